@@ -1,0 +1,18 @@
+//! Basic nodes: constants, arithmetic, the frame number, printing and writing tables.
+
+pub mod frame;
+pub mod math;
+pub mod print;
+pub mod table_write;
+pub mod value;
+
+use crate::registry::Registry;
+
+/// Registers the basic nodes.
+pub fn register(r: &mut Registry) {
+    value::register(r);
+    math::register(r);
+    frame::register(r);
+    print::register(r);
+    table_write::register(r);
+}

@@ -1,0 +1,22 @@
+//! Built-in nodes, grouped by domain. Each domain's `register` adds its nodes; each node file
+//! reads as declaration (`declare`), then execution (`execute`), then its tests, with the
+//! algorithm itself in a plain function that Rust users can call without the runtime.
+
+pub mod basic;
+pub mod mesh;
+pub mod param;
+pub mod render;
+pub mod sim;
+pub mod trace;
+
+use crate::registry::Registry;
+
+/// Registers every built-in node.
+pub fn register_all(r: &mut Registry) {
+    basic::register(r);
+    mesh::register(r);
+    param::register(r);
+    render::register(r);
+    trace::register(r);
+    sim::register(r);
+}

@@ -1,0 +1,6 @@
+//! param nodes.
+
+use crate::registry::Registry;
+
+/// Registers the param nodes.
+pub fn register(_r: &mut Registry) {}

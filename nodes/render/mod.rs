@@ -1,0 +1,6 @@
+//! render nodes.
+
+use crate::registry::Registry;
+
+/// Registers the render nodes.
+pub fn register(_r: &mut Registry) {}

@@ -1,0 +1,42 @@
+//! File helpers shared by writer nodes.
+
+use std::io::{BufWriter, Write};
+use std::path::Path;
+
+/// Writes `path` atomically: the data goes to a temporary file in the same folder, which is
+/// renamed over `path` only when `f` succeeds. A failure leaves no partial file.
+pub fn write_atomic(path: &Path, f: impl FnOnce(&mut dyn Write) -> std::io::Result<()>) -> std::io::Result<()> {
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => std::path::PathBuf::from("."),
+    };
+    std::fs::create_dir_all(&dir)?;
+    let tmp = tempfile::Builder::new().prefix(".cgnodes-").suffix(".tmp").tempfile_in(&dir)?;
+    {
+        let mut w = BufWriter::new(tmp.as_file());
+        f(&mut w)?;
+        w.flush()?;
+    }
+    tmp.as_file().sync_all()?;
+    tmp.persist(path).map_err(|e| e.error)?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn failed_write_leaves_nothing() {
+        let d = tempfile::tempdir().unwrap();
+        let p = d.path().join("x.txt");
+        let r = write_atomic(&p, |w| {
+            w.write_all(b"partial")?;
+            Err(std::io::Error::other("boom"))
+        });
+        assert!(r.is_err());
+        assert_eq!(std::fs::read_dir(d.path()).unwrap().count(), 0);
+        write_atomic(&p, |w| w.write_all(b"ok")).unwrap();
+        assert_eq!(std::fs::read_to_string(&p).unwrap(), "ok");
+    }
+}

@@ -1,0 +1,28 @@
+//! cgnodes: a node-graph batch executor for computer graphics.
+//!
+//! A graph is a JSON file of typed nodes and links (`graph`); it is checked against the
+//! node registry (`validate`), planned over the nodes the requested outputs need, and run
+//! in parallel with caching (`exec`). Built-in nodes live in `nodes`, one file per node or
+//! small family; each node's algorithm is a plain function callable without the runtime.
+
+pub mod cache;
+pub mod cli;
+pub mod exec;
+pub mod f3d;
+pub mod graph;
+pub mod io;
+pub mod node;
+pub mod registry;
+pub mod types;
+pub mod validate;
+
+#[path = "../nodes/mod.rs"]
+pub mod nodes;
+
+/// Everything a node file needs.
+pub mod prelude {
+    pub use crate::node::{ErrorKind, ExecContext, FileEnv, NodeBuilder, NodeDecl, NodeError};
+    pub use crate::registry::Registry;
+    pub use crate::types::*;
+    pub use std::sync::Arc;
+}

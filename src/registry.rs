@@ -1,0 +1,102 @@
+//! The registry of node types. Built-in nodes register through the same calls a plugin uses.
+
+use crate::node::{ExecContext, NodeBuilder, NodeDecl, NodeError};
+use std::collections::BTreeMap;
+use std::sync::Arc;
+
+/// All node types a graph may use, by name.
+#[derive(Clone, Default)]
+pub struct Registry {
+    nodes: BTreeMap<String, Arc<NodeDecl>>,
+}
+
+impl Registry {
+    /// An empty registry.
+    pub fn new() -> Registry {
+        Registry::default()
+    }
+
+    /// A registry with every built-in node.
+    pub fn builtin() -> Registry {
+        let mut r = Registry::new();
+        crate::nodes::register_all(&mut r);
+        r
+    }
+
+    /// Registers a node from its declaration and execution functions (the usual way).
+    pub fn add(
+        &mut self,
+        type_name: &str,
+        declare: impl FnOnce(&mut NodeBuilder),
+        execute: impl Fn(&mut ExecContext) -> Result<(), NodeError> + Send + Sync + 'static,
+    ) {
+        let mut b = NodeBuilder::new(type_name);
+        declare(&mut b);
+        self.add_decl(b.build(Arc::new(execute)));
+    }
+
+    /// Registers a finished declaration; a later registration of the same name replaces it.
+    pub fn add_decl(&mut self, decl: NodeDecl) {
+        self.nodes.insert(decl.type_name.clone(), Arc::new(decl));
+    }
+
+    /// The declaration of `type_name`.
+    pub fn get(&self, type_name: &str) -> Option<&Arc<NodeDecl>> {
+        self.nodes.get(type_name)
+    }
+
+    /// All declarations, sorted by name.
+    pub fn iter(&self) -> impl Iterator<Item = &Arc<NodeDecl>> {
+        self.nodes.values()
+    }
+
+    /// Number of node types.
+    pub fn len(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// Whether no node type is registered.
+    pub fn is_empty(&self) -> bool {
+        self.nodes.is_empty()
+    }
+
+    /// The registered name closest to `name`, for "did you mean" hints.
+    pub fn closest(&self, name: &str) -> Option<String> {
+        closest(name, self.nodes.keys().map(String::as_str))
+    }
+}
+
+/// The candidate closest to `name` by edit distance, if reasonably close.
+pub fn closest<'a>(name: &str, candidates: impl Iterator<Item = &'a str>) -> Option<String> {
+    candidates
+        .map(|c| (edit_distance(name, c), c))
+        .filter(|(d, c)| *d <= (c.len().max(name.len()) / 2).max(2))
+        .min()
+        .map(|(_, c)| c.to_string())
+}
+
+/// Levenshtein distance.
+fn edit_distance(a: &str, b: &str) -> usize {
+    let a: Vec<char> = a.chars().collect();
+    let b: Vec<char> = b.chars().collect();
+    let mut prev: Vec<usize> = (0..=b.len()).collect();
+    for i in 1..=a.len() {
+        let mut cur = vec![i; b.len() + 1];
+        for j in 1..=b.len() {
+            let sub = prev[j - 1] + usize::from(a[i - 1] != b[j - 1]);
+            cur[j] = sub.min(prev[j] + 1).min(cur[j - 1] + 1);
+        }
+        prev = cur;
+    }
+    prev[b.len()]
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn suggests_close_names() {
+        let names = ["mesh_load", "mesh_save", "tutte"];
+        assert_eq!(super::closest("mesh_lod", names.iter().copied()).as_deref(), Some("mesh_load"));
+        assert_eq!(super::closest("zzzzzzzzzz", names.iter().copied()), None);
+    }
+}

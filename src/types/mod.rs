@@ -1,0 +1,21 @@
+//! Socket types and the values that travel along links.
+//!
+//! Heavy values (meshes, images, ...) are held in `Arc`s so that passing them between nodes
+//! never copies; a node that wants to change one calls `Arc::make_mut` (clone on write).
+
+mod mesh;
+mod misc;
+mod scene;
+mod topology;
+mod value;
+
+pub use mesh::{Attribute, AttributeData, Domain, Mesh, MeshError};
+pub use misc::{Curve, Image, Joint, Points, Skeleton, Table};
+pub use scene::{Camera, FovAxis, Light, Material, MaterialKind, Scene, SceneObject};
+pub use topology::Topology;
+pub use value::{Color, FromValue, SocketType, Typed, Value};
+
+/// The `Any` socket type marker (`b.add_input::<value_any::Any>("value")`).
+pub mod value_any {
+    pub use super::value::AnyValue as Any;
+}

@@ -1,0 +1,410 @@
+//! Mesh connectivity built once per mesh: undirected edges with their faces, vertex
+//! one-rings, ordered boundary loops, connected components and manifoldness.
+
+use super::Mesh;
+
+/// Marks an absent face in `edge_faces`.
+pub const NONE: u32 = u32::MAX;
+
+/// The connectivity of a polygon mesh. Works on any mesh; non-manifold parts are recorded
+/// (`nonmanifold_edges`, `nonmanifold_vertices`) rather than refused, so that nodes needing a
+/// manifold can say exactly what is wrong.
+#[derive(Clone, Debug)]
+pub struct Topology {
+    /// Number of vertices of the mesh.
+    pub num_vertices: usize,
+    /// Number of faces of the mesh.
+    pub num_faces: usize,
+    /// Unique undirected edges, each with its smaller vertex index first.
+    pub edges: Vec<[u32; 2]>,
+    /// The first two faces of each edge (`NONE` where absent).
+    pub edge_faces: Vec<[u32; 2]>,
+    /// For each face corner `c`, the edge from that corner to the next corner of its face.
+    pub corner_edge: Vec<u32>,
+    /// For each corner, its face.
+    pub corner_face: Vec<u32>,
+    neighbor_start: Vec<u32>,
+    neighbors: Vec<u32>,
+    vface_start: Vec<u32>,
+    vfaces: Vec<u32>,
+    /// Boundary loops, vertices in order with the faces on the left (counter-clockwise for a
+    /// disk whose faces are counter-clockwise).
+    pub boundary_loops: Vec<Vec<u32>>,
+    /// Component id of each vertex (isolated vertices get their own component).
+    pub vertex_component: Vec<u32>,
+    /// Number of connected components (counting isolated vertices).
+    pub num_components: usize,
+    /// Vertices used by no face.
+    pub isolated_vertices: usize,
+    /// Edges with more than two faces.
+    pub nonmanifold_edges: Vec<u32>,
+    /// Vertices whose faces do not form a single fan.
+    pub nonmanifold_vertices: Vec<u32>,
+    /// Edges whose two faces run along them in the same direction (inconsistent orientation).
+    pub misoriented_edges: Vec<u32>,
+}
+
+impl Topology {
+    /// Builds the connectivity of `mesh`.
+    pub fn build(mesh: &Mesh) -> Topology {
+        let nv = mesh.num_vertices();
+        let nf = mesh.num_faces();
+        let idx = mesh.face_indices();
+        let starts = mesh.face_starts();
+        let nc = idx.len();
+        let mut corner_face = vec![0u32; nc];
+        let mut next_corner = vec![0u32; nc];
+        for f in 0..nf {
+            let (s, e) = (starts[f] as usize, starts[f + 1] as usize);
+            for c in s..e {
+                corner_face[c] = f as u32;
+                next_corner[c] = if c + 1 == e { s as u32 } else { c as u32 + 1 };
+            }
+        }
+        // Undirected edges by sorting (min, max) keys of every corner's outgoing edge.
+        let mut keyed: Vec<(u64, u32)> = (0..nc)
+            .map(|c| {
+                let a = idx[c];
+                let b = idx[next_corner[c] as usize];
+                let (lo, hi) = if a < b { (a, b) } else { (b, a) };
+                (((lo as u64) << 32) | hi as u64, c as u32)
+            })
+            .collect();
+        keyed.sort_unstable();
+        let mut edges = Vec::new();
+        let mut edge_faces = Vec::new();
+        let mut corner_edge = vec![0u32; nc];
+        let mut nonmanifold_edges = Vec::new();
+        let mut misoriented_edges = Vec::new();
+        let mut i = 0;
+        while i < keyed.len() {
+            let key = keyed[i].0;
+            let mut j = i;
+            let e = edges.len() as u32;
+            let mut ef = [NONE, NONE];
+            let mut dirs = [0u32; 2];
+            while j < keyed.len() && keyed[j].0 == key {
+                let c = keyed[j].1 as usize;
+                corner_edge[c] = e;
+                let k = j - i;
+                if k < 2 {
+                    ef[k] = corner_face[c];
+                    dirs[k] = idx[c];
+                }
+                j += 1;
+            }
+            edges.push([(key >> 32) as u32, key as u32]);
+            edge_faces.push(ef);
+            if j - i > 2 {
+                nonmanifold_edges.push(e);
+            } else if j - i == 2 && dirs[0] == dirs[1] {
+                misoriented_edges.push(e);
+            }
+            i = j;
+        }
+        // One-rings.
+        let (neighbor_start, neighbors) = csr(nv, edges.iter().flat_map(|&[a, b]| [(a, b), (b, a)]));
+        let (vface_start, vfaces) = csr(nv, (0..nc).map(|c| (idx[c], corner_face[c])));
+        // Boundary half-edges: corners whose edge has a single face.
+        let boundary_out = |c: usize| edge_faces[corner_edge[c] as usize][1] == NONE;
+        let mut out_start = vec![0u32; nv + 1];
+        for c in 0..nc {
+            if boundary_out(c) {
+                out_start[idx[c] as usize + 1] += 1;
+            }
+        }
+        for v in 0..nv {
+            out_start[v + 1] += out_start[v];
+        }
+        let mut fill = out_start.clone();
+        let mut out_corner = vec![0u32; out_start[nv] as usize];
+        for c in 0..nc {
+            if boundary_out(c) {
+                let v = idx[c] as usize;
+                out_corner[fill[v] as usize] = c as u32;
+                fill[v] += 1;
+            }
+        }
+        let mut used = vec![false; out_corner.len()];
+        let mut boundary_loops = Vec::new();
+        let mut nonmanifold_vertices = Vec::new();
+        for v in 0..nv {
+            if out_start[v + 1] - out_start[v] > 1 {
+                nonmanifold_vertices.push(v as u32);
+            }
+        }
+        for start in 0..out_corner.len() {
+            if used[start] {
+                continue;
+            }
+            let mut lp = Vec::new();
+            let mut h = start;
+            loop {
+                used[h] = true;
+                let c = out_corner[h] as usize;
+                lp.push(idx[c]);
+                let w = idx[next_corner[c] as usize] as usize;
+                let cand = (out_start[w]..out_start[w + 1]).map(|k| k as usize).find(|&k| !used[k]);
+                match cand {
+                    Some(k) => h = k,
+                    None => break,
+                }
+            }
+            boundary_loops.push(lp);
+        }
+        // Interior fans: a vertex whose incident faces split into several groups joined
+        // through its edges is not manifold (two cones touching at a tip).
+        let mut local: Vec<u32> = Vec::new();
+        for v in 0..nv {
+            let fs = &vfaces[vface_start[v] as usize..vface_start[v + 1] as usize];
+            if fs.len() < 2 || nonmanifold_vertices.last() == Some(&(v as u32)) {
+                continue;
+            }
+            local.clear();
+            local.extend(0..fs.len() as u32);
+            fn find(p: &mut [u32], mut x: u32) -> u32 {
+                while p[x as usize] != x {
+                    p[x as usize] = p[p[x as usize] as usize];
+                    x = p[x as usize];
+                }
+                x
+            }
+            for (a, &f) in fs.iter().enumerate() {
+                let (s, e) = (starts[f as usize] as usize, starts[f as usize + 1] as usize);
+                for c in s..e {
+                    let cn = next_corner[c] as usize;
+                    if idx[c] as usize != v && idx[cn] as usize != v {
+                        continue;
+                    }
+                    let [f0, f1] = edge_faces[corner_edge[c] as usize];
+                    let other = if f0 == f { f1 } else { f0 };
+                    if other == NONE {
+                        continue;
+                    }
+                    if let Some(b) = fs.iter().position(|&g| g == other) {
+                        let (ra, rb) = (find(&mut local, a as u32), find(&mut local, b as u32));
+                        local[ra as usize] = rb;
+                    }
+                }
+            }
+            let roots = (0..fs.len() as u32).filter(|&a| find(&mut local, a) == a).count();
+            if roots > 1 {
+                nonmanifold_vertices.push(v as u32);
+            }
+        }
+        nonmanifold_vertices.sort_unstable();
+        nonmanifold_vertices.dedup();
+        // Components by union-find over edges.
+        let mut parent: Vec<u32> = (0..nv as u32).collect();
+        fn root(p: &mut [u32], mut x: u32) -> u32 {
+            while p[x as usize] != x {
+                p[x as usize] = p[p[x as usize] as usize];
+                x = p[x as usize];
+            }
+            x
+        }
+        for &[a, b] in &edges {
+            let (ra, rb) = (root(&mut parent, a), root(&mut parent, b));
+            if ra != rb {
+                parent[ra.max(rb) as usize] = ra.min(rb);
+            }
+        }
+        let mut comp_id = vec![NONE; nv];
+        let mut vertex_component = vec![0u32; nv];
+        let mut num_components = 0;
+        for v in 0..nv {
+            let r = root(&mut parent, v as u32) as usize;
+            if comp_id[r] == NONE {
+                comp_id[r] = num_components as u32;
+                num_components += 1;
+            }
+            vertex_component[v] = comp_id[r];
+        }
+        let isolated_vertices = (0..nv).filter(|&v| vface_start[v] == vface_start[v + 1]).count();
+        Topology {
+            num_vertices: nv,
+            num_faces: nf,
+            edges,
+            edge_faces,
+            corner_edge,
+            corner_face,
+            neighbor_start,
+            neighbors,
+            vface_start,
+            vfaces,
+            boundary_loops,
+            vertex_component,
+            num_components,
+            isolated_vertices,
+            nonmanifold_edges,
+            nonmanifold_vertices,
+            misoriented_edges,
+        }
+    }
+
+    /// The vertices joined to `v` by an edge.
+    pub fn neighbors(&self, v: usize) -> &[u32] {
+        &self.neighbors[self.neighbor_start[v] as usize..self.neighbor_start[v + 1] as usize]
+    }
+
+    /// The faces that use vertex `v`.
+    pub fn vertex_faces(&self, v: usize) -> &[u32] {
+        &self.vfaces[self.vface_start[v] as usize..self.vface_start[v + 1] as usize]
+    }
+
+    /// Whether vertex `v` lies on a boundary loop.
+    pub fn is_boundary_vertex(&self, v: usize) -> bool {
+        let nb = self.neighbors(v);
+        // A vertex is on the boundary when one of its edges has a single face.
+        nb.iter().any(|&w| {
+            self.edge_index(v as u32, w).is_some_and(|e| self.edge_faces[e][1] == NONE)
+        })
+    }
+
+    /// The index of the edge between `a` and `b`, if there is one.
+    pub fn edge_index(&self, a: u32, b: u32) -> Option<usize> {
+        let key = if a < b { [a, b] } else { [b, a] };
+        self.edges.binary_search(&key).ok()
+    }
+
+    /// Number of undirected edges.
+    pub fn num_edges(&self) -> usize {
+        self.edges.len()
+    }
+
+    /// V - E + F, counting only vertices that some face uses.
+    pub fn euler_characteristic(&self) -> i64 {
+        (self.num_vertices - self.isolated_vertices) as i64 - self.edges.len() as i64 + self.num_faces as i64
+    }
+
+    /// Whether every edge has at most two faces, consistently oriented, and every vertex is a
+    /// single fan.
+    pub fn is_manifold(&self) -> bool {
+        self.nonmanifold_edges.is_empty() && self.nonmanifold_vertices.is_empty() && self.misoriented_edges.is_empty()
+    }
+
+    /// Number of connected components that have faces.
+    pub fn num_face_components(&self) -> usize {
+        self.num_components - self.isolated_vertices
+    }
+
+    /// Genus of a connected orientable manifold: chi = 2 - 2g - b. `None` for anything else.
+    pub fn genus(&self) -> Option<i64> {
+        if !self.is_manifold() || self.num_face_components() != 1 {
+            return None;
+        }
+        let g2 = 2 - self.euler_characteristic() - self.boundary_loops.len() as i64;
+        (g2 >= 0 && g2 % 2 == 0).then_some(g2 / 2)
+    }
+
+    /// Checks that the mesh is a topological disk (one component, manifold, one boundary loop,
+    /// Euler characteristic 1), saying what is wrong otherwise.
+    pub fn check_disk(&self) -> Result<(), String> {
+        if !self.nonmanifold_edges.is_empty() || !self.nonmanifold_vertices.is_empty() {
+            return Err(format!(
+                "mesh is not manifold ({} edges with more than two faces, {} non-manifold vertices); a disk is needed",
+                self.nonmanifold_edges.len(),
+                self.nonmanifold_vertices.len()
+            ));
+        }
+        if !self.misoriented_edges.is_empty() {
+            return Err(format!(
+                "mesh faces are inconsistently oriented ({} edges); a disk is needed",
+                self.misoriented_edges.len()
+            ));
+        }
+        if self.num_face_components() != 1 {
+            return Err(format!("mesh has {} connected components; a disk is needed", self.num_face_components()));
+        }
+        match self.boundary_loops.len() {
+            0 => return Err("mesh is closed (no boundary loop); a disk is needed: cut it open first".into()),
+            1 => {}
+            n => return Err(format!("mesh has {n} boundary loops; a disk is needed; use holes: fill")),
+        }
+        let chi = self.euler_characteristic();
+        if chi != 1 {
+            return Err(format!("mesh has Euler characteristic {chi} (genus > 0); a disk has 1"));
+        }
+        Ok(())
+    }
+}
+
+/// Compressed rows from (row, value) pairs.
+fn csr(n: usize, pairs: impl Iterator<Item = (u32, u32)> + Clone) -> (Vec<u32>, Vec<u32>) {
+    let mut start = vec![0u32; n + 1];
+    for (r, _) in pairs.clone() {
+        start[r as usize + 1] += 1;
+    }
+    for i in 0..n {
+        start[i + 1] += start[i];
+    }
+    let mut fill = start.clone();
+    let mut vals = vec![0u32; start[n] as usize];
+    for (r, v) in pairs {
+        vals[fill[r as usize] as usize] = v;
+        fill[r as usize] += 1;
+    }
+    (start, vals)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn grid(n: usize) -> Mesh {
+        let mut p = Vec::new();
+        for j in 0..=n {
+            for i in 0..=n {
+                p.push([i as f64, j as f64, 0.0]);
+            }
+        }
+        let mut t = Vec::new();
+        let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
+        for j in 0..n {
+            for i in 0..n {
+                t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+                t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+            }
+        }
+        Mesh::from_triangles(p, &t).unwrap()
+    }
+
+    #[test]
+    fn grid_is_a_disk_with_ccw_boundary() {
+        let m = grid(3);
+        let t = m.topology();
+        assert_eq!(t.num_edges(), 3 * 4 * 2 + 9);
+        assert_eq!(t.euler_characteristic(), 1);
+        assert_eq!(t.boundary_loops.len(), 1);
+        assert_eq!(t.boundary_loops[0].len(), 12);
+        assert!(t.check_disk().is_ok());
+        assert_eq!(t.genus(), Some(0));
+        // counter-clockwise: signed area of the loop is positive
+        let lp = &t.boundary_loops[0];
+        let mut area = 0.0;
+        for k in 0..lp.len() {
+            let a = m.positions[lp[k] as usize];
+            let b = m.positions[lp[(k + 1) % lp.len()] as usize];
+            area += a[0] * b[1] - a[1] * b[0];
+        }
+        assert!(area > 0.0);
+        assert_eq!(t.neighbors(5).len(), 6);
+        assert!(!t.is_boundary_vertex(5));
+        assert!(t.is_boundary_vertex(0));
+    }
+
+    #[test]
+    fn closed_tetrahedron_and_bowtie() {
+        let p = vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+        let m = Mesh::from_triangles(p, &[[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]]).unwrap();
+        let t = m.topology();
+        assert_eq!(t.euler_characteristic(), 2);
+        assert!(t.boundary_loops.is_empty());
+        assert!(t.check_disk().unwrap_err().contains("closed"));
+        // two triangles sharing only a vertex
+        let p = vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]];
+        let m = Mesh::from_triangles(p, &[[0, 1, 2], [0, 3, 4]]).unwrap();
+        assert_eq!(m.topology().nonmanifold_vertices, vec![0]);
+        assert!(!m.topology().is_manifold());
+    }
+}

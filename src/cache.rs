@@ -79,7 +79,9 @@ impl DiskCache {
     /// A cache in `dir` (created if missing).
     pub fn open(dir: &Path) -> std::io::Result<DiskCache> {
         std::fs::create_dir_all(dir)?;
-        Ok(DiskCache { dir: dir.to_path_buf() })
+        Ok(DiskCache {
+            dir: dir.to_path_buf(),
+        })
     }
     fn path(&self, k: &Key) -> PathBuf {
         let h = hex(k);

@@ -22,7 +22,11 @@ pub const EXIT_USAGE: i32 = 2;
 pub const EXIT_INVALID: i32 = 3;
 
 #[derive(Parser)]
-#[command(name = "cgnodes", version, about = "Run computer-graphics node graphs from JSON files.")]
+#[command(
+    name = "cgnodes",
+    version,
+    about = "Run computer-graphics node graphs from JSON files."
+)]
 struct Cli {
     #[command(subcommand)]
     cmd: Cmd,
@@ -135,7 +139,11 @@ pub fn main_with(registry: Registry) -> i32 {
                 println!("{}", serde_json::to_string_pretty(&all).unwrap_or_default());
             } else {
                 for d in registry.iter() {
-                    let src = if d.source == "builtin" { String::new() } else { format!("  [{}]", d.source) };
+                    let src = if d.source == "builtin" {
+                        String::new()
+                    } else {
+                        format!("  [{}]", d.source)
+                    };
                     println!("{:<24} {}{src}", d.type_name, d.doc);
                     println!("{:<24}   in:  {}", "", sockets(&d.inputs));
                     println!("{:<24}   out: {}", "", sockets(&d.outputs));
@@ -149,13 +157,19 @@ pub fn main_with(registry: Registry) -> i32 {
                 0
             }
             None => {
-                let hint = registry.closest(&node_type).map(|s| format!(" (did you mean '{s}'?)")).unwrap_or_default();
+                let hint = registry
+                    .closest(&node_type)
+                    .map(|s| format!(" (did you mean '{s}'?)"))
+                    .unwrap_or_default();
                 eprintln!("error: unknown node type '{node_type}'{hint}");
                 EXIT_USAGE
             }
         },
         Cmd::Schema => {
-            println!("{}", serde_json::to_string_pretty(&graph::schema()).unwrap_or_default());
+            println!(
+                "{}",
+                serde_json::to_string_pretty(&graph::schema()).unwrap_or_default()
+            );
             0
         }
         Cmd::Dot { graph } => match load_valid(&registry, &graph, &[]) {
@@ -165,7 +179,11 @@ pub fn main_with(registry: Registry) -> i32 {
             }
             Err(c) => c,
         },
-        Cmd::ImportF3d { input, output, aliases } => cmd_import(&input, &output, aliases.as_deref()),
+        Cmd::ImportF3d {
+            input,
+            output,
+            aliases,
+        } => cmd_import(&input, &output, aliases.as_deref()),
     }
 }
 
@@ -177,12 +195,14 @@ fn cmd_import(input: &Path, output: &Path, aliases: Option<&Path>) -> i32 {
     let result = (|| -> Result<(), String> {
         let raw = read_json(input)?;
         let al = match aliases {
-            Some(a) => serde_json::from_value(read_json(a)?).map_err(|e| format!("{}: {e}", a.display()))?,
+            Some(a) => serde_json::from_value(read_json(a)?)
+                .map_err(|e| format!("{}: {e}", a.display()))?,
             None => crate::f3d::Aliases::default(),
         };
         let g = crate::f3d::import(&raw, &al).map_err(|e| format!("{}: {e}", input.display()))?;
         let text = serde_json::to_string_pretty(&g).map_err(|e| e.to_string())?;
-        crate::io::write_atomic(output, |w| w.write_all(text.as_bytes())).map_err(|e| format!("{}: {e}", output.display()))
+        crate::io::write_atomic(output, |w| w.write_all(text.as_bytes()))
+            .map_err(|e| format!("{}: {e}", output.display()))
     })();
     match result {
         Ok(()) => 0,
@@ -194,7 +214,10 @@ fn cmd_import(input: &Path, output: &Path, aliases: Option<&Path>) -> i32 {
 }
 
 fn sockets(s: &[crate::node::SocketDecl]) -> String {
-    s.iter().map(|s| format!("{}: {}", s.name, s.ty)).collect::<Vec<_>>().join(", ")
+    s.iter()
+        .map(|s| format!("{}: {}", s.name, s.ty))
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 /// A human description of a node type: doc, then sockets with defaults, ranges and choices.
@@ -234,8 +257,17 @@ pub fn describe(d: &crate::node::NodeDecl) -> String {
             if x.optional {
                 extra.push("optional".into());
             }
-            let extra = if extra.is_empty() { String::new() } else { format!(" [{}]", extra.join("; ")) };
-            s.push_str(&format!("  {:<16} {:<12} {}{extra}\n", x.name, x.ty.to_string(), x.doc));
+            let extra = if extra.is_empty() {
+                String::new()
+            } else {
+                format!(" [{}]", extra.join("; "))
+            };
+            s.push_str(&format!(
+                "  {:<16} {:<12} {}{extra}\n",
+                x.name,
+                x.ty.to_string(),
+                x.doc
+            ));
         }
     }
     s
@@ -246,20 +278,25 @@ pub fn describe(d: &crate::node::NodeDecl) -> String {
 /// socket's type.
 pub fn apply_sets(g: &mut Graph, sets: &[String]) -> Result<(), String> {
     for s in sets {
-        let (lhs, val) = s.split_once('=').ok_or_else(|| format!("--set '{s}': expected NODE.SOCKET=VALUE"))?;
-        let (node, socket) =
-            graph::split_link(lhs).ok_or_else(|| format!("--set '{s}': expected NODE.SOCKET=VALUE"))?;
+        let (lhs, val) = s
+            .split_once('=')
+            .ok_or_else(|| format!("--set '{s}': expected NODE.SOCKET=VALUE"))?;
+        let (node, socket) = graph::split_link(lhs)
+            .ok_or_else(|| format!("--set '{s}': expected NODE.SOCKET=VALUE"))?;
         if !g.spec.nodes.contains_key(node) {
             let hint = crate::registry::closest(node, g.spec.nodes.keys().map(String::as_str))
                 .map(|h| format!(" (did you mean '{h}'?)"))
                 .unwrap_or_default();
             return Err(format!("--set '{s}': no node '{node}' in the graph{hint}"));
         }
-        let Some(spec) = g.spec.nodes.get_mut(node) else { continue };
+        let Some(spec) = g.spec.nodes.get_mut(node) else {
+            continue;
+        };
         if spec.inputs.contains_key(socket) {
             return Err(format!("--set '{s}': input '{socket}' of node '{node}' is linked; a literal cannot replace a link"));
         }
-        let j = serde_json::from_str(val).unwrap_or_else(|_| serde_json::Value::String(val.to_string()));
+        let j = serde_json::from_str(val)
+            .unwrap_or_else(|_| serde_json::Value::String(val.to_string()));
         spec.params.insert(socket.to_string(), j);
     }
     Ok(())
@@ -288,7 +325,11 @@ fn print_graph_errors(errs: &[GraphError]) {
     for e in errs {
         eprintln!("error: {e}");
     }
-    eprintln!("{} error{} found; nothing was run", errs.len(), if errs.len() == 1 { "" } else { "s" });
+    eprintln!(
+        "{} error{} found; nothing was run",
+        errs.len(),
+        if errs.len() == 1 { "" } else { "s" }
+    );
 }
 
 /// Parses `A..B` (inclusive) or a single frame `A`.
@@ -297,10 +338,18 @@ pub fn parse_frames(s: &str) -> Result<(i64, i64), String> {
         Some((a, b)) => (a, b.trim_start_matches('=')),
         None => (s, s),
     };
-    let a: i64 = a.trim().parse().map_err(|_| format!("--frames '{s}': expected A..B"))?;
-    let b: i64 = b.trim().parse().map_err(|_| format!("--frames '{s}': expected A..B"))?;
+    let a: i64 = a
+        .trim()
+        .parse()
+        .map_err(|_| format!("--frames '{s}': expected A..B"))?;
+    let b: i64 = b
+        .trim()
+        .parse()
+        .map_err(|_| format!("--frames '{s}': expected A..B"))?;
     if b < a {
-        return Err(format!("--frames '{s}': the last frame comes before the first"));
+        return Err(format!(
+            "--frames '{s}': the last frame comes before the first"
+        ));
     }
     Ok((a, b))
 }
@@ -312,12 +361,18 @@ fn cmd_run(registry: &Registry, args: RunArgs) -> i32 {
     };
     for t in &args.target {
         if !graph.index.contains_key(t) {
-            eprintln!("error: --target '{t}' is not a node of {}", args.graph.display());
+            eprintln!(
+                "error: --target '{t}' is not a node of {}",
+                args.graph.display()
+            );
             return EXIT_USAGE;
         }
     }
+    let hint = graph::load(&args.graph)
+        .ok()
+        .and_then(|g| g.spec.frames_hint());
     let (f0, f1) = match args.frames.as_deref().map(parse_frames).transpose() {
-        Ok(r) => r.unwrap_or((0, 0)),
+        Ok(r) => r.or(hint).unwrap_or((0, 0)),
         Err(e) => {
             eprintln!("error: {e}");
             return EXIT_USAGE;
@@ -330,16 +385,20 @@ fn cmd_run(registry: &Registry, args: RunArgs) -> i32 {
             return EXIT_USAGE;
         }
     };
-    let show_progress = !args.quiet && std::io::stderr().is_terminal() && std::env::var_os("CI").is_none();
+    let show_progress =
+        !args.quiet && std::io::stderr().is_terminal() && std::env::var_os("CI").is_none();
     let bars = show_progress.then(indicatif::MultiProgress::new);
     let progress: Option<crate::node::ProgressFn> = bars.as_ref().map(|mp| {
         let mp = mp.clone();
-        let map: Arc<std::sync::Mutex<std::collections::HashMap<String, indicatif::ProgressBar>>> = Arc::default();
+        let map: Arc<std::sync::Mutex<std::collections::HashMap<String, indicatif::ProgressBar>>> =
+            Arc::default();
         Arc::new(move |node: &str, f: f64| {
             let mut m = map.lock().unwrap_or_else(|p| p.into_inner());
             let bar = m.entry(node.to_string()).or_insert_with(|| {
                 let b = mp.add(indicatif::ProgressBar::new(1000));
-                if let Ok(st) = indicatif::ProgressStyle::with_template("{prefix:>16} {bar:30} {percent:>3}% {elapsed}") {
+                if let Ok(st) = indicatif::ProgressStyle::with_template(
+                    "{prefix:>16} {bar:30} {percent:>3}% {elapsed}",
+                ) {
                     b.set_style(st);
                 }
                 b.set_prefix(node.to_string());
@@ -366,7 +425,7 @@ fn cmd_run(registry: &Registry, args: RunArgs) -> i32 {
     for frame in f0..=f1 {
         let report = exec.run(&graph, &opts, frame);
         if !args.quiet {
-            print_report(&report, args.frames.is_some());
+            print_report(&report, f1 > f0);
         }
         for e in report.errors() {
             eprintln!("error: {e}");
@@ -390,7 +449,11 @@ fn cmd_run(registry: &Registry, args: RunArgs) -> i32 {
 }
 
 fn print_report(r: &RunReport, frames: bool) {
-    let prefix = if frames { format!("[frame {}] ", r.frame) } else { String::new() };
+    let prefix = if frames {
+        format!("[frame {}] ", r.frame)
+    } else {
+        String::new()
+    };
     for n in &r.nodes {
         for l in &n.logs {
             eprintln!("{prefix}{}: {l}", n.id);
@@ -402,8 +465,12 @@ fn print_report(r: &RunReport, frames: bool) {
         }
     }
     let count = |f: fn(&NodeStatus) -> bool| r.nodes.iter().filter(|n| f(&n.status)).count();
-    let skipped: Vec<&str> =
-        r.nodes.iter().filter(|n| matches!(n.status, NodeStatus::Skipped)).map(|n| n.id.as_str()).collect();
+    let skipped: Vec<&str> = r
+        .nodes
+        .iter()
+        .filter(|n| matches!(n.status, NodeStatus::Skipped))
+        .map(|n| n.id.as_str())
+        .collect();
     eprintln!(
         "{prefix}ran {}, cached {}, failed {}, blocked {}, skipped {}{} in {:.1} ms",
         count(|s| matches!(s, NodeStatus::Ran)),
@@ -411,13 +478,20 @@ fn print_report(r: &RunReport, frames: bool) {
         count(|s| matches!(s, NodeStatus::Failed(_))),
         count(|s| matches!(s, NodeStatus::Blocked { .. })),
         skipped.len(),
-        if skipped.is_empty() || skipped.len() > 10 { String::new() } else { format!(" ({})", skipped.join(", ")) },
+        if skipped.is_empty() || skipped.len() > 10 {
+            String::new()
+        } else {
+            format!(" ({})", skipped.join(", "))
+        },
         r.total_ms
     );
 }
 
 fn print_profile(r: &RunReport) {
-    eprintln!("{:<20} {:<20} {:>10} {:>8} {:>10}", "node", "type", "ms", "status", "rss MiB");
+    eprintln!(
+        "{:<20} {:<20} {:>10} {:>8} {:>10}",
+        "node", "type", "ms", "status", "rss MiB"
+    );
     for n in &r.nodes {
         let st = match &n.status {
             NodeStatus::Ran => "ran",
@@ -426,9 +500,20 @@ fn print_profile(r: &RunReport) {
             NodeStatus::Failed(_) => "failed",
             NodeStatus::Blocked { .. } => "blocked",
         };
-        eprintln!("{:<20} {:<20} {:>10.2} {:>8} {:>10.1}", n.id, n.node_type, n.ms, st, n.rss_kib as f64 / 1024.0);
+        eprintln!(
+            "{:<20} {:<20} {:>10.2} {:>8} {:>10.1}",
+            n.id,
+            n.node_type,
+            n.ms,
+            st,
+            n.rss_kib as f64 / 1024.0
+        );
     }
-    eprintln!("total {:.2} ms, peak memory {:.1} MiB", r.total_ms, r.peak_rss_kib as f64 / 1024.0);
+    eprintln!(
+        "total {:.2} ms, peak memory {:.1} MiB",
+        r.total_ms,
+        r.peak_rss_kib as f64 / 1024.0
+    );
 }
 
 /// The profile of a run as JSON: per-node wall time, status and memory.

@@ -81,7 +81,10 @@ pub struct RunReport {
 impl RunReport {
     /// Whether no node failed.
     pub fn ok(&self) -> bool {
-        !self.nodes.iter().any(|n| matches!(n.status, NodeStatus::Failed(_) | NodeStatus::Blocked { .. }))
+        !self
+            .nodes
+            .iter()
+            .any(|n| matches!(n.status, NodeStatus::Failed(_) | NodeStatus::Blocked { .. }))
     }
     /// The value of `node.socket`, if computed.
     pub fn output(&self, node: &str, socket: &str) -> Option<&Value> {
@@ -93,7 +96,11 @@ impl RunReport {
     }
     /// Ids of the nodes that ran (not cached, skipped or failed).
     pub fn executed(&self) -> Vec<&str> {
-        self.nodes.iter().filter(|n| matches!(n.status, NodeStatus::Ran)).map(|n| n.id.as_str()).collect()
+        self.nodes
+            .iter()
+            .filter(|n| matches!(n.status, NodeStatus::Ran))
+            .map(|n| n.id.as_str())
+            .collect()
     }
     /// Error messages of failed nodes, each naming the file, node id and type.
     pub fn errors(&self) -> Vec<String> {
@@ -134,30 +141,51 @@ type Slot = Mutex<Option<Result<Arc<BTreeMap<String, Value>>, String>>>;
 impl Executor {
     /// An executor with `threads` worker threads (all cores when `None`) and an optional
     /// disk cache.
-    pub fn new(threads: Option<usize>, cache_dir: Option<&std::path::Path>) -> Result<Executor, String> {
+    pub fn new(
+        threads: Option<usize>,
+        cache_dir: Option<&std::path::Path>,
+    ) -> Result<Executor, String> {
         let mut b = rayon::ThreadPoolBuilder::new();
         if let Some(n) = threads {
             b = b.num_threads(n.max(1));
         }
-        let pool = b.build().map_err(|e| format!("cannot start threads: {e}"))?;
+        let pool = b
+            .build()
+            .map_err(|e| format!("cannot start threads: {e}"))?;
         let disk = match cache_dir {
-            Some(d) => Some(DiskCache::open(d).map_err(|e| format!("cache folder {}: {e}", d.display()))?),
+            Some(d) => {
+                Some(DiskCache::open(d).map_err(|e| format!("cache folder {}: {e}", d.display()))?)
+            }
             None => None,
         };
-        Ok(Executor { pool, memory: Mutex::new(MemoryCache::default()), disk, states: Mutex::new(HashMap::new()) })
+        Ok(Executor {
+            pool,
+            memory: Mutex::new(MemoryCache::default()),
+            disk,
+            states: Mutex::new(HashMap::new()),
+        })
     }
 
     /// Drops the state of every stateful node (simulations restart).
     pub fn reset_states(&self) {
-        self.states.lock().unwrap_or_else(|p| p.into_inner()).clear();
+        self.states
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .clear();
     }
 
     /// Runs `graph` for one frame.
     pub fn run(&self, graph: &ValidGraph, opts: &RunOptions, frame: i64) -> RunReport {
         let start = Instant::now();
-        self.memory.lock().unwrap_or_else(|p| p.into_inner()).next_generation();
+        self.memory
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .next_generation();
         let targets: Vec<usize> = match &opts.targets {
-            Some(t) => t.iter().filter_map(|id| graph.index.get(id).copied()).collect(),
+            Some(t) => t
+                .iter()
+                .filter_map(|id| graph.index.get(id).copied())
+                .collect(),
             None => graph.targets.clone(),
         };
         let need = graph.needed(&targets);
@@ -177,7 +205,16 @@ impl Executor {
                 dependents[d].push(i);
             }
         }
-        let shared = Shared { graph, opts, frame, keys: &keys, slots: &slots, reports: &reports, dependents: &dependents, pending: &pending };
+        let shared = Shared {
+            graph,
+            opts,
+            frame,
+            keys: &keys,
+            slots: &slots,
+            reports: &reports,
+            dependents: &dependents,
+            pending: &pending,
+        };
         self.pool.install(|| {
             rayon::scope(|s| {
                 for i in 0..n {
@@ -240,12 +277,21 @@ impl Executor {
     }
 
     /// Gathers inputs, consults the caches, runs the node and checks its outputs.
-    fn evaluate(&self, sh: &Shared, i: usize, report: &mut NodeReport) -> Result<Arc<BTreeMap<String, Value>>, String> {
+    fn evaluate(
+        &self,
+        sh: &Shared,
+        i: usize,
+        report: &mut NodeReport,
+    ) -> Result<Arc<BTreeMap<String, Value>>, String> {
         let node = &sh.graph.nodes[i];
         let decl = &node.decl;
         // Upstream failures block this node.
         for &d in &node.deps {
-            if let Some(Err(failed)) = sh.slots[d].lock().unwrap_or_else(|p| p.into_inner()).as_ref() {
+            if let Some(Err(failed)) = sh.slots[d]
+                .lock()
+                .unwrap_or_else(|p| p.into_inner())
+                .as_ref()
+            {
                 report.status = NodeStatus::Blocked { by: failed.clone() };
                 return Err(failed.clone());
             }
@@ -265,7 +311,9 @@ impl Executor {
         // Inputs.
         let mut inputs = BTreeMap::new();
         for (name, src) in &node.inputs {
-            let Some(sdecl) = decl.input(name) else { continue };
+            let Some(sdecl) = decl.input(name) else {
+                continue;
+            };
             let v = match src {
                 InputSource::Literal(v) | InputSource::Default(v) => v.clone(),
                 InputSource::Unset => continue,
@@ -273,13 +321,20 @@ impl Executor {
                     let mut vals = Vec::new();
                     for (j, out) in links {
                         let slot = sh.slots[*j].lock().unwrap_or_else(|p| p.into_inner());
-                        let v = slot.as_ref().and_then(|r| r.as_ref().ok()).and_then(|o| o.get(out)).cloned();
+                        let v = slot
+                            .as_ref()
+                            .and_then(|r| r.as_ref().ok())
+                            .and_then(|o| o.get(out))
+                            .cloned();
                         match v {
                             Some(v) => vals.push(v),
                             None => {
                                 let e = NodeError::new(
                                     ErrorKind::Internal,
-                                    format!("'{}' produced no output '{out}'", sh.graph.nodes[*j].id),
+                                    format!(
+                                        "'{}' produced no output '{out}'",
+                                        sh.graph.nodes[*j].id
+                                    ),
                                 )
                                 .at(name);
                                 return fail(report, e);
@@ -305,19 +360,28 @@ impl Executor {
                     inputs.insert(name.clone(), v);
                 }
                 None => {
-                    let e = NodeError::invalid(name, format!("cannot convert {} to {}", v.socket_type(), sdecl.ty));
+                    let e = NodeError::invalid(
+                        name,
+                        format!("cannot convert {} to {}", v.socket_type(), sdecl.ty),
+                    );
                     return fail(report, e);
                 }
             }
         }
         // State (taken out while the node runs, put back after).
         let mut state = if decl.stateful {
-            self.states.lock().unwrap_or_else(|p| p.into_inner()).remove(&node.id)
+            self.states
+                .lock()
+                .unwrap_or_else(|p| p.into_inner())
+                .remove(&node.id)
         } else {
             None
         };
         let Some(exec) = decl.exec.clone() else {
-            return fail(report, NodeError::new(ErrorKind::Internal, "node has no implementation"));
+            return fail(
+                report,
+                NodeError::new(ErrorKind::Internal, "node has no implementation"),
+            );
         };
         let mut ctx = ExecContext {
             node_id: &node.id,
@@ -338,7 +402,10 @@ impl Executor {
         drop(ctx);
         if decl.stateful {
             if let Some(s) = state {
-                self.states.lock().unwrap_or_else(|p| p.into_inner()).insert(node.id.clone(), s);
+                self.states
+                    .lock()
+                    .unwrap_or_else(|p| p.into_inner())
+                    .insert(node.id.clone(), s);
             }
         }
         match res {
@@ -350,19 +417,36 @@ impl Executor {
                     .cloned()
                     .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
                     .unwrap_or_default();
-                return fail(report, NodeError::new(ErrorKind::Internal, format!("the node panicked: {msg}")));
+                return fail(
+                    report,
+                    NodeError::new(ErrorKind::Internal, format!("the node panicked: {msg}")),
+                );
             }
         }
         for o in &decl.outputs {
             match outputs.get(&o.name) {
                 None if o.optional => {}
                 None => {
-                    return fail(report, NodeError::new(ErrorKind::Internal, format!("produced no output '{}'", o.name)))
+                    return fail(
+                        report,
+                        NodeError::new(
+                            ErrorKind::Internal,
+                            format!("produced no output '{}'", o.name),
+                        ),
+                    )
                 }
-                Some(v) if !o.ty.accepts(&v.socket_type()) && !matches!(v, Value::List(l) if l.is_empty()) => {
+                Some(v)
+                    if !o.ty.accepts(&v.socket_type())
+                        && !matches!(v, Value::List(l) if l.is_empty()) =>
+                {
                     let e = NodeError::new(
                         ErrorKind::Internal,
-                        format!("output '{}' should be {} but is {}", o.name, o.ty, v.socket_type()),
+                        format!(
+                            "output '{}' should be {} but is {}",
+                            o.name,
+                            o.ty,
+                            v.socket_type()
+                        ),
                     );
                     return fail(report, e);
                 }
@@ -371,20 +455,33 @@ impl Executor {
         }
         let outputs = Arc::new(outputs);
         if !decl.stateful {
-            let e = Entry { outputs: outputs.clone(), written: report.written.clone() };
+            let e = Entry {
+                outputs: outputs.clone(),
+                written: report.written.clone(),
+            };
             if let Some(d) = &self.disk {
                 d.put(&key, &e);
             }
-            self.memory.lock().unwrap_or_else(|p| p.into_inner()).put(key, e);
+            self.memory
+                .lock()
+                .unwrap_or_else(|p| p.into_inner())
+                .put(key, e);
         }
         Ok(outputs)
     }
 
     fn lookup(&self, key: &Key) -> Option<Entry> {
-        let hit = self.memory.lock().unwrap_or_else(|p| p.into_inner()).get(key);
+        let hit = self
+            .memory
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .get(key);
         let hit = hit.or_else(|| {
             let e = self.disk.as_ref()?.get(key)?;
-            self.memory.lock().unwrap_or_else(|p| p.into_inner()).put(*key, e.clone());
+            self.memory
+                .lock()
+                .unwrap_or_else(|p| p.into_inner())
+                .put(*key, e.clone());
             Some(e)
         });
         hit.filter(|e| e.files_present())
@@ -430,7 +527,8 @@ pub fn cache_keys(graph: &ValidGraph, need: &[bool], files: &FileEnv, frame: i64
                         if let Ok(m) = std::fs::metadata(&path) {
                             h.update(&m.len().to_le_bytes());
                             if let Ok(t) = m.modified().and_then(|t| {
-                                t.duration_since(std::time::UNIX_EPOCH).map_err(std::io::Error::other)
+                                t.duration_since(std::time::UNIX_EPOCH)
+                                    .map_err(std::io::Error::other)
                             }) {
                                 h.update(&t.as_nanos().to_le_bytes());
                             }

@@ -19,10 +19,14 @@ pub struct ImportError(pub String);
 
 /// Whether a JSON document is a Framework3D saved node tree.
 pub fn is_f3d(raw: &serde_json::Value) -> bool {
-    ["nodes_info", "sockets_info", "links_info"].iter().all(|k| raw.get(k).is_some())
+    ["nodes_info", "sockets_info", "links_info"]
+        .iter()
+        .all(|k| raw.get(k).is_some())
 }
 
 /// Converts a Framework3D saved node tree into a cgnodes graph.
 pub fn import(_raw: &serde_json::Value, _aliases: &Aliases) -> Result<GraphFile, ImportError> {
-    Err(ImportError("importing Framework3D graphs is not implemented yet".into()))
+    Err(ImportError(
+        "importing Framework3D graphs is not implemented yet".into(),
+    ))
 }

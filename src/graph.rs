@@ -83,10 +83,18 @@ pub struct Graph {
 pub enum LoadError {
     /// The file could not be read.
     #[error("{file}: {source}")]
-    Io { file: PathBuf, source: std::io::Error },
+    Io {
+        file: PathBuf,
+        source: std::io::Error,
+    },
     /// The JSON is malformed or does not fit the format.
     #[error("{file}:{line}:{column}: {message}")]
-    Parse { file: PathBuf, line: usize, column: usize, message: String },
+    Parse {
+        file: PathBuf,
+        line: usize,
+        column: usize,
+        message: String,
+    },
     /// The file is JSON but not a graph this build reads.
     #[error("{file}: {message}")]
     Format { file: PathBuf, message: String },
@@ -95,9 +103,16 @@ pub enum LoadError {
 /// Loads a graph file: a cgnodes graph of any supported version, or a Framework3D saved
 /// node tree (recognised by its `nodes_info`, `sockets_info` and `links_info` keys).
 pub fn load(path: &Path) -> Result<Graph, LoadError> {
-    let text = std::fs::read_to_string(path).map_err(|e| LoadError::Io { file: path.to_path_buf(), source: e })?;
+    let text = std::fs::read_to_string(path).map_err(|e| LoadError::Io {
+        file: path.to_path_buf(),
+        source: e,
+    })?;
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    let dir = if dir.as_os_str().is_empty() { PathBuf::from(".") } else { dir };
+    let dir = if dir.as_os_str().is_empty() {
+        PathBuf::from(".")
+    } else {
+        dir
+    };
     parse(&text, path, &dir)
 }
 
@@ -107,19 +122,38 @@ pub fn parse(text: &str, file: &Path, dir: &Path) -> Result<Graph, LoadError> {
         file: file.to_path_buf(),
         line: e.line(),
         column: e.column(),
-        message: e.to_string().split(" at line ").next().unwrap_or_default().to_string(),
+        message: e
+            .to_string()
+            .split(" at line ")
+            .next()
+            .unwrap_or_default()
+            .to_string(),
     };
     let raw: serde_json::Value = serde_json::from_str(text).map_err(perr)?;
-    let ferr = |m: String| LoadError::Format { file: file.to_path_buf(), message: m };
-    let obj = raw.as_object().ok_or_else(|| ferr("a graph file is a JSON object".into()))?;
+    let ferr = |m: String| LoadError::Format {
+        file: file.to_path_buf(),
+        message: m,
+    };
+    let obj = raw
+        .as_object()
+        .ok_or_else(|| ferr("a graph file is a JSON object".into()))?;
     if crate::f3d::is_f3d(&raw) {
-        let spec = crate::f3d::import(&raw, &crate::f3d::Aliases::default()).map_err(|e| ferr(e.to_string()))?;
-        return Ok(Graph { file: file.to_path_buf(), dir: dir.to_path_buf(), spec });
+        let spec = crate::f3d::import(&raw, &crate::f3d::Aliases::default())
+            .map_err(|e| ferr(e.to_string()))?;
+        return Ok(Graph {
+            file: file.to_path_buf(),
+            dir: dir.to_path_buf(),
+            spec,
+        });
     }
     match obj.get("format").and_then(|f| f.as_str()) {
         Some(FORMAT) => {}
         Some(other) => return Err(ferr(format!("format is '{other}', expected '{FORMAT}'"))),
-        None => return Err(ferr(format!("missing \"format\": \"{FORMAT}\" (or a Framework3D node tree)"))),
+        None => {
+            return Err(ferr(format!(
+                "missing \"format\": \"{FORMAT}\" (or a Framework3D node tree)"
+            )))
+        }
     }
     let version = obj
         .get("version")
@@ -129,12 +163,18 @@ pub fn parse(text: &str, file: &Path, dir: &Path) -> Result<Graph, LoadError> {
         // Deserialize from the text so errors keep their line and column.
         serde_json::from_str(text).map_err(perr)?
     } else if version > VERSION {
-        return Err(ferr(format!("version {version} is newer than this cgnodes reads ({VERSION}); please upgrade")));
+        return Err(ferr(format!(
+            "version {version} is newer than this cgnodes reads ({VERSION}); please upgrade"
+        )));
     } else {
         let migrated = migrate(raw, version).map_err(ferr)?;
         serde_json::from_value(migrated).map_err(|e| ferr(e.to_string()))?
     };
-    Ok(Graph { file: file.to_path_buf(), dir: dir.to_path_buf(), spec })
+    Ok(Graph {
+        file: file.to_path_buf(),
+        dir: dir.to_path_buf(),
+        spec,
+    })
 }
 
 /// Migrates a raw graph of an older version to the current one, one version at a time.
@@ -154,6 +194,15 @@ pub fn schema() -> serde_json::Value {
     serde_json::to_value(s).unwrap_or_default()
 }
 
+impl GraphFile {
+    /// The frame range the graph suggests in `meta.frames` (`"A..B"`), used when the command
+    /// line gives no `--frames`.
+    pub fn frames_hint(&self) -> Option<(i64, i64)> {
+        let f = self.meta.as_ref()?.get("frames")?.as_str()?;
+        crate::cli::parse_frames(f).ok()
+    }
+}
+
 /// Parses `"node.socket"`.
 pub fn split_link(s: &str) -> Option<(&str, &str)> {
     let (n, k) = s.rsplit_once('.')?;
@@ -166,8 +215,12 @@ mod tests {
 
     #[test]
     fn parse_errors_carry_line_and_column() {
-        let e = parse("{\n  \"format\": \"cgnodes-graph\",\n  \"version\": 1,\n  \"nodes\": {,}\n}", Path::new("g.json"), Path::new("."))
-            .unwrap_err();
+        let e = parse(
+            "{\n  \"format\": \"cgnodes-graph\",\n  \"version\": 1,\n  \"nodes\": {,}\n}",
+            Path::new("g.json"),
+            Path::new("."),
+        )
+        .unwrap_err();
         match e {
             LoadError::Parse { line, column, .. } => {
                 assert_eq!(line, 4);
@@ -180,13 +233,18 @@ mod tests {
     #[test]
     fn unknown_fields_are_errors() {
         let t = r#"{"format":"cgnodes-graph","version":1,"nodes":{"a":{"type":"x","param":{}}}}"#;
-        let e = parse(t, Path::new("g.json"), Path::new(".")).unwrap_err().to_string();
+        let e = parse(t, Path::new("g.json"), Path::new("."))
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("unknown field `param`"), "{e}");
     }
 
     #[test]
     fn newer_versions_are_refused() {
         let t = r#"{"format":"cgnodes-graph","version":9,"nodes":{}}"#;
-        assert!(parse(t, Path::new("g.json"), Path::new(".")).unwrap_err().to_string().contains("newer"));
+        assert!(parse(t, Path::new("g.json"), Path::new("."))
+            .unwrap_err()
+            .to_string()
+            .contains("newer"));
     }
 }

@@ -5,13 +5,19 @@ use std::path::Path;
 
 /// Writes `path` atomically: the data goes to a temporary file in the same folder, which is
 /// renamed over `path` only when `f` succeeds. A failure leaves no partial file.
-pub fn write_atomic(path: &Path, f: impl FnOnce(&mut dyn Write) -> std::io::Result<()>) -> std::io::Result<()> {
+pub fn write_atomic(
+    path: &Path,
+    f: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
+) -> std::io::Result<()> {
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
         _ => std::path::PathBuf::from("."),
     };
     std::fs::create_dir_all(&dir)?;
-    let tmp = tempfile::Builder::new().prefix(".cgnodes-").suffix(".tmp").tempfile_in(&dir)?;
+    let tmp = tempfile::Builder::new()
+        .prefix(".cgnodes-")
+        .suffix(".tmp")
+        .tempfile_in(&dir)?;
     {
         let mut w = BufWriter::new(tmp.as_file());
         f(&mut w)?;

@@ -1,3 +1,5 @@
 fn main() {
-    std::process::exit(cgnodes::cli::main_with(cgnodes::registry::Registry::builtin()));
+    std::process::exit(cgnodes::cli::main_with(
+        cgnodes::registry::Registry::builtin(),
+    ));
 }

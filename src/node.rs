@@ -35,7 +35,9 @@ use std::sync::Arc;
 pub type ExecFn = Arc<dyn Fn(&mut ExecContext) -> Result<(), NodeError> + Send + Sync>;
 
 /// What a file-path socket is for, so the runtime can resolve and guard it.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize, schemars::JsonSchema)]
+#[derive(
+    Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize, schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum FileRole {
     /// Not a path.
@@ -112,7 +114,9 @@ impl SocketDecl {
 
     /// The default as a value of the socket's type.
     pub fn default_value(&self) -> Option<Value> {
-        self.default.as_ref().and_then(|j| Value::from_json(&self.ty, j).ok())
+        self.default
+            .as_ref()
+            .and_then(|j| Value::from_json(&self.ty, j).ok())
     }
 }
 
@@ -154,7 +158,9 @@ pub struct NodeDecl {
 
 impl std::fmt::Debug for NodeDecl {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("NodeDecl").field("type", &self.type_name).finish_non_exhaustive()
+        f.debug_struct("NodeDecl")
+            .field("type", &self.type_name)
+            .finish_non_exhaustive()
     }
 }
 
@@ -267,7 +273,9 @@ impl NodeBuilder {
     /// Adds an input socket of a type known only at run time (plugins).
     pub fn add_input_of(&mut self, name: &str, ty: SocketType) -> SocketBuilder<'_> {
         self.decl.inputs.push(socket(name, ty));
-        SocketBuilder { s: self.decl.inputs.last_mut().expect("just pushed") }
+        SocketBuilder {
+            s: self.decl.inputs.last_mut().expect("just pushed"),
+        }
     }
     /// Adds an output socket of type `T`.
     pub fn add_output<T: Typed>(&mut self, name: &str) -> SocketBuilder<'_> {
@@ -276,7 +284,9 @@ impl NodeBuilder {
     /// Adds an output socket of a type known only at run time.
     pub fn add_output_of(&mut self, name: &str, ty: SocketType) -> SocketBuilder<'_> {
         self.decl.outputs.push(socket(name, ty));
-        SocketBuilder { s: self.decl.outputs.last_mut().expect("just pushed") }
+        SocketBuilder {
+            s: self.decl.outputs.last_mut().expect("just pushed"),
+        }
     }
     /// Keeps state between frames and runs every frame.
     pub fn stateful(&mut self) -> &mut Self {
@@ -366,15 +376,27 @@ pub struct NodeError {
 impl NodeError {
     /// A failure of `kind`.
     pub fn new(kind: ErrorKind, message: impl Into<String>) -> NodeError {
-        NodeError { kind, socket: None, message: message.into() }
+        NodeError {
+            kind,
+            socket: None,
+            message: message.into(),
+        }
     }
     /// A bad value on input `socket`.
     pub fn invalid(socket: &str, message: impl Into<String>) -> NodeError {
-        NodeError { kind: ErrorKind::InvalidInput, socket: Some(socket.to_string()), message: message.into() }
+        NodeError {
+            kind: ErrorKind::InvalidInput,
+            socket: Some(socket.to_string()),
+            message: message.into(),
+        }
     }
     /// A mesh with the wrong topology on input `socket`.
     pub fn topology(socket: &str, message: impl Into<String>) -> NodeError {
-        NodeError { kind: ErrorKind::Topology, socket: Some(socket.to_string()), message: message.into() }
+        NodeError {
+            kind: ErrorKind::Topology,
+            socket: Some(socket.to_string()),
+            message: message.into(),
+        }
     }
     /// A simulation that blew up.
     pub fn unstable(message: impl Into<String>) -> NodeError {
@@ -410,7 +432,12 @@ pub struct FileEnv {
 
 impl Default for FileEnv {
     fn default() -> Self {
-        FileEnv { graph_dir: ".".into(), asset_dirs: Vec::new(), out_dir: "out".into(), allow_write_anywhere: false }
+        FileEnv {
+            graph_dir: ".".into(),
+            asset_dirs: Vec::new(),
+            out_dir: "out".into(),
+            allow_write_anywhere: false,
+        }
     }
 }
 
@@ -446,7 +473,12 @@ impl FileEnv {
                     "'{p}' is absolute; outputs go under the output directory (use --allow-write-anywhere to permit this)"
                 ));
             }
-            if path.components().any(|c| !matches!(c, std::path::Component::Normal(_) | std::path::Component::CurDir)) {
+            if path.components().any(|c| {
+                !matches!(
+                    c,
+                    std::path::Component::Normal(_) | std::path::Component::CurDir
+                )
+            }) {
                 return Err(format!(
                     "'{p}' leaves the output directory; outputs go under it (use --allow-write-anywhere to permit this)"
                 ));
@@ -455,7 +487,11 @@ impl FileEnv {
         if p.is_empty() {
             return Err("empty output path".into());
         }
-        Ok(if path.is_absolute() { path.to_path_buf() } else { self.out_dir.join(path) })
+        Ok(if path.is_absolute() {
+            path.to_path_buf()
+        } else {
+            self.out_dir.join(path)
+        })
     }
 }
 
@@ -466,12 +502,16 @@ pub fn substitute_frame(p: &str, frame: i64) -> Result<String, String> {
     while let Some(i) = rest.find("{frame") {
         out.push_str(&rest[..i]);
         let tail = &rest[i..];
-        let end = tail.find('}').ok_or_else(|| format!("unclosed '{{' in '{p}'"))?;
+        let end = tail
+            .find('}')
+            .ok_or_else(|| format!("unclosed '{{' in '{p}'"))?;
         let spec = &tail[6..end];
         if spec.is_empty() {
             out.push_str(&frame.to_string());
         } else if let Some(w) = spec.strip_prefix(":0").or_else(|| spec.strip_prefix(':')) {
-            let w: usize = w.parse().map_err(|_| format!("bad frame format '{{frame{spec}}}' in '{p}'"))?;
+            let w: usize = w
+                .parse()
+                .map_err(|_| format!("bad frame format '{{frame{spec}}}' in '{p}'"))?;
             out.push_str(&format!("{frame:0w$}"));
         } else {
             return Err(format!("bad frame format '{{frame{spec}}}' in '{p}'"));
@@ -533,7 +573,8 @@ impl<'a> ExecContext<'a> {
 
     /// Reads input `name` as `T`. Fails when the input is unset or of another type.
     pub fn input<T: FromValue>(&self, name: &str) -> Result<T, NodeError> {
-        self.input_opt(name)?.ok_or_else(|| NodeError::invalid(name, "no value given"))
+        self.input_opt(name)?
+            .ok_or_else(|| NodeError::invalid(name, "no value given"))
     }
 
     /// Reads an optional input: `None` when unconnected with no default.
@@ -543,7 +584,10 @@ impl<'a> ExecContext<'a> {
             Some(v) => T::from_value(v).map(Some).ok_or_else(|| {
                 NodeError::new(
                     ErrorKind::Internal,
-                    format!("input '{name}' holds a {} which the node cannot read", v.socket_type()),
+                    format!(
+                        "input '{name}' holds a {} which the node cannot read",
+                        v.socket_type()
+                    ),
                 )
                 .at(name)
             }),
@@ -600,7 +644,9 @@ impl<'a> ExecContext<'a> {
     /// Resolves an output path under the output directory (with `{frame}` substituted);
     /// `socket` names the socket the path came from, for the error.
     pub fn output_path(&self, socket: &str, p: &str) -> Result<PathBuf, NodeError> {
-        self.files.output_path(p, self.frame).map_err(|e| NodeError::invalid(socket, e))
+        self.files
+            .output_path(p, self.frame)
+            .map_err(|e| NodeError::invalid(socket, e))
     }
 
     /// Writes a file atomically (temporary file in the same folder, then rename).
@@ -659,7 +705,10 @@ mod tests {
     #[test]
     fn frame_patterns() {
         assert_eq!(substitute_frame("a_{frame}.obj", 7).unwrap(), "a_7.obj");
-        assert_eq!(substitute_frame("a_{frame:04}.obj", 7).unwrap(), "a_0007.obj");
+        assert_eq!(
+            substitute_frame("a_{frame:04}.obj", 7).unwrap(),
+            "a_0007.obj"
+        );
         assert!(substitute_frame("a_{frame:x}.obj", 7).is_err());
     }
 
@@ -669,8 +718,14 @@ mod tests {
         assert!(env.output_path("../x.obj", 0).is_err());
         assert!(env.output_path("/tmp/x.obj", 0).is_err());
         assert!(env.output_path("a/../../x.obj", 0).is_err());
-        assert_eq!(env.output_path("sub/x.obj", 0).unwrap(), Path::new("out/sub/x.obj"));
-        let any = FileEnv { allow_write_anywhere: true, ..FileEnv::default() };
+        assert_eq!(
+            env.output_path("sub/x.obj", 0).unwrap(),
+            Path::new("out/sub/x.obj")
+        );
+        let any = FileEnv {
+            allow_write_anywhere: true,
+            ..FileEnv::default()
+        };
         assert!(any.output_path("/tmp/x.obj", 0).is_ok());
     }
 }

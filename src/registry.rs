@@ -96,7 +96,10 @@ mod tests {
     #[test]
     fn suggests_close_names() {
         let names = ["mesh_load", "mesh_save", "tutte"];
-        assert_eq!(super::closest("mesh_lod", names.iter().copied()).as_deref(), Some("mesh_load"));
+        assert_eq!(
+            super::closest("mesh_lod", names.iter().copied()).as_deref(),
+            Some("mesh_load")
+        );
         assert_eq!(super::closest("zzzzzzzzzz", names.iter().copied()), None);
     }
 }

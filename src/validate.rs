@@ -28,15 +28,28 @@ impl fmt::Display for Side {
 }
 
 fn hint(s: &Option<String>) -> String {
-    s.as_ref().map(|s| format!(" (did you mean '{s}'?)")).unwrap_or_default()
+    s.as_ref()
+        .map(|s| format!(" (did you mean '{s}'?)"))
+        .unwrap_or_default()
 }
 
 /// A problem with a graph, found before it runs.
 #[derive(Clone, Debug, thiserror::Error)]
 pub enum GraphError {
-    #[error("{file}: node '{node}': unknown node type '{node_type}'{}", hint(suggestion))]
-    UnknownNodeType { file: PathBuf, node: String, node_type: String, suggestion: Option<String> },
-    #[error("{file}: node '{node}' ({node_type}): no {side} socket '{socket}'{}", hint(suggestion))]
+    #[error(
+        "{file}: node '{node}': unknown node type '{node_type}'{}",
+        hint(suggestion)
+    )]
+    UnknownNodeType {
+        file: PathBuf,
+        node: String,
+        node_type: String,
+        suggestion: Option<String>,
+    },
+    #[error(
+        "{file}: node '{node}' ({node_type}): no {side} socket '{socket}'{}",
+        hint(suggestion)
+    )]
     UnknownSocket {
         file: PathBuf,
         node: String,
@@ -46,7 +59,12 @@ pub enum GraphError {
         suggestion: Option<String>,
     },
     #[error("{file}: node '{node}' ({node_type}): input '{socket}' is required but has no value or link")]
-    MissingInput { file: PathBuf, node: String, node_type: String, socket: String },
+    MissingInput {
+        file: PathBuf,
+        node: String,
+        node_type: String,
+        socket: String,
+    },
     #[error("{file}: node '{node}' ({node_type}): input '{socket}' expects {expected} but '{from_node}.{from_socket}' gives {actual}")]
     MismatchedInputSlotType {
         file: PathBuf,
@@ -59,19 +77,56 @@ pub enum GraphError {
         from_socket: String,
     },
     #[error("{file}: node '{node}' ({node_type}): input '{socket}': {message}")]
-    BadParam { file: PathBuf, node: String, node_type: String, socket: String, message: String },
+    BadParam {
+        file: PathBuf,
+        node: String,
+        node_type: String,
+        socket: String,
+        message: String,
+    },
     #[error("{file}: node '{node}' ({node_type}): input '{socket}' has both a literal in params and a link in inputs; give one")]
-    LiteralAndLink { file: PathBuf, node: String, node_type: String, socket: String },
+    LiteralAndLink {
+        file: PathBuf,
+        node: String,
+        node_type: String,
+        socket: String,
+    },
     #[error("{file}: node '{node}' ({node_type}): input '{socket}' links to '{link}', {reason}")]
-    DanglingLink { file: PathBuf, node: String, node_type: String, socket: String, link: String, reason: String },
+    DanglingLink {
+        file: PathBuf,
+        node: String,
+        node_type: String,
+        socket: String,
+        link: String,
+        reason: String,
+    },
     #[error("{file}: node '{node}' ({node_type}): input '{socket}' takes one link, got {count}")]
-    TooManyLinks { file: PathBuf, node: String, node_type: String, socket: String, count: usize },
+    TooManyLinks {
+        file: PathBuf,
+        node: String,
+        node_type: String,
+        socket: String,
+        count: usize,
+    },
     #[error("{file}: cycle: {}", path.join(" -> "))]
     Cycle { file: PathBuf, path: Vec<String> },
-    #[error("{file}: \"outputs\" names '{node}', which is not a node of the graph{}", hint(suggestion))]
-    UnknownTarget { file: PathBuf, node: String, suggestion: Option<String> },
+    #[error(
+        "{file}: \"outputs\" names '{node}', which is not a node of the graph{}",
+        hint(suggestion)
+    )]
+    UnknownTarget {
+        file: PathBuf,
+        node: String,
+        suggestion: Option<String>,
+    },
     #[error("{file}: node '{node}' ({node_type}): input '{socket}': file '{path}' does not exist")]
-    MissingFile { file: PathBuf, node: String, node_type: String, socket: String, path: String },
+    MissingFile {
+        file: PathBuf,
+        node: String,
+        node_type: String,
+        socket: String,
+        path: String,
+    },
 }
 
 impl GraphError {
@@ -160,8 +215,17 @@ pub fn validate(graph: &Graph, registry: &Registry) -> Result<ValidGraph, Vec<Gr
     let mut edges: Vec<(String, String)> = Vec::new();
     let mut raw_inputs: HashMap<&str, Vec<(String, RawSource)>> = HashMap::new();
     for (id, n) in &spec.nodes {
-        let Some(decl) = decls.get(id.as_str()) else { continue };
-        let ctx = |socket: &str| (file.clone(), id.clone(), n.node_type.clone(), socket.to_string());
+        let Some(decl) = decls.get(id.as_str()) else {
+            continue;
+        };
+        let ctx = |socket: &str| {
+            (
+                file.clone(),
+                id.clone(),
+                n.node_type.clone(),
+                socket.to_string(),
+            )
+        };
         let names = || decl.inputs.iter().map(|s| s.name.as_str());
         for key in n.params.keys().chain(n.inputs.keys()) {
             if decl.input(key).is_none() {
@@ -183,23 +247,43 @@ pub fn validate(graph: &Graph, registry: &Registry) -> Result<ValidGraph, Vec<Gr
             let link = n.inputs.get(&s.name);
             let src = match (lit, link) {
                 (Some(_), Some(_)) => {
-                    errors.push(GraphError::LiteralAndLink { file, node, node_type, socket });
+                    errors.push(GraphError::LiteralAndLink {
+                        file,
+                        node,
+                        node_type,
+                        socket,
+                    });
                     continue;
                 }
                 (Some(j), None) => match Value::from_json(&s.ty, j) {
                     Err(message) => {
-                        errors.push(GraphError::BadParam { file, node, node_type, socket, message });
+                        errors.push(GraphError::BadParam {
+                            file,
+                            node,
+                            node_type,
+                            socket,
+                            message,
+                        });
                         continue;
                     }
                     Ok(v) => {
                         if let Err(message) = s.check_literal(&v) {
-                            errors.push(GraphError::BadParam { file, node, node_type, socket, message });
+                            errors.push(GraphError::BadParam {
+                                file,
+                                node,
+                                node_type,
+                                socket,
+                                message,
+                            });
                             continue;
                         }
                         if s.file == FileRole::Input {
                             if let Value::String(p) = &v {
-                                let path = crate::node::FileEnv { graph_dir: graph.dir.clone(), ..Default::default() }
-                                    .input_path(p);
+                                let path = crate::node::FileEnv {
+                                    graph_dir: graph.dir.clone(),
+                                    ..Default::default()
+                                }
+                                .input_path(p);
                                 if !p.contains('{') && !path.exists() {
                                     errors.push(GraphError::MissingFile {
                                         file,
@@ -218,7 +302,13 @@ pub fn validate(graph: &Graph, registry: &Registry) -> Result<ValidGraph, Vec<Gr
                 (None, Some(l)) => {
                     let links = l.links();
                     if links.len() != 1 && !matches!(s.ty, SocketType::List(_)) {
-                        errors.push(GraphError::TooManyLinks { file, node, node_type, socket, count: links.len() });
+                        errors.push(GraphError::TooManyLinks {
+                            file,
+                            node,
+                            node_type,
+                            socket,
+                            count: links.len(),
+                        });
                         continue;
                     }
                     let mut parsed = Vec::new();
@@ -230,7 +320,8 @@ pub fn validate(graph: &Graph, registry: &Registry) -> Result<ValidGraph, Vec<Gr
                                 node_type: node_type.clone(),
                                 socket: socket.clone(),
                                 link: link.to_string(),
-                                reason: "which is not of the form \"<node id>.<output socket>\"".into(),
+                                reason: "which is not of the form \"<node id>.<output socket>\""
+                                    .into(),
                             });
                             continue;
                         };
@@ -249,7 +340,9 @@ pub fn validate(graph: &Graph, registry: &Registry) -> Result<ValidGraph, Vec<Gr
                             continue;
                         };
                         edges.push((from.to_string(), id.clone()));
-                        let Some(up_decl) = decls.get(from) else { continue };
+                        let Some(up_decl) = decls.get(from) else {
+                            continue;
+                        };
                         let Some(out_decl) = up_decl.output(out) else {
                             errors.push(GraphError::UnknownSocket {
                                 file: file.clone(),
@@ -257,7 +350,10 @@ pub fn validate(graph: &Graph, registry: &Registry) -> Result<ValidGraph, Vec<Gr
                                 node_type: up.node_type.clone(),
                                 side: Side::Output,
                                 socket: out.to_string(),
-                                suggestion: closest(out, up_decl.outputs.iter().map(|s| s.name.as_str())),
+                                suggestion: closest(
+                                    out,
+                                    up_decl.outputs.iter().map(|s| s.name.as_str()),
+                                ),
                             });
                             continue;
                         };
@@ -282,7 +378,12 @@ pub fn validate(graph: &Graph, registry: &Registry) -> Result<ValidGraph, Vec<Gr
                     Some(v) => RawSource::Default(v),
                     None if s.optional => RawSource::Unset,
                     None => {
-                        errors.push(GraphError::MissingInput { file, node, node_type, socket });
+                        errors.push(GraphError::MissingInput {
+                            file,
+                            node,
+                            node_type,
+                            socket,
+                        });
                         continue;
                     }
                 },
@@ -308,7 +409,12 @@ pub fn validate(graph: &Graph, registry: &Registry) -> Result<ValidGraph, Vec<Gr
             }
         }
         None => {
-            target_ids.extend(spec.nodes.keys().filter(|id| decls.get(id.as_str()).is_some_and(|d| d.sink)).cloned());
+            target_ids.extend(
+                spec.nodes
+                    .keys()
+                    .filter(|id| decls.get(id.as_str()).is_some_and(|d| d.sink))
+                    .cloned(),
+            );
         }
     }
     // Cycles and order, with petgraph.
@@ -326,7 +432,10 @@ pub fn validate(graph: &Graph, registry: &Registry) -> Result<ValidGraph, Vec<Gr
             for scc in petgraph::algo::tarjan_scc(&g) {
                 let cyclic = scc.len() > 1 || g.contains_edge(scc[0], scc[0]);
                 if cyclic {
-                    errors.push(GraphError::Cycle { file: file.clone(), path: cycle_path(&g, &scc) });
+                    errors.push(GraphError::Cycle {
+                        file: file.clone(),
+                        path: cycle_path(&g, &scc),
+                    });
                 }
             }
             Vec::new()
@@ -336,7 +445,11 @@ pub fn validate(graph: &Graph, registry: &Registry) -> Result<ValidGraph, Vec<Gr
         return Err(errors);
     }
     let ids: Vec<&str> = order.iter().map(|&i| g[i]).collect();
-    let index: HashMap<String, usize> = ids.iter().enumerate().map(|(i, id)| (id.to_string(), i)).collect();
+    let index: HashMap<String, usize> = ids
+        .iter()
+        .enumerate()
+        .map(|(i, id)| (id.to_string(), i))
+        .collect();
     let mut nodes = Vec::with_capacity(ids.len());
     for id in &ids {
         let raw = raw_inputs.remove(id).unwrap_or_default();
@@ -362,10 +475,21 @@ pub fn validate(graph: &Graph, registry: &Registry) -> Result<ValidGraph, Vec<Gr
             .collect();
         deps.sort_unstable();
         deps.dedup();
-        nodes.push(ValidNode { id: id.to_string(), decl: decls[id].clone(), inputs, deps });
+        nodes.push(ValidNode {
+            id: id.to_string(),
+            decl: decls[id].clone(),
+            inputs,
+            deps,
+        });
     }
     let targets = target_ids.iter().map(|t| index[t]).collect();
-    Ok(ValidGraph { file, dir: graph.dir.clone(), nodes, index, targets })
+    Ok(ValidGraph {
+        file,
+        dir: graph.dir.clone(),
+        nodes,
+        index,
+        targets,
+    })
 }
 
 enum RawSource {
@@ -424,9 +548,14 @@ impl ValidGraph {
 
     /// Graphviz text of the graph.
     pub fn to_dot(&self) -> String {
-        let mut s = String::from("digraph cgnodes {\n  rankdir=LR;\n  node [shape=record, fontname=\"sans-serif\"];\n");
+        let mut s = String::from(
+            "digraph cgnodes {\n  rankdir=LR;\n  node [shape=record, fontname=\"sans-serif\"];\n",
+        );
         for n in &self.nodes {
-            s.push_str(&format!("  \"{}\" [label=\"{}\\n({})\"];\n", n.id, n.id, n.decl.type_name));
+            s.push_str(&format!(
+                "  \"{}\" [label=\"{}\\n({})\"];\n",
+                n.id, n.id, n.decl.type_name
+            ));
         }
         for n in &self.nodes {
             for (socket, src) in &n.inputs {

@@ -3,10 +3,12 @@
 use crate::prelude::*;
 
 fn declare(b: &mut NodeBuilder) {
-    b.doc("The current frame number (0 unless the graph is run with --frames).").category("basic");
+    b.doc("The current frame number (0 unless the graph is run with --frames).")
+        .category("basic");
     b.time_dependent();
     b.add_output::<i64>("frame");
-    b.add_output::<f64>("time").doc("The frame number as a float.");
+    b.add_output::<f64>("time")
+        .doc("The frame number as a float.");
 }
 
 fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {

@@ -34,7 +34,9 @@ fn declare(b: &mut NodeBuilder) {
         .category("basic");
     b.add_input::<f64>("a").default(0.0);
     b.add_input::<f64>("b").default(0.0);
-    b.add_input::<String>("op").choices(OPS).doc("The operation.");
+    b.add_input::<String>("op")
+        .choices(OPS)
+        .doc("The operation.");
     b.add_output::<f64>("value");
 }
 

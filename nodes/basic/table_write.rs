@@ -3,10 +3,14 @@
 use crate::prelude::*;
 
 fn declare(b: &mut NodeBuilder) {
-    b.doc("Writes a scalar or a Table to CSV or JSON (chosen by the extension).").category("basic");
+    b.doc("Writes a scalar or a Table to CSV or JSON (chosen by the extension).")
+        .category("basic");
     b.sink();
-    b.add_input::<crate::types::value_any::Any>("value").doc("A number, a list of numbers, or a Table.");
-    b.add_input::<String>("path").file_out().doc("Output file (.csv or .json), under the output directory.");
+    b.add_input::<crate::types::value_any::Any>("value")
+        .doc("A number, a list of numbers, or a Table.");
+    b.add_input::<String>("path")
+        .file_out()
+        .doc("Output file (.csv or .json), under the output directory.");
 }
 
 /// The value as a Table: a Table as is, a number as a one-cell table `value`.
@@ -25,7 +29,10 @@ pub fn as_table(v: &Value) -> Option<Table> {
                     _ => None,
                 })
                 .collect();
-            Some(Table { columns: vec![("value".into(), col?)], ..Default::default() })
+            Some(Table {
+                columns: vec![("value".into(), col?)],
+                ..Default::default()
+            })
         }
         _ => None,
     }
@@ -33,22 +40,37 @@ pub fn as_table(v: &Value) -> Option<Table> {
 
 /// JSON text of a table: `{"columns": {name: [values]}, "meta": {...}}`.
 pub fn table_json(t: &Table) -> String {
-    let cols: serde_json::Map<String, serde_json::Value> =
-        t.columns.iter().map(|(n, c)| (n.clone(), serde_json::json!(c))).collect();
+    let cols: serde_json::Map<String, serde_json::Value> = t
+        .columns
+        .iter()
+        .map(|(n, c)| (n.clone(), serde_json::json!(c)))
+        .collect();
     let j = serde_json::json!({"columns": cols, "meta": t.meta});
     serde_json::to_string_pretty(&j).unwrap_or_default()
 }
 
 fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
-    let v = ctx.input_value("value").cloned().ok_or_else(|| NodeError::invalid("value", "no value"))?;
-    let table = as_table(&v)
-        .ok_or_else(|| NodeError::invalid("value", format!("a {} cannot be written as a table", v.socket_type())))?;
+    let v = ctx
+        .input_value("value")
+        .cloned()
+        .ok_or_else(|| NodeError::invalid("value", "no value"))?;
+    let table = as_table(&v).ok_or_else(|| {
+        NodeError::invalid(
+            "value",
+            format!("a {} cannot be written as a table", v.socket_type()),
+        )
+    })?;
     let p: String = ctx.input("path")?;
     let path = ctx.output_path("path", &p)?;
     let text = match path.extension().and_then(|e| e.to_str()) {
         Some("csv") => table.to_csv(),
         Some("json") => table_json(&table),
-        _ => return Err(NodeError::invalid("path", format!("'{p}' should end in .csv or .json"))),
+        _ => {
+            return Err(NodeError::invalid(
+                "path",
+                format!("'{p}' should end in .csv or .json"),
+            ))
+        }
     };
     ctx.write_file(&path, text.as_bytes())
 }

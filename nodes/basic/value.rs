@@ -9,11 +9,16 @@ fn constant<T: Typed + Into<Value> + 'static>(r: &mut Registry, name: &str, defa
         name,
         move |b| {
             b.doc(&doc).category("basic");
-            b.add_input::<T>("value").default(default).doc("The constant.");
+            b.add_input::<T>("value")
+                .default(default)
+                .doc("The constant.");
             b.add_output::<T>("value");
         },
         |ctx| {
-            let v = ctx.input_value("value").cloned().ok_or_else(|| NodeError::invalid("value", "no value"))?;
+            let v = ctx
+                .input_value("value")
+                .cloned()
+                .ok_or_else(|| NodeError::invalid("value", "no value"))?;
             ctx.set_output("value", v);
             Ok(())
         },

@@ -32,10 +32,13 @@ pub fn write_obj(mesh: &Mesh, w: &mut dyn Write) -> std::io::Result<()> {
 }
 
 fn declare(b: &mut NodeBuilder) {
-    b.doc("Writes a mesh as OBJ under the output directory.").category("mesh");
+    b.doc("Writes a mesh as OBJ under the output directory.")
+        .category("mesh");
     b.sink();
     b.add_input::<Mesh>("mesh");
-    b.add_input::<String>("path").file_out().doc("Output file; may contain {frame}.");
+    b.add_input::<String>("path")
+        .file_out()
+        .doc("Output file; may contain {frame}.");
 }
 
 fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {

@@ -33,7 +33,11 @@ pub enum AttributeData {
 #[derive(Debug, thiserror::Error, Clone, PartialEq)]
 pub enum MeshError {
     #[error("face {face} refers to vertex {index}, but the mesh has {count} vertices")]
-    IndexOutOfRange { face: usize, index: u32, count: usize },
+    IndexOutOfRange {
+        face: usize,
+        index: u32,
+        count: usize,
+    },
     #[error("face {face} has {size} corners; a face needs at least 3")]
     TooFewCorners { face: usize, size: u32 },
     #[error("face {face} repeats vertex {index}")]
@@ -43,7 +47,11 @@ pub enum MeshError {
     #[error("face sizes add up to {sum} corners but {len} indices are given")]
     CornerCount { sum: usize, len: usize },
     #[error("attribute '{name}' has {got} values but its domain has {want}")]
-    AttributeLength { name: String, got: usize, want: usize },
+    AttributeLength {
+        name: String,
+        got: usize,
+        want: usize,
+    },
 }
 
 /// A polygon mesh, laid out as USD lays it out: positions, face sizes and face vertex indices,
@@ -92,7 +100,10 @@ impl Mesh {
     }
 
     /// A triangle mesh.
-    pub fn from_triangles(positions: Vec<[f64; 3]>, triangles: &[[u32; 3]]) -> Result<Mesh, MeshError> {
+    pub fn from_triangles(
+        positions: Vec<[f64; 3]>,
+        triangles: &[[u32; 3]],
+    ) -> Result<Mesh, MeshError> {
         let counts = vec![3; triangles.len()];
         let idx = triangles.iter().flatten().copied().collect();
         Mesh::new(positions, counts, idx)
@@ -102,22 +113,35 @@ impl Mesh {
     pub fn check(&self) -> Result<(), MeshError> {
         let sum: usize = self.face_counts.iter().map(|&c| c as usize).sum();
         if sum != self.face_indices.len() {
-            return Err(MeshError::CornerCount { sum, len: self.face_indices.len() });
+            return Err(MeshError::CornerCount {
+                sum,
+                len: self.face_indices.len(),
+            });
         }
         for (i, p) in self.positions.iter().enumerate() {
             if p.iter().any(|x| !x.is_finite()) {
-                return Err(MeshError::NonFinite { vertex: i, value: *p });
+                return Err(MeshError::NonFinite {
+                    vertex: i,
+                    value: *p,
+                });
             }
         }
         let n = self.positions.len();
         for f in 0..self.num_faces() {
             let face = self.face(f);
             if face.len() < 3 {
-                return Err(MeshError::TooFewCorners { face: f, size: face.len() as u32 });
+                return Err(MeshError::TooFewCorners {
+                    face: f,
+                    size: face.len() as u32,
+                });
             }
             for (k, &v) in face.iter().enumerate() {
                 if v as usize >= n {
-                    return Err(MeshError::IndexOutOfRange { face: f, index: v, count: n });
+                    return Err(MeshError::IndexOutOfRange {
+                        face: f,
+                        index: v,
+                        count: n,
+                    });
                 }
                 if face[..k].contains(&v) {
                     return Err(MeshError::RepeatedVertex { face: f, index: v });
@@ -131,7 +155,11 @@ impl Mesh {
         };
         let check_len = |name: &str, d: Domain, got: usize| {
             if got != want(d) {
-                Err(MeshError::AttributeLength { name: name.to_string(), got, want: want(d) })
+                Err(MeshError::AttributeLength {
+                    name: name.to_string(),
+                    got,
+                    want: want(d),
+                })
             } else {
                 Ok(())
             }
@@ -216,13 +244,25 @@ impl Mesh {
             Domain::Corner => len == nc,
             Domain::Face => len == nf,
         };
-        if self.uvs.as_ref().is_some_and(|a| !fits(a.domain, a.values.len())) {
+        if self
+            .uvs
+            .as_ref()
+            .is_some_and(|a| !fits(a.domain, a.values.len()))
+        {
             self.uvs = None;
         }
-        if self.normals.as_ref().is_some_and(|a| !fits(a.domain, a.values.len())) {
+        if self
+            .normals
+            .as_ref()
+            .is_some_and(|a| !fits(a.domain, a.values.len()))
+        {
             self.normals = None;
         }
-        if self.colors.as_ref().is_some_and(|a| !fits(a.domain, a.values.len())) {
+        if self
+            .colors
+            .as_ref()
+            .is_some_and(|a| !fits(a.domain, a.values.len()))
+        {
             self.colors = None;
         }
         self.attributes.retain(|_, a| match a {
@@ -244,7 +284,12 @@ impl Mesh {
         if !self.is_triangle_mesh() {
             return None;
         }
-        Some(self.face_indices.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())
+        Some(
+            self.face_indices
+                .chunks_exact(3)
+                .map(|c| [c[0], c[1], c[2]])
+                .collect(),
+        )
     }
 
     /// A copy with every polygon split into a fan of triangles from its first corner;
@@ -281,7 +326,10 @@ impl Mesh {
         fn re<T: Clone>(a: &Attribute<T>, map: Option<&Vec<usize>>) -> Attribute<T> {
             match map {
                 None => a.clone(),
-                Some(m) => Attribute { domain: a.domain, values: m.iter().map(|&i| a.values[i].clone()).collect() },
+                Some(m) => Attribute {
+                    domain: a.domain,
+                    values: m.iter().map(|&i| a.values[i].clone()).collect(),
+                },
             }
         }
         let mut out = Mesh {
@@ -308,7 +356,8 @@ impl Mesh {
 
     /// The connectivity: edges, boundary loops, one-rings, components. Built on first use.
     pub fn topology(&self) -> &Arc<Topology> {
-        self.topology.get_or_init(|| Arc::new(Topology::build(self)))
+        self.topology
+            .get_or_init(|| Arc::new(Topology::build(self)))
     }
 
     /// Per-vertex UVs, when the mesh has them per vertex (or per corner but consistent
@@ -359,19 +408,37 @@ mod tests {
         let p = vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
         assert!(matches!(
             Mesh::from_triangles(p.clone(), &[[0, 1, 3]]),
-            Err(MeshError::IndexOutOfRange { face: 0, index: 3, .. })
+            Err(MeshError::IndexOutOfRange {
+                face: 0,
+                index: 3,
+                ..
+            })
         ));
-        assert!(matches!(Mesh::from_triangles(p.clone(), &[[0, 1, 1]]), Err(MeshError::RepeatedVertex { .. })));
+        assert!(matches!(
+            Mesh::from_triangles(p.clone(), &[[0, 1, 1]]),
+            Err(MeshError::RepeatedVertex { .. })
+        ));
         let mut bad = p.clone();
         bad[1][2] = f64::NAN;
-        assert!(matches!(Mesh::from_triangles(bad, &[[0, 1, 2]]), Err(MeshError::NonFinite { vertex: 1, .. })));
+        assert!(matches!(
+            Mesh::from_triangles(bad, &[[0, 1, 2]]),
+            Err(MeshError::NonFinite { vertex: 1, .. })
+        ));
     }
 
     #[test]
     fn triangulates_quads_keeping_corner_uvs() {
-        let p = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]];
+        let p = vec![
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [0.0, 1.0, 0.0],
+        ];
         let mut m = Mesh::new(p, vec![4], vec![0, 1, 2, 3]).unwrap();
-        m.uvs = Some(Attribute { domain: Domain::Corner, values: vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]] });
+        m.uvs = Some(Attribute {
+            domain: Domain::Corner,
+            values: vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]],
+        });
         let t = Arc::new(m).triangulated();
         assert_eq!(t.triangles().unwrap(), vec![[0, 1, 2], [0, 2, 3]]);
         assert_eq!(t.uvs.as_ref().unwrap().values[5], [0.0, 1.0]);

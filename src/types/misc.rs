@@ -15,7 +15,11 @@ pub struct Image {
 impl Image {
     /// An image filled with one colour.
     pub fn new(width: u32, height: u32, fill: [f32; 4]) -> Image {
-        Image { width, height, pixels: vec![fill; width as usize * height as usize] }
+        Image {
+            width,
+            height,
+            pixels: vec![fill; width as usize * height as usize],
+        }
     }
 
     /// The pixel at column `x`, row `y` (row 0 at the top).
@@ -56,7 +60,10 @@ pub struct Table {
 impl Table {
     /// An empty table with these column names.
     pub fn with_columns(names: &[&str]) -> Table {
-        Table { columns: names.iter().map(|n| (n.to_string(), Vec::new())).collect(), meta: BTreeMap::new() }
+        Table {
+            columns: names.iter().map(|n| (n.to_string(), Vec::new())).collect(),
+            meta: BTreeMap::new(),
+        }
     }
 
     /// A one-row table from name/value pairs.
@@ -76,7 +83,10 @@ impl Table {
 
     /// The column called `name`.
     pub fn column(&self, name: &str) -> Option<&[f64]> {
-        self.columns.iter().find(|(n, _)| n == name).map(|(_, c)| c.as_slice())
+        self.columns
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, c)| c.as_slice())
     }
 
     /// Adds or replaces a column.
@@ -94,11 +104,19 @@ impl Table {
 
     /// CSV text with a header row.
     pub fn to_csv(&self) -> String {
-        let mut s = self.columns.iter().map(|(n, _)| n.as_str()).collect::<Vec<_>>().join(",");
+        let mut s = self
+            .columns
+            .iter()
+            .map(|(n, _)| n.as_str())
+            .collect::<Vec<_>>()
+            .join(",");
         s.push('\n');
         for r in 0..self.num_rows() {
-            let row: Vec<String> =
-                self.columns.iter().map(|(_, c)| c.get(r).map(|v| format!("{v}")).unwrap_or_default()).collect();
+            let row: Vec<String> = self
+                .columns
+                .iter()
+                .map(|(_, c)| c.get(r).map(|v| format!("{v}")).unwrap_or_default())
+                .collect();
             s.push_str(&row.join(","));
             s.push('\n');
         }

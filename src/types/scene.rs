@@ -69,9 +69,17 @@ impl Camera {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub enum Light {
     /// A point light radiating `color * intensity` (W/sr per channel) in every direction.
-    Point { position: [f64; 3], color: [f64; 3], intensity: f64 },
+    Point {
+        position: [f64; 3],
+        color: [f64; 3],
+        intensity: f64,
+    },
     /// A distant light travelling along `direction`, with irradiance `color * intensity`.
-    Directional { direction: [f64; 3], color: [f64; 3], intensity: f64 },
+    Directional {
+        direction: [f64; 3],
+        color: [f64; 3],
+        intensity: f64,
+    },
 }
 
 /// How a surface scatters light (used by the ray and path tracers; the rasterizer uses
@@ -150,6 +158,12 @@ pub struct Scene {
 impl Scene {
     /// A scene holding just one mesh (the implicit Mesh to Scene conversion).
     pub fn from_mesh(mesh: Arc<Mesh>) -> Scene {
-        Scene { objects: vec![SceneObject { mesh, material: None }], ..Default::default() }
+        Scene {
+            objects: vec![SceneObject {
+                mesh,
+                material: None,
+            }],
+            ..Default::default()
+        }
     }
 }

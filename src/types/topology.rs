@@ -103,7 +103,8 @@ impl Topology {
             i = j;
         }
         // One-rings.
-        let (neighbor_start, neighbors) = csr(nv, edges.iter().flat_map(|&[a, b]| [(a, b), (b, a)]));
+        let (neighbor_start, neighbors) =
+            csr(nv, edges.iter().flat_map(|&[a, b]| [(a, b), (b, a)]));
         let (vface_start, vfaces) = csr(nv, (0..nc).map(|c| (idx[c], corner_face[c])));
         // Boundary half-edges: corners whose edge has a single face.
         let boundary_out = |c: usize| edge_faces[corner_edge[c] as usize][1] == NONE;
@@ -144,7 +145,9 @@ impl Topology {
                 let c = out_corner[h] as usize;
                 lp.push(idx[c]);
                 let w = idx[next_corner[c] as usize] as usize;
-                let cand = (out_start[w]..out_start[w + 1]).map(|k| k as usize).find(|&k| !used[k]);
+                let cand = (out_start[w]..out_start[w + 1])
+                    .map(|k| k as usize)
+                    .find(|&k| !used[k]);
                 match cand {
                     Some(k) => h = k,
                     None => break,
@@ -187,7 +190,9 @@ impl Topology {
                     }
                 }
             }
-            let roots = (0..fs.len() as u32).filter(|&a| find(&mut local, a) == a).count();
+            let roots = (0..fs.len() as u32)
+                .filter(|&a| find(&mut local, a) == a)
+                .count();
             if roots > 1 {
                 nonmanifold_vertices.push(v as u32);
             }
@@ -220,7 +225,9 @@ impl Topology {
             }
             vertex_component[v] = comp_id[r];
         }
-        let isolated_vertices = (0..nv).filter(|&v| vface_start[v] == vface_start[v + 1]).count();
+        let isolated_vertices = (0..nv)
+            .filter(|&v| vface_start[v] == vface_start[v + 1])
+            .count();
         Topology {
             num_vertices: nv,
             num_faces: nf,
@@ -257,7 +264,8 @@ impl Topology {
         let nb = self.neighbors(v);
         // A vertex is on the boundary when one of its edges has a single face.
         nb.iter().any(|&w| {
-            self.edge_index(v as u32, w).is_some_and(|e| self.edge_faces[e][1] == NONE)
+            self.edge_index(v as u32, w)
+                .is_some_and(|e| self.edge_faces[e][1] == NONE)
         })
     }
 
@@ -274,13 +282,16 @@ impl Topology {
 
     /// V - E + F, counting only vertices that some face uses.
     pub fn euler_characteristic(&self) -> i64 {
-        (self.num_vertices - self.isolated_vertices) as i64 - self.edges.len() as i64 + self.num_faces as i64
+        (self.num_vertices - self.isolated_vertices) as i64 - self.edges.len() as i64
+            + self.num_faces as i64
     }
 
     /// Whether every edge has at most two faces, consistently oriented, and every vertex is a
     /// single fan.
     pub fn is_manifold(&self) -> bool {
-        self.nonmanifold_edges.is_empty() && self.nonmanifold_vertices.is_empty() && self.misoriented_edges.is_empty()
+        self.nonmanifold_edges.is_empty()
+            && self.nonmanifold_vertices.is_empty()
+            && self.misoriented_edges.is_empty()
     }
 
     /// Number of connected components that have faces.
@@ -314,16 +325,29 @@ impl Topology {
             ));
         }
         if self.num_face_components() != 1 {
-            return Err(format!("mesh has {} connected components; a disk is needed", self.num_face_components()));
+            return Err(format!(
+                "mesh has {} connected components; a disk is needed",
+                self.num_face_components()
+            ));
         }
         match self.boundary_loops.len() {
-            0 => return Err("mesh is closed (no boundary loop); a disk is needed: cut it open first".into()),
+            0 => {
+                return Err(
+                    "mesh is closed (no boundary loop); a disk is needed: cut it open first".into(),
+                )
+            }
             1 => {}
-            n => return Err(format!("mesh has {n} boundary loops; a disk is needed; use holes: fill")),
+            n => {
+                return Err(format!(
+                    "mesh has {n} boundary loops; a disk is needed; use holes: fill"
+                ))
+            }
         }
         let chi = self.euler_characteristic();
         if chi != 1 {
-            return Err(format!("mesh has Euler characteristic {chi} (genus > 0); a disk has 1"));
+            return Err(format!(
+                "mesh has Euler characteristic {chi} (genus > 0); a disk has 1"
+            ));
         }
         Ok(())
     }
@@ -402,7 +426,13 @@ mod tests {
         assert!(t.boundary_loops.is_empty());
         assert!(t.check_disk().unwrap_err().contains("closed"));
         // two triangles sharing only a vertex
-        let p = vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]];
+        let p = vec![
+            [0.0; 3],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [-1.0, 0.0, 0.0],
+            [0.0, -1.0, 0.0],
+        ];
         let m = Mesh::from_triangles(p, &[[0, 1, 2], [0, 3, 4]]).unwrap();
         assert_eq!(m.topology().nonmanifold_vertices, vec![0]);
         assert!(!m.topology().is_manifold());

@@ -150,7 +150,10 @@ impl Value {
     pub fn from_json(ty: &SocketType, j: &serde_json::Value) -> Result<Value, String> {
         use serde_json::Value as J;
         use SocketType as T;
-        let num = |j: &J| j.as_f64().ok_or_else(|| format!("expected a number, got {j}"));
+        let num = |j: &J| {
+            j.as_f64()
+                .ok_or_else(|| format!("expected a number, got {j}"))
+        };
         let arr = |j: &J, n: usize| -> Result<Vec<f64>, String> {
             match j {
                 J::Array(a) if a.len() == n => a.iter().map(num).collect(),
@@ -159,10 +162,16 @@ impl Value {
             }
         };
         Ok(match ty {
-            T::Bool => Value::Bool(j.as_bool().ok_or_else(|| format!("expected true or false, got {j}"))?),
+            T::Bool => Value::Bool(
+                j.as_bool()
+                    .ok_or_else(|| format!("expected true or false, got {j}"))?,
+            ),
             T::Int => match j {
                 J::Number(n) if n.is_i64() => Value::Int(n.as_i64().unwrap_or_default()),
-                J::Number(n) if n.as_f64().is_some_and(|f| f.fract() == 0.0 && f.abs() < 9e15) => {
+                J::Number(n)
+                    if n.as_f64()
+                        .is_some_and(|f| f.fract() == 0.0 && f.abs() < 9e15) =>
+                {
                     Value::Int(n.as_f64().unwrap_or_default() as i64)
                 }
                 _ => return Err(format!("expected an integer, got {j}")),
@@ -175,7 +184,9 @@ impl Value {
                 Value::Float(x)
             }
             T::String => Value::String(
-                j.as_str().ok_or_else(|| format!("expected a string, got {j}"))?.to_string(),
+                j.as_str()
+                    .ok_or_else(|| format!("expected a string, got {j}"))?
+                    .to_string(),
             ),
             T::Vec2 => {
                 let a = arr(j, 2)?;
@@ -191,7 +202,9 @@ impl Value {
             }
             T::List(inner) => match j {
                 J::Array(a) => Value::List(Arc::new(
-                    a.iter().map(|x| Value::from_json(inner, x)).collect::<Result<_, _>>()?,
+                    a.iter()
+                        .map(|x| Value::from_json(inner, x))
+                        .collect::<Result<_, _>>()?,
                 )),
                 other => Value::List(Arc::new(vec![Value::from_json(inner, other)?])),
             },
@@ -226,7 +239,11 @@ impl Value {
     /// A short human description (for `print` and logs).
     pub fn summary(&self) -> String {
         match self {
-            Value::Mesh(m) => format!("mesh: {} vertices, {} faces", m.positions.len(), m.num_faces()),
+            Value::Mesh(m) => format!(
+                "mesh: {} vertices, {} faces",
+                m.positions.len(),
+                m.num_faces()
+            ),
             Value::Image(i) => format!("image: {}x{}", i.width, i.height),
             Value::Points(p) => format!("points: {} ({}-D)", p.positions.len(), p.dim),
             Value::Table(t) => {
@@ -234,9 +251,18 @@ impl Value {
                 for (name, col) in &t.columns {
                     s.push_str(&format!("{name}: {:?}\n", col.last()));
                 }
-                format!("table: {} columns, {} rows\n{}", t.columns.len(), t.num_rows(), s.trim_end())
+                format!(
+                    "table: {} columns, {} rows\n{}",
+                    t.columns.len(),
+                    t.num_rows(),
+                    s.trim_end()
+                )
             }
-            Value::Scene(s) => format!("scene: {} objects, {} lights", s.objects.len(), s.lights.len()),
+            Value::Scene(s) => format!(
+                "scene: {} objects, {} lights",
+                s.objects.len(),
+                s.lights.len()
+            ),
             other => match other.to_json() {
                 Some(j) => j.to_string(),
                 None => format!("{}", other.socket_type()),
@@ -381,7 +407,6 @@ impl Typed for AnyValue {
     }
 }
 
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -400,9 +425,15 @@ mod tests {
     #[test]
     fn literals_parse_by_type() {
         let j: serde_json::Value = serde_json::json!([1, 2, 3]);
-        assert!(matches!(Value::from_json(&SocketType::Vec3, &j), Ok(Value::Vec3(_))));
+        assert!(matches!(
+            Value::from_json(&SocketType::Vec3, &j),
+            Ok(Value::Vec3(_))
+        ));
         assert!(Value::from_json(&SocketType::Int, &serde_json::json!(2.5)).is_err());
         assert!(Value::from_json(&SocketType::Mesh, &serde_json::json!("x")).is_err());
-        assert_eq!(SocketType::List(Box::new(SocketType::Mesh)).to_string(), "list<mesh>");
+        assert_eq!(
+            SocketType::List(Box::new(SocketType::Mesh)).to_string(),
+            "list<mesh>"
+        );
     }
 }

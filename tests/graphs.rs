@@ -1,0 +1,84 @@
+//! Every example graph in `graphs/` validates and runs end to end on the shipped assets.
+
+use cgnodes::exec::{Executor, RunOptions};
+use cgnodes::node::FileEnv;
+use cgnodes::registry::Registry;
+use std::path::Path;
+
+#[test]
+fn every_example_graph_runs() {
+    let registry = Registry::builtin();
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("graphs");
+    let mut files: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|e| e == "json"))
+        .collect();
+    files.sort();
+    assert!(
+        files.len() >= 3,
+        "expected example graphs in {}",
+        dir.display()
+    );
+    let mut failures = Vec::new();
+    for f in &files {
+        let g = match cgnodes::graph::load(f) {
+            Ok(g) => g,
+            Err(e) => {
+                failures.push(format!("{e}"));
+                continue;
+            }
+        };
+        let (f0, f1) = g.spec.frames_hint().unwrap_or((0, 0));
+        let valid = match cgnodes::validate::validate(&g, &registry) {
+            Ok(v) => v,
+            Err(errs) => {
+                failures.extend(errs.iter().map(|e| e.to_string()));
+                continue;
+            }
+        };
+        let out = tempfile::tempdir().unwrap();
+        let exec = Executor::new(None, None).unwrap();
+        let opts = RunOptions {
+            files: FileEnv {
+                graph_dir: valid.dir.clone(),
+                out_dir: out.path().to_path_buf(),
+                ..Default::default()
+            },
+            ..Default::default()
+        };
+        for frame in f0..=f1 {
+            let r = exec.run(&valid, &opts, frame);
+            failures.extend(r.errors());
+            assert!(!r.nodes.is_empty());
+        }
+        let written = walk(out.path());
+        if written == 0
+            && valid.nodes.iter().any(|n| {
+                n.decl
+                    .inputs
+                    .iter()
+                    .any(|s| s.file == cgnodes::node::FileRole::Output)
+            })
+        {
+            failures.push(format!("{}: wrote no file", f.display()));
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+fn walk(p: &Path) -> usize {
+    std::fs::read_dir(p)
+        .map(|rd| {
+            rd.filter_map(|e| e.ok())
+                .map(|e| {
+                    if e.path().is_dir() {
+                        walk(&e.path())
+                    } else {
+                        1
+                    }
+                })
+                .sum()
+        })
+        .unwrap_or(0)
+}

@@ -12,7 +12,9 @@ fn generate(n: usize) -> String {
     let chains = n / 10;
     let mut nodes = Vec::new();
     for c in 0..chains {
-        nodes.push(format!(r#""c{c}_0": {{"type": "value_float", "params": {{"value": {c}}}}}"#));
+        nodes.push(format!(
+            r#""c{c}_0": {{"type": "value_float", "params": {{"value": {c}}}}}"#
+        ));
         for k in 1..9 {
             nodes.push(format!(
                 r#""c{c}_{k}": {{"type": "math", "params": {{"op": "add", "b": 1}}, "inputs": {{"a": "c{c}_{}.value"}}}}"#,
@@ -21,7 +23,10 @@ fn generate(n: usize) -> String {
         }
         nodes.push(format!(r#""c{c}_9": {{"type": "print", "params": {{"label": "x"}}, "inputs": {{"value": "c{c}_8.value"}}}}"#));
     }
-    format!(r#"{{"format": "cgnodes-graph", "version": 1, "nodes": {{{}}}, "outputs": []}}"#, nodes.join(",\n"))
+    format!(
+        r#"{{"format": "cgnodes-graph", "version": 1, "nodes": {{{}}}, "outputs": []}}"#,
+        nodes.join(",\n")
+    )
 }
 
 fn main() {
@@ -34,7 +39,13 @@ fn main() {
     });
     let registry = Registry::builtin();
     let exec = Executor::new(None, None).unwrap();
-    let opts = RunOptions { files: FileEnv { out_dir: std::env::temp_dir(), ..Default::default() }, ..Default::default() };
+    let opts = RunOptions {
+        files: FileEnv {
+            out_dir: std::env::temp_dir(),
+            ..Default::default()
+        },
+        ..Default::default()
+    };
     let mut rows = Vec::new();
     for rep in 0..5 {
         let t0 = Instant::now();
@@ -53,7 +64,10 @@ fn main() {
         let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;
         rows.push([ms(t0, t1), ms(t1, t2), ms(t2, t3), ms(t3, t4)]);
         if rep == 0 {
-            println!("graph: {n} nodes, {} run per evaluation", r.executed().len());
+            println!(
+                "graph: {n} nodes, {} run per evaluation",
+                r.executed().len()
+            );
         }
     }
     rows.sort_by(|a, b| (a[0] + a[1] + a[2]).total_cmp(&(b[0] + b[1] + b[2])));

@@ -4,6 +4,7 @@
 
 pub mod basic;
 pub mod mesh;
+pub mod metrics;
 pub mod param;
 pub mod render;
 pub mod sim;
@@ -15,6 +16,7 @@ use crate::registry::Registry;
 pub fn register_all(r: &mut Registry) {
     basic::register(r);
     mesh::register(r);
+    metrics::register(r);
     param::register(r);
     render::register(r);
     trace::register(r);

@@ -62,6 +62,8 @@ enum Cmd {
         /// Graph file.
         graph: PathBuf,
     },
+    /// Run a graph for every combination of parameter values; write a CSV and a chart.
+    Sweep(SweepArgs),
     /// Convert a Framework3D saved node tree to a cgnodes graph.
     ImportF3d {
         /// Framework3D JSON file.
@@ -73,6 +75,57 @@ enum Cmd {
         #[arg(long = "f3d-aliases")]
         aliases: Option<PathBuf>,
     },
+}
+
+#[derive(clap::Args)]
+struct SweepArgs {
+    /// A graph file, or a sweep file (JSON with a "graph" field; see docs/sweep.md).
+    target: PathBuf,
+    /// Values to try: NODE.PARAM=v1,v2,... (repeatable; every combination runs).
+    #[arg(long = "vary", value_name = "NODE.PARAM=V1,V2,...")]
+    vary: Vec<String>,
+    /// Fixed override for every run: NODE.SOCKET=VALUE (repeatable).
+    #[arg(long = "set", value_name = "NODE.SOCKET=VALUE")]
+    set: Vec<String>,
+    /// Runs per combination.
+    #[arg(long)]
+    repeat: Option<usize>,
+    /// Output to record: NODE.SOCKET, or NODE.SOCKET:COLUMN[:last|mean|max|min|sum] for a table.
+    #[arg(long = "measure", value_name = "NODE.SOCKET[:COLUMN[:SUMMARY]]")]
+    measure: Vec<String>,
+    /// CSV file to write.
+    #[arg(long)]
+    csv: Option<PathBuf>,
+    /// Chart to write (.svg or .png).
+    #[arg(long)]
+    plot: Option<PathBuf>,
+    /// X axis: time, time:NODE, a measure or a varied parameter.
+    #[arg(long)]
+    x: Option<String>,
+    /// Y axis: a measure (default: the first).
+    #[arg(long)]
+    y: Option<String>,
+    /// Varied parameter whose values name the series.
+    #[arg(long)]
+    series: Option<String>,
+    /// Logarithmic x axis.
+    #[arg(long)]
+    log_x: bool,
+    /// Logarithmic y axis.
+    #[arg(long)]
+    log_y: bool,
+    /// Chart title.
+    #[arg(long)]
+    title: Option<String>,
+    /// Frame range A..B per run.
+    #[arg(long)]
+    frames: Option<String>,
+    /// Output directory for the graph's writers (default: a temporary folder).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Worker threads.
+    #[arg(long)]
+    threads: Option<usize>,
 }
 
 #[derive(clap::Args)]
@@ -179,11 +232,89 @@ pub fn main_with(registry: Registry) -> i32 {
             }
             Err(c) => c,
         },
+        Cmd::Sweep(args) => cmd_sweep(&registry, args),
         Cmd::ImportF3d {
             input,
             output,
             aliases,
         } => cmd_import(&input, &output, aliases.as_deref()),
+    }
+}
+
+fn cmd_sweep(registry: &Registry, a: SweepArgs) -> i32 {
+    use crate::sweep::{parse_vary, SweepSpec};
+    let raw: Option<serde_json::Value> = std::fs::read_to_string(&a.target)
+        .ok()
+        .and_then(|t| serde_json::from_str(&t).ok());
+    let is_sweep_file = raw
+        .as_ref()
+        .is_some_and(|r| r.get("graph").is_some() && r.get("nodes").is_none());
+    let (mut spec, base) = if is_sweep_file {
+        match serde_json::from_value::<SweepSpec>(raw.unwrap_or_default()) {
+            Ok(s) => (
+                s,
+                a.target.parent().map(Path::to_path_buf).unwrap_or_default(),
+            ),
+            Err(e) => {
+                eprintln!("error: {}: {e}", a.target.display());
+                return EXIT_INVALID;
+            }
+        }
+    } else {
+        (
+            SweepSpec {
+                graph: a.target.clone(),
+                repeat: 1,
+                ..Default::default()
+            },
+            PathBuf::from("."),
+        )
+    };
+    for v in &a.vary {
+        match parse_vary(v) {
+            Ok(v) => spec.vary.push(v),
+            Err(e) => {
+                eprintln!("error: {e}");
+                return EXIT_USAGE;
+            }
+        }
+    }
+    spec.set.extend(a.set);
+    spec.measure.extend(a.measure);
+    if let Some(r) = a.repeat {
+        spec.repeat = r;
+    }
+    // Paths given on the command line are relative to the current folder.
+    let here = |p: PathBuf| {
+        if is_sweep_file && p.is_relative() {
+            std::env::current_dir().unwrap_or_default().join(p)
+        } else {
+            p
+        }
+    };
+    spec.csv = a.csv.map(here).or(spec.csv);
+    spec.plot = a.plot.map(here).or(spec.plot);
+    spec.out = a.out.map(here).or(spec.out);
+    spec.x = a.x.or(spec.x);
+    spec.y = a.y.or(spec.y);
+    spec.series = a.series.or(spec.series);
+    spec.title = a.title.or(spec.title);
+    spec.frames = a.frames.or(spec.frames);
+    spec.log_x |= a.log_x;
+    spec.log_y |= a.log_y;
+    match crate::sweep::run_and_write(&spec, &base, registry, a.threads) {
+        Ok(rows) => {
+            let failed = rows.iter().filter(|r| !r.ok).count();
+            eprintln!("{} runs, {} failed", rows.len(), failed);
+            if spec.csv.is_none() {
+                print!("{}", crate::sweep::to_csv(&spec, &rows));
+            }
+            0
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            EXIT_INVALID
+        }
     }
 }
 
@@ -420,6 +551,7 @@ fn cmd_run(registry: &Registry, args: RunArgs) -> i32 {
         },
         progress,
         measure_memory: args.profile || args.profile_json.is_some(),
+        recompute: Vec::new(),
     };
     let mut code = 0;
     let mut profile = Vec::new();

@@ -24,6 +24,9 @@ pub struct RunOptions {
     pub progress: Option<ProgressFn>,
     /// Record resident memory after each node (for `--profile`; costs a /proc read per node).
     pub measure_memory: bool,
+    /// Node ids that must run even when cached, with everything downstream of them
+    /// (`cgnodes sweep --repeat` times real executions this way).
+    pub recompute: Vec<String>,
 }
 
 /// What happened to one node in a run.
@@ -193,6 +196,11 @@ impl Executor {
         let need = graph.needed(&targets);
         let n = graph.nodes.len();
         let keys = cache_keys(graph, &need, &opts.files, frame);
+        let mut fresh = vec![false; n];
+        for (i, node) in graph.nodes.iter().enumerate() {
+            fresh[i] =
+                opts.recompute.iter().any(|r| *r == node.id) || node.deps.iter().any(|&d| fresh[d]);
+        }
         let slots: Vec<Slot> = (0..n).map(|_| Mutex::new(None)).collect();
         let reports: Vec<Mutex<Option<NodeReport>>> = (0..n).map(|_| Mutex::new(None)).collect();
         // Dependents and pending counts over the needed subgraph.
@@ -212,6 +220,7 @@ impl Executor {
             opts,
             frame,
             keys: &keys,
+            fresh: &fresh,
             slots: &slots,
             reports: &reports,
             dependents: &dependents,
@@ -301,7 +310,7 @@ impl Executor {
             }
         }
         let key = sh.keys[i];
-        if !decl.stateful {
+        if !decl.stateful && !sh.fresh[i] {
             if let Some(e) = self.lookup(&key) {
                 report.status = NodeStatus::Cached;
                 report.written = e.written.clone();
@@ -497,6 +506,7 @@ struct Shared<'a> {
     opts: &'a RunOptions,
     frame: i64,
     keys: &'a [Key],
+    fresh: &'a [bool],
     slots: &'a [Slot],
     reports: &'a [Mutex<Option<NodeReport>>],
     dependents: &'a [Vec<usize>],

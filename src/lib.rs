@@ -6,6 +6,7 @@
 //! small family; each node's algorithm is a plain function callable without the runtime.
 
 pub mod cache;
+pub mod chart;
 pub mod cli;
 pub mod exec;
 pub mod f3d;
@@ -13,6 +14,7 @@ pub mod graph;
 pub mod io;
 pub mod node;
 pub mod registry;
+pub mod sweep;
 pub mod types;
 pub mod validate;
 

@@ -1,0 +1,160 @@
+//! `cgnodes sweep`: every combination runs, failures are recorded without stopping the
+//! sweep, upstream nodes are served from the cache, and the CSV and chart are written.
+
+use cgnodes::registry::Registry;
+use cgnodes::sweep::{parse_vary, run_and_write, SweepSpec};
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex};
+
+const GRAPH: &str = r#"{"format":"cgnodes-graph","version":1,"nodes":{
+  "source":{"type":"slow_source","params":{"value":8}},
+  "d":{"type":"math","params":{"op":"div","b":2},"inputs":{"a":"source.value"}},
+  "err":{"type":"math","params":{"op":"sub","b":4},"inputs":{"a":"d.value"}},
+  "w":{"type":"table_write","params":{"path":"e.csv"},"inputs":{"value":"err.value"}}}}"#;
+
+fn registry(count: Arc<Mutex<HashMap<String, usize>>>) -> Registry {
+    let mut r = Registry::builtin();
+    r.add(
+        "slow_source",
+        |b| {
+            b.add_input::<f64>("value").default(1.0);
+            b.add_output::<f64>("value");
+        },
+        move |ctx| {
+            *count
+                .lock()
+                .unwrap()
+                .entry(ctx.node_id.to_string())
+                .or_default() += 1;
+            let v: f64 = ctx.input("value")?;
+            ctx.set_output("value", v);
+            Ok(())
+        },
+    );
+    r
+}
+
+#[test]
+fn a_sweep_records_every_combination_and_failure_and_reuses_upstream_results() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("g.json"), GRAPH).unwrap();
+    let counts: Arc<Mutex<HashMap<String, usize>>> = Arc::default();
+    let r = registry(counts.clone());
+    let spec = SweepSpec {
+        graph: "g.json".into(),
+        vary: vec![
+            parse_vary("d.b=0,1,2,4").unwrap(),
+            parse_vary("d.op=div,mul").unwrap(),
+        ],
+        repeat: 2,
+        measure: vec!["err.value".into(), "d.value".into()],
+        csv: Some("sweep.csv".into()),
+        plot: Some("sweep.svg".into()),
+        x: Some("d.b".into()),
+        y: Some("err.value".into()),
+        ..Default::default()
+    };
+    let rows = run_and_write(&spec, dir.path(), &r, Some(2)).unwrap();
+    assert_eq!(rows.len(), 4 * 2 * 2);
+    // Division by zero fails (twice: two repeats) and the sweep goes on.
+    let failed: Vec<_> = rows.iter().filter(|r| !r.ok).collect();
+    assert_eq!(failed.len(), 2);
+    assert!(failed
+        .iter()
+        .all(|r| r.error_kind == "invalid_input" && r.error.contains("d (math)")));
+    // Measured values are right: 8 / b - 4 and 8 * b - 4.
+    for row in rows.iter().filter(|r| r.ok) {
+        let b = row.values[0].as_f64().unwrap();
+        let want = if row.values[1] == "div" {
+            8.0 / b - 4.0
+        } else {
+            8.0 * b - 4.0
+        };
+        assert_eq!(row.measures[0], want);
+    }
+    // The upstream node ran once for the whole sweep.
+    assert_eq!(counts.lock().unwrap()["source"], 1);
+    // Repeats re-executed the varied node (its time is real, not a cache hit).
+    assert!(rows
+        .iter()
+        .filter(|r| r.ok && r.repeat == 1)
+        .all(|r| r.node_ms["d"] > 0.0));
+    let csv = std::fs::read_to_string(dir.path().join("sweep.csv")).unwrap();
+    let mut lines = csv.lines();
+    let head: Vec<&str> = lines.next().unwrap().split(',').collect();
+    assert_eq!(
+        &head[..7],
+        [
+            "d.b",
+            "d.op",
+            "repeat",
+            "status",
+            "error_kind",
+            "error",
+            "total_ms"
+        ]
+    );
+    assert!(head.contains(&"ms:source") && head.ends_with(&["err.value", "d.value"]));
+    assert_eq!(lines.clone().count(), 16);
+    assert_eq!(
+        lines
+            .filter(|l| l.contains(",failed,invalid_input,"))
+            .count(),
+        2
+    );
+    let svg = std::fs::read_to_string(dir.path().join("sweep.svg")).unwrap();
+    assert!(
+        svg.contains("<svg")
+            && svg.contains("failed (2)")
+            && svg.contains("div")
+            && svg.contains("mul")
+    );
+}
+
+#[test]
+fn a_sweep_file_through_the_command_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let graph = concat!(env!("CARGO_MANIFEST_DIR"), "/graphs/arithmetic.json");
+    let sweep = serde_json::json!({
+        "graph": graph,
+        "vary": [{"param": "radius.value", "values": [1, 2, 3]}],
+        "measure": ["pi_r2.value"],
+        "csv": "areas.csv",
+        "plot": "areas.png",
+        "x": "radius.value"
+    });
+    std::fs::write(dir.path().join("sweep.json"), sweep.to_string()).unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_cgnodes"))
+        .args(["sweep", dir.path().join("sweep.json").to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let csv = std::fs::read_to_string(dir.path().join("areas.csv")).unwrap();
+    let areas: Vec<f64> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.rsplit(',').next().unwrap().parse().unwrap())
+        .collect();
+    for (r, a) in [1.0, 2.0, 3.0].iter().zip(&areas) {
+        assert!((a - std::f64::consts::PI * r * r).abs() < 1e-9);
+    }
+    assert!(image::open(dir.path().join("areas.png")).is_ok());
+    // A measure that does not exist is an error, not a silent empty column.
+    let bad = std::process::Command::new(env!("CARGO_BIN_EXE_cgnodes"))
+        .args([
+            "sweep",
+            graph,
+            "--vary",
+            "radius.value=1,2",
+            "--measure",
+            "pi_r2.nope",
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(bad.status.code(), Some(3));
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("no output pi_r2.nope"));
+}

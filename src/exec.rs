@@ -198,8 +198,7 @@ impl Executor {
         let keys = cache_keys(graph, &need, &opts.files, frame);
         let mut fresh = vec![false; n];
         for (i, node) in graph.nodes.iter().enumerate() {
-            fresh[i] =
-                opts.recompute.iter().any(|r| *r == node.id) || node.deps.iter().any(|&d| fresh[d]);
+            fresh[i] = opts.recompute.contains(&node.id) || node.deps.iter().any(|&d| fresh[d]);
         }
         let slots: Vec<Slot> = (0..n).map(|_| Mutex::new(None)).collect();
         let reports: Vec<Mutex<Option<NodeReport>>> = (0..n).map(|_| Mutex::new(None)).collect();
@@ -228,8 +227,8 @@ impl Executor {
         };
         self.pool.install(|| {
             rayon::scope(|s| {
-                for i in 0..n {
-                    if need[i] && graph.nodes[i].deps.is_empty() {
+                for (i, node) in graph.nodes.iter().enumerate() {
+                    if need[i] && node.deps.is_empty() {
                         let sh = &shared;
                         s.spawn(move |s| self.run_node(s, sh, i));
                     }

@@ -23,6 +23,13 @@ pub fn write_atomic(
         f(&mut w)?;
         w.flush()?;
     }
+    // Temporary files are private (0600); the result should read like any other file.
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        tmp.as_file()
+            .set_permissions(std::fs::Permissions::from_mode(0o644))?;
+    }
     tmp.as_file().sync_all()?;
     tmp.persist(path).map_err(|e| e.error)?;
     Ok(())

@@ -165,9 +165,11 @@ pub fn measure(outputs: &crate::exec::RunReport, spec: &str) -> Result<f64, Stri
             "max" => finite.fold(f64::NEG_INFINITY, f64::max),
             "min" => finite.fold(f64::INFINITY, f64::min),
             "sum" => finite.sum(),
-            other => return Err(format!(
+            other => {
+                return Err(format!(
                 "measure '{spec}': unknown summary '{other}' (last, first, mean, max, min, sum)"
-            )),
+            ))
+            }
         })
     };
     match v {

@@ -304,9 +304,9 @@ impl Mesh {
         let mut corner_src = Vec::new(); // source corner of each new corner
         let mut face_src = Vec::new();
         let starts = self.face_starts();
-        for f in 0..self.num_faces() {
+        for (f, &n) in self.face_counts.iter().enumerate() {
             let s = starts[f] as usize;
-            let n = self.face_counts[f] as usize;
+            let n = n as usize;
             for k in 1..n - 1 {
                 counts.push(3);
                 for c in [s, s + k, s + k + 1] {

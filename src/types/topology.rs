@@ -119,9 +119,9 @@ impl Topology {
         }
         let mut fill = out_start.clone();
         let mut out_corner = vec![0u32; out_start[nv] as usize];
-        for c in 0..nc {
+        for (c, &v) in idx.iter().enumerate() {
             if boundary_out(c) {
-                let v = idx[c] as usize;
+                let v = v as usize;
                 out_corner[fill[v] as usize] = c as u32;
                 fill[v] += 1;
             }
@@ -217,13 +217,13 @@ impl Topology {
         let mut comp_id = vec![NONE; nv];
         let mut vertex_component = vec![0u32; nv];
         let mut num_components = 0;
-        for v in 0..nv {
+        for (v, comp) in vertex_component.iter_mut().enumerate() {
             let r = root(&mut parent, v as u32) as usize;
             if comp_id[r] == NONE {
                 comp_id[r] = num_components as u32;
                 num_components += 1;
             }
-            vertex_component[v] = comp_id[r];
+            *comp = comp_id[r];
         }
         let isolated_vertices = (0..nv)
             .filter(|&v| vface_start[v] == vface_start[v + 1])

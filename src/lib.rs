@@ -12,6 +12,7 @@ pub mod f3d;
 pub mod graph;
 pub mod io;
 pub mod node;
+pub mod plugin;
 pub mod registry;
 pub mod types;
 pub mod validate;

@@ -45,6 +45,8 @@ def mesh_edges(counts, indices, n):
 
 
 def smooth(positions, counts, indices, iterations, lam, fix_boundary):
+    if iterations == 0:
+        return positions.copy()
     n = len(positions)
     e0, e1, boundary = mesh_edges(counts, indices, n)
     degree = np.bincount(e0, minlength=n) + np.bincount(e1, minlength=n)

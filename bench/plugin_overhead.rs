@@ -131,7 +131,9 @@ fn main() {
         let _ = Command::new("python3").args(["-c", "pass"]).status();
     });
     let py_numpy = time_ms(|| {
-        let _ = Command::new("python3").args(["-c", "import numpy"]).status();
+        let _ = Command::new("python3")
+            .args(["-c", "import numpy"])
+            .status();
     });
     let (s0, total0) = call(0);
     let (s10, total10) = call(10);
@@ -139,21 +141,36 @@ fn main() {
         std::hint::black_box(smooth_direct(&mesh, 10, 0.5));
     });
     println!("{:<52} {:>10}", "phase", "ms");
-    println!("{:<52} {:>10.2}", "bare process start+exit (`true`)", spawn_true);
+    println!(
+        "{:<52} {:>10.2}",
+        "bare process start+exit (`true`)", spawn_true
+    );
     println!("{:<52} {:>10.2}", "python3 -c pass", py_bare);
     println!("{:<52} {:>10.2}", "python3 -c 'import numpy'", py_numpy);
     println!("-- plugin call, 0 iterations (pure overhead) --");
-    println!("{:<52} {:>10.2}", "  write request + .npy inputs", s0.encode_ms);
+    println!(
+        "{:<52} {:>10.2}",
+        "  write request + .npy inputs", s0.encode_ms
+    );
     println!("{:<52} {:>10.2}", "  process start (spawn)", s0.spawn_ms);
-    println!("{:<52} {:>10.2}", "  process run (python, numpy, np.load, np.save)", s0.run_ms);
-    println!("{:<52} {:>10.2}", "  read response + .npy outputs", s0.decode_ms);
+    println!(
+        "{:<52} {:>10.2}",
+        "  process run (python, numpy, np.load, np.save)", s0.run_ms
+    );
+    println!(
+        "{:<52} {:>10.2}",
+        "  read response + .npy outputs", s0.decode_ms
+    );
     println!("{:<52} {:>10.2}", "  total", total0);
     println!("-- plugin call, 10 iterations --");
     println!("{:<52} {:>10.2}", "  write", s10.encode_ms);
     println!("{:<52} {:>10.2}", "  process run", s10.run_ms);
     println!("{:<52} {:>10.2}", "  read", s10.decode_ms);
     println!("{:<52} {:>10.2}", "  total", total10);
-    println!("{:<52} {:>10.2}", "direct Rust smoothing, 10 iterations (baseline)", direct10);
+    println!(
+        "{:<52} {:>10.2}",
+        "direct Rust smoothing, 10 iterations (baseline)", direct10
+    );
     println!();
     println!(
         "overhead per call (0-iteration call): {:.1} ms = {:.2}x `python3 -c 'import numpy'`; \

@@ -9,7 +9,6 @@ use cgnodes::types::{Attribute, Domain, Image, Mesh, Points, Table, Value};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::Command;
-use std::sync::Arc;
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -207,7 +206,11 @@ fn smooth_reference(
     let topo = mesh.topology();
     let n = mesh.positions.len();
     let free: Vec<bool> = (0..n)
-        .map(|v| !topo.neighbors(v).is_empty() && !(fix_boundary && topo.is_boundary_vertex(v)))
+        .map(|v| {
+            let isolated = topo.neighbors(v).is_empty();
+            let pinned = fix_boundary && topo.is_boundary_vertex(v);
+            !isolated && !pinned
+        })
         .collect();
     let mut p = mesh.positions.clone();
     for _ in 0..iterations {
@@ -646,7 +649,6 @@ fn the_example_crate_adds_a_node_to_a_working_binary() {
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let _ = Arc::new(());
 }
 
 fn copy_dir(from: &Path, to: &Path) {

@@ -169,15 +169,18 @@ pub fn load(dir: &Path) -> Result<Plugin, String> {
         argv: argv.clone(),
         timeout,
     });
+    // The source enters the nodes' cache keys: the stamp makes a changed script miss the
+    // disk cache.
     let source = format!(
-        "plugin {}{} ({})",
+        "plugin {}{} ({}) #{}",
         m.name,
         if m.version.is_empty() {
             String::new()
         } else {
             format!(" {}", m.version)
         },
-        dir.display()
+        dir.display(),
+        folder_stamp(&dir)
     );
     let mut nodes = Vec::new();
     for mut d in m.nodes {
@@ -214,6 +217,34 @@ pub fn load(dir: &Path) -> Result<Plugin, String> {
         timeout,
         nodes,
     })
+}
+
+/// A short hash of the names, sizes and modification times of the files at the top of a
+/// plugin folder: it changes when the plugin's scripts are edited.
+fn folder_stamp(dir: &Path) -> String {
+    let mut files: Vec<(String, u64, u128)> = std::fs::read_dir(dir)
+        .map(|rd| {
+            rd.filter_map(|e| e.ok())
+                .filter_map(|e| {
+                    let m = e.metadata().ok().filter(|m| m.is_file())?;
+                    let t = m
+                        .modified()
+                        .ok()
+                        .and_then(|t| t.duration_since(std::time::UNIX_EPOCH).ok())
+                        .map_or(0, |d| d.as_nanos());
+                    Some((e.file_name().to_string_lossy().into_owned(), m.len(), t))
+                })
+                .collect()
+        })
+        .unwrap_or_default();
+    files.sort();
+    let mut h = blake3::Hasher::new();
+    for (name, len, t) in files {
+        h.update(name.as_bytes());
+        h.update(&len.to_le_bytes());
+        h.update(&t.to_le_bytes());
+    }
+    h.finalize().to_hex()[..8].to_string()
 }
 
 fn is_name(s: &str) -> bool {
@@ -420,8 +451,13 @@ pub fn call(
     let Some(resp) = resp else {
         let out = String::from_utf8_lossy(&fin.stdout);
         let shown: String = out.chars().take(200).collect();
+        let nan = if out.contains("NaN") || out.contains("Infinity") {
+            " (NaN and Infinity are not JSON numbers)"
+        } else {
+            ""
+        };
         return Err(with_tail(format!(
-            "the response on stdout is not JSON (log lines go to stderr): {:?}{}",
+            "the response on stdout is not JSON{nan} (log lines go to stderr): {:?}{}",
             shown,
             if out.chars().count() > 200 { "..." } else { "" }
         )));

@@ -381,7 +381,7 @@ mod tests {
         // (3, 2) array, header written by NumPy 1.x (16-byte alignment, version 1.0).
         let header = "{'descr': '<i8', 'fortran_order': True, 'shape': (3, 2), }";
         let mut h = header.to_string();
-        while (10 + h.len() + 1) % 16 != 0 {
+        while !(10 + h.len() + 1).is_multiple_of(16) {
             h.push(' ');
         }
         h.push('\n');

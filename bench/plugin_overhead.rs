@@ -5,7 +5,7 @@
 //!
 //! Run: `cargo bench --bench plugin_overhead` (needs python3 with numpy).
 
-use cgnodes::plugin::{self, CallStats, Runner};
+use cgnodes::plugin::{self, CallStats};
 use cgnodes::types::{Mesh, Value};
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -94,12 +94,7 @@ fn main() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let p = plugin::load(&root.join("plugins/laplacian_smooth")).expect("example plugin");
     let decl = &p.nodes[0];
-    let runner = Runner {
-        plugin: p.name.clone(),
-        dir: p.dir.clone(),
-        argv: p.argv.clone(),
-        timeout: p.timeout,
-    };
+    let runner = p.runner();
     let mesh = grid(317);
     println!(
         "mesh: {} vertices, {} triangles; median of {RUNS} runs\n",

@@ -88,13 +88,8 @@ fn call(
     timeout: f64,
 ) -> Result<plugin::CallResult, NodeError> {
     let p = plugin::load(&test_plugins().join("misbehave")).unwrap();
-    let decl = p.nodes.iter().find(|d| d.type_name == node).unwrap();
-    let runner = plugin::Runner {
-        plugin: p.name.clone(),
-        dir: p.dir.clone(),
-        argv: p.argv.clone(),
-        timeout: p.timeout,
-    };
+    let decl = p.node(node).unwrap();
+    let runner = p.runner();
     plugin::call(&runner, decl, &inputs, 0, None, timeout)
 }
 
@@ -283,12 +278,7 @@ fn python_laplacian_smooth_matches_a_direct_computation() {
     // Without the boundary fixed, on a small mesh, straight through `plugin::call`.
     let mesh = quad_mesh();
     let p = plugin::load(&root().join("plugins/laplacian_smooth")).unwrap();
-    let runner = plugin::Runner {
-        plugin: p.name.clone(),
-        dir: p.dir.clone(),
-        argv: p.argv.clone(),
-        timeout: p.timeout,
-    };
+    let runner = p.runner();
     let mut inputs = BTreeMap::new();
     inputs.insert("mesh".into(), Value::from(mesh.clone()));
     inputs.insert("iterations".into(), Value::Int(3));

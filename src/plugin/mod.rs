@@ -84,6 +84,23 @@ pub struct Plugin {
     pub nodes: Vec<NodeDecl>,
 }
 
+impl Plugin {
+    /// What `call` needs to run this plugin's nodes.
+    pub fn runner(&self) -> Runner {
+        Runner {
+            plugin: self.name.clone(),
+            dir: self.dir.clone(),
+            argv: self.argv.clone(),
+            timeout: self.timeout,
+        }
+    }
+
+    /// The declaration of node `type_name`.
+    pub fn node(&self, type_name: &str) -> Option<&NodeDecl> {
+        self.nodes.iter().find(|d| d.type_name == type_name)
+    }
+}
+
 /// What a call to a plugin node needs besides its inputs.
 #[derive(Clone, Debug)]
 pub struct Runner {

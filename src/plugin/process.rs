@@ -76,10 +76,13 @@ pub fn run(
         std::thread::spawn(move || {
             let mut buf = Vec::new();
             let mut chunk = [0u8; 8192];
-            while let Ok(n) = err.read(&mut chunk) {
-                if n == 0 {
-                    break;
-                }
+            loop {
+                let n = match err.read(&mut chunk) {
+                    Ok(0) => break,
+                    Ok(n) => n,
+                    Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+                    Err(_) => break,
+                };
                 buf.extend_from_slice(&chunk[..n]);
                 if buf.len() > 2 * STDERR_KEEP {
                     buf.drain(..buf.len() - STDERR_KEEP);

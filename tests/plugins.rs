@@ -361,14 +361,16 @@ fn a_hanging_plugin_is_killed_at_its_timeout() {
     let e = failure(&r, "hang");
     assert_eq!(e.kind, ErrorKind::Plugin);
     assert!(e.message.contains("timed out after 4 s"), "{}", e.message);
-    assert!(e.message.contains("hanging now"), "{}", e.message);
     assert!(matches!(r.output("ok", "y"), Some(Value::Float(y)) if *y == 2.0));
+    // The plugin writes the pid file after its first stderr line; on a machine so loaded that
+    // Python did not get that far within the limit, there is nothing more to check.
+    let Ok(pid) = std::fs::read_to_string(&pidfile) else {
+        eprintln!("the plugin did not reach its sleep before the timeout; child check skipped");
+        return;
+    };
+    assert!(e.message.contains("hanging now"), "{}", e.message);
     // The process the plugin started was killed with it.
-    let pid: u32 = std::fs::read_to_string(&pidfile)
-        .unwrap()
-        .trim()
-        .parse()
-        .unwrap();
+    let pid: u32 = pid.trim().parse().unwrap();
     let mut alive = pid_alive(pid);
     for _ in 0..100 {
         if !alive {

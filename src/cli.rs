@@ -30,6 +30,10 @@ pub const EXIT_INVALID: i32 = 3;
 struct Cli {
     #[command(subcommand)]
     cmd: Cmd,
+    /// A plugin folder, or a folder of plugin folders, whose nodes are added (repeatable;
+    /// also searched: CGNODES_PLUGIN_PATH and ~/.config/cgnodes/plugins).
+    #[arg(long = "plugins", value_name = "DIR", global = true)]
+    plugins: Vec<PathBuf>,
 }
 
 #[derive(Subcommand)]
@@ -175,6 +179,13 @@ pub fn main_with(registry: Registry) -> i32 {
         Err(e) => {
             let _ = e.print();
             return if e.use_stderr() { EXIT_USAGE } else { 0 };
+        }
+    };
+    let registry = match crate::plugin::cli_registry(registry, &cli.plugins) {
+        Ok(r) => r,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return EXIT_USAGE;
         }
     };
     match cli.cmd {

@@ -13,6 +13,7 @@ pub mod f3d;
 pub mod graph;
 pub mod io;
 pub mod node;
+pub mod plugin;
 pub mod registry;
 pub mod sweep;
 pub mod types;

@@ -1,0 +1,411 @@
+//! Reading and writing NumPy `.npy` files (format versions 1.0, 2.0 and 3.0), the array
+//! format plugins exchange with cgnodes. The format is a magic string, a version, a header
+//! length, a Python-literal header `{'descr': '<f8', 'fortran_order': False, 'shape': (N, 3), }`
+//! padded to a multiple of 64 bytes, then the raw array data
+//! (<https://numpy.org/doc/stable/reference/generated/numpy.lib.format.html>).
+
+use std::path::Path;
+
+const MAGIC: &[u8] = b"\x93NUMPY";
+
+/// The element types cgnodes reads and writes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DType {
+    /// `<f8`
+    F64,
+    /// `<f4`
+    F32,
+    /// `<i8`
+    I64,
+    /// `<i4`
+    I32,
+    /// `<u8`
+    U64,
+    /// `<u4`
+    U32,
+    /// `|u1`
+    U8,
+    /// `|b1`
+    Bool,
+}
+
+impl DType {
+    /// Bytes per element.
+    pub fn size(self) -> usize {
+        match self {
+            DType::F64 | DType::I64 | DType::U64 => 8,
+            DType::F32 | DType::I32 | DType::U32 => 4,
+            DType::U8 | DType::Bool => 1,
+        }
+    }
+
+    /// The `descr` string NumPy writes for this type.
+    pub fn descr(self) -> &'static str {
+        match self {
+            DType::F64 => "<f8",
+            DType::F32 => "<f4",
+            DType::I64 => "<i8",
+            DType::I32 => "<i4",
+            DType::U64 => "<u8",
+            DType::U32 => "<u4",
+            DType::U8 => "|u1",
+            DType::Bool => "|b1",
+        }
+    }
+
+    fn parse(descr: &str) -> Result<DType, String> {
+        let (order, code) = descr.split_at(descr.len().min(1));
+        if order == ">" && !matches!(code, "u1" | "b1" | "i1") {
+            return Err(format!(
+                "dtype '{descr}' is big-endian; write little-endian arrays (arr.astype('<{code}'))"
+            ));
+        }
+        if !matches!(order, "<" | "|" | "=") {
+            return Err(format!("unsupported dtype '{descr}'"));
+        }
+        Ok(match code {
+            "f8" => DType::F64,
+            "f4" => DType::F32,
+            "i8" => DType::I64,
+            "i4" => DType::I32,
+            "u8" => DType::U64,
+            "u4" => DType::U32,
+            "u1" => DType::U8,
+            "b1" => DType::Bool,
+            _ => {
+                return Err(format!(
+                    "unsupported dtype '{descr}' (cgnodes reads f8, f4, i8, i4, u8, u4, u1 and b1)"
+                ))
+            }
+        })
+    }
+}
+
+/// An n-dimensional array read from an `.npy` file: shape, element type and the data in
+/// C order (little-endian bytes).
+#[derive(Clone, Debug, PartialEq)]
+pub struct NpyArray {
+    /// Dimensions, outermost first.
+    pub shape: Vec<usize>,
+    /// Element type.
+    pub dtype: DType,
+    data: Vec<u8>,
+}
+
+impl NpyArray {
+    /// Number of elements.
+    pub fn len(&self) -> usize {
+        self.shape.iter().product()
+    }
+
+    /// Whether the array has no elements.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The shape as NumPy prints it, for messages: `(100, 3)`.
+    pub fn shape_str(&self) -> String {
+        shape_str(&self.shape)
+    }
+
+    fn elem(&self, i: usize) -> &[u8] {
+        let s = self.dtype.size();
+        &self.data[i * s..(i + 1) * s]
+    }
+
+    /// The elements as `f64` (any numeric type converts).
+    pub fn to_f64(&self) -> Vec<f64> {
+        (0..self.len())
+            .map(|i| {
+                let b = self.elem(i);
+                match self.dtype {
+                    DType::F64 => f64::from_le_bytes(b.try_into().unwrap_or([0; 8])),
+                    DType::F32 => f32::from_le_bytes(b.try_into().unwrap_or([0; 4])) as f64,
+                    DType::I64 => i64::from_le_bytes(b.try_into().unwrap_or([0; 8])) as f64,
+                    DType::I32 => i32::from_le_bytes(b.try_into().unwrap_or([0; 4])) as f64,
+                    DType::U64 => u64::from_le_bytes(b.try_into().unwrap_or([0; 8])) as f64,
+                    DType::U32 => u32::from_le_bytes(b.try_into().unwrap_or([0; 4])) as f64,
+                    DType::U8 | DType::Bool => b[0] as f64,
+                }
+            })
+            .collect()
+    }
+
+    /// The elements as `f32` (any numeric type converts).
+    pub fn to_f32(&self) -> Vec<f32> {
+        if self.dtype == DType::F32 {
+            return self
+                .data
+                .chunks_exact(4)
+                .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+                .collect();
+        }
+        self.to_f64().into_iter().map(|x| x as f32).collect()
+    }
+
+    /// The elements as integers; fails for floating-point arrays (indices must be integers).
+    pub fn to_i64(&self) -> Result<Vec<i64>, String> {
+        let conv = |b: &[u8]| -> Result<i64, String> {
+            Ok(match self.dtype {
+                DType::I64 => i64::from_le_bytes(b.try_into().unwrap_or([0; 8])),
+                DType::I32 => i32::from_le_bytes(b.try_into().unwrap_or([0; 4])) as i64,
+                DType::U64 => i64::try_from(u64::from_le_bytes(b.try_into().unwrap_or([0; 8])))
+                    .map_err(|_| "index out of range".to_string())?,
+                DType::U32 => u32::from_le_bytes(b.try_into().unwrap_or([0; 4])) as i64,
+                DType::U8 | DType::Bool => b[0] as i64,
+                DType::F64 | DType::F32 => {
+                    return Err(format!(
+                        "expected an integer array, got dtype {}",
+                        self.dtype.descr()
+                    ))
+                }
+            })
+        };
+        (0..self.len()).map(|i| conv(self.elem(i))).collect()
+    }
+
+    /// An `f64` array of `shape` from C-order values.
+    pub fn from_f64(shape: &[usize], values: &[f64]) -> NpyArray {
+        let mut data = Vec::with_capacity(values.len() * 8);
+        for v in values {
+            data.extend_from_slice(&v.to_le_bytes());
+        }
+        NpyArray {
+            shape: shape.to_vec(),
+            dtype: DType::F64,
+            data,
+        }
+    }
+
+    /// An `f32` array of `shape` from C-order values.
+    pub fn from_f32(shape: &[usize], values: &[f32]) -> NpyArray {
+        let mut data = Vec::with_capacity(values.len() * 4);
+        for v in values {
+            data.extend_from_slice(&v.to_le_bytes());
+        }
+        NpyArray {
+            shape: shape.to_vec(),
+            dtype: DType::F32,
+            data,
+        }
+    }
+
+    /// An `int32` array of `shape` from C-order values (mesh indices; NumPy indexes with it
+    /// directly).
+    pub fn from_i32(shape: &[usize], values: &[i32]) -> NpyArray {
+        let mut data = Vec::with_capacity(values.len() * 4);
+        for v in values {
+            data.extend_from_slice(&v.to_le_bytes());
+        }
+        NpyArray {
+            shape: shape.to_vec(),
+            dtype: DType::I32,
+            data,
+        }
+    }
+
+    /// The file bytes (format version 1.0, header padded to 64 bytes as NumPy does).
+    pub fn to_bytes(&self) -> Vec<u8> {
+        let shape = match self.shape.len() {
+            1 => format!("({},)", self.shape[0]),
+            _ => shape_str(&self.shape),
+        };
+        let mut header = format!(
+            "{{'descr': '{}', 'fortran_order': False, 'shape': {shape}, }}",
+            self.dtype.descr()
+        );
+        // magic (6) + version (2) + length (2) + header + '\n' is a multiple of 64.
+        let unpadded = 10 + header.len() + 1;
+        header.push_str(&" ".repeat((64 - unpadded % 64) % 64));
+        header.push('\n');
+        let mut out = Vec::with_capacity(10 + header.len() + self.data.len());
+        out.extend_from_slice(MAGIC);
+        out.extend_from_slice(&[1, 0]);
+        out.extend_from_slice(&(header.len() as u16).to_le_bytes());
+        out.extend_from_slice(header.as_bytes());
+        out.extend_from_slice(&self.data);
+        out
+    }
+
+    /// Parses `.npy` file bytes. Fortran-ordered arrays are converted to C order.
+    pub fn from_bytes(bytes: &[u8]) -> Result<NpyArray, String> {
+        if bytes.len() < 10 || &bytes[..6] != MAGIC {
+            return Err("not an .npy file (no \\x93NUMPY magic)".into());
+        }
+        let (hlen, start) = match bytes[6] {
+            1 => (u16::from_le_bytes([bytes[8], bytes[9]]) as usize, 10),
+            2 | 3 if bytes.len() >= 12 => (
+                u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]) as usize,
+                12,
+            ),
+            v => return Err(format!("unsupported .npy format version {v}")),
+        };
+        let header = bytes
+            .get(start..start + hlen)
+            .ok_or("truncated .npy header")?;
+        let header = std::str::from_utf8(header).map_err(|_| "the .npy header is not text")?;
+        let descr = header_field(header, "descr")
+            .ok_or("the .npy header has no 'descr'")?
+            .trim_matches(|c| c == '\'' || c == '"')
+            .to_string();
+        let dtype = DType::parse(&descr)?;
+        let fortran = header_field(header, "fortran_order")
+            .ok_or("the .npy header has no 'fortran_order'")?
+            == "True";
+        let shape_text = header_field(header, "shape").ok_or("the .npy header has no 'shape'")?;
+        let shape: Vec<usize> = shape_text
+            .trim_matches(|c| c == '(' || c == ')')
+            .split(',')
+            .map(str::trim)
+            .filter(|s| !s.is_empty())
+            .map(|s| s.parse().map_err(|_| format!("bad shape {shape_text}")))
+            .collect::<Result<_, _>>()?;
+        let n: usize = shape
+            .iter()
+            .try_fold(1usize, |a, &d| a.checked_mul(d))
+            .ok_or("shape too large")?;
+        let data = &bytes[start + hlen..];
+        let want = n.checked_mul(dtype.size()).ok_or("shape too large")?;
+        if data.len() < want {
+            return Err(format!(
+                "the .npy data is truncated: shape {} of {} needs {want} bytes, found {}",
+                shape_str(&shape),
+                dtype.descr(),
+                data.len()
+            ));
+        }
+        let mut a = NpyArray {
+            shape,
+            dtype,
+            data: data[..want].to_vec(),
+        };
+        if fortran && a.shape.len() > 1 {
+            a.data = fortran_to_c(&a.data, &a.shape, dtype.size());
+        }
+        Ok(a)
+    }
+
+    /// Reads an `.npy` file.
+    pub fn read(path: &Path) -> Result<NpyArray, String> {
+        let bytes = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
+        NpyArray::from_bytes(&bytes).map_err(|e| format!("{}: {e}", path.display()))
+    }
+
+    /// Writes an `.npy` file.
+    pub fn write(&self, path: &Path) -> Result<(), String> {
+        std::fs::write(path, self.to_bytes()).map_err(|e| format!("{}: {e}", path.display()))
+    }
+}
+
+/// `(a, b, c)` as NumPy prints a shape.
+pub fn shape_str(shape: &[usize]) -> String {
+    match shape.len() {
+        1 => format!("({},)", shape[0]),
+        _ => format!(
+            "({})",
+            shape
+                .iter()
+                .map(|d| d.to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+    }
+}
+
+/// The text of `key`'s value in a header dict (a quoted string, a word or a tuple).
+fn header_field<'a>(header: &'a str, key: &str) -> Option<&'a str> {
+    let pats = [format!("'{key}'"), format!("\"{key}\"")];
+    let i = pats
+        .iter()
+        .find_map(|p| header.find(p.as_str()).map(|i| i + p.len()))?;
+    let rest = header[i..].trim_start().strip_prefix(':')?.trim_start();
+    let end = if rest.starts_with('(') {
+        rest.find(')')? + 1
+    } else if let Some(q) = rest.chars().next().filter(|c| *c == '\'' || *c == '"') {
+        rest[1..].find(q)? + 2
+    } else {
+        rest.find([',', '}'])?
+    };
+    Some(rest[..end].trim())
+}
+
+/// Reorders Fortran-order (column-major) element bytes to C order.
+fn fortran_to_c(data: &[u8], shape: &[usize], size: usize) -> Vec<u8> {
+    let n: usize = shape.iter().product();
+    // Fortran strides (in elements): first axis fastest.
+    let mut fstride = vec![1usize; shape.len()];
+    for k in 1..shape.len() {
+        fstride[k] = fstride[k - 1] * shape[k - 1];
+    }
+    let mut out = Vec::with_capacity(data.len());
+    let mut idx = vec![0usize; shape.len()];
+    for _ in 0..n {
+        let off: usize = idx.iter().zip(&fstride).map(|(i, s)| i * s).sum();
+        out.extend_from_slice(&data[off * size..(off + 1) * size]);
+        // Advance the C-order multi-index (last axis fastest).
+        for k in (0..shape.len()).rev() {
+            idx[k] += 1;
+            if idx[k] < shape[k] {
+                break;
+            }
+            idx[k] = 0;
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn round_trip_and_alignment() {
+        let a = NpyArray::from_f64(&[2, 3], &[1.0, 2.0, 3.0, 4.0, 5.0, 6.5]);
+        let b = a.to_bytes();
+        // NumPy aligns the data to 64 bytes.
+        assert_eq!((b.len() - 48) % 64, 0);
+        assert_eq!(b[b.len() - 49], b'\n');
+        let back = NpyArray::from_bytes(&b).unwrap();
+        assert_eq!(back, a);
+        assert_eq!(back.to_f64(), vec![1.0, 2.0, 3.0, 4.0, 5.0, 6.5]);
+        assert!(back.to_i64().is_err());
+        let one = NpyArray::from_i32(&[3], &[7, -1, 2]);
+        let back = NpyArray::from_bytes(&one.to_bytes()).unwrap();
+        assert_eq!(back.shape, vec![3]);
+        assert_eq!(back.to_i64().unwrap(), vec![7, -1, 2]);
+    }
+
+    #[test]
+    fn reads_a_file_numpy_wrote() {
+        // Bytes of `np.save(f, np.arange(6, dtype='<i8').reshape(2, 3).T)`: a Fortran-order
+        // (3, 2) array, header written by NumPy 1.x (16-byte alignment, version 1.0).
+        let header = "{'descr': '<i8', 'fortran_order': True, 'shape': (3, 2), }";
+        let mut h = header.to_string();
+        while !(10 + h.len() + 1).is_multiple_of(16) {
+            h.push(' ');
+        }
+        h.push('\n');
+        let mut b = b"\x93NUMPY\x01\x00".to_vec();
+        b.extend_from_slice(&(h.len() as u16).to_le_bytes());
+        b.extend_from_slice(h.as_bytes());
+        for v in 0i64..6 {
+            b.extend_from_slice(&v.to_le_bytes());
+        }
+        let a = NpyArray::from_bytes(&b).unwrap();
+        assert_eq!(a.shape, vec![3, 2]);
+        // Transpose of [[0,1,2],[3,4,5]] in C order.
+        assert_eq!(a.to_i64().unwrap(), vec![0, 3, 1, 4, 2, 5]);
+    }
+
+    #[test]
+    fn refuses_bad_files() {
+        assert!(NpyArray::from_bytes(b"hello").is_err());
+        let mut b = NpyArray::from_f64(&[4, 3], &[0.0; 12]).to_bytes();
+        b.truncate(b.len() - 8);
+        assert!(NpyArray::from_bytes(&b).unwrap_err().contains("truncated"));
+        let big = b"\x93NUMPY\x01\x00\x3c\x00{'descr': '>f8', 'fortran_order': False, 'shape': (1,), }    \n";
+        assert!(NpyArray::from_bytes(big)
+            .unwrap_err()
+            .contains("big-endian"));
+    }
+}

@@ -68,6 +68,8 @@ enum Cmd {
     },
     /// Run a graph for every combination of parameter values; write a CSV and a chart.
     Sweep(SweepArgs),
+    /// Chart columns of one or more CSV files (for example a sweep beside a peer's results).
+    Chart(ChartArgs),
     /// Convert a Framework3D saved node tree to a cgnodes graph.
     ImportF3d {
         /// Framework3D JSON file.
@@ -79,6 +81,34 @@ enum Cmd {
         #[arg(long = "f3d-aliases")]
         aliases: Option<PathBuf>,
     },
+}
+
+#[derive(clap::Args)]
+struct ChartArgs {
+    /// CSV files with a header row.
+    #[arg(required = true)]
+    csv: Vec<PathBuf>,
+    /// Column for the x axis.
+    #[arg(long)]
+    x: String,
+    /// Column for the y axis.
+    #[arg(long)]
+    y: String,
+    /// Column whose values name the series (default: one series per file, named after it).
+    #[arg(long)]
+    series: Option<String>,
+    /// Chart to write (.svg or .png).
+    #[arg(long)]
+    plot: PathBuf,
+    /// Chart title.
+    #[arg(long, default_value = "")]
+    title: String,
+    /// Logarithmic x axis.
+    #[arg(long)]
+    log_x: bool,
+    /// Logarithmic y axis.
+    #[arg(long)]
+    log_y: bool,
 }
 
 #[derive(clap::Args)]
@@ -244,12 +274,103 @@ pub fn main_with(registry: Registry) -> i32 {
             Err(c) => c,
         },
         Cmd::Sweep(args) => cmd_sweep(&registry, args),
+        Cmd::Chart(args) => match chart_from_csv(&args) {
+            Ok(()) => 0,
+            Err(e) => {
+                eprintln!("error: {e}");
+                EXIT_INVALID
+            }
+        },
         Cmd::ImportF3d {
             input,
             output,
             aliases,
         } => cmd_import(&input, &output, aliases.as_deref()),
     }
+}
+
+/// Splits one CSV line, honouring double quotes.
+fn csv_split(line: &str) -> Vec<String> {
+    let mut out = vec![String::new()];
+    let mut quoted = false;
+    let mut chars = line.chars().peekable();
+    while let Some(c) = chars.next() {
+        match c {
+            '"' if quoted && chars.peek() == Some(&'"') => {
+                chars.next();
+                out.last_mut().map(|s| s.push('"'));
+            }
+            '"' => quoted = !quoted,
+            ',' if !quoted => out.push(String::new()),
+            c => {
+                if let Some(s) = out.last_mut() {
+                    s.push(c)
+                }
+            }
+        }
+    }
+    out
+}
+
+fn chart_from_csv(a: &ChartArgs) -> Result<(), String> {
+    use crate::chart::{Chart, Series};
+    let mut chart = Chart {
+        title: a.title.clone(),
+        x_label: a.x.clone(),
+        y_label: a.y.clone(),
+        log_x: a.log_x,
+        log_y: a.log_y,
+        ..Default::default()
+    };
+    for f in &a.csv {
+        let text = std::fs::read_to_string(f).map_err(|e| format!("{}: {e}", f.display()))?;
+        let mut lines = text.lines().filter(|l| !l.trim().is_empty());
+        let head = csv_split(
+            lines
+                .next()
+                .ok_or_else(|| format!("{}: empty", f.display()))?,
+        );
+        let col = |name: &str| {
+            head.iter()
+                .position(|h| h == name)
+                .ok_or_else(|| format!("{}: no column '{name}'", f.display()))
+        };
+        let (ix, iy) = (col(&a.x)?, col(&a.y)?);
+        let is = a.series.as_deref().map(col).transpose()?;
+        let status = head.iter().position(|h| h == "status");
+        let file_label = f
+            .file_stem()
+            .map(|s| s.to_string_lossy().to_string())
+            .unwrap_or_default();
+        for line in lines {
+            let row = csv_split(line);
+            let num = |i: usize| row.get(i).and_then(|s| s.trim().parse::<f64>().ok());
+            let Some(x) = num(ix) else { continue };
+            if status
+                .and_then(|i| row.get(i))
+                .is_some_and(|s| s == "failed")
+            {
+                chart.failures.push((x, file_label.clone()));
+                continue;
+            }
+            let Some(y) = num(iy) else { continue };
+            let label = match is {
+                Some(i) => row.get(i).cloned().unwrap_or_default(),
+                None => file_label.clone(),
+            };
+            match chart.series.iter_mut().find(|s| s.label == label) {
+                Some(s) => s.points.push((x, y)),
+                None => chart.series.push(Series {
+                    label,
+                    points: vec![(x, y)],
+                }),
+            }
+        }
+    }
+    for s in &mut chart.series {
+        s.points.sort_by(|p, q| p.0.total_cmp(&q.0));
+    }
+    crate::chart::draw(&chart, &a.plot)
 }
 
 fn cmd_sweep(registry: &Registry, a: SweepArgs) -> i32 {

@@ -158,3 +158,43 @@ fn a_sweep_file_through_the_command_line() {
     assert_eq!(bad.status.code(), Some(3));
     assert!(String::from_utf8_lossy(&bad.stderr).contains("no output pi_r2.nope"));
 }
+
+#[test]
+fn chart_puts_a_sweep_and_a_peer_on_one_plot() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("ours.csv"),
+        "method,status,total_ms,rmse\nmis,ok,10,0.5\nmis,ok,40,0.25\nmis,failed,5,\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.path().join("peer.csv"),
+        "method,total_ms,rmse\n\"mitsuba, scalar\",20,0.5\n\"mitsuba, scalar\",80,0.25\n",
+    )
+    .unwrap();
+    let plot = dir.path().join("c.svg");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_cgnodes"))
+        .args([
+            "chart", "--x", "total_ms", "--y", "rmse", "--series", "method", "--log-x", "--plot",
+        ])
+        .arg(&plot)
+        .arg(dir.path().join("ours.csv"))
+        .arg(dir.path().join("peer.csv"))
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let svg = std::fs::read_to_string(&plot).unwrap();
+    assert!(svg.contains("mis") && svg.contains("mitsuba, scalar") && svg.contains("failed (1)"));
+    let bad = std::process::Command::new(env!("CARGO_BIN_EXE_cgnodes"))
+        .args(["chart", "--x", "nope", "--y", "rmse", "--plot"])
+        .arg(&plot)
+        .arg(dir.path().join("ours.csv"))
+        .output()
+        .unwrap();
+    assert_eq!(bad.status.code(), Some(3));
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("no column 'nope'"));
+}

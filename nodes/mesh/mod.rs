@@ -1,7 +1,11 @@
 //! Mesh nodes: loading, saving, inspecting and triangulating meshes.
 
 pub mod load;
+pub mod obj;
+pub mod off;
+pub mod ply;
 pub mod save;
+pub mod usda;
 
 use crate::registry::Registry;
 

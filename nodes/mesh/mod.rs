@@ -1,10 +1,12 @@
 //! Mesh nodes: loading, saving, inspecting and triangulating meshes.
 
+pub mod info;
 pub mod load;
 pub mod obj;
 pub mod off;
 pub mod ply;
 pub mod save;
+pub mod triangulate;
 pub mod usda;
 
 use crate::registry::Registry;
@@ -13,4 +15,6 @@ use crate::registry::Registry;
 pub fn register(r: &mut Registry) {
     load::register(r);
     save::register(r);
+    info::register(r);
+    triangulate::register(r);
 }

@@ -1,5 +1,7 @@
 //! Mesh nodes: loading, saving, inspecting and triangulating meshes.
 
+pub mod buffer;
+pub mod compose;
 pub mod info;
 pub mod load;
 pub mod obj;
@@ -17,4 +19,6 @@ pub fn register(r: &mut Registry) {
     save::register(r);
     info::register(r);
     triangulate::register(r);
+    compose::register(r);
+    buffer::register(r);
 }

@@ -248,3 +248,102 @@ fn non_manifold_meshes_load_and_are_flagged() {
     assert!(!t.is_manifold());
     assert_eq!(t.nonmanifold_edges.len(), 1);
 }
+
+/// Runs one node outside a graph; returns its outputs and the output directory.
+fn run_node(
+    name: &str,
+    inputs: Vec<(&str, cgnodes::types::Value)>,
+    out: &Path,
+) -> Result<std::collections::BTreeMap<String, cgnodes::types::Value>, String> {
+    let r = cgnodes::registry::Registry::builtin();
+    let decl = r.get(name).unwrap();
+    let mut state = None;
+    let files = cgnodes::node::FileEnv {
+        graph_dir: asset(""),
+        out_dir: out.to_path_buf(),
+        ..Default::default()
+    };
+    let ins = inputs
+        .into_iter()
+        .map(|(k, v)| (k.to_string(), v))
+        .collect();
+    let mut ctx = cgnodes::node::ExecContext::standalone(decl, ins, &mut state, &files, 0);
+    (decl.exec.as_ref().unwrap())(&mut ctx).map_err(|e| e.to_string())?;
+    Ok(ctx.take_outputs())
+}
+
+#[test]
+fn obj_save_writes_mtl_and_texture_png() {
+    use cgnodes::types::{Image, Material, Value};
+    let dir = tempfile::tempdir().unwrap();
+    let mut m = sample();
+    let mut img = Image::new(2, 1, [0.0, 0.0, 0.0, 1.0]);
+    img.set(1, 0, [1.0, 0.2158605, 0.0, 1.0]); // linear 0.21586 is sRGB 128/255 (IEC 61966-2-1)
+    m.material = Some(std::sync::Arc::new(Material {
+        name: "checker board".into(),
+        base_color_texture: Some(std::sync::Arc::new(img)),
+        ..Default::default()
+    }));
+    run_node(
+        "mesh_save",
+        vec![
+            ("mesh", Value::from(m)),
+            ("path", Value::from("tex/model.obj")),
+        ],
+        dir.path(),
+    )
+    .unwrap();
+    let obj = std::fs::read_to_string(dir.path().join("tex/model.obj")).unwrap();
+    assert!(obj.contains("mtllib model.mtl") && obj.contains("usemtl checker_board"));
+    let mtl = std::fs::read_to_string(dir.path().join("tex/model.mtl")).unwrap();
+    let tex = mtl
+        .lines()
+        .find_map(|l| l.strip_prefix("map_Kd "))
+        .expect("map_Kd");
+    let png = image::open(dir.path().join("tex").join(tex))
+        .unwrap()
+        .to_rgba8();
+    assert_eq!(png.get_pixel(1, 0).0, [255, 128, 0, 255]);
+    // tobj reads the pair back: the MTL names the texture, the faces keep their UVs
+    let (_, mats) = tobj::load_obj(
+        dir.path().join("tex/model.obj"),
+        &tobj::LoadOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(mats.unwrap()[0].diffuse_texture.as_deref(), Some(tex));
+    let r = load_mesh(&dir.path().join("tex/model.obj"), &opts()).unwrap();
+    assert_eq!(r.uvs, sample().uvs);
+}
+
+#[test]
+fn mesh_nodes_run_and_report() {
+    use cgnodes::types::Value;
+    let dir = tempfile::tempdir().unwrap();
+    let o = run_node(
+        "mesh_load",
+        vec![("path", Value::from("assets/course/arm.usda"))],
+        dir.path(),
+    )
+    .unwrap();
+    let arm = o["mesh"].clone();
+    let o = run_node("mesh_info", vec![("mesh", arm.clone())], dir.path()).unwrap();
+    let Value::Table(t) = &o["table"] else {
+        panic!()
+    };
+    // a closed box of 10 quads around 12 vertices: V - E + F = 12 - 20 + 10 = 2
+    assert_eq!(t.column("edges").unwrap()[0], 20.0);
+    assert_eq!(t.column("genus").unwrap()[0], 0.0);
+    let o = run_node("mesh_triangulate", vec![("mesh", arm)], dir.path()).unwrap();
+    let Value::Mesh(tm) = &o["mesh"] else {
+        panic!()
+    };
+    assert_eq!(tm.num_faces(), 20);
+    assert!(tm.is_triangle_mesh());
+    let e = run_node(
+        "mesh_load",
+        vec![("path", Value::from("tests/data/mesh/nan.obj"))],
+        dir.path(),
+    )
+    .unwrap_err();
+    assert!(e.contains("line 3"), "{e}");
+}

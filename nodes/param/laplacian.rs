@@ -8,6 +8,7 @@
 //! sparse LU factorization. All coordinates are solved with one factorization (multi-column
 //! right-hand side).
 
+use super::nested_dissection::nested_dissection_order;
 use crate::prelude::*;
 use faer::linalg::solvers::Solve;
 use faer::sparse::{SparseColMat, Triplet};
@@ -159,17 +160,27 @@ pub fn count_negative_edges(weights: &[EdgeWeight]) -> usize {
     }
     count
 }
+/// The interior (free-vertex) block of a Laplace system with Dirichlet conditions, ready to
+/// factor: `matrix` (only the lower triangle when assembled as symmetric), the right-hand side
+/// with one column per coordinate, and the row of each vertex (`u32::MAX` for fixed ones).
+pub struct DirichletSystem<const D: usize> {
+    /// Free-vertex system matrix, `L_II`.
+    pub matrix: SparseColMat<usize, f64>,
+    /// `-L_IB x_B`, one column per coordinate.
+    pub rhs: Mat<f64>,
+    /// Row of each vertex in the system, `u32::MAX` for fixed vertices.
+    pub index: Vec<u32>,
+}
 
-/// Solves the Laplace equation `sum_j w_ij (x_i - x_j) = 0` for every free vertex `i`, with
-/// the vertices where `fixed[i]` is `Some` held at those values (Dirichlet conditions moved
-/// to the right-hand side). `symmetric` selects a sparse Cholesky factorization (the weights
-/// must then be symmetric, `w_ij = w_ji`); otherwise a sparse LU. All `D` coordinates share
-/// one factorization. A free vertex without weights, or a singular system, is an error.
-pub fn solve_dirichlet<const D: usize>(
+/// Assembles the free-vertex system of `sum_j w_ij (x_i - x_j) = 0` with the vertices where
+/// `fixed[i]` is `Some` moved to the right-hand side. With `symmetric`, only the lower triangle
+/// is stored (for a Cholesky factorization). Duplicate weights are summed. Entries are bucketed
+/// by column with a counting sort (linear time), then each short column is sorted.
+pub fn assemble_dirichlet<const D: usize>(
     weights: &[EdgeWeight],
     fixed: &[Option<[f64; D]>],
     symmetric: bool,
-) -> Result<Vec<[f64; D]>, NodeError> {
+) -> Result<DirichletSystem<D>, NodeError> {
     let n = fixed.len();
     let mut index = vec![u32::MAX; n];
     let mut nfree = 0usize;
@@ -179,19 +190,27 @@ pub fn solve_dirichlet<const D: usize>(
             nfree += 1;
         }
     }
-    let mut out: Vec<[f64; D]> = fixed.iter().map(|f| f.unwrap_or([0.0; D])).collect();
-    if nfree == 0 {
-        return Ok(out);
-    }
     let mut diag = vec![0.0; nfree];
     let mut rhs = Mat::<f64>::zeros(nfree, D);
-    let mut trip = Vec::with_capacity(
-        if symmetric {
-            weights.len() / 2
-        } else {
-            weights.len()
-        } + nfree,
-    );
+    // count off-diagonal entries per column
+    let mut col_start = vec![0usize; nfree + 2];
+    for &(i, j, _) in weights {
+        let (ri, cj) = (index[i as usize], index[j as usize]);
+        if ri != u32::MAX && cj != u32::MAX && (!symmetric || ri > cj) {
+            col_start[cj as usize + 2] += 1;
+        }
+    }
+    // one diagonal entry per column
+    for c in 0..nfree {
+        col_start[c + 2] += 1;
+    }
+    for c in 1..nfree + 2 {
+        col_start[c] += col_start[c - 1];
+    }
+    let nnz = col_start[nfree + 1];
+    let mut rows = vec![0u32; nnz];
+    let mut vals = vec![0.0f64; nnz];
+    // fill: col_start[c + 1] is the next free slot of column c
     for &(i, j, w) in weights {
         let ri = index[i as usize];
         if ri == u32::MAX {
@@ -204,38 +223,197 @@ pub fn solve_dirichlet<const D: usize>(
             for (d, xd) in x.iter().enumerate() {
                 rhs[(ri as usize, d)] += w * xd;
             }
-        } else if !symmetric || cj < ri {
-            trip.push(Triplet::new(ri as usize, cj as usize, -w));
+        } else if !symmetric || ri > cj {
+            let s = &mut col_start[cj as usize + 1];
+            rows[*s] = ri;
+            vals[*s] = -w;
+            *s += 1;
         }
     }
-    for (r, &d) in diag.iter().enumerate() {
+    for (c, &d) in diag.iter().enumerate() {
         if d.abs() <= 1e-300 || !d.is_finite() {
+            let v = index.iter().position(|&r| r == c as u32).unwrap_or(0);
             return Err(NodeError::singular(format!(
-                "free vertex {} has no usable edge weights (isolated or degenerate neighbourhood)",
-                (0..n).find(|&v| index[v] == r as u32).unwrap_or(0)
+                "free vertex {v} has no usable edge weights (isolated or degenerate neighbourhood)"
             )));
         }
-        trip.push(Triplet::new(r, r, d));
+        let s = &mut col_start[c + 1];
+        rows[*s] = c as u32;
+        vals[*s] = d;
+        *s += 1;
     }
-    let a =
-        SparseColMat::<usize, f64>::try_new_from_triplets(nfree, nfree, &trip).map_err(|e| {
-            NodeError::singular(format!("could not assemble the Laplace system: {e:?}"))
-        })?;
-    let x = if symmetric {
-        a.sp_cholesky(Side::Lower)
-            .map_err(|e| {
-                NodeError::singular(format!(
-                    "the Laplace system is not positive definite ({e:?}); is every part of the mesh joined to the fixed boundary?"
-                ))
-            })?
-            .solve(&rhs)
-    } else {
-        a.sp_lu()
-            .map_err(|e| NodeError::singular(format!("the Laplace system is singular ({e:?})")))?
-            .solve(&rhs)
+    // col_start[c] .. col_start[c + 1] is now column c; sort rows and merge duplicates
+    let mut col_ptr = Vec::with_capacity(nfree + 1);
+    let mut row_idx = Vec::with_capacity(nnz);
+    let mut values = Vec::with_capacity(nnz);
+    let mut pairs: Vec<(u32, f64)> = Vec::new();
+    col_ptr.push(0usize);
+    for c in 0..nfree {
+        pairs.clear();
+        pairs.extend((col_start[c]..col_start[c + 1]).map(|k| (rows[k], vals[k])));
+        pairs.sort_unstable_by_key(|p| p.0);
+        for &(r, v) in &pairs {
+            if row_idx.len() > col_ptr[c] && row_idx.last() == Some(&(r as usize)) {
+                *values.last_mut().unwrap() += v;
+            } else {
+                row_idx.push(r as usize);
+                values.push(v);
+            }
+        }
+        col_ptr.push(row_idx.len());
+    }
+    let symbolic =
+        faer::sparse::SymbolicSparseColMat::new_checked(nfree, nfree, col_ptr, None, row_idx);
+    let matrix = SparseColMat::new(symbolic, values);
+    Ok(DirichletSystem { matrix, rhs, index })
+}
+
+/// Solves `A X = B` for a symmetric positive definite `A` given by its lower triangle, with a
+/// sparse Cholesky factorization (faer picks simplicial or supernodal). With `coords` (one
+/// point per row, e.g. the vertex positions) and more than a few thousand rows, the
+/// fill-reducing order is geometric nested dissection (`nested_dissection.rs`), several times
+/// cheaper than AMD on meshes; otherwise AMD. The numeric factorization uses faer's global
+/// parallelism; the triangular solves run sequentially (a few right-hand sides do not pay for
+/// threads).
+pub fn solve_spd_lower(
+    a: &SparseColMat<usize, f64>,
+    b: &Mat<f64>,
+    coords: Option<&[[f64; 3]]>,
+) -> Result<Mat<f64>, NodeError> {
+    use faer::dyn_stack::{MemBuffer, MemStack};
+    use faer::sparse::linalg::cholesky::{
+        factorize_symbolic_cholesky, CholeskySymbolicParams, SymmetricOrdering,
     };
-    for v in 0..n {
-        let r = index[v];
+    let not_pd = |e: String| {
+        NodeError::singular(format!(
+            "the Laplace system is not positive definite ({e}); is every part of the mesh joined to the fixed boundary?"
+        ))
+    };
+    let n = a.nrows();
+    let nd = coords.filter(|c| c.len() == n && n > ND_MIN_ROWS).map(|c| {
+        let (start, adj) = symmetric_adjacency(a);
+        let fwd = nested_dissection_order(&start, &adj, c, 64);
+        let mut inv = vec![0usize; n];
+        for (k, &v) in fwd.iter().enumerate() {
+            inv[v] = k;
+        }
+        (fwd, inv)
+    });
+    let ordering = match &nd {
+        Some((fwd, inv)) => {
+            SymmetricOrdering::Custom(faer::perm::PermRef::new_checked(fwd, inv, n))
+        }
+        None => SymmetricOrdering::Amd,
+    };
+    let sym = factorize_symbolic_cholesky(
+        a.symbolic(),
+        Side::Lower,
+        ordering,
+        CholeskySymbolicParams::default(),
+    )
+    .map_err(|e| not_pd(format!("{e:?}")))?;
+    let par = faer::get_global_parallelism();
+    let mut l_values = vec![0.0f64; sym.len_val()];
+    let req = sym
+        .factorize_numeric_llt_scratch::<f64>(par, Default::default())
+        .or(sym.solve_in_place_scratch::<f64>(b.ncols(), faer::Par::Seq));
+    let mut buf = MemBuffer::try_new(req).map_err(|_| NodeError::singular("out of memory"))?;
+    let stack = MemStack::new(&mut buf);
+    let llt = sym
+        .factorize_numeric_llt(
+            &mut l_values,
+            a.as_ref(),
+            Side::Lower,
+            faer::linalg::cholesky::llt::factor::LltRegularization::default(),
+            par,
+            stack,
+            Default::default(),
+        )
+        .map_err(|e| not_pd(format!("{e:?}")))?;
+    let mut x = b.clone();
+    llt.solve_in_place_with_conj(faer::Conj::No, x.as_mut(), faer::Par::Seq, stack);
+    Ok(x)
+}
+
+/// Below this many rows AMD is cheap enough and nested dissection is not used.
+const ND_MIN_ROWS: usize = 4000;
+
+/// Both-ways adjacency (compressed rows) of a matrix stored as its lower triangle, diagonal left out.
+fn symmetric_adjacency(a: &SparseColMat<usize, f64>) -> (Vec<usize>, Vec<u32>) {
+    let n = a.nrows();
+    let cp = a.symbolic().col_ptr();
+    let ri = a.symbolic().row_idx();
+    let mut start = vec![0usize; n + 1];
+    for c in 0..n {
+        for &r in &ri[cp[c]..cp[c + 1]] {
+            if r != c {
+                start[r + 1] += 1;
+                start[c + 1] += 1;
+            }
+        }
+    }
+    for i in 0..n {
+        start[i + 1] += start[i];
+    }
+    let mut fill = start.clone();
+    let mut adj = vec![0u32; start[n]];
+    for c in 0..n {
+        for &r in &ri[cp[c]..cp[c + 1]] {
+            if r != c {
+                adj[fill[r]] = c as u32;
+                fill[r] += 1;
+                adj[fill[c]] = r as u32;
+                fill[c] += 1;
+            }
+        }
+    }
+    (start, adj)
+}
+
+/// Solves the Laplace equation `sum_j w_ij (x_i - x_j) = 0` for every free vertex `i`, with
+/// the vertices where `fixed[i]` is `Some` held at those values (Dirichlet conditions moved
+/// to the right-hand side). `symmetric` selects a sparse Cholesky factorization (the weights
+/// must then be symmetric, `w_ij = w_ji`); otherwise a sparse LU. All `D` coordinates share
+/// one factorization. A free vertex without weights, or a singular system, is an error.
+pub fn solve_dirichlet<const D: usize>(
+    weights: &[EdgeWeight],
+    fixed: &[Option<[f64; D]>],
+    symmetric: bool,
+) -> Result<Vec<[f64; D]>, NodeError> {
+    solve_dirichlet_on(weights, fixed, symmetric, None)
+}
+
+/// `solve_dirichlet` with the vertex positions (one per entry of `fixed`), which let the
+/// Cholesky factorization use a geometric nested-dissection ordering on large meshes.
+pub fn solve_dirichlet_on<const D: usize>(
+    weights: &[EdgeWeight],
+    fixed: &[Option<[f64; D]>],
+    symmetric: bool,
+    positions: Option<&[[f64; 3]]>,
+) -> Result<Vec<[f64; D]>, NodeError> {
+    let mut out: Vec<[f64; D]> = fixed.iter().map(|f| f.unwrap_or([0.0; D])).collect();
+    if fixed.iter().all(|f| f.is_some()) {
+        return Ok(out);
+    }
+    let sys = assemble_dirichlet(weights, fixed, symmetric)?;
+    let x = if symmetric {
+        let coords: Option<Vec<[f64; 3]>> = positions.filter(|p| p.len() == fixed.len()).map(|p| {
+            let mut c = vec![[0.0; 3]; sys.rhs.nrows()];
+            for (v, &r) in sys.index.iter().enumerate() {
+                if r != u32::MAX {
+                    c[r as usize] = p[v];
+                }
+            }
+            c
+        });
+        solve_spd_lower(&sys.matrix, &sys.rhs, coords.as_deref())?
+    } else {
+        sys.matrix
+            .sp_lu()
+            .map_err(|e| NodeError::singular(format!("the Laplace system is singular ({e:?})")))?
+            .solve(&sys.rhs)
+    };
+    for (v, &r) in sys.index.iter().enumerate() {
         if r != u32::MAX {
             for d in 0..D {
                 let val = x[(r as usize, d)];

@@ -6,7 +6,7 @@
 //! course) or cotangent weights taken from the input geometry. The three coordinates share one
 //! sparse Cholesky factorization.
 
-use super::laplacian::{cotangent_weights, fan_triangles, solve_dirichlet, uniform_weights};
+use super::laplacian::{cotangent_weights, fan_triangles, solve_dirichlet_on, uniform_weights};
 use super::tutte::parse_weights;
 use super::tutte::TutteWeights;
 use crate::prelude::*;
@@ -67,7 +67,7 @@ pub fn minimal_surface(
             false,
         ),
     };
-    let x = solve_dirichlet(&w, &fixed, sym).map_err(|e| {
+    let x = solve_dirichlet_on(&w, &fixed, sym, Some(&mesh.positions)).map_err(|e| {
         NodeError::new(
             e.kind,
             format!("{} (every connected component needs a boundary)", e.message),

@@ -4,6 +4,7 @@
 pub mod boundary_map;
 pub mod laplacian;
 pub mod minimal_surface;
+pub mod nested_dissection;
 pub mod render_uv;
 pub mod texture_map;
 pub mod tutte;

@@ -16,7 +16,7 @@ use super::boundary_map::{
     map_boundary, parse_shape, parse_spacing, parse_start, rotate_loop, Spacing,
 };
 use super::laplacian::{
-    cotangent_weights, fan_triangles, mean_value_weights, solve_dirichlet, uniform_weights,
+    cotangent_weights, fan_triangles, mean_value_weights, solve_dirichlet_on, uniform_weights,
 };
 use super::uv_metrics::uv_metrics;
 use crate::prelude::*;
@@ -209,7 +209,7 @@ pub fn tutte(mesh: &Mesh, opts: &TutteOptions) -> Result<TutteResult, NodeError>
             false,
         ),
     };
-    let mut uvs = solve_dirichlet(&w, &fixed, symmetric)?;
+    let mut uvs = solve_dirichlet_on(&w, &fixed, symmetric, Some(&positions))?;
     uvs.truncate(n);
     Ok(TutteResult {
         uvs,

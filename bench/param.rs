@@ -6,7 +6,7 @@
 //! is `bench/peers/param_libigl.py` (`pip install libigl`); without it only our times print.
 //! Our time includes building the mesh connectivity (the mesh is rebuilt before every run).
 
-use cgnodes::nodes::mesh::load::load_obj;
+use cgnodes::nodes::mesh::load::{load_mesh, LoadOptions};
 use cgnodes::nodes::param::laplacian::fan_triangles;
 use cgnodes::nodes::param::tutte::{tutte, TutteOptions, TutteWeights};
 use cgnodes::nodes::param::uv_metrics::uv_metrics;
@@ -36,7 +36,7 @@ fn main() {
     println!("| mesh (faces) | weights | cgnodes ms (median) | flips | ARAP E |");
     println!("|---|---|---|---|---|");
     for path in &meshes {
-        let m = load_obj(Path::new(path)).unwrap();
+        let m = load_mesh(Path::new(path), &LoadOptions::default()).unwrap();
         let name = Path::new(path)
             .file_stem()
             .unwrap()

@@ -13,6 +13,7 @@ use crate::prelude::*;
 use faer::linalg::solvers::Solve;
 use faer::sparse::{SparseColMat, Triplet};
 use faer::{Mat, Side};
+use rayon::prelude::*;
 
 /// A directed edge weight: row vertex, column vertex, weight.
 pub type EdgeWeight = (u32, u32, f64);
@@ -24,26 +25,28 @@ pub fn corner_cotangents(
     positions: &[[f64; 3]],
     triangles: &[[u32; 3]],
 ) -> Result<Vec<[f64; 3]>, String> {
-    let mut out = Vec::with_capacity(triangles.len());
-    for (t, tri) in triangles.iter().enumerate() {
-        let p = tri.map(|v| positions[v as usize]);
-        let mut c = [0.0; 3];
-        for k in 0..3 {
-            let a = sub(p[(k + 1) % 3], p[k]);
-            let b = sub(p[(k + 2) % 3], p[k]);
-            let cr = norm(cross(a, b));
-            // cot = cos / sin = (a.b) / |a x b|
-            if cr <= 1e-300 || !cr.is_finite() {
-                return Err(format!(
-                    "triangle {t} (vertices {:?}) is degenerate (zero area); cotangent weights are undefined",
-                    tri
-                ));
+    triangles
+        .par_iter()
+        .enumerate()
+        .map(|(t, tri)| {
+            let p = tri.map(|v| positions[v as usize]);
+            let mut c = [0.0; 3];
+            for k in 0..3 {
+                let a = sub(p[(k + 1) % 3], p[k]);
+                let b = sub(p[(k + 2) % 3], p[k]);
+                let cr = norm(cross(a, b));
+                // cot = cos / sin = (a.b) / |a x b|
+                if cr <= 1e-300 || !cr.is_finite() {
+                    return Err(format!(
+                        "triangle {t} (vertices {:?}) is degenerate (zero area); cotangent weights are undefined",
+                        tri
+                    ));
+                }
+                c[k] = dot(a, b) / cr;
             }
-            c[k] = dot(a, b) / cr;
-        }
-        out.push(c);
-    }
-    Ok(out)
+            Ok(c)
+        })
+        .collect()
 }
 
 /// Cotangent weights `w_ij = (cot a_ij + cot b_ij) / 2` (Pinkall and Polthier 1993, eq. 5;
@@ -55,14 +58,16 @@ pub fn cotangent_weights(
     triangles: &[[u32; 3]],
 ) -> Result<(Vec<EdgeWeight>, usize), String> {
     let cot = corner_cotangents(positions, triangles)?;
-    let mut w = Vec::with_capacity(triangles.len() * 6);
-    for (tri, c) in triangles.iter().zip(&cot) {
-        for k in 0..3 {
-            let (i, j) = (tri[(k + 1) % 3], tri[(k + 2) % 3]);
-            w.push((i, j, 0.5 * c[k]));
-            w.push((j, i, 0.5 * c[k]));
-        }
-    }
+    let w: Vec<EdgeWeight> = triangles
+        .par_iter()
+        .zip(&cot)
+        .flat_map_iter(|(tri, c)| {
+            (0..3).flat_map(move |k| {
+                let (i, j) = (tri[(k + 1) % 3], tri[(k + 2) % 3]);
+                [(i, j, 0.5 * c[k]), (j, i, 0.5 * c[k])]
+            })
+        })
+        .collect();
     let negative = count_negative_edges(&w);
     Ok((w, negative))
 }
@@ -144,7 +149,7 @@ pub fn count_negative_edges(weights: &[EdgeWeight]) -> usize {
         .filter(|(i, j, _)| i < j)
         .map(|&(i, j, w)| (((i as u64) << 32) | j as u64, w))
         .collect();
-    keyed.sort_unstable_by_key(|k| k.0);
+    keyed.par_sort_unstable_by_key(|k| k.0);
     let mut count = 0;
     let mut k = 0;
     while k < keyed.len() {

@@ -480,8 +480,8 @@ mod tests {
         ];
         let t = [[0, 1, 2], [0, 3, 1]];
         let c = corner_cotangents(&p, &t).unwrap();
-        for k in 0..3 {
-            assert!((c[0][k] - 1.0 / 3f64.sqrt()).abs() < 1e-12);
+        for ck in c[0] {
+            assert!((ck - 1.0 / 3f64.sqrt()).abs() < 1e-12);
         }
         // L applied to a linear function vanishes at the interior edge's rows up to boundary terms;
         // on a whole closed-up planar fan the row sums are zero.

@@ -168,8 +168,8 @@ pub fn tutte(mesh: &Mesh, opts: &TutteOptions) -> Result<TutteResult, NodeError>
         let c = positions.len() as u32;
         let mut centroid = [0.0; 3];
         for &v in lp {
-            for d in 0..3 {
-                centroid[d] += mesh.positions[v as usize][d] / lp.len() as f64;
+            for (c, x) in centroid.iter_mut().zip(mesh.positions[v as usize]) {
+                *c += x / lp.len() as f64;
             }
         }
         positions.to_mut().push(centroid);

@@ -1,6 +1,10 @@
 //! param nodes.
 
+pub mod arap;
+
 use crate::registry::Registry;
 
 /// Registers the param nodes.
-pub fn register(_r: &mut Registry) {}
+pub fn register(r: &mut Registry) {
+    arap::register(r);
+}

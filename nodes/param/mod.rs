@@ -1,10 +1,18 @@
-//! param nodes.
+//! Parameterization nodes: boundary mapping, minimal surfaces, Tutte's embedding with three
+//! weightings, texture mapping, UV layout rendering and distortion metrics.
 
 pub mod arap;
+pub mod boundary_map;
+pub mod laplacian;
+pub mod tutte;
+pub mod uv_metrics;
 
 use crate::registry::Registry;
 
 /// Registers the param nodes.
 pub fn register(r: &mut Registry) {
+    boundary_map::register(r);
+    tutte::register(r);
+    uv_metrics::register(r);
     arap::register(r);
 }

@@ -6,7 +6,7 @@
 //! where `(F, G)` is the anti-similarity part of `J` (see `frames::similarity_parts`). Two
 //! vertices are pinned to fix the similarity; the rest comes from one sparse Cholesky solve.
 
-use super::frames::{local_step, similarity_parts, TriangleFrames};
+use super::frames::{local_step, similarity_parts, TriangleFrames, PAR_CHUNK};
 use super::injective::orientation_and_flips;
 use super::spd::SpdFactor;
 use super::{component_of, uv_outputs};
@@ -175,6 +175,7 @@ pub fn asap_parameterize(
 pub fn energies(frames: &TriangleFrames, uv: &[[f64; 2]]) -> (f64, f64) {
     let (conf, arap) = (0..frames.len())
         .into_par_iter()
+        .with_min_len(PAR_CHUNK)
         .map(|t| {
             let j = frames.jacobian(t, uv);
             let (_, _, f, g) = similarity_parts(&j);

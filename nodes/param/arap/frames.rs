@@ -8,6 +8,10 @@
 
 use rayon::prelude::*;
 
+/// Triangles per rayon task: large enough that small meshes run on one thread and the
+/// per-task overhead stays negligible.
+pub const PAR_CHUNK: usize = 2048;
+
 /// A 2x2 matrix, row-major: `[[a, b], [c, d]]`.
 pub type Mat2 = [[f64; 2]; 2];
 
@@ -34,6 +38,7 @@ impl TriangleFrames {
         let n = positions.len();
         let per: Vec<Result<([[f64; 2]; 3], f64, [f64; 3], [f64; 3]), String>> = triangles
             .par_iter()
+            .with_min_len(PAR_CHUNK)
             .enumerate()
             .map(|(t, tri)| {
                 if tri.iter().any(|&v| v as usize >= n) {

@@ -2,7 +2,7 @@
 //! triangle's orientation (Smith & Schaefer 2015, "Bijective Parameterization with Free
 //! Boundaries", §4), and flip counting.
 
-use super::frames::{cross2, sub2, TriangleFrames};
+use super::frames::{cross2, sub2, TriangleFrames, PAR_CHUNK};
 use rayon::prelude::*;
 
 /// The smallest positive `t` at which triangle `t`'s signed area, moving as `uv + t·d`,
@@ -53,6 +53,7 @@ pub fn smallest_positive_root(c0: f64, c1: f64, c2: f64) -> f64 {
 pub fn max_step(frames: &TriangleFrames, uv: &[[f64; 2]], d: &[[f64; 2]], orient: f64) -> f64 {
     (0..frames.len())
         .into_par_iter()
+        .with_min_len(PAR_CHUNK)
         .map(|t| triangle_max_step(frames, t, uv, d, orient))
         .reduce(|| f64::INFINITY, f64::min)
 }
@@ -62,6 +63,7 @@ pub fn max_step(frames: &TriangleFrames, uv: &[[f64; 2]], d: &[[f64; 2]], orient
 pub fn orientation_and_flips(frames: &TriangleFrames, uv: &[[f64; 2]]) -> (f64, usize) {
     let (pos, neg) = (0..frames.len())
         .into_par_iter()
+        .with_min_len(PAR_CHUNK)
         .map(|t| {
             let a = frames.signed_area2(t, uv);
             (usize::from(a > 0.0), usize::from(a < 0.0))
@@ -78,6 +80,7 @@ pub fn orientation_and_flips(frames: &TriangleFrames, uv: &[[f64; 2]]) -> (f64, 
 pub fn count_flips(frames: &TriangleFrames, uv: &[[f64; 2]], orient: f64) -> usize {
     (0..frames.len())
         .into_par_iter()
+        .with_min_len(PAR_CHUNK)
         .filter(|&t| orient * frames.signed_area2(t, uv) <= 0.0)
         .count()
 }

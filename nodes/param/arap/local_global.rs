@@ -8,7 +8,7 @@
 //! In fold-free mode the move towards the global solution is cut to the largest step that
 //! keeps every triangle's orientation, then backed off until the energy drops (Armijo).
 
-use super::frames::{local_step, Similarity, TriangleFrames};
+use super::frames::{local_step, Similarity, TriangleFrames, PAR_CHUNK};
 use super::injective::{orientation_and_flips, triangle_max_step};
 use super::spd::SpdFactor;
 use super::{component_of, init_uvs, uv_outputs, StopReason};
@@ -59,8 +59,11 @@ pub struct ArapIteration {
     pub flips: usize,
     /// Time since the call started, in milliseconds (setup and factorization included).
     pub elapsed_ms: f64,
-    /// Fraction of the global step taken (1 for a full step, 0 for the initial row).
+    /// Length of the step taken along the search direction (1: the full global step;
+    /// 0 for the initial row).
     pub step: f64,
+    /// Whether the step was cut short to keep every triangle's orientation.
+    pub blocked: bool,
 }
 
 /// What `arap_parameterize` returns.
@@ -85,6 +88,8 @@ const ARMIJO_C: f64 = 1e-4;
 const STEP_SAFETY: f64 = 0.9;
 /// Halvings of the step before giving up.
 const MAX_BACKTRACKS: usize = 40;
+/// Below this orientation-preserving step length the iteration is stalled.
+const MIN_STEP: f64 = 1e-12;
 
 /// ARAP (or hybrid) parameterization of a triangle mesh from initial UVs, libigl style.
 ///
@@ -216,6 +221,7 @@ pub fn arap_parameterize(
     // w_t,i = Σ_(j≠i) cot θ_ij (x_i - x_j) (Liu et al. 2008, eq. 6).
     let corner_w: Vec<[[f64; 2]; 3]> = (0..m)
         .into_par_iter()
+        .with_min_len(PAR_CHUNK)
         .map(|t| {
             let x = frames.local[t];
             let c = frames.cot[t];
@@ -242,11 +248,13 @@ pub fn arap_parameterize(
         flips,
         elapsed_ms: ms(start),
         step: 0.0,
+        blocked: false,
     }];
     let mut stop = StopReason::Iterations;
     let mut rhs = Mat::<f64>::zeros(nf, 2);
     let mut d = vec![[0.0; 2]; n];
     let mut trial = uv.clone();
+    let mut limits = vec![f64::INFINITY; if opts.injective { m } else { 0 }];
     let mut it = 0;
     while it < opts.iterations {
         let Some(factor) = factor.as_ref() else {
@@ -278,11 +286,26 @@ pub fn arap_parameterize(
 
         // Line search.
         let mut step = 1.0;
-        let mut decrease_slope = 0.0; // 2Δ: minus the derivative of the surrogate at 0
+        let mut slope = 0.0; // derivative of the energy along d at step 0 (negative)
+        let mut blocked = false;
         if opts.injective {
-            let (surrogate, tmax) = surrogate_and_max_step(&frames, &uv, &d, &targets, lambda);
-            decrease_slope = 2.0 * (energy - surrogate / total_area).max(0.0);
-            step = (STEP_SAFETY * tmax).min(1.0);
+            let dir = directional(&frames, &uv, &d, &targets, &mut limits);
+            slope = dir.slope;
+            step = dir.best_step.min(STEP_SAFETY * dir.max_step);
+            blocked = STEP_SAFETY * dir.max_step < dir.best_step;
+            if dir.max_step < MIN_STEP {
+                stop = StopReason::NoProgress;
+                break;
+            }
+            if !(slope < 0.0) {
+                // zero: already stationary for these targets; positive/NaN: no descent left
+                stop = if slope == 0.0 {
+                    StopReason::Tolerance
+                } else {
+                    StopReason::NoProgress
+                };
+                break;
+            }
         }
         let mut accepted = None;
         for _ in 0..MAX_BACKTRACKS {
@@ -292,11 +315,12 @@ pub fn arap_parameterize(
             trial
                 .par_iter_mut()
                 .zip(uv.par_iter().zip(d.par_iter()))
+                .with_min_len(PAR_CHUNK)
                 .for_each(|(o, (u, dv))| *o = [u[0] + step * dv[0], u[1] + step * dv[1]]);
             let (e_sum, fl) = evaluate(&frames, &trial, lambda, &mut trial_targets);
             let e = e_sum / total_area;
             let ok_orient = !opts.injective || fl == 0;
-            if ok_orient && e.is_finite() && e <= energy - ARMIJO_C * step * decrease_slope {
+            if ok_orient && e.is_finite() && e <= energy + ARMIJO_C * step * slope {
                 accepted = Some((e, fl));
                 break;
             }
@@ -316,9 +340,15 @@ pub fn arap_parameterize(
             flips: fl,
             elapsed_ms: ms(start),
             step,
+            blocked,
         });
         if e_old - energy <= opts.tolerance * e_old {
-            stop = StopReason::Tolerance;
+            // a step cut short by a triangle about to flip is a stall, not convergence
+            stop = if blocked {
+                StopReason::NoProgress
+            } else {
+                StopReason::Tolerance
+            };
             break;
         }
     }
@@ -351,6 +381,7 @@ fn evaluate(
 ) -> (f64, usize) {
     targets
         .par_iter_mut()
+        .with_min_len(PAR_CHUNK)
         .enumerate()
         .map(|(t, out)| {
             let j = frames.jacobian(t, uv);
@@ -362,34 +393,58 @@ fn evaluate(
         .reduce(|| (0.0, 0), |a, b| (a.0 + b.0, a.1 + b.1))
 }
 
-/// The global step's objective at `uv + d` with the targets held fixed (the surrogate that the
-/// line search compares against), and the largest orientation-preserving step along `d`.
-fn surrogate_and_max_step(
+/// What the energy does along a direction `δ` with the targets held fixed.
+struct Directional {
+    /// `dE/ds` at `s = 0`: `Σ 2 A <J(uv) - L, J(δ)>`.
+    slope: f64,
+    /// Minimizer of the quadratic `E + s·slope + s²·Σ A |J(δ)|²` (1 for the global step).
+    best_step: f64,
+    /// Largest step keeping every triangle's orientation.
+    max_step: f64,
+}
+
+/// One parallel pass over the triangles: slope and curvature of the targets' quadratic
+/// along `dir`, and each triangle's orientation limit (written to `limits`).
+fn directional(
     frames: &TriangleFrames,
     uv: &[[f64; 2]],
-    d: &[[f64; 2]],
+    dir: &[[f64; 2]],
     targets: &[Similarity],
-    lambda: Option<f64>,
-) -> (f64, f64) {
-    (0..frames.len())
-        .into_par_iter()
-        .map(|t| {
+    limits: &mut [f64],
+) -> Directional {
+    let (slope, curv, max_step) = limits
+        .par_iter_mut()
+        .with_min_len(PAR_CHUNK)
+        .enumerate()
+        .map(|(t, lim)| {
             let j0 = frames.jacobian(t, uv);
-            let jd = frames.jacobian(t, d);
+            let jd = frames.jacobian(t, dir);
             let [a, b] = targets[t];
             let l = [[a, -b], [b, a]];
-            let mut e = 0.0;
+            let (mut g, mut c) = (0.0, 0.0);
             for r in 0..2 {
-                for c in 0..2 {
-                    e += (j0[r][c] + jd[r][c] - l[r][c]).powi(2);
+                for k in 0..2 {
+                    g += (j0[r][k] - l[r][k]) * jd[r][k];
+                    c += jd[r][k] * jd[r][k];
                 }
             }
-            if let Some(lm) = lambda {
-                e += 2.0 * lm * (a * a + b * b - 1.0).powi(2);
-            }
-            (frames.area[t] * e, triangle_max_step(frames, t, uv, d, 1.0))
+            *lim = triangle_max_step(frames, t, uv, dir, 1.0);
+            (2.0 * frames.area[t] * g, frames.area[t] * c, *lim)
         })
-        .reduce(|| (0.0, f64::INFINITY), |x, y| (x.0 + y.0, x.1.min(y.1)))
+        .reduce(
+            || (0.0, 0.0, f64::INFINITY),
+            |x, y| (x.0 + y.0, x.1 + y.1, x.2.min(y.2)),
+        );
+    let best_step = if curv > 0.0 {
+        -slope / (2.0 * curv)
+    } else {
+        0.0
+    };
+    Directional {
+        slope,
+        best_step: best_step.max(0.0),
+        max_step,
+    }
 }
 
 /// Marks one vertex per connected component (the `pin` in its component, otherwise the
@@ -440,8 +495,9 @@ fn declare_common(b: &mut NodeBuilder) {
         .doc("The input mesh with per-vertex UVs.");
     b.add_output::<Mesh>("flat")
         .doc("The flattened mesh (UV, 0), at the 3-D scale.");
-    b.add_output::<Table>("log")
-        .doc("Per iteration: energy, flips, elapsed_ms, step; meta: stop_reason.");
+    b.add_output::<Table>("log").doc(
+        "Per iteration: energy, flips, elapsed_ms, step, blocked (1: cut short to avoid a flip); meta: stop_reason, flips, energy.",
+    );
 }
 
 fn declare_arap(b: &mut NodeBuilder) {
@@ -482,7 +538,14 @@ fn execute_with(ctx: &mut ExecContext, lambda: Option<f64>) -> Result<(), NodeEr
         lambda,
     };
     let res = arap_parameterize(&tri_mesh.positions, &triangles, &uv0, &opts)?;
-    let mut table = Table::with_columns(&["iteration", "energy", "flips", "elapsed_ms", "step"]);
+    let mut table = Table::with_columns(&[
+        "iteration",
+        "energy",
+        "flips",
+        "elapsed_ms",
+        "step",
+        "blocked",
+    ]);
     for r in &res.log {
         table.push_row(&[
             r.iteration as f64,
@@ -490,6 +553,7 @@ fn execute_with(ctx: &mut ExecContext, lambda: Option<f64>) -> Result<(), NodeEr
             r.flips as f64,
             r.elapsed_ms,
             r.step,
+            f64::from(u8::from(r.blocked)),
         ]);
     }
     table

@@ -18,6 +18,7 @@ pub mod spd;
 pub use asap::{asap_parameterize, AsapResult};
 pub use local_global::{arap_parameterize, ArapIteration, ArapOptions, ArapResult};
 
+use super::tutte::{tutte_parameterize, BoundaryShape, TutteWeights};
 use crate::prelude::*;
 
 /// Why an iterative parameterization stopped.
@@ -119,10 +120,12 @@ pub fn init_uvs(mesh: &Mesh, init: Option<&Mesh>) -> Result<(Vec<[f64; 2]>, Stri
     }
 }
 
-fn default_init(_mesh: &Mesh) -> Result<(Vec<[f64; 2]>, String), NodeError> {
-    Err(NodeError::new(
-        ErrorKind::Unsupported,
-        "no init given and the Tutte initialization is not available in this build; connect `init`",
+fn default_init(mesh: &Mesh) -> Result<(Vec<[f64; 2]>, String), NodeError> {
+    let uv = tutte_parameterize(mesh, TutteWeights::MeanValue, BoundaryShape::Circle, true)?;
+    let holes = mesh.topology().boundary_loops.len().saturating_sub(1);
+    Ok((
+        uv,
+        format!("initial UVs: Tutte, mean-value weights, circle boundary, {holes} hole(s) filled"),
     ))
 }
 

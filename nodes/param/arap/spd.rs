@@ -1,5 +1,5 @@
 //! A sparse symmetric positive definite system factored once (faer's sparse Cholesky) and
-//! solved for several right-hand sides per call, with an explicit choice of parallelism.
+//! solved for several right-hand sides per call.
 
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, LltRef, SymbolicCholesky};
@@ -7,10 +7,13 @@ use faer::sparse::{SparseColMat, Triplet};
 use faer::{Conj, MatMut, Par, Side};
 
 /// `L Lᵀ` of a sparse SPD matrix (fill-reducing ordering chosen by faer).
+///
+/// The factorization runs with the given parallelism; the triangular solves run on one
+/// thread: for the two right-hand sides of a parameterization they are memory-bound, and on
+/// the 2-core benchmark machine faer's parallel solve was several times slower.
 pub struct SpdFactor {
     symbolic: SymbolicCholesky<usize>,
     values: Vec<f64>,
-    par: Par,
 }
 
 impl SpdFactor {
@@ -46,11 +49,7 @@ impl SpdFactor {
                 Default::default(),
             )
             .map_err(|e| format!("Cholesky: {e:?}"))?;
-        Ok(SpdFactor {
-            symbolic,
-            values,
-            par,
-        })
+        Ok(SpdFactor { symbolic, values })
     }
 
     /// Number of unknowns.
@@ -67,12 +66,12 @@ impl SpdFactor {
     pub fn solve_in_place(&self, rhs: MatMut<'_, f64>) {
         let mut mem = MemBuffer::new(
             self.symbolic
-                .solve_in_place_scratch::<f64>(rhs.ncols(), self.par),
+                .solve_in_place_scratch::<f64>(rhs.ncols(), Par::Seq),
         );
         LltRef::new(&self.symbolic, &self.values).solve_in_place_with_conj(
             Conj::No,
             rhs,
-            self.par,
+            Par::Seq,
             MemStack::new(&mut mem),
         );
     }

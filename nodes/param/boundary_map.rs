@@ -61,7 +61,7 @@ pub fn map_boundary(
                 t.push(acc);
                 acc += len(i);
             }
-            if !(acc > 0.0) || !acc.is_finite() {
+            if acc <= 0.0 || !acc.is_finite() {
                 return Err("boundary loop has zero or non-finite length".into());
             }
             if (0..n).any(|i| len(i) <= 0.0) {

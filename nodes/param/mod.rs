@@ -4,6 +4,9 @@
 pub mod arap;
 pub mod boundary_map;
 pub mod laplacian;
+pub mod minimal_surface;
+pub mod render_uv;
+pub mod texture_map;
 pub mod tutte;
 pub mod uv_metrics;
 
@@ -12,6 +15,9 @@ use crate::registry::Registry;
 /// Registers the param nodes.
 pub fn register(r: &mut Registry) {
     boundary_map::register(r);
+    minimal_surface::register(r);
+    render_uv::register(r);
+    texture_map::register(r);
     tutte::register(r);
     uv_metrics::register(r);
     arap::register(r);

@@ -107,7 +107,9 @@ fn main() {
         .status()
     {
         Ok(s) if s.success() => {}
-        Ok(s) => eprintln!("libigl comparison failed ({s}); is libigl installed (pip install libigl)?"),
+        Ok(s) => {
+            eprintln!("libigl comparison failed ({s}); is libigl installed (pip install libigl)?")
+        }
         Err(e) => eprintln!("could not run python3: {e}"),
     }
 }

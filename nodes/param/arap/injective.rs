@@ -18,12 +18,26 @@ pub fn triangle_max_step(
     d: &[[f64; 2]],
     orient: f64,
 ) -> f64 {
+    triangle_max_step_above(frames, t, uv, d, orient, 0.0)
+}
+
+/// Like `triangle_max_step`, but the smallest positive `t` at which twice the signed area
+/// drops to `floor2` (the fold-free ARAP keeps a margin so triangles are not squeezed flat).
+#[inline]
+pub fn triangle_max_step_above(
+    frames: &TriangleFrames,
+    t: usize,
+    uv: &[[f64; 2]],
+    d: &[[f64; 2]],
+    orient: f64,
+    floor2: f64,
+) -> f64 {
     let [i, j, k] = frames.triangles[t].map(|v| v as usize);
     let a = sub2(uv[j], uv[i]);
     let b = sub2(uv[k], uv[i]);
     let da = sub2(d[j], d[i]);
     let db = sub2(d[k], d[i]);
-    let c0 = orient * cross2(a, b);
+    let c0 = orient * cross2(a, b) - floor2;
     let c1 = orient * (cross2(a, db) + cross2(da, b));
     let c2 = orient * cross2(da, db);
     smallest_positive_root(c0, c1, c2)

@@ -9,7 +9,7 @@
 //! keeps every triangle's orientation, then backed off until the energy drops (Armijo).
 
 use super::frames::{local_step, Similarity, TriangleFrames, PAR_CHUNK};
-use super::injective::{orientation_and_flips, triangle_max_step};
+use super::injective::{orientation_and_flips, triangle_max_step_above};
 use super::spd::SpdFactor;
 use super::{component_of, init_uvs, uv_outputs, StopReason};
 use crate::prelude::*;
@@ -79,6 +79,8 @@ pub struct ArapResult {
     pub flips: usize,
     /// Final energy (as in the log).
     pub energy: f64,
+    /// Times a triangle's weight was raised by the fold-free mode (0: plain local/global).
+    pub reweighted: usize,
 }
 
 /// Armijo's sufficient-decrease constant.
@@ -88,6 +90,19 @@ const ARMIJO_C: f64 = 1e-4;
 const STEP_SAFETY: f64 = 0.9;
 /// Halvings of the step before giving up.
 const MAX_BACKTRACKS: usize = 40;
+/// When the orientation-preserving step is below this fraction of the best step along the
+/// direction, the blocking triangles are stiffened and the direction recomputed.
+const BLOCKED_STEP: f64 = 0.5;
+/// Reweighting rounds per iteration (each refactors the Laplacian numerically).
+const REWEIGHT_ROUNDS: usize = 3;
+/// Factor applied to a blocking triangle's weight.
+const REWEIGHT_FACTOR: f64 = 10.0;
+/// Largest weight.
+const MAX_WEIGHT: f64 = 1e8;
+/// Fold-free steps keep every triangle's UV area above this fraction of its 3-D area (after
+/// scaling the layout to the 3-D area), or above half its current area if already smaller,
+/// so that blocked triangles are not squeezed towards zero area.
+const AREA_MARGIN: f64 = 1e-3;
 /// Below this orientation-preserving step length the iteration is stalled.
 const MIN_STEP: f64 = 1e-12;
 
@@ -179,43 +194,42 @@ pub fn arap_parameterize(
     }
     let nf = free_vertices.len();
 
-    // Cotangent Laplacian on the free vertices (lower triangle), and the coupling of free
-    // vertices to fixed ones, which moves to the right-hand side.
+    // Cotangent Laplacian on the free vertices (lower triangle), each entry tagged with its
+    // triangle so that the fold-free mode can reweight triangles (see `reweight`).
     let mut trip: Vec<Triplet<usize, usize, f64>> = Vec::with_capacity(9 * m);
-    let mut coupling: Vec<(u32, u32, f64)> = Vec::new();
+    let mut trip_tri: Vec<u32> = Vec::with_capacity(9 * m);
     for t in 0..m {
         let tri = frames.triangles[t];
         for k in 0..3 {
             let (i, j) = (tri[(k + 1) % 3] as usize, tri[(k + 2) % 3] as usize);
             let w = frames.cot[t][k];
             let (fi, fj) = (free_index[i], free_index[j]);
+            let mut push = |r: u32, c: u32, v: f64| {
+                trip.push(Triplet::new(r as usize, c as usize, v));
+                trip_tri.push(t as u32);
+            };
             if fi != u32::MAX {
-                trip.push(Triplet::new(fi as usize, fi as usize, w));
+                push(fi, fi, w);
             }
             if fj != u32::MAX {
-                trip.push(Triplet::new(fj as usize, fj as usize, w));
+                push(fj, fj, w);
             }
-            match (fi != u32::MAX, fj != u32::MAX) {
-                (true, true) => {
-                    let (a, b) = (fi.max(fj) as usize, fi.min(fj) as usize);
-                    trip.push(Triplet::new(a, b, -w));
-                }
-                (true, false) => coupling.push((fi, j as u32, w)),
-                (false, true) => coupling.push((fj, i as u32, w)),
-                (false, false) => {}
+            if fi != u32::MAX && fj != u32::MAX {
+                push(fi.max(fj), fi.min(fj), -w);
             }
         }
     }
-    let factor = if nf > 0 {
-        Some(SpdFactor::new(nf, &trip, Par::rayon(0)).map_err(|e| {
-            NodeError::singular(format!(
-                "the cotangent Laplacian could not be factored ({e}); the mesh may have nearly degenerate triangles"
-            ))
-        })?)
+    let singular = |e: String| {
+        NodeError::singular(format!(
+            "the cotangent Laplacian could not be factored ({e}); the mesh may have nearly degenerate triangles"
+        ))
+    };
+    let mut factor = if nf > 0 {
+        Some(SpdFactor::new(nf, &trip, Par::rayon(0)).map_err(singular)?)
     } else {
         None
     };
-    drop(trip);
+    let mut weights = vec![1.0; if opts.injective { m } else { 0 }];
 
     // Right-hand side weights per corner: b_i += L_t · w_t,i with
     // w_t,i = Σ_(j≠i) cot θ_ij (x_i - x_j) (Liu et al. 2008, eq. 6).
@@ -252,36 +266,52 @@ pub fn arap_parameterize(
     }];
     let mut stop = StopReason::Iterations;
     let mut rhs = Mat::<f64>::zeros(nf, 2);
+    let mut reweighted = 0usize;
     let mut d = vec![[0.0; 2]; n];
     let mut trial = uv.clone();
     let mut limits = vec![f64::INFINITY; if opts.injective { m } else { 0 }];
     let mut it = 0;
     while it < opts.iterations {
-        let Some(factor) = factor.as_ref() else {
+        let Some(factor) = factor.as_mut() else {
             stop = StopReason::Tolerance;
             break;
         };
         it += 1;
-        // Global step.
+        // Global step, written as a preconditioned gradient step: d = -Δ_W⁻¹ ∇E. With unit
+        // weights this is exactly Liu et al.'s global solve minus the current UVs;
+        // ∇E at vertex i is Σ_t Σ_j cot θ_ij ((u_i - u_j) - L_t (x_i - x_j)) (eq. 6).
         rhs.fill(0.0);
         for t in 0..m {
             let [a, b] = targets[t];
-            for (k, &v) in frames.triangles[t].iter().enumerate() {
-                let fi = free_index[v as usize];
-                if fi != u32::MAX {
-                    let w = corner_w[t][k];
-                    rhs[(fi as usize, 0)] += a * w[0] - b * w[1];
-                    rhs[(fi as usize, 1)] += b * w[0] + a * w[1];
+            let tri = frames.triangles[t];
+            let c = frames.cot[t];
+            for k in 0..3 {
+                let fi = free_index[tri[k] as usize];
+                if fi == u32::MAX {
+                    continue;
+                }
+                let (k1, k2) = ((k + 1) % 3, (k + 2) % 3);
+                let (u, u1, u2) = (
+                    uv[tri[k] as usize],
+                    uv[tri[k1] as usize],
+                    uv[tri[k2] as usize],
+                );
+                let w = corner_w[t][k];
+                for dim in 0..2 {
+                    let lw = if dim == 0 {
+                        a * w[0] - b * w[1]
+                    } else {
+                        b * w[0] + a * w[1]
+                    };
+                    rhs[(fi as usize, dim)] +=
+                        c[k2] * (u[dim] - u1[dim]) + c[k1] * (u[dim] - u2[dim]) - lw;
                 }
             }
         }
-        for &(fi, p, w) in &coupling {
-            rhs[(fi as usize, 0)] += w * uv[p as usize][0];
-            rhs[(fi as usize, 1)] += w * uv[p as usize][1];
-        }
+        let gradient = rhs.clone();
         factor.solve_in_place(rhs.as_mut());
         for (f, &v) in free_vertices.iter().enumerate() {
-            d[v] = [rhs[(f, 0)] - uv[v][0], rhs[(f, 1)] - uv[v][1]];
+            d[v] = [-rhs[(f, 0)], -rhs[(f, 1)]];
         }
 
         // Line search.
@@ -289,7 +319,31 @@ pub fn arap_parameterize(
         let mut slope = 0.0; // derivative of the energy along d at step 0 (negative)
         let mut blocked = false;
         if opts.injective {
-            let dir = directional(&frames, &uv, &d, &targets, &mut limits);
+            let mut dir = directional(&frames, &uv, &d, &targets, &mut limits);
+            let mut rounds = 0;
+            while STEP_SAFETY * dir.max_step < BLOCKED_STEP * dir.best_step
+                && rounds < REWEIGHT_ROUNDS
+            {
+                // Blocked: stiffen the triangles that the step would flip and solve again.
+                let changed = reweight(&limits, dir.best_step, &mut weights);
+                if changed == 0 {
+                    break;
+                }
+                reweighted += changed;
+                rounds += 1;
+                let lower: Vec<Triplet<usize, usize, f64>> = trip
+                    .iter()
+                    .zip(&trip_tri)
+                    .map(|(x, &t)| Triplet::new(x.row, x.col, x.val * weights[t as usize]))
+                    .collect();
+                factor.refactor(&lower, Par::rayon(0)).map_err(singular)?;
+                rhs.copy_from(&gradient);
+                factor.solve_in_place(rhs.as_mut());
+                for (f, &v) in free_vertices.iter().enumerate() {
+                    d[v] = [-rhs[(f, 0)], -rhs[(f, 1)]];
+                }
+                dir = directional(&frames, &uv, &d, &targets, &mut limits);
+            }
             slope = dir.slope;
             step = dir.best_step.min(STEP_SAFETY * dir.max_step);
             blocked = STEP_SAFETY * dir.max_step < dir.best_step;
@@ -364,6 +418,7 @@ pub fn arap_parameterize(
         stop_reason: stop,
         flips,
         energy,
+        reweighted,
     })
 }
 
@@ -412,6 +467,13 @@ fn directional(
     targets: &[Similarity],
     limits: &mut [f64],
 ) -> Directional {
+    // UV-to-3D area ratio, for the area margin below which no triangle is pushed
+    let uv_area2: f64 = (0..frames.len())
+        .into_par_iter()
+        .with_min_len(PAR_CHUNK)
+        .map(|t| frames.signed_area2(t, uv).abs())
+        .sum();
+    let ratio = uv_area2 / (2.0 * frames.total_area);
     let (slope, curv, max_step) = limits
         .par_iter_mut()
         .with_min_len(PAR_CHUNK)
@@ -428,7 +490,9 @@ fn directional(
                     c += jd[r][k] * jd[r][k];
                 }
             }
-            *lim = triangle_max_step(frames, t, uv, dir, 1.0);
+            let a2 = frames.signed_area2(t, uv);
+            let floor2 = (AREA_MARGIN * 2.0 * frames.area[t] * ratio).min(0.5 * a2);
+            *lim = triangle_max_step_above(frames, t, uv, dir, 1.0, floor2);
             (2.0 * frames.area[t] * g, frames.area[t] * c, *lim)
         })
         .reduce(
@@ -445,6 +509,19 @@ fn directional(
         best_step: best_step.max(0.0),
         max_step,
     }
+}
+
+/// Multiplies by `REWEIGHT_FACTOR` the weight of every triangle that would flip before
+/// `best_step` (`limits < best_step`); returns how many changed.
+fn reweight(limits: &[f64], best_step: f64, weights: &mut [f64]) -> usize {
+    let mut changed = 0;
+    for (w, &lim) in weights.iter_mut().zip(limits) {
+        if lim < best_step && *w < MAX_WEIGHT {
+            *w = (*w * REWEIGHT_FACTOR).min(MAX_WEIGHT);
+            changed += 1;
+        }
+    }
+    changed
 }
 
 /// Marks one vertex per connected component (the `pin` in its component, otherwise the
@@ -560,6 +637,9 @@ fn execute_with(ctx: &mut ExecContext, lambda: Option<f64>) -> Result<(), NodeEr
         .meta
         .insert("stop_reason".into(), res.stop_reason.as_str().into());
     table.meta.insert("flips".into(), res.flips.to_string());
+    table
+        .meta
+        .insert("reweighted".into(), res.reweighted.to_string());
     table
         .meta
         .insert("energy".into(), format!("{:.6e}", res.energy));

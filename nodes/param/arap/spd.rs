@@ -33,14 +33,34 @@ impl SpdFactor {
             Default::default(),
         )
         .map_err(|e| format!("symbolic Cholesky: {e:?}"))?;
-        let mut values = vec![0.0; symbolic.len_val()];
+        let values = vec![0.0; symbolic.len_val()];
+        let mut f = SpdFactor { symbolic, values };
+        f.numeric(&a, par)?;
+        Ok(f)
+    }
+
+    /// Factors new values with the same pattern as the matrix given to `new` (the symbolic
+    /// analysis, ordering included, is reused).
+    pub fn refactor(
+        &mut self,
+        lower: &[Triplet<usize, usize, f64>],
+        par: Par,
+    ) -> Result<(), String> {
+        let n = self.dim();
+        let a = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, lower)
+            .map_err(|e| format!("assembling the sparse matrix: {e:?}"))?;
+        self.numeric(&a, par)
+    }
+
+    fn numeric(&mut self, a: &SparseColMat<usize, f64>, par: Par) -> Result<(), String> {
         let mut mem = MemBuffer::try_new(
-            symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()),
+            self.symbolic
+                .factorize_numeric_llt_scratch::<f64>(par, Default::default()),
         )
         .map_err(|e| format!("Cholesky workspace: {e:?}"))?;
-        symbolic
+        self.symbolic
             .factorize_numeric_llt(
-                &mut values,
+                &mut self.values,
                 a.as_ref(),
                 Side::Lower,
                 Default::default(),
@@ -49,7 +69,7 @@ impl SpdFactor {
                 Default::default(),
             )
             .map_err(|e| format!("Cholesky: {e:?}"))?;
-        Ok(SpdFactor { symbolic, values })
+        Ok(())
     }
 
     /// Number of unknowns.
@@ -105,5 +125,18 @@ mod tests {
         t[0] = Triplet::new(0, 0, 1.0);
         t[2 * (n - 1)] = Triplet::new(n - 1, n - 1, 1.0);
         assert!(SpdFactor::new(n, &t, Par::Seq).is_err());
+        // refactor with doubled values: the solution halves
+        t[0] = Triplet::new(0, 0, 2.0);
+        t[2 * (n - 1)] = Triplet::new(n - 1, n - 1, 2.0);
+        let mut f = SpdFactor::new(n, &t, Par::Seq).unwrap();
+        let t2: Vec<_> = t
+            .iter()
+            .map(|x| Triplet::new(x.row, x.col, 2.0 * x.val))
+            .collect();
+        f.refactor(&t2, Par::Seq).unwrap();
+        let mut b = faer::Mat::<f64>::zeros(n, 1);
+        b[(n - 1, 0)] = (n + 1) as f64;
+        f.solve_in_place(b.as_mut());
+        assert!((b[(0, 0)] - 0.5).abs() < 1e-12);
     }
 }

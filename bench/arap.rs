@@ -9,7 +9,7 @@
 //! (our frames and factorization; libigl's precomputation), which is reported separately.
 //! Writes `target/bench/arap/*.csv` (energy against time) and `docs/arap_energy_time.svg`.
 
-use cgnodes::nodes::mesh::load::load_obj;
+use cgnodes::nodes::mesh::obj::load_obj;
 use cgnodes::nodes::param::arap::{arap_parameterize, ArapOptions, ArapResult};
 use cgnodes::nodes::param::tutte::{tutte_parameterize, BoundaryShape, TutteWeights};
 use cgnodes::nodes::param::uv_metrics::uv_metrics;
@@ -64,7 +64,7 @@ fn main() {
         if !path.exists() || !seen.insert(name.clone()) {
             continue;
         }
-        let mesh = Arc::new(load_obj(&path).expect("load mesh")).triangulated();
+        let mesh = Arc::new(load_obj(&path, "").expect("load mesh")).triangulated();
         let tris = mesh.triangles().expect("triangles");
         eprintln!("{name}: {} faces", tris.len());
 

@@ -81,6 +81,8 @@ pub struct ArapResult {
     pub energy: f64,
     /// Times a triangle's weight was raised by the fold-free mode (0: plain local/global).
     pub reweighted: usize,
+    /// Details of a `NoProgress` stop (empty otherwise).
+    pub stop_detail: String,
 }
 
 /// Armijo's sufficient-decrease constant.
@@ -267,6 +269,7 @@ pub fn arap_parameterize(
     let mut stop = StopReason::Iterations;
     let mut rhs = Mat::<f64>::zeros(nf, 2);
     let mut reweighted = 0usize;
+    let mut detail = String::new();
     let mut d = vec![[0.0; 2]; n];
     let mut trial = uv.clone();
     let mut limits = vec![f64::INFINITY; if opts.injective { m } else { 0 }];
@@ -344,11 +347,15 @@ pub fn arap_parameterize(
                 }
                 dir = directional(&frames, &uv, &d, &targets, &mut limits);
             }
-            slope = dir.slope;
+            slope = dir.slope / total_area; // per unit area, like `energy`
             step = dir.best_step.min(STEP_SAFETY * dir.max_step);
             blocked = STEP_SAFETY * dir.max_step < dir.best_step;
             if dir.max_step < MIN_STEP {
                 stop = StopReason::NoProgress;
+                detail = format!(
+                    "orientation-preserving step {:.3e} at iteration {it}",
+                    dir.max_step
+                );
                 break;
             }
             if !(slope < 0.0) {
@@ -358,10 +365,12 @@ pub fn arap_parameterize(
                 } else {
                     StopReason::NoProgress
                 };
+                detail = format!("slope {slope:.3e} along the search direction at iteration {it}");
                 break;
             }
         }
         let mut accepted = None;
+        let first_step = step;
         for _ in 0..MAX_BACKTRACKS {
             if step <= 0.0 || !step.is_finite() {
                 break;
@@ -382,6 +391,9 @@ pub fn arap_parameterize(
         }
         let Some((e_new, fl)) = accepted else {
             stop = StopReason::NoProgress;
+            detail = format!(
+                "line search failed at iteration {it} (slope {slope:.3e}, first step {first_step:.3e})"
+            );
             break;
         };
         std::mem::swap(&mut uv, &mut trial);
@@ -419,6 +431,7 @@ pub fn arap_parameterize(
         flips,
         energy,
         reweighted,
+        stop_detail: detail,
     })
 }
 
@@ -640,6 +653,12 @@ fn execute_with(ctx: &mut ExecContext, lambda: Option<f64>) -> Result<(), NodeEr
     table
         .meta
         .insert("reweighted".into(), res.reweighted.to_string());
+    if !res.stop_detail.is_empty() {
+        table
+            .meta
+            .insert("stop_detail".into(), res.stop_detail.clone());
+        ctx.log(format!("stopped: {}", res.stop_detail));
+    }
     table
         .meta
         .insert("energy".into(), format!("{:.6e}", res.energy));

@@ -36,7 +36,8 @@ impl TriangleFrames {
     /// Builds the frames; fails on a triangle with zero or non-finite area, naming it.
     pub fn new(positions: &[[f64; 3]], triangles: &[[u32; 3]]) -> Result<TriangleFrames, String> {
         let n = positions.len();
-        let per: Vec<Result<([[f64; 2]; 3], f64, [f64; 3], [f64; 3]), String>> = triangles
+        type Frame = ([[f64; 2]; 3], f64, [f64; 3], [f64; 3]);
+        let per: Vec<Result<Frame, String>> = triangles
             .par_iter()
             .with_min_len(PAR_CHUNK)
             .enumerate()

@@ -358,7 +358,7 @@ pub fn arap_parameterize(
                 );
                 break;
             }
-            if !(slope < 0.0) {
+            if slope.is_nan() || slope >= 0.0 {
                 // zero: already stationary for these targets; positive/NaN: no descent left
                 stop = if slope == 0.0 {
                     StopReason::Tolerance

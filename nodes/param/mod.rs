@@ -1,6 +1,7 @@
 //! Parameterization nodes: boundary mapping, minimal surfaces, Tutte's embedding with three
 //! weightings, texture mapping, UV layout rendering and distortion metrics.
 
+pub mod arap;
 pub mod boundary_map;
 pub mod laplacian;
 pub mod minimal_surface;
@@ -20,4 +21,5 @@ pub fn register(r: &mut Registry) {
     texture_map::register(r);
     tutte::register(r);
     uv_metrics::register(r);
+    arap::register(r);
 }

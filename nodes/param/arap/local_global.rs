@@ -1,0 +1,804 @@
+//! `arap` and `arap_hybrid`: the local/global parameterization of Liu et al. 2008
+//! ("A Local/Global Approach to Mesh Parameterization"), with an optional fold-free line
+//! search (Smith & Schaefer 2015).
+//!
+//! Each iteration fits a target per triangle to the current Jacobian (local step: closed-form
+//! 2x2 decomposition, in parallel), then solves for the UVs that best follow the targets
+//! (global step: the cotangent Laplacian, factored once, both coordinates in one solve).
+//! In fold-free mode the move towards the global solution is cut to the largest step that
+//! keeps every triangle's orientation, then backed off until the energy drops (Armijo).
+
+use super::frames::{local_step, Similarity, TriangleFrames, PAR_CHUNK};
+use super::injective::{orientation_and_flips, triangle_max_step_above};
+use super::spd::SpdFactor;
+use super::{component_of, init_uvs, uv_outputs, StopReason};
+use crate::prelude::*;
+use faer::sparse::Triplet;
+use faer::{Mat, Par};
+use rayon::prelude::*;
+use std::time::Instant;
+
+/// Settings of `arap_parameterize`.
+#[derive(Clone, Debug)]
+pub struct ArapOptions {
+    /// Maximum number of local/global iterations.
+    pub iterations: usize,
+    /// Stop when an iteration lowers the energy by less than this fraction of it.
+    pub tolerance: f64,
+    /// Never accept a step that flips or flattens a triangle (needs a fold-free start).
+    pub injective: bool,
+    /// The vertex kept at its initial UV (translation gauge); `None`: the first vertex.
+    /// Every other connected component pins its first vertex.
+    pub pin: Option<usize>,
+    /// `None`: ARAP (rotations). `Some(λ)`: the hybrid model of Liu et al. 2008 §4.3, where
+    /// `λ = 0` is ASAP's similarity and `λ → ∞` tends to ARAP.
+    pub lambda: Option<f64>,
+}
+
+impl Default for ArapOptions {
+    fn default() -> Self {
+        ArapOptions {
+            iterations: 100,
+            tolerance: 1e-6,
+            injective: true,
+            pin: None,
+            lambda: None,
+        }
+    }
+}
+
+/// One row of the convergence log.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ArapIteration {
+    /// 0 for the initial UVs.
+    pub iteration: usize,
+    /// Area-weighted mean energy, `Σ A_t (|J_t - L_t|² + 2λ(s_t²-1)²) / Σ A_t`
+    /// (for ARAP: `Σ A ((σ1-1)² + (σ2-1)²) / Σ A`).
+    pub energy: f64,
+    /// Triangles whose orientation disagrees with the majority (or are degenerate).
+    pub flips: usize,
+    /// Time since the call started, in milliseconds (setup and factorization included).
+    pub elapsed_ms: f64,
+    /// Length of the step taken along the search direction (1: the full global step;
+    /// 0 for the initial row).
+    pub step: f64,
+    /// Whether the step was cut short to keep every triangle's orientation.
+    pub blocked: bool,
+}
+
+/// What `arap_parameterize` returns.
+#[derive(Clone, Debug)]
+pub struct ArapResult {
+    /// One UV per vertex.
+    pub uv: Vec<[f64; 2]>,
+    /// Row 0 is the start; one row per accepted iteration.
+    pub log: Vec<ArapIteration>,
+    /// Why the iterations stopped.
+    pub stop_reason: StopReason,
+    /// Flipped triangles at the end.
+    pub flips: usize,
+    /// Final energy (as in the log).
+    pub energy: f64,
+    /// Times a triangle's weight was raised by the fold-free mode (0: plain local/global).
+    pub reweighted: usize,
+    /// Details of a `NoProgress` stop (empty otherwise).
+    pub stop_detail: String,
+}
+
+/// Armijo's sufficient-decrease constant.
+const ARMIJO_C: f64 = 1e-4;
+/// Fraction of the largest orientation-preserving step that is tried first
+/// (Smith & Schaefer 2015 back off from the singularity the same way).
+const STEP_SAFETY: f64 = 0.9;
+/// Halvings of the step before giving up.
+const MAX_BACKTRACKS: usize = 40;
+/// When the orientation-preserving step is below this fraction of the best step along the
+/// direction, the blocking triangles are stiffened and the direction recomputed.
+const BLOCKED_STEP: f64 = 0.5;
+/// Reweighting rounds per iteration (each refactors the Laplacian numerically).
+const REWEIGHT_ROUNDS: usize = 3;
+/// Factor applied to a blocking triangle's weight.
+const REWEIGHT_FACTOR: f64 = 10.0;
+/// Largest weight.
+const MAX_WEIGHT: f64 = 1e8;
+/// Fold-free steps keep every triangle's UV area above this fraction of its 3-D area (after
+/// scaling the layout to the 3-D area), or above half its current area if already smaller,
+/// so that blocked triangles are not squeezed towards zero area.
+const AREA_MARGIN: f64 = 1e-3;
+/// Below this orientation-preserving step length the iteration is stalled.
+const MIN_STEP: f64 = 1e-12;
+
+/// ARAP (or hybrid) parameterization of a triangle mesh from initial UVs, libigl style.
+///
+/// The energy is `Σ_t A_t |J_t - L_t|²`, which equals Liu et al.'s
+/// `½ Σ_t Σ_(i,j) cot θ_ij |(u_i - u_j) - L_t (x_i - x_j)|²` (eq. 3). The global step solves
+/// `Δ u = b` (eq. 6) with the cotangent Laplacian `Δ` restricted to the free vertices, factored
+/// once. Energy never increases: the global step minimizes a convex quadratic in the UVs whose
+/// value at the current UVs is the current energy, so every step length in `(0, 1]` along it
+/// lowers it; the Armijo test only guards against rounding.
+pub fn arap_parameterize(
+    positions: &[[f64; 3]],
+    triangles: &[[u32; 3]],
+    init_uv: &[[f64; 2]],
+    opts: &ArapOptions,
+) -> Result<ArapResult, NodeError> {
+    let start = Instant::now();
+    let n = positions.len();
+    if init_uv.len() != n {
+        return Err(NodeError::invalid(
+            "init",
+            format!(
+                "initial UVs have {} entries but the mesh has {n} vertices",
+                init_uv.len()
+            ),
+        ));
+    }
+    if let Some(v) = init_uv
+        .iter()
+        .position(|p| !(p[0].is_finite() && p[1].is_finite()))
+    {
+        return Err(NodeError::invalid(
+            "init",
+            format!("initial UV of vertex {v} is not finite"),
+        ));
+    }
+    if triangles.is_empty() {
+        return Err(NodeError::invalid("mesh", "mesh has no triangles"));
+    }
+    if !(opts.tolerance >= 0.0 && opts.tolerance.is_finite()) {
+        return Err(NodeError::invalid(
+            "tolerance",
+            "tolerance must be finite and >= 0",
+        ));
+    }
+    if let Some(l) = opts.lambda {
+        if !(l >= 0.0 && l.is_finite()) {
+            return Err(NodeError::invalid(
+                "lambda",
+                "lambda must be finite and >= 0",
+            ));
+        }
+    }
+    if let Some(p) = opts.pin {
+        if p >= n {
+            return Err(NodeError::invalid(
+                "pin",
+                format!("pin {p} is not a vertex (the mesh has {n})"),
+            ));
+        }
+    }
+    let frames =
+        TriangleFrames::new(positions, triangles).map_err(|e| NodeError::invalid("mesh", e))?;
+    let m = frames.len();
+    let lambda = opts.lambda;
+
+    // Orientation of the start; work counter-clockwise, mirroring a clockwise start.
+    let (orient, flips0) = orientation_and_flips(&frames, init_uv);
+    if opts.injective && flips0 > 0 {
+        return Err(NodeError::new(
+            ErrorKind::Folded,
+            format!(
+                "the initial UVs have {flips0} flipped or degenerate triangles; fold-free ARAP needs a fold-free start (the default Tutte initialization is one), or set injective: false"
+            ),
+        ));
+    }
+    let mut uv: Vec<[f64; 2]> = init_uv.iter().map(|p| [p[0], orient * p[1]]).collect();
+
+    // Fixed vertices: one pin per connected component, and vertices in no triangle.
+    let fixed = fixed_vertices(n, triangles, opts.pin);
+    let mut free_index = vec![u32::MAX; n];
+    let mut free_vertices = Vec::new();
+    for v in 0..n {
+        if !fixed[v] {
+            free_index[v] = free_vertices.len() as u32;
+            free_vertices.push(v);
+        }
+    }
+    let nf = free_vertices.len();
+
+    // Cotangent Laplacian on the free vertices (lower triangle), each entry tagged with its
+    // triangle so that the fold-free mode can reweight triangles (see `reweight`).
+    let mut trip: Vec<Triplet<usize, usize, f64>> = Vec::with_capacity(9 * m);
+    let mut trip_tri: Vec<u32> = Vec::with_capacity(9 * m);
+    for t in 0..m {
+        let tri = frames.triangles[t];
+        for k in 0..3 {
+            let (i, j) = (tri[(k + 1) % 3] as usize, tri[(k + 2) % 3] as usize);
+            let w = frames.cot[t][k];
+            let (fi, fj) = (free_index[i], free_index[j]);
+            let mut push = |r: u32, c: u32, v: f64| {
+                trip.push(Triplet::new(r as usize, c as usize, v));
+                trip_tri.push(t as u32);
+            };
+            if fi != u32::MAX {
+                push(fi, fi, w);
+            }
+            if fj != u32::MAX {
+                push(fj, fj, w);
+            }
+            if fi != u32::MAX && fj != u32::MAX {
+                push(fi.max(fj), fi.min(fj), -w);
+            }
+        }
+    }
+    let singular = |e: String| {
+        NodeError::singular(format!(
+            "the cotangent Laplacian could not be factored ({e}); the mesh may have nearly degenerate triangles"
+        ))
+    };
+    let mut factor = if nf > 0 {
+        Some(SpdFactor::new(nf, &trip, Par::rayon(0)).map_err(singular)?)
+    } else {
+        None
+    };
+    let mut weights = vec![1.0; if opts.injective { m } else { 0 }];
+
+    // Right-hand side weights per corner: b_i += L_t · w_t,i with
+    // w_t,i = Σ_(j≠i) cot θ_ij (x_i - x_j) (Liu et al. 2008, eq. 6).
+    let corner_w: Vec<[[f64; 2]; 3]> = (0..m)
+        .into_par_iter()
+        .with_min_len(PAR_CHUNK)
+        .map(|t| {
+            let x = frames.local[t];
+            let c = frames.cot[t];
+            let mut w = [[0.0; 2]; 3];
+            for k in 0..3 {
+                let (k1, k2) = ((k + 1) % 3, (k + 2) % 3);
+                // edge (k, k1) is opposite corner k2, edge (k, k2) opposite corner k1
+                for d in 0..2 {
+                    w[k][d] = c[k2] * (x[k][d] - x[k1][d]) + c[k1] * (x[k][d] - x[k2][d]);
+                }
+            }
+            w
+        })
+        .collect();
+
+    let total_area = frames.total_area;
+    let mut targets: Vec<Similarity> = vec![[1.0, 0.0]; m];
+    let mut trial_targets: Vec<Similarity> = vec![[1.0, 0.0]; m];
+    let (e_sum, flips) = evaluate(&frames, &uv, lambda, &mut targets);
+    let mut energy = e_sum / total_area;
+    let mut log = vec![ArapIteration {
+        iteration: 0,
+        energy,
+        flips,
+        elapsed_ms: ms(start),
+        step: 0.0,
+        blocked: false,
+    }];
+    let mut stop = StopReason::Iterations;
+    let mut rhs = Mat::<f64>::zeros(nf, 2);
+    let mut reweighted = 0usize;
+    let mut detail = String::new();
+    let mut d = vec![[0.0; 2]; n];
+    let mut trial = uv.clone();
+    let mut limits = vec![f64::INFINITY; if opts.injective { m } else { 0 }];
+    let mut it = 0;
+    while it < opts.iterations {
+        let Some(factor) = factor.as_mut() else {
+            stop = StopReason::Tolerance;
+            break;
+        };
+        it += 1;
+        // Global step, written as a preconditioned gradient step: d = -Δ_W⁻¹ ∇E. With unit
+        // weights this is exactly Liu et al.'s global solve minus the current UVs;
+        // ∇E at vertex i is Σ_t Σ_j cot θ_ij ((u_i - u_j) - L_t (x_i - x_j)) (eq. 6).
+        rhs.fill(0.0);
+        for t in 0..m {
+            let [a, b] = targets[t];
+            let tri = frames.triangles[t];
+            let c = frames.cot[t];
+            for k in 0..3 {
+                let fi = free_index[tri[k] as usize];
+                if fi == u32::MAX {
+                    continue;
+                }
+                let (k1, k2) = ((k + 1) % 3, (k + 2) % 3);
+                let (u, u1, u2) = (
+                    uv[tri[k] as usize],
+                    uv[tri[k1] as usize],
+                    uv[tri[k2] as usize],
+                );
+                let w = corner_w[t][k];
+                for dim in 0..2 {
+                    let lw = if dim == 0 {
+                        a * w[0] - b * w[1]
+                    } else {
+                        b * w[0] + a * w[1]
+                    };
+                    rhs[(fi as usize, dim)] +=
+                        c[k2] * (u[dim] - u1[dim]) + c[k1] * (u[dim] - u2[dim]) - lw;
+                }
+            }
+        }
+        let gradient = rhs.clone();
+        factor.solve_in_place(rhs.as_mut());
+        for (f, &v) in free_vertices.iter().enumerate() {
+            d[v] = [-rhs[(f, 0)], -rhs[(f, 1)]];
+        }
+
+        // Line search.
+        let mut step = 1.0;
+        let mut slope = 0.0; // derivative of the energy along d at step 0 (negative)
+        let mut blocked = false;
+        if opts.injective {
+            let mut dir = directional(&frames, &uv, &d, &targets, &mut limits);
+            let mut rounds = 0;
+            while STEP_SAFETY * dir.max_step < BLOCKED_STEP * dir.best_step
+                && rounds < REWEIGHT_ROUNDS
+            {
+                // Blocked: stiffen the triangles that the step would flip and solve again.
+                let changed = reweight(&limits, dir.best_step, &mut weights);
+                if changed == 0 {
+                    break;
+                }
+                reweighted += changed;
+                rounds += 1;
+                let lower: Vec<Triplet<usize, usize, f64>> = trip
+                    .iter()
+                    .zip(&trip_tri)
+                    .map(|(x, &t)| Triplet::new(x.row, x.col, x.val * weights[t as usize]))
+                    .collect();
+                factor.refactor(&lower, Par::rayon(0)).map_err(singular)?;
+                rhs.copy_from(&gradient);
+                factor.solve_in_place(rhs.as_mut());
+                for (f, &v) in free_vertices.iter().enumerate() {
+                    d[v] = [-rhs[(f, 0)], -rhs[(f, 1)]];
+                }
+                dir = directional(&frames, &uv, &d, &targets, &mut limits);
+            }
+            slope = dir.slope / total_area; // per unit area, like `energy`
+            step = dir.best_step.min(STEP_SAFETY * dir.max_step);
+            blocked = STEP_SAFETY * dir.max_step < dir.best_step;
+            if dir.max_step < MIN_STEP {
+                stop = StopReason::NoProgress;
+                detail = format!(
+                    "orientation-preserving step {:.3e} at iteration {it}",
+                    dir.max_step
+                );
+                break;
+            }
+            if slope.is_nan() || slope >= 0.0 {
+                // zero: already stationary for these targets; positive/NaN: no descent left
+                stop = if slope == 0.0 {
+                    StopReason::Tolerance
+                } else {
+                    StopReason::NoProgress
+                };
+                detail = format!("slope {slope:.3e} along the search direction at iteration {it}");
+                break;
+            }
+        }
+        let mut accepted = None;
+        let first_step = step;
+        for _ in 0..MAX_BACKTRACKS {
+            if step <= 0.0 || !step.is_finite() {
+                break;
+            }
+            trial
+                .par_iter_mut()
+                .zip(uv.par_iter().zip(d.par_iter()))
+                .with_min_len(PAR_CHUNK)
+                .for_each(|(o, (u, dv))| *o = [u[0] + step * dv[0], u[1] + step * dv[1]]);
+            let (e_sum, fl) = evaluate(&frames, &trial, lambda, &mut trial_targets);
+            let e = e_sum / total_area;
+            let ok_orient = !opts.injective || fl == 0;
+            if ok_orient && e.is_finite() && e <= energy + ARMIJO_C * step * slope {
+                accepted = Some((e, fl));
+                break;
+            }
+            step *= 0.5;
+        }
+        let Some((e_new, fl)) = accepted else {
+            stop = StopReason::NoProgress;
+            detail = format!(
+                "line search failed at iteration {it} (slope {slope:.3e}, first step {first_step:.3e})"
+            );
+            break;
+        };
+        std::mem::swap(&mut uv, &mut trial);
+        std::mem::swap(&mut targets, &mut trial_targets);
+        let e_old = energy;
+        energy = e_new;
+        log.push(ArapIteration {
+            iteration: it,
+            energy,
+            flips: fl,
+            elapsed_ms: ms(start),
+            step,
+            blocked,
+        });
+        if e_old - energy <= opts.tolerance * e_old {
+            // a step cut short by a triangle about to flip is a stall, not convergence
+            stop = if blocked {
+                StopReason::NoProgress
+            } else {
+                StopReason::Tolerance
+            };
+            break;
+        }
+    }
+    if orient < 0.0 {
+        for p in &mut uv {
+            p[1] = -p[1];
+        }
+    }
+    let flips = log.last().map_or(0, |r| r.flips);
+    Ok(ArapResult {
+        uv,
+        log,
+        stop_reason: stop,
+        flips,
+        energy,
+        reweighted,
+        stop_detail: detail,
+    })
+}
+
+fn ms(start: Instant) -> f64 {
+    start.elapsed().as_secs_f64() * 1e3
+}
+
+/// Local step for every triangle at `uv` (targets written to `targets`), returning the
+/// area-weighted energy sum and the number of triangles with `det J <= 0`.
+fn evaluate(
+    frames: &TriangleFrames,
+    uv: &[[f64; 2]],
+    lambda: Option<f64>,
+    targets: &mut [Similarity],
+) -> (f64, usize) {
+    targets
+        .par_iter_mut()
+        .with_min_len(PAR_CHUNK)
+        .enumerate()
+        .map(|(t, out)| {
+            let j = frames.jacobian(t, uv);
+            let (l, e) = local_step(&j, lambda);
+            *out = l;
+            let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
+            (frames.area[t] * e, usize::from(det <= 0.0))
+        })
+        .reduce(|| (0.0, 0), |a, b| (a.0 + b.0, a.1 + b.1))
+}
+
+/// What the energy does along a direction `δ` with the targets held fixed.
+struct Directional {
+    /// `dE/ds` at `s = 0`: `Σ 2 A <J(uv) - L, J(δ)>`.
+    slope: f64,
+    /// Minimizer of the quadratic `E + s·slope + s²·Σ A |J(δ)|²` (1 for the global step).
+    best_step: f64,
+    /// Largest step keeping every triangle's orientation.
+    max_step: f64,
+}
+
+/// One parallel pass over the triangles: slope and curvature of the targets' quadratic
+/// along `dir`, and each triangle's orientation limit (written to `limits`).
+fn directional(
+    frames: &TriangleFrames,
+    uv: &[[f64; 2]],
+    dir: &[[f64; 2]],
+    targets: &[Similarity],
+    limits: &mut [f64],
+) -> Directional {
+    // UV-to-3D area ratio, for the area margin below which no triangle is pushed
+    let uv_area2: f64 = (0..frames.len())
+        .into_par_iter()
+        .with_min_len(PAR_CHUNK)
+        .map(|t| frames.signed_area2(t, uv).abs())
+        .sum();
+    let ratio = uv_area2 / (2.0 * frames.total_area);
+    let (slope, curv, max_step) = limits
+        .par_iter_mut()
+        .with_min_len(PAR_CHUNK)
+        .enumerate()
+        .map(|(t, lim)| {
+            let j0 = frames.jacobian(t, uv);
+            let jd = frames.jacobian(t, dir);
+            let [a, b] = targets[t];
+            let l = [[a, -b], [b, a]];
+            let (mut g, mut c) = (0.0, 0.0);
+            for r in 0..2 {
+                for k in 0..2 {
+                    g += (j0[r][k] - l[r][k]) * jd[r][k];
+                    c += jd[r][k] * jd[r][k];
+                }
+            }
+            let a2 = frames.signed_area2(t, uv);
+            let floor2 = (AREA_MARGIN * 2.0 * frames.area[t] * ratio).min(0.5 * a2);
+            *lim = triangle_max_step_above(frames, t, uv, dir, 1.0, floor2);
+            (2.0 * frames.area[t] * g, frames.area[t] * c, *lim)
+        })
+        .reduce(
+            || (0.0, 0.0, f64::INFINITY),
+            |x, y| (x.0 + y.0, x.1 + y.1, x.2.min(y.2)),
+        );
+    let best_step = if curv > 0.0 {
+        -slope / (2.0 * curv)
+    } else {
+        0.0
+    };
+    Directional {
+        slope,
+        best_step: best_step.max(0.0),
+        max_step,
+    }
+}
+
+/// Multiplies by `REWEIGHT_FACTOR` the weight of every triangle that would flip before
+/// `best_step` (`limits < best_step`); returns how many changed.
+fn reweight(limits: &[f64], best_step: f64, weights: &mut [f64]) -> usize {
+    let mut changed = 0;
+    for (w, &lim) in weights.iter_mut().zip(limits) {
+        if lim < best_step && *w < MAX_WEIGHT {
+            *w = (*w * REWEIGHT_FACTOR).min(MAX_WEIGHT);
+            changed += 1;
+        }
+    }
+    changed
+}
+
+/// Marks one vertex per connected component (the `pin` in its component, otherwise the
+/// component's lowest vertex) and every vertex that no triangle uses.
+fn fixed_vertices(n: usize, triangles: &[[u32; 3]], pin: Option<usize>) -> Vec<bool> {
+    let (comp, ncomp) = component_of(n, triangles);
+    let mut fixed: Vec<bool> = comp.iter().map(|&c| c == u32::MAX).collect();
+    let mut has_pin = vec![false; ncomp];
+    if let Some(p) = pin.filter(|&p| comp[p] != u32::MAX) {
+        has_pin[comp[p] as usize] = true;
+        fixed[p] = true;
+    }
+    for v in 0..n {
+        let c = comp[v];
+        if c != u32::MAX && !has_pin[c as usize] {
+            has_pin[c as usize] = true;
+            fixed[v] = true;
+        }
+    }
+    fixed
+}
+
+fn declare_common(b: &mut NodeBuilder) {
+    b.add_input::<Mesh>("mesh")
+        .doc("Mesh to flatten (triangulated if needed).");
+    b.add_input::<Mesh>("init").optional().doc(
+        "Mesh carrying the initial UVs (per vertex). Default: Tutte on a circle with mean-value weights, holes filled.",
+    );
+    b.add_input::<i64>("iterations")
+        .default(100i64)
+        .range(0.0, 100000.0)
+        .doc("Maximum number of local/global iterations.");
+    b.add_input::<f64>("tolerance")
+        .default(1e-6)
+        .range(0.0, 1.0)
+        .doc("Stop when an iteration lowers the energy by less than this fraction.");
+    b.add_input::<bool>("injective")
+        .default(true)
+        .doc("Fold-free: never accept a step that flips a triangle.");
+    b.add_input::<i64>("pin")
+        .default(-1i64)
+        .min(-1.0)
+        .doc("Vertex kept at its initial UV; -1: the first vertex.");
+    b.add_input::<bool>("normalize").default(true).doc(
+        "Scale and move the UVs into [0,1]² (same scale on both axes); `flat` keeps the true size.",
+    );
+    b.add_output::<Mesh>("mesh")
+        .doc("The input mesh with per-vertex UVs.");
+    b.add_output::<Mesh>("flat")
+        .doc("The flattened mesh (UV, 0), at the 3-D scale.");
+    b.add_output::<Table>("log").doc(
+        "Per iteration: energy, flips, elapsed_ms, step, blocked (1: cut short to avoid a flip); meta: stop_reason, flips, energy.",
+    );
+}
+
+fn declare_arap(b: &mut NodeBuilder) {
+    b.doc("ARAP parameterization (Liu et al. 2008 local/global), fold-free by default.")
+        .category("param");
+    declare_common(b);
+}
+
+fn declare_hybrid(b: &mut NodeBuilder) {
+    b.doc("Hybrid ARAP/ASAP parameterization (Liu et al. 2008 §4.3): lambda blends similarity (0) and rotation (large).")
+        .category("param");
+    declare_common(b);
+    b.add_input::<f64>("lambda")
+        .default(1.0)
+        .range(0.0, 1e9)
+        .doc("Weight of the scale term: 0 is ASAP, large values tend to ARAP.");
+}
+
+fn execute_with(ctx: &mut ExecContext, lambda: Option<f64>) -> Result<(), NodeError> {
+    let mesh: Arc<Mesh> = ctx.input("mesh")?;
+    let init: Option<Arc<Mesh>> = ctx.input_opt("init")?;
+    let iterations: i64 = ctx.input("iterations")?;
+    let tolerance: f64 = ctx.input("tolerance")?;
+    let injective: bool = ctx.input("injective")?;
+    let pin: i64 = ctx.input("pin")?;
+    let normalize: bool = ctx.input("normalize")?;
+    let tri_mesh = mesh.triangulated();
+    let triangles = tri_mesh
+        .triangles()
+        .ok_or_else(|| NodeError::invalid("mesh", "could not triangulate the mesh"))?;
+    let (uv0, init_note) = init_uvs(&tri_mesh, init.as_deref())?;
+    ctx.log(init_note);
+    let opts = ArapOptions {
+        iterations: iterations.max(0) as usize,
+        tolerance,
+        injective,
+        pin: (pin >= 0).then_some(pin as usize),
+        lambda,
+    };
+    let res = arap_parameterize(&tri_mesh.positions, &triangles, &uv0, &opts)?;
+    let mut table = Table::with_columns(&[
+        "iteration",
+        "energy",
+        "flips",
+        "elapsed_ms",
+        "step",
+        "blocked",
+    ]);
+    for r in &res.log {
+        table.push_row(&[
+            r.iteration as f64,
+            r.energy,
+            r.flips as f64,
+            r.elapsed_ms,
+            r.step,
+            f64::from(u8::from(r.blocked)),
+        ]);
+    }
+    table
+        .meta
+        .insert("stop_reason".into(), res.stop_reason.as_str().into());
+    table.meta.insert("flips".into(), res.flips.to_string());
+    table
+        .meta
+        .insert("reweighted".into(), res.reweighted.to_string());
+    if !res.stop_detail.is_empty() {
+        table
+            .meta
+            .insert("stop_detail".into(), res.stop_detail.clone());
+        ctx.log(format!("stopped: {}", res.stop_detail));
+    }
+    table
+        .meta
+        .insert("energy".into(), format!("{:.6e}", res.energy));
+    ctx.log(format!(
+        "{} iterations, energy {:.4e} -> {:.4e}, {} flipped triangles, stopped: {}",
+        res.log.len() - 1,
+        res.log[0].energy,
+        res.energy,
+        res.flips,
+        res.stop_reason.as_str()
+    ));
+    let (out, flat) = uv_outputs(&mesh, &tri_mesh, &res.uv, normalize);
+    ctx.set_output("mesh", out);
+    ctx.set_output("flat", flat);
+    ctx.set_output("log", table);
+    Ok(())
+}
+
+fn execute_arap(ctx: &mut ExecContext) -> Result<(), NodeError> {
+    execute_with(ctx, None)
+}
+
+fn execute_hybrid(ctx: &mut ExecContext) -> Result<(), NodeError> {
+    let lambda: f64 = ctx.input("lambda")?;
+    execute_with(ctx, Some(lambda))
+}
+
+/// Registers `arap` and `arap_hybrid`.
+pub fn register(r: &mut Registry) {
+    r.add("arap", declare_arap, execute_arap);
+    r.add("arap_hybrid", declare_hybrid, execute_hybrid);
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+
+    /// A wavy-free planar disk: a triangulated regular grid in the plane z = 0.
+    pub(crate) fn planar_grid(k: usize) -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
+        let mut p = Vec::new();
+        for j in 0..=k {
+            for i in 0..=k {
+                let (x, y) = (i as f64 / k as f64, j as f64 / k as f64);
+                // irregular but planar: shift interior points a little
+                let s = if i > 0 && i < k && j > 0 && j < k {
+                    0.2 / k as f64
+                } else {
+                    0.0
+                };
+                p.push([x + s * ((i * 7 + j * 3) % 5) as f64 / 5.0, y, 0.0]);
+            }
+        }
+        let id = |i: usize, j: usize| (j * (k + 1) + i) as u32;
+        let mut t = Vec::new();
+        for j in 0..k {
+            for i in 0..k {
+                t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+                t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+            }
+        }
+        (p, t)
+    }
+
+    #[test]
+    fn planar_mesh_comes_back_rigidly() {
+        let (p, t) = planar_grid(8);
+        // start from an anisotropic, rotated, fold-free squash of the true layout
+        let init: Vec<[f64; 2]> = p
+            .iter()
+            .map(|q| {
+                [
+                    0.3 * q[0] + 0.1 * q[1],
+                    -0.2 * q[0] + 1.7 * q[1] + 0.05 * q[0] * q[0],
+                ]
+            })
+            .collect();
+        for injective in [false, true] {
+            let opts = ArapOptions {
+                iterations: 500,
+                tolerance: 0.0,
+                injective,
+                ..Default::default()
+            };
+            let r = arap_parameterize(&p, &t, &init, &opts).unwrap();
+            assert!(r.energy < 1e-16, "energy {}", r.energy);
+            // all pairwise distances preserved: a rigid motion
+            let d =
+                |a: [f64; 2], b: [f64; 2]| ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt();
+            let d3 =
+                |a: [f64; 3], b: [f64; 3]| ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt();
+            for i in (0..p.len()).step_by(7) {
+                for j in (0..p.len()).step_by(5) {
+                    assert!((d(r.uv[i], r.uv[j]) - d3(p[i], p[j])).abs() < 1e-7);
+                }
+            }
+            assert_eq!(r.flips, 0);
+        }
+    }
+
+    #[test]
+    fn clockwise_start_is_mirrored_and_restored() {
+        let (p, t) = planar_grid(4);
+        let init: Vec<[f64; 2]> = p.iter().map(|q| [q[0] * 0.5, -q[1]]).collect();
+        let r = arap_parameterize(&p, &t, &init, &ArapOptions::default()).unwrap();
+        let f = TriangleFrames::new(&p, &t).unwrap();
+        // still clockwise, and rigid
+        assert!((0..t.len()).all(|k| f.signed_area2(k, &r.uv) < 0.0));
+        assert!(r.energy < 1e-10);
+    }
+
+    #[test]
+    fn refuses_folded_start_in_fold_free_mode() {
+        let (p, t) = planar_grid(3);
+        let mut init: Vec<[f64; 2]> = p.iter().map(|q| [q[0], q[1]]).collect();
+        init[5] = [2.0, 2.0];
+        let e = arap_parameterize(&p, &t, &init, &ArapOptions::default()).unwrap_err();
+        assert_eq!(e.kind, ErrorKind::Folded);
+        let opts = ArapOptions {
+            injective: false,
+            ..Default::default()
+        };
+        assert!(arap_parameterize(&p, &t, &init, &opts).is_ok());
+        let bad = ArapOptions {
+            pin: Some(1000),
+            ..Default::default()
+        };
+        assert!(arap_parameterize(&p, &t, &init, &bad).is_err());
+    }
+
+    #[test]
+    fn hybrid_on_planar_mesh_reaches_zero_energy() {
+        let (p, t) = planar_grid(5);
+        let init: Vec<[f64; 2]> = p.iter().map(|q| [0.5 * q[0], 0.7 * q[1]]).collect();
+        let opts = ArapOptions {
+            iterations: 500,
+            tolerance: 0.0,
+            lambda: Some(2.0),
+            ..Default::default()
+        };
+        let r = arap_parameterize(&p, &t, &init, &opts).unwrap();
+        assert!(r.energy < 1e-14, "{}", r.energy);
+    }
+}

@@ -1,0 +1,144 @@
+//! ARAP parameterization on real meshes: fold-free mode ends with no flipped triangle on every
+//! disk-like mesh in the repository, the energy never increases, and the nodes run in a graph.
+
+use cgnodes::nodes::mesh::obj::load_obj;
+use cgnodes::nodes::param::arap::{arap_parameterize, ArapOptions, StopReason};
+use cgnodes::nodes::param::tutte::{tutte_parameterize, BoundaryShape, TutteWeights};
+use cgnodes::nodes::param::uv_metrics::uv_metrics;
+use cgnodes::types::Mesh;
+use std::path::Path;
+use std::sync::Arc;
+
+fn load(name: &str) -> Arc<Mesh> {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join(name);
+    Arc::new(load_obj(&p, "").unwrap()).triangulated()
+}
+
+/// Runs fold-free ARAP from the default Tutte start and checks the promises.
+fn check_fold_free(name: &str, iterations: usize) -> (f64, f64) {
+    let mesh = load(name);
+    let tris = mesh.triangles().unwrap();
+    let init =
+        tutte_parameterize(&mesh, TutteWeights::MeanValue, BoundaryShape::Circle, true).unwrap();
+    let opts = ArapOptions {
+        iterations,
+        tolerance: 0.0,
+        injective: true,
+        ..Default::default()
+    };
+    let r = arap_parameterize(&mesh.positions, &tris, &init, &opts).unwrap();
+    // energy monotone, log complete
+    for w in r.log.windows(2) {
+        assert!(
+            w[1].energy <= w[0].energy,
+            "{name}: energy rose {:?} -> {:?}",
+            w[0],
+            w[1]
+        );
+        assert!(w[1].step > 0.0);
+        assert_eq!(
+            w[1].flips, 0,
+            "{name}: iteration {} flipped",
+            w[1].iteration
+        );
+    }
+    assert!(r.log.len() > 1, "{name}: no iteration accepted");
+    assert!(r.energy < r.log[0].energy, "{name}: no progress from Tutte");
+    if r.log.len() == iterations + 1 {
+        assert_eq!(r.stop_reason, StopReason::Iterations);
+    }
+    // independent count (uv_metrics, against the majority orientation)
+    let m = uv_metrics(&mesh.positions, &tris, &r.uv);
+    assert_eq!(m.flipped, 0, "{name}: {} flipped triangles", m.flipped);
+    assert_eq!(r.flips, 0);
+    (r.log[0].energy, r.energy)
+}
+
+#[test]
+fn fold_free_on_camelhead() {
+    // libigl folds 724 triangles here (shared/reference/PEERS.md); a fold-free line search
+    // without reweighting stalls at 0.65 of the start's energy
+    let (e0, e1) = check_fold_free("assets/meshes/camelhead.obj", 20);
+    assert!(e1 < 0.55 * e0, "{e0} -> {e1}");
+}
+
+#[test]
+fn fold_free_on_camel_b() {
+    check_fold_free("assets/meshes/camel_b.obj", 30);
+}
+
+#[test]
+fn fold_free_on_nefertiti_front() {
+    check_fold_free("assets/meshes/nefertiti_front.obj", 8);
+}
+
+#[test]
+fn fold_free_on_beetle_with_holes() {
+    // 11 boundary loops: Tutte fills the holes for the start, ARAP keeps them free
+    check_fold_free("assets/meshes/beetle_11holes.obj", 20);
+}
+
+#[test]
+fn plain_mode_energy_is_monotone_too() {
+    let mesh = load("assets/meshes/camel_b.obj");
+    let tris = mesh.triangles().unwrap();
+    let init =
+        tutte_parameterize(&mesh, TutteWeights::MeanValue, BoundaryShape::Circle, true).unwrap();
+    let opts = ArapOptions {
+        iterations: 40,
+        tolerance: 0.0,
+        injective: false,
+        ..Default::default()
+    };
+    let r = arap_parameterize(&mesh.positions, &tris, &init, &opts).unwrap();
+    for w in r.log.windows(2) {
+        assert!(w[1].energy <= w[0].energy, "{:?} -> {:?}", w[0], w[1]);
+    }
+    // the metric of the param module agrees with ours up to its area rescaling
+    let m = uv_metrics(&mesh.positions, &tris, &r.uv);
+    assert!(
+        (m.uv_scale - 1.0).abs() < 0.1,
+        "ARAP keeps the size: {}",
+        m.uv_scale
+    );
+    assert!((m.arap_energy - r.energy).abs() < 0.5 * r.energy + 1e-3);
+}
+
+#[test]
+fn fold_free_on_every_course_disk_mesh() {
+    use cgnodes::nodes::mesh::load::{load_mesh, LoadOptions};
+    // every disk-like course mesh (Beetle_ABF has 11 holes, filled for the Tutte start)
+    for name in [
+        "Beetle_ABF",
+        "Cow_dABF",
+        "Isis_dABF",
+        "Gargoyle_ABF",
+        "NefertitiFace",
+        "BunnyHead",
+        "CatHead",
+        "David328",
+        "grid10x10",
+    ] {
+        let p = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("assets/course/{name}.usda"));
+        let opts = LoadOptions {
+            prim: String::new(),
+            group: String::new(),
+            apply_transform: true,
+        };
+        let mesh = Arc::new(load_mesh(&p, &opts).unwrap()).triangulated();
+        let tris = mesh.triangles().unwrap();
+        let init = tutte_parameterize(&mesh, TutteWeights::MeanValue, BoundaryShape::Circle, true)
+            .unwrap();
+        let arap = ArapOptions {
+            iterations: 15,
+            ..Default::default()
+        };
+        let r = arap_parameterize(&mesh.positions, &tris, &init, &arap).unwrap();
+        let m = uv_metrics(&mesh.positions, &tris, &r.uv);
+        assert_eq!((m.flipped, m.collapsed, r.flips), (0, 0, 0), "{name}");
+        assert!(r.energy < r.log[0].energy, "{name}");
+        for w in r.log.windows(2) {
+            assert!(w[1].energy <= w[0].energy, "{name}");
+        }
+    }
+}

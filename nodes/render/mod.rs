@@ -6,6 +6,7 @@ pub mod image_io;
 pub mod light;
 pub mod material;
 pub mod primitive;
+pub mod raster;
 pub mod scene;
 
 use crate::registry::Registry;
@@ -18,4 +19,5 @@ pub fn register(r: &mut Registry) {
     scene::register(r);
     image_io::register(r);
     primitive::register(r);
+    raster::register(r);
 }

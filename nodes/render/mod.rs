@@ -8,6 +8,7 @@ pub mod material;
 pub mod primitive;
 pub mod raster;
 pub mod scene;
+pub mod uv_project;
 
 use crate::registry::Registry;
 
@@ -20,4 +21,5 @@ pub fn register(r: &mut Registry) {
     image_io::register(r);
     primitive::register(r);
     raster::register(r);
+    uv_project::register(r);
 }

@@ -173,7 +173,11 @@ pub fn scene_geometry(scene: &Scene) -> Result<SceneGeometry, String> {
                             let ortho = sub(tt, scale3(n, dot(n, tt)));
                             match normalize(ortho) {
                                 Some(o) => {
-                                    let w = if dot(cross(n, o), bv[v]) < 0.0 { -1.0 } else { 1.0 };
+                                    let w = if dot(cross(n, o), bv[v]) < 0.0 {
+                                        -1.0
+                                    } else {
+                                        1.0
+                                    };
                                     [o[0], o[1], o[2], w]
                                 }
                                 None => [0.0; 4],

@@ -26,7 +26,7 @@ pub mod texture;
 use crate::nodes::render::camera::{camera_frame, check_camera, focal_lengths};
 use crate::prelude::*;
 use geometry::{scene_geometry, SceneGeometry};
-use rasterize::{barycentric, rasterize, setup_triangle, TriSetup};
+use rasterize::{barycentric, bin_rows, fill_rows, setup_triangle, TriSetup};
 use rayon::prelude::*;
 use shadow::{directional_shadow_map, point_shadow_map, ShadowMap, ShadowParams};
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -208,7 +208,11 @@ impl Shader<'_> {
         };
         if let (true, Some(tex)) = (has_uv, &m.tex) {
             let c = tex.trilinear(uv[0], uv[1], dx, dy, self.opts.wrap);
-            base = [base[0] * c[0] as f64, base[1] * c[1] as f64, base[2] * c[2] as f64];
+            base = [
+                base[0] * c[0] as f64,
+                base[1] * c[1] as f64,
+                base[2] * c[2] as f64,
+            ];
         }
         if let (true, Some(nm)) = (has_uv, &m.nmap) {
             let tan = &g.tan[t];
@@ -313,15 +317,25 @@ pub fn render(scene: &Scene, cam: &Camera, opts: &RasterOptions) -> Result<Rende
         })
         .collect();
     let triangles = setups.iter().filter(|t| t.is_some()).count();
-    let vis = rasterize(&setups, ws, hs, cam.near, cam.far, true);
+    // Pixel rows per band: each band is rasterized into a small sample buffer and shaded
+    // right away (fused, so the full-resolution sample buffer never exists).
+    const BAND_PX: usize = 8;
+    let band_rows = BAND_PX as u32 * s;
+    let bins = bin_rows(&setups, hs, band_rows);
 
     let mats = g
         .materials
         .iter()
         .map(|m| MatPrep {
             base: m.base_color,
-            tex: m.base_color_texture.as_ref().map(|t| MipTexture::new(t, opts.mipmaps)),
-            nmap: m.normal_map.as_ref().map(|t| MipTexture::new(t, opts.mipmaps)),
+            tex: m
+                .base_color_texture
+                .as_ref()
+                .map(|t| MipTexture::new(t, opts.mipmaps)),
+            nmap: m
+                .normal_map
+                .as_ref()
+                .map(|t| MipTexture::new(t, opts.mipmaps)),
             ks: shading::specular_weight(m.metallic),
             k: shading::roughness_to_exponent(m.roughness),
             emission: m.emission,
@@ -338,9 +352,12 @@ pub fn render(scene: &Scene, cam: &Camera, opts: &RasterOptions) -> Result<Rende
                 Light::Directional { direction, .. } => {
                     directional_shadow_map(&g.pos, *direction, g.bounds, res)
                 }
-                Light::Point { position, .. } => {
-                    point_shadow_map(&g.pos, *position, (res / 2).max(16), (1e-5 * diag).max(1e-9))
-                }
+                Light::Point { position, .. } => point_shadow_map(
+                    &g.pos,
+                    *position,
+                    (res / 2).max(16),
+                    (1e-5 * diag).max(1e-9),
+                ),
             }),
         })
         .collect();
@@ -371,101 +388,134 @@ pub fn render(scene: &Scene, cam: &Camera, opts: &RasterOptions) -> Result<Rende
     let shaded = AtomicU64::new(0);
     let wu = w as usize;
     let n_samples = (s * s) as f64;
+    let band_len = wu * BAND_PX;
+    let band_samples = ws as usize * band_rows as usize;
     color
-        .par_chunks_mut(wu)
-        .zip(depth.par_chunks_mut(wu))
-        .zip(normal.par_chunks_mut(wu))
-        .zip(position.par_chunks_mut(wu))
-        .zip(uvp.par_chunks_mut(wu))
-        .zip(basep.par_chunks_mut(wu))
+        .par_chunks_mut(band_len)
+        .zip(depth.par_chunks_mut(band_len))
+        .zip(normal.par_chunks_mut(band_len))
+        .zip(position.par_chunks_mut(band_len))
+        .zip(uvp.par_chunks_mut(band_len))
+        .zip(basep.par_chunks_mut(band_len))
         .enumerate()
-        .for_each(|(py, (((((crow, drow), nrow), prow), urow), brow))| {
-            let mut count = 0u64;
-            // (triangle, covered samples, sum of sample x, sum of sample y, min depth)
-            let mut groups: Vec<(u32, u32, f64, f64, f32)> = Vec::with_capacity(16);
-            for px in 0..wu {
-                groups.clear();
-                let mut acc = [0.0f64; 3];
-                let mut empty = 0u32;
-                for j in 0..s as usize {
-                    let sy = py * s as usize + j;
-                    for i in 0..s as usize {
-                        let sx = px * s as usize + i;
-                        let k = sy * ws as usize + sx;
-                        let id = vis.ids[k];
-                        if id == u32::MAX {
-                            empty += 1;
-                            continue;
-                        }
-                        let (xc, yc) = (sx as f64 + 0.5, sy as f64 + 0.5);
-                        if opts.aa == AntiAliasing::Supersampling {
-                            if let Some(sf) = sh.surface(id as usize, xc, yc, 1.0, true) {
-                                count += 1;
-                                for c in 0..3 {
-                                    acc[c] += sf.color[c];
+        .for_each_init(
+            || (Vec::new(), Vec::new()),
+            |(zbuf, ibuf), (bi, (((((cband, dband), nband), pband), uband), bband))| {
+                zbuf.clear();
+                zbuf.resize(band_samples, f32::INFINITY);
+                ibuf.clear();
+                ibuf.resize(band_samples, u32::MAX);
+                let y_start = bi as u32 * band_rows;
+                let y_end = (y_start + band_rows).min(hs);
+                fill_rows(
+                    &setups,
+                    &bins[bi],
+                    y_start,
+                    y_end,
+                    ws,
+                    cam.near,
+                    cam.far,
+                    zbuf,
+                    Some(ibuf),
+                );
+                let mut count = 0u64;
+                // (triangle, covered samples, sum of sample x, sum of sample y, min depth)
+                let mut groups: Vec<(u32, u32, f64, f64, f32)> = Vec::with_capacity(16);
+                let rows = cband.len() / wu;
+                for r in 0..rows {
+                    let py = bi * BAND_PX + r;
+                    let crow = &mut cband[r * wu..(r + 1) * wu];
+                    let drow = &mut dband[r * wu..(r + 1) * wu];
+                    let nrow = &mut nband[r * wu..(r + 1) * wu];
+                    let prow = &mut pband[r * wu..(r + 1) * wu];
+                    let urow = &mut uband[r * wu..(r + 1) * wu];
+                    let brow = &mut bband[r * wu..(r + 1) * wu];
+                    for px in 0..wu {
+                        groups.clear();
+                        let mut acc = [0.0f64; 3];
+                        let mut empty = 0u32;
+                        for j in 0..s as usize {
+                            let sy = py * s as usize + j;
+                            for i in 0..s as usize {
+                                let sx = px * s as usize + i;
+                                let k = (sy - y_start as usize) * ws as usize + sx;
+                                let id = ibuf[k];
+                                if id == u32::MAX {
+                                    empty += 1;
+                                    continue;
+                                }
+                                let (xc, yc) = (sx as f64 + 0.5, sy as f64 + 0.5);
+                                if opts.aa == AntiAliasing::Supersampling {
+                                    if let Some(sf) = sh.surface(id as usize, xc, yc, 1.0, true) {
+                                        count += 1;
+                                        for c in 0..3 {
+                                            acc[c] += sf.color[c];
+                                        }
+                                    }
+                                }
+                                let d = zbuf[k];
+                                match groups.iter_mut().find(|g| g.0 == id) {
+                                    Some(g) => {
+                                        g.1 += 1;
+                                        g.2 += xc;
+                                        g.3 += yc;
+                                        g.4 = g.4.min(d);
+                                    }
+                                    None => groups.push((id, 1, xc, yc, d)),
                                 }
                             }
                         }
-                        let d = vis.depth[k];
-                        match groups.iter_mut().find(|g| g.0 == id) {
-                            Some(g) => {
-                                g.1 += 1;
-                                g.2 += xc;
-                                g.3 += yc;
-                                g.4 = g.4.min(d);
+                        if groups.is_empty() {
+                            continue;
+                        }
+                        // The nearest triangle in the pixel (first on ties) gives the passes.
+                        let mut nearest = 0;
+                        for (gi, gr) in groups.iter().enumerate() {
+                            if gr.4 < groups[nearest].4 {
+                                nearest = gi;
                             }
-                            None => groups.push((id, 1, xc, yc, d)),
+                        }
+                        let step = s as f64;
+                        let mut pass_surf = None;
+                        for (gi, gr) in groups.iter().enumerate() {
+                            let (x, y) = (gr.2 / gr.1 as f64, gr.3 / gr.1 as f64);
+                            if opts.aa == AntiAliasing::Multisampling {
+                                if let Some(sf) = sh.surface(gr.0 as usize, x, y, step, true) {
+                                    count += 1;
+                                    for c in 0..3 {
+                                        acc[c] += sf.color[c] * gr.1 as f64;
+                                    }
+                                    if gi == nearest {
+                                        pass_surf = Some(sf);
+                                    }
+                                }
+                            } else if gi == nearest {
+                                pass_surf = sh.surface(gr.0 as usize, x, y, step, false);
+                            }
+                        }
+                        for c in 0..3 {
+                            acc[c] += opts.background[c] * empty as f64;
+                        }
+                        crow[px] = [
+                            (acc[0] / n_samples) as f32,
+                            (acc[1] / n_samples) as f32,
+                            (acc[2] / n_samples) as f32,
+                            1.0,
+                        ];
+                        if let Some(sf) = pass_surf {
+                            let d = sf.depth as f32;
+                            drow[px] = [d, d, d, 1.0];
+                            nrow[px] = [sf.n[0] as f32, sf.n[1] as f32, sf.n[2] as f32, 1.0];
+                            prow[px] = [sf.p[0] as f32, sf.p[1] as f32, sf.p[2] as f32, 1.0];
+                            urow[px] = [sf.uv[0] as f32, sf.uv[1] as f32, 0.0, 1.0];
+                            brow[px] =
+                                [sf.base[0] as f32, sf.base[1] as f32, sf.base[2] as f32, 1.0];
                         }
                     }
                 }
-                if groups.is_empty() {
-                    continue;
-                }
-                // The nearest triangle in the pixel (first on ties) gives the passes.
-                let mut nearest = 0;
-                for (gi, gr) in groups.iter().enumerate() {
-                    if gr.4 < groups[nearest].4 {
-                        nearest = gi;
-                    }
-                }
-                let step = s as f64;
-                let mut pass_surf = None;
-                for (gi, gr) in groups.iter().enumerate() {
-                    let (x, y) = (gr.2 / gr.1 as f64, gr.3 / gr.1 as f64);
-                    if opts.aa == AntiAliasing::Multisampling {
-                        if let Some(sf) = sh.surface(gr.0 as usize, x, y, step, true) {
-                            count += 1;
-                            for c in 0..3 {
-                                acc[c] += sf.color[c] * gr.1 as f64;
-                            }
-                            if gi == nearest {
-                                pass_surf = Some(sf);
-                            }
-                        }
-                    } else if gi == nearest {
-                        pass_surf = sh.surface(gr.0 as usize, x, y, step, false);
-                    }
-                }
-                for c in 0..3 {
-                    acc[c] += opts.background[c] * empty as f64;
-                }
-                crow[px] = [
-                    (acc[0] / n_samples) as f32,
-                    (acc[1] / n_samples) as f32,
-                    (acc[2] / n_samples) as f32,
-                    1.0,
-                ];
-                if let Some(sf) = pass_surf {
-                    let d = sf.depth as f32;
-                    drow[px] = [d, d, d, 1.0];
-                    nrow[px] = [sf.n[0] as f32, sf.n[1] as f32, sf.n[2] as f32, 1.0];
-                    prow[px] = [sf.p[0] as f32, sf.p[1] as f32, sf.p[2] as f32, 1.0];
-                    urow[px] = [sf.uv[0] as f32, sf.uv[1] as f32, 0.0, 1.0];
-                    brow[px] = [sf.base[0] as f32, sf.base[1] as f32, sf.base[2] as f32, 1.0];
-                }
-            }
-            shaded.fetch_add(count, Ordering::Relaxed);
-        });
+                shaded.fetch_add(count, Ordering::Relaxed);
+            },
+        );
     let img = |pixels| Image {
         width: w,
         height: h,
@@ -486,7 +536,8 @@ pub fn render(scene: &Scene, cam: &Camera, opts: &RasterOptions) -> Result<Rende
 fn declare(b: &mut NodeBuilder) {
     b.doc("Rasterizes a scene: Blinn-Phong with shadow maps, textures and normal maps, plus deferred passes.")
         .category("render");
-    b.add_input::<Scene>("scene").doc("Meshes, materials, lights and usually the camera.");
+    b.add_input::<Scene>("scene")
+        .doc("Meshes, materials, lights and usually the camera.");
     b.add_input::<Camera>("camera")
         .optional()
         .doc("Camera; overrides the scene's camera.");
@@ -500,7 +551,9 @@ fn declare(b: &mut NodeBuilder) {
     b.add_input::<bool>("cull_backfaces")
         .default(false)
         .doc("Skip triangles seen from behind (clockwise on screen).");
-    b.add_input::<bool>("shadows").default(true).doc("Render shadow maps.");
+    b.add_input::<bool>("shadows")
+        .default(true)
+        .doc("Render shadow maps.");
     b.add_input::<i64>("shadow_resolution")
         .default(2048i64)
         .range(256.0, 8192.0)
@@ -531,11 +584,16 @@ fn declare(b: &mut NodeBuilder) {
         .default(Color([0.05, 0.05, 0.05]))
         .doc("Colour where nothing is hit.");
     b.add_output::<Image>("color").doc("Shaded linear colour.");
-    b.add_output::<Image>("depth").doc("View depth along the viewing direction.");
-    b.add_output::<Image>("normal").doc("World-space shading normal.");
-    b.add_output::<Image>("position").doc("World-space position.");
-    b.add_output::<Image>("uv").doc("Texture coordinates (R, G).");
-    b.add_output::<Image>("base_color").doc("Base colour (texture times factor).");
+    b.add_output::<Image>("depth")
+        .doc("View depth along the viewing direction.");
+    b.add_output::<Image>("normal")
+        .doc("World-space shading normal.");
+    b.add_output::<Image>("position")
+        .doc("World-space position.");
+    b.add_output::<Image>("uv")
+        .doc("Texture coordinates (R, G).");
+    b.add_output::<Image>("base_color")
+        .doc("Base colour (texture times factor).");
 }
 
 fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
@@ -562,7 +620,10 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let aa: String = ctx.input("antialiasing")?;
     let res: i64 = ctx.input("shadow_resolution")?;
     if !(256..=8192).contains(&res) {
-        return Err(NodeError::invalid("shadow_resolution", "must lie in 256..=8192"));
+        return Err(NodeError::invalid(
+            "shadow_resolution",
+            "must lie in 256..=8192",
+        ));
     }
     let pcf: i64 = ctx.input("pcf_radius")?;
     if !(0..=4).contains(&pcf) {
@@ -571,7 +632,11 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let bias: f64 = ctx.input("shadow_bias")?;
     let slope: f64 = ctx.input("shadow_slope_bias")?;
     let ambient: f64 = ctx.input("ambient")?;
-    for (n, v) in [("shadow_bias", bias), ("shadow_slope_bias", slope), ("ambient", ambient)] {
+    for (n, v) in [
+        ("shadow_bias", bias),
+        ("shadow_slope_bias", slope),
+        ("ambient", ambient),
+    ] {
         if !(v.is_finite() && v >= 0.0) {
             return Err(NodeError::invalid(n, "must be finite and not negative"));
         }

@@ -84,11 +84,7 @@ pub fn setup_triangle(
         }
         if ina != inb {
             let t = (w_near - a[2]) / (b[2] - a[2]);
-            add([
-                a[0] + t * (b[0] - a[0]),
-                a[1] + t * (b[1] - a[1]),
-                w_near,
-            ]);
+            add([a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]), w_near]);
         }
     }
     if !(x0.is_finite() && y0.is_finite() && x1.is_finite() && y1.is_finite()) {
@@ -137,6 +133,80 @@ pub struct DepthTarget {
 /// Rows per band of the parallel rasterizer.
 const BAND: u32 = 16;
 
+/// Bins triangles to horizontal bands of `band` rows by their bounding boxes, in
+/// triangle order.
+pub fn bin_rows(tris: &[Option<TriSetup>], height: u32, band: u32) -> Vec<Vec<u32>> {
+    let nb = height.div_ceil(band) as usize;
+    let mut bins: Vec<Vec<u32>> = vec![Vec::new(); nb];
+    for (i, t) in tris.iter().enumerate() {
+        if let Some(t) = t {
+            let b0 = (t.bbox[1] / band) as usize;
+            let b1 = ((t.bbox[3] - 1) / band) as usize;
+            for bin in &mut bins[b0.min(nb)..=b1.min(nb - 1)] {
+                bin.push(i as u32);
+            }
+        }
+    }
+    bins
+}
+
+/// Rasterizes the triangles listed in `list` into rows `y_start..y_end` of a z-buffer
+/// `width` wide (`depth` and `ids` hold just those rows), keeping the smallest depth in
+/// `[zmin, zmax]`; ties keep the earlier triangle.
+#[allow(clippy::too_many_arguments)]
+pub fn fill_rows(
+    tris: &[Option<TriSetup>],
+    list: &[u32],
+    y_start: u32,
+    y_end: u32,
+    width: u32,
+    zmin: f64,
+    zmax: f64,
+    depth: &mut [f32],
+    mut ids: Option<&mut [u32]>,
+) {
+    let w = width as usize;
+    for &ti in list {
+        let Some(t) = tris[ti as usize].as_ref() else {
+            continue;
+        };
+        let ya = t.bbox[1].max(y_start);
+        let yb = t.bbox[3].min(y_end);
+        let [a, b, c] = t.inv;
+        let d = t.depth;
+        for y in ya..yb {
+            let yc = y as f64 + 0.5;
+            let row = (y - y_start) as usize * w;
+            let ey = [a[1] * yc + a[2], b[1] * yc + b[2], c[1] * yc + c[2]];
+            for x in t.bbox[0]..t.bbox[2] {
+                let xc = x as f64 + 0.5;
+                let e0 = a[0] * xc + ey[0];
+                let e1 = b[0] * xc + ey[1];
+                let e2 = c[0] * xc + ey[2];
+                if e0 < 0.0 || e1 < 0.0 || e2 < 0.0 {
+                    continue;
+                }
+                let s = e0 + e1 + e2;
+                if s <= 0.0 {
+                    continue;
+                }
+                let z = (e0 * d[0] + e1 * d[1] + e2 * d[2]) / s;
+                if !(z >= zmin && z <= zmax) {
+                    continue;
+                }
+                let k = row + x as usize;
+                let zf = z as f32;
+                if zf < depth[k] {
+                    depth[k] = zf;
+                    if let Some(ic) = ids.as_deref_mut() {
+                        ic[k] = ti;
+                    }
+                }
+            }
+        }
+    }
+}
+
 /// Rasterizes triangles (index = position in `tris`; `None` entries are skipped) into a
 /// z-buffer keeping the smallest depth within `[zmin, zmax]`; ties keep the earlier
 /// triangle. `keep_ids` also records the winning triangle per pixel.
@@ -148,17 +218,7 @@ pub fn rasterize(
     zmax: f64,
     keep_ids: bool,
 ) -> DepthTarget {
-    let nb = height.div_ceil(BAND) as usize;
-    let mut bins: Vec<Vec<u32>> = vec![Vec::new(); nb];
-    for (i, t) in tris.iter().enumerate() {
-        if let Some(t) = t {
-            let b0 = (t.bbox[1] / BAND) as usize;
-            let b1 = ((t.bbox[3] - 1) / BAND) as usize;
-            for bin in &mut bins[b0..=b1.min(nb - 1)] {
-                bin.push(i as u32);
-            }
-        }
-    }
+    let bins = bin_rows(tris, height, BAND);
     let w = width as usize;
     let mut depth = vec![f32::INFINITY; w * height as usize];
     let mut ids = if keep_ids {
@@ -167,58 +227,24 @@ pub fn rasterize(
         Vec::new()
     };
     let band_len = w * BAND as usize;
-    let fill = |bi: usize, dchunk: &mut [f32], mut ichunk: Option<&mut [u32]>| {
-        let y_start = bi as u32 * BAND;
-        let y_end = (y_start + BAND).min(height);
-        for &ti in &bins[bi] {
-            let t = tris[ti as usize].as_ref().expect("binned triangles exist");
-            let ya = t.bbox[1].max(y_start);
-            let yb = t.bbox[3].min(y_end);
-            let [a, b, c] = t.inv;
-            let d = t.depth;
-            for y in ya..yb {
-                let yc = y as f64 + 0.5;
-                let row = (y - y_start) as usize * w;
-                let ey = [a[1] * yc + a[2], b[1] * yc + b[2], c[1] * yc + c[2]];
-                for x in t.bbox[0]..t.bbox[2] {
-                    let xc = x as f64 + 0.5;
-                    let e0 = a[0] * xc + ey[0];
-                    let e1 = b[0] * xc + ey[1];
-                    let e2 = c[0] * xc + ey[2];
-                    if e0 < 0.0 || e1 < 0.0 || e2 < 0.0 {
-                        continue;
-                    }
-                    let s = e0 + e1 + e2;
-                    if s <= 0.0 {
-                        continue;
-                    }
-                    let z = (e0 * d[0] + e1 * d[1] + e2 * d[2]) / s;
-                    if !(z >= zmin && z <= zmax) {
-                        continue;
-                    }
-                    let k = row + x as usize;
-                    let zf = z as f32;
-                    if zf < dchunk[k] {
-                        dchunk[k] = zf;
-                        if let Some(ic) = ichunk.as_deref_mut() {
-                            ic[k] = ti;
-                        }
-                    }
-                }
-            }
-        }
-    };
+    let rows = |bi: usize| (bi as u32 * BAND, ((bi as u32 + 1) * BAND).min(height));
     if keep_ids {
         depth
             .par_chunks_mut(band_len)
             .zip(ids.par_chunks_mut(band_len))
             .enumerate()
-            .for_each(|(bi, (dc, ic))| fill(bi, dc, Some(ic)));
+            .for_each(|(bi, (dc, ic))| {
+                let (y0, y1) = rows(bi);
+                fill_rows(tris, &bins[bi], y0, y1, width, zmin, zmax, dc, Some(ic))
+            });
     } else {
         depth
             .par_chunks_mut(band_len)
             .enumerate()
-            .for_each(|(bi, dc)| fill(bi, dc, None));
+            .for_each(|(bi, dc)| {
+                let (y0, y1) = rows(bi);
+                fill_rows(tris, &bins[bi], y0, y1, width, zmin, zmax, dc, None)
+            });
     }
     DepthTarget {
         width,
@@ -253,10 +279,7 @@ mod tests {
     #[test]
     fn depth_is_interpolated_and_nearest_wins() {
         // A plane z = 1 + x/16 over the whole 16x16 image, and a nearer small triangle.
-        let big = flat(
-            [[0.0, 0.0], [32.0, 0.0], [0.0, 32.0]],
-            [1.0, 3.0, 1.0],
-        );
+        let big = flat([[0.0, 0.0], [32.0, 0.0], [0.0, 32.0]], [1.0, 3.0, 1.0]);
         let small = flat([[2.0, 2.0], [6.0, 2.0], [2.0, 6.0]], [0.5; 3]);
         let far = flat([[2.0, 2.0], [6.0, 2.0], [2.0, 6.0]], [5.0; 3]);
         let r = rasterize(&[big, far, small], 16, 16, 0.0, 10.0, true);
@@ -310,7 +333,10 @@ mod tests {
             })
             .collect();
         let a = rasterize(&tris, 16, 16, 0.0, 10.0, true);
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
         let b = pool.install(|| rasterize(&tris, 16, 16, 0.0, 10.0, true));
         assert_eq!(a.ids, b.ids);
         assert_eq!(a.depth, b.depth);

@@ -32,7 +32,14 @@ pub fn specular_weight(metallic: f64) -> f64 {
 /// One light's Blinn-Phong contribution per unit irradiance: `kd base cos(alpha) + ks
 /// cos^k(theta)` for unit normal `n`, unit direction to the light `l` and to the eye `v`.
 /// Zero when the light is behind the surface.
-pub fn blinn_phong(n: [f64; 3], l: [f64; 3], v: [f64; 3], base: [f64; 3], ks: f64, k: f64) -> [f64; 3] {
+pub fn blinn_phong(
+    n: [f64; 3],
+    l: [f64; 3],
+    v: [f64; 3],
+    base: [f64; 3],
+    ks: f64,
+    k: f64,
+) -> [f64; 3] {
     let cos_a = n[0] * l[0] + n[1] * l[1] + n[2] * l[2];
     if cos_a <= 0.0 {
         return [0.0; 3];
@@ -71,6 +78,9 @@ mod tests {
         assert!((d[0] - 0.4).abs() < 1e-12 && (d[1] - 0.2).abs() < 1e-12);
         let s = blinn_phong(n, l, v, [0.0; 3], 0.8, 30.0);
         assert!((s[0] - 0.8).abs() < 1e-12);
-        assert_eq!(blinn_phong(n, [0.0, 0.0, -1.0], v, [1.0; 3], 0.5, 1.0), [0.0; 3]);
+        assert_eq!(
+            blinn_phong(n, [0.0, 0.0, -1.0], v, [1.0; 3], 0.5, 1.0),
+            [0.0; 3]
+        );
     }
 }

@@ -88,7 +88,11 @@ pub fn directional_shadow_map(
     res: u32,
 ) -> ShadowMap {
     let f = normalize(dir);
-    let a = if f[1].abs() > 0.9 { [1.0, 0.0, 0.0] } else { [0.0, 1.0, 0.0] };
+    let a = if f[1].abs() > 0.9 {
+        [1.0, 0.0, 0.0]
+    } else {
+        [0.0, 1.0, 0.0]
+    };
     let r = normalize(cross(f, a));
     let u = cross(r, f);
     let (lo, hi) = bounds;
@@ -143,7 +147,11 @@ fn cube_axes() -> [[[f64; 3]; 3]; 6] {
         [0.0, 0.0, -1.0],
     ];
     fw.map(|f| {
-        let up = if f[1] != 0.0 { [0.0, 0.0, 1.0] } else { [0.0, 1.0, 0.0] };
+        let up = if f[1] != 0.0 {
+            [0.0, 0.0, 1.0]
+        } else {
+            [0.0, 1.0, 0.0]
+        };
         let r = cross(f, up);
         [r, up, f]
     })
@@ -219,20 +227,41 @@ impl ShadowMap {
         let slope = |tau: f64| tau * (sp.bias + sp.slope_bias * tan * (r as f64 + 1.0));
         match self {
             ShadowMap::Directional {
-                face, x0, y1, k, res,
+                face,
+                x0,
+                y1,
+                k,
+                res,
             } => {
                 let [ax, ay, az] = face.axes;
                 let x = (dot(p, ax) - x0) * k;
                 let y = (y1 - dot(p, ay)) * k;
-                pcf(&face.depth, *res, x, y, dot(p, az), slope(1.0 / k), r, false)
+                pcf(
+                    &face.depth,
+                    *res,
+                    x,
+                    y,
+                    dot(p, az),
+                    slope(1.0 / k),
+                    r,
+                    false,
+                )
             }
             ShadowMap::Point { faces, res } => {
                 let d = sub(p, faces[0].origin);
                 let a = d.map(f64::abs);
                 let fi = if a[0] >= a[1] && a[0] >= a[2] {
-                    if d[0] >= 0.0 { 0 } else { 1 }
+                    if d[0] >= 0.0 {
+                        0
+                    } else {
+                        1
+                    }
                 } else if a[1] >= a[2] {
-                    if d[1] >= 0.0 { 2 } else { 3 }
+                    if d[1] >= 0.0 {
+                        2
+                    } else {
+                        3
+                    }
                 } else if d[2] >= 0.0 {
                     4
                 } else {
@@ -247,7 +276,16 @@ impl ShadowMap {
                 let half = *res as f64 * 0.5;
                 let x = half + half * dot(d, ax) / z;
                 let y = half - half * dot(d, ay) / z;
-                pcf(&face.depth, *res, x, y, z, slope(2.0 * z / *res as f64), r, true)
+                pcf(
+                    &face.depth,
+                    *res,
+                    x,
+                    y,
+                    z,
+                    slope(2.0 * z / *res as f64),
+                    r,
+                    true,
+                )
             }
         }
     }
@@ -296,7 +334,11 @@ mod tests {
             let sm = directional_shadow_map(&tris, dir, bounds, res);
             for i in 0..40 {
                 for j in 0..40 {
-                    let p = [-1.95 + 0.1 * i as f64, 0.0, -1.95 + 0.1 * j as f64 + 0.001 * i as f64];
+                    let p = [
+                        -1.95 + 0.1 * i as f64,
+                        0.0,
+                        -1.95 + 0.1 * j as f64 + 0.001 * i as f64,
+                    ];
                     assert_eq!(sm.visibility(p, [0.0, 1.0, 0.0], l, &P), 1.0, "{p:?}");
                 }
             }

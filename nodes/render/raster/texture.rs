@@ -136,7 +136,14 @@ impl MipTexture {
     /// Trilinear sample: the level of detail is `log2` of the larger screen-space
     /// footprint of one pixel in texels, `max(|d(uv)/dx|, |d(uv)/dy|)` scaled by the size;
     /// the two nearest levels are blended.
-    pub fn trilinear(&self, u: f64, v: f64, duv_dx: [f64; 2], duv_dy: [f64; 2], wrap: Wrap) -> [f32; 4] {
+    pub fn trilinear(
+        &self,
+        u: f64,
+        v: f64,
+        duv_dx: [f64; 2],
+        duv_dy: [f64; 2],
+        wrap: Wrap,
+    ) -> [f32; 4] {
         let (w, h) = (self.levels[0].w as f64, self.levels[0].h as f64);
         let lx = (duv_dx[0] * w).hypot(duv_dx[1] * h);
         let ly = (duv_dy[0] * w).hypot(duv_dy[1] * h);
@@ -208,7 +215,13 @@ mod tests {
             assert!((c[0] - 0.5).abs() < 1e-5);
         }
         // Magnified: level 0.
-        let c = t.trilinear(0.5 / 64.0, 1.0 - 0.5 / 64.0, [1e-4, 0.0], [0.0, 1e-4], Wrap::Repeat);
+        let c = t.trilinear(
+            0.5 / 64.0,
+            1.0 - 0.5 / 64.0,
+            [1e-4, 0.0],
+            [0.0, 1e-4],
+            Wrap::Repeat,
+        );
         assert_eq!(c[0], 1.0);
     }
 

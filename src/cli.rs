@@ -8,7 +8,7 @@ use crate::exec::{Executor, NodeStatus, RunOptions, RunReport};
 use crate::graph::{self, Graph};
 use crate::node::FileEnv;
 use crate::registry::Registry;
-use crate::validate::{validate, GraphError, ValidGraph};
+use crate::validate::{validate_with, GraphError, ValidGraph};
 use clap::{Parser, Subcommand};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -112,6 +112,9 @@ struct RunArgs {
     /// Print only errors.
     #[arg(long, short)]
     quiet: bool,
+    /// JSON file mapping custom Framework3D node names onto cgnodes nodes.
+    #[arg(long = "f3d-aliases")]
+    f3d_aliases: Option<PathBuf>,
 }
 
 /// Runs the command line with `registry` (`Registry::builtin()` plus anything a crate adds).
@@ -199,7 +202,15 @@ fn cmd_import(input: &Path, output: &Path, aliases: Option<&Path>) -> i32 {
                 .map_err(|e| format!("{}: {e}", a.display()))?,
             None => crate::f3d::Aliases::default(),
         };
-        let g = crate::f3d::import(&raw, &al).map_err(|e| format!("{}: {e}", input.display()))?;
+        let (g, missing) = crate::f3d::import_lenient(&raw, &al, &Registry::builtin())
+            .map_err(|e| format!("{}: {e}", input.display()))?;
+        if !missing.is_empty() {
+            eprintln!(
+                "warning: {}: the graph was converted, but it will not run until these exist: {}",
+                input.display(),
+                missing.join(", ")
+            );
+        }
         let text = serde_json::to_string_pretty(&g).map_err(|e| e.to_string())?;
         crate::io::write_atomic(output, |w| w.write_all(text.as_bytes()))
             .map_err(|e| format!("{}: {e}", output.display()))
@@ -304,7 +315,24 @@ pub fn apply_sets(g: &mut Graph, sets: &[String]) -> Result<(), String> {
 
 /// Loads, applies overrides and validates, printing errors; `Err` is the exit code.
 pub fn load_valid(registry: &Registry, path: &Path, sets: &[String]) -> Result<ValidGraph, i32> {
-    let mut g = match graph::load(path) {
+    load_valid_with(registry, path, sets, &crate::f3d::Aliases::default(), &[])
+}
+
+/// Reads Framework3D aliases (`--f3d-aliases FILE`).
+pub fn read_aliases(p: &Path) -> Result<crate::f3d::Aliases, String> {
+    let t = std::fs::read_to_string(p).map_err(|e| format!("{}: {e}", p.display()))?;
+    serde_json::from_str(&t).map_err(|e| format!("{}: {e}", p.display()))
+}
+
+/// Like `load_valid`, with aliases for custom Framework3D node names.
+pub fn load_valid_with(
+    registry: &Registry,
+    path: &Path,
+    sets: &[String],
+    aliases: &crate::f3d::Aliases,
+    assets: &[PathBuf],
+) -> Result<ValidGraph, i32> {
+    let mut g = match graph::load_with(path, aliases) {
         Ok(g) => g,
         Err(e) => {
             eprintln!("error: {e}");
@@ -315,7 +343,7 @@ pub fn load_valid(registry: &Registry, path: &Path, sets: &[String]) -> Result<V
         eprintln!("error: {e}");
         return Err(EXIT_USAGE);
     }
-    validate(&g, registry).map_err(|errs| {
+    validate_with(&g, registry, assets).map_err(|errs| {
         print_graph_errors(&errs);
         EXIT_INVALID
     })
@@ -355,7 +383,14 @@ pub fn parse_frames(s: &str) -> Result<(i64, i64), String> {
 }
 
 fn cmd_run(registry: &Registry, args: RunArgs) -> i32 {
-    let graph = match load_valid(registry, &args.graph, &args.set) {
+    let aliases = match args.f3d_aliases.as_deref().map(read_aliases).transpose() {
+        Ok(a) => a.unwrap_or_default(),
+        Err(e) => {
+            eprintln!("error: {e}");
+            return EXIT_USAGE;
+        }
+    };
+    let graph = match load_valid_with(registry, &args.graph, &args.set, &aliases, &args.assets) {
         Ok(g) => g,
         Err(c) => return c,
     };
@@ -368,7 +403,7 @@ fn cmd_run(registry: &Registry, args: RunArgs) -> i32 {
             return EXIT_USAGE;
         }
     }
-    let hint = graph::load(&args.graph)
+    let hint = graph::load_with(&args.graph, &aliases)
         .ok()
         .and_then(|g| g.spec.frames_hint());
     let (f0, f1) = match args.frames.as_deref().map(parse_frames).transpose() {

@@ -1,15 +1,134 @@
 //! Framework3D (USTC CG 2024) saved node trees: detection and import into the native format.
 //! See `docs/framework3d.md`.
+//!
+//! Each Framework3D `id_name` maps onto a cgnodes node through a `NodeMap`: the node type,
+//! fixed parameters, and where each Framework3D socket (by its `identifier`) goes. The
+//! built-in maps are the JSON in `BUILTIN`; a user's alias file (`--f3d-aliases FILE`) has
+//! the same shape and overrides or extends them. Widget values of unlinked inputs become
+//! parameters; links become links. Storage and time-gain nodes are removed (the frame
+//! executor keeps simulation state between frames), as are the state sockets they feed.
 
-use crate::graph::GraphFile;
+use crate::graph::{GraphFile, LinkSpec, NodeSpec};
+use crate::node::NodeDecl;
+use crate::registry::Registry;
+use crate::types::SocketType;
+use serde::Deserialize;
 use std::collections::BTreeMap;
 
-/// User aliases mapping Framework3D `id_name`s onto cgnodes nodes (`--f3d-aliases FILE`).
+/// User aliases mapping Framework3D `id_name`s onto cgnodes nodes (`--f3d-aliases FILE`):
+/// `{"<id_name>": <NodeMap>, ...}`; keys starting with `_` (comments) are ignored.
 #[derive(Clone, Debug, Default, serde::Deserialize)]
 pub struct Aliases {
     /// By Framework3D `id_name`.
     #[serde(flatten)]
     pub nodes: BTreeMap<String, serde_json::Value>,
+}
+
+/// How one Framework3D node becomes a cgnodes node.
+///
+/// Socket targets are a cgnodes socket name, `null` (dropped), or for inputs
+/// `"socket<helper.in:out"` (the Framework3D value or link goes into input `in` of a helper
+/// node whose output `out` feeds `socket`, e.g. `image<image_load.path:image`), and for
+/// outputs `"socket>helper.in:out"` (output `socket` passes through a helper node, e.g.
+/// `mesh>mesh_decompose.mesh:texcoords`).
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct NodeMap {
+    /// cgnodes node type; absent or null when the node is removed.
+    #[serde(rename = "type", default)]
+    pub node_type: Option<String>,
+    /// Literal parameters always set.
+    #[serde(default)]
+    pub params: BTreeMap<String, serde_json::Value>,
+    /// Framework3D input identifier -> cgnodes input.
+    #[serde(default)]
+    pub inputs: BTreeMap<String, Option<String>>,
+    /// Framework3D output identifier -> cgnodes output.
+    #[serde(default)]
+    pub outputs: BTreeMap<String, Option<String>>,
+    /// Why the map is as it is (kept in the node's meta).
+    #[serde(default)]
+    pub note: Option<String>,
+}
+
+/// The built-in maps for the 2024 homework nodes.
+pub const BUILTIN: &str = r#"{
+  "geom_read_usd": {"type": "mesh_load",
+    "inputs": {"File Name": "path", "Prim Path": "prim", "Time Code": null},
+    "outputs": {"Geometry": "mesh"}},
+  "geom_write_usd": {"type": "mesh_save",
+    "inputs": {"Geometry": "mesh", "File Name": "path", "Prim Path": "prim", "Time Code": null}},
+  "geom_map_boundary_to_circle": {"type": "boundary_map", "params": {"shape": "circle"},
+    "inputs": {"Input": "mesh"}, "outputs": {"Output": "mesh"}},
+  "geom_map_boundary_to_square": {"type": "boundary_map", "params": {"shape": "square"},
+    "inputs": {"Input": "mesh"}, "outputs": {"Output": "mesh"}},
+  "geom_min_surf": {"type": "minimal_surface",
+    "inputs": {"Input": "mesh", "Weight": "weights"}, "outputs": {"Output": "mesh"}},
+  "geom_arap": {"type": "arap",
+    "inputs": {"Input": "mesh", "Initialization": "init"},
+    "outputs": {"OutputUV": "mesh>mesh_decompose.mesh:texcoords", "Output": "flat", "Runtime": null}},
+  "geom_mesh_decompose": {"type": "mesh_decompose",
+    "inputs": {"Mesh": "mesh"},
+    "outputs": {"Vertices": "vertices", "FaceVertexCounts": "face_counts",
+      "FaceVertexIndices": "face_indices", "Normals": "normals", "Texcoords": "texcoords"}},
+  "geom_mesh_compose": {"type": "mesh_compose",
+    "inputs": {"Vertices": "vertices", "FaceVertexCounts": "face_counts",
+      "FaceVertexIndices": "face_indices", "Normals": "normals", "Texcoords": "texcoords"},
+    "outputs": {"Mesh": "mesh"}},
+  "geom_set_texture": {"type": "texture_map",
+    "inputs": {"Geometry": "mesh", "Texture Name": "image<image_load.path:image"},
+    "outputs": {"Geometry": "mesh"}},
+  "func_buffer_decompose3f": {"type": "buffer_decompose3",
+    "inputs": {"Buffer": "buffer"}, "outputs": {"X": "x", "Y": "y", "Z": "z", "Size": "size"}},
+  "func_buffer_decompose2f": {"type": "buffer_decompose2",
+    "inputs": {"Buffer": "buffer"}, "outputs": {"X": "x", "Y": "y", "Size": "size"}},
+  "func_buffer_compose3f": {"type": "buffer_compose3",
+    "inputs": {"X": "x", "Y": "y", "Z": "z"}, "outputs": {"Buffer": "buffer"}},
+  "func_buffer_compose2f": {"type": "buffer_compose2",
+    "inputs": {"X": "x", "Y": "y"}, "outputs": {"Buffer": "buffer"}},
+  "func_create_float3f": {"type": "buffer_compose3",
+    "inputs": {"X": "x", "Y": "y", "Z": "z"}, "outputs": {"Buffer": "buffer"}},
+  "func_create_float2f": {"type": "buffer_compose2",
+    "inputs": {"X": "x", "Y": "y"}, "outputs": {"Buffer": "buffer"}},
+  "func_value_float": {"type": "value_float", "inputs": {"value": "value"}, "outputs": {"value": "value"}},
+  "func_value_int": {"type": "value_int", "inputs": {"value": "value"}, "outputs": {"value": "value"}},
+  "func_value_string": {"type": "value_string", "inputs": {"value": "value"}, "outputs": {"value": "value"}},
+  "geom_mass_spring": {"type": "mass_spring",
+    "inputs": {"Mesh": "mesh", "Mass Spring": null, "stiffness": "stiffness", "h": "h",
+      "damping": "damping", "gravity": "gravity", "collision penalty_k": "penalty_k",
+      "collision scale factor": "collision_scale", "sphere radius": "sphere_radius",
+      "sphere center": "sphere_center", "time integrator type": null,
+      "enable damping": null, "enable sphere collision": "sphere", "enable Liu13": null,
+      "time_code": null},
+    "outputs": {"Mass Spring Class": null, "Output Mesh": "mesh"}},
+  "geom_mass_spring_with_control_points": {"type": "mass_spring",
+    "inputs": {"Mesh": "mesh", "Mass Spring": null, "stiffness": "stiffness", "h": "h",
+      "damping": "damping", "gravity": "gravity", "time integrator type": null,
+      "enable damping": null, "enable Liu13": null, "time_code": null},
+    "outputs": {"Mass Spring Class": null, "Output Mesh": "mesh"}},
+  "geom_sph_fluid": {"type": "sph_fluid",
+    "inputs": {"SPH Class": null, "sim box min": "sim_box_min", "sim box max": "sim_box_max",
+      "particle box min": "particle_box_min", "particle box max": "particle_box_max",
+      "num particle per axis": "num_particle_per_axis", "dt": "dt", "viscosity": "viscosity",
+      "gravity": "gravity", "stiffness": "stiffness", "exponent": "exponent",
+      "enable time profiling": null, "enable debug output": null, "enable IISPH": null,
+      "time_code": null},
+    "outputs": {"SPH Class": null, "Points": "points", "Point Colors": null}},
+  "geom_animate_mesh": {"type": "animate_mesh",
+    "inputs": {"Animator": null, "Geometry": "mesh", "time_code": null},
+    "outputs": {"Animator": null, "Output Geometry": "mesh"}},
+  "geom_time_code": {"type": "frame", "outputs": {"time": "time", "Time": "time"}},
+  "geom_storage_in": {"note": "the frame executor keeps state between frames"},
+  "geom_storage_out": {"note": "the frame executor keeps state between frames"},
+  "geom_time_gain": {"note": "frames are numbered by the executor (--frames)"}
+}"#;
+
+/// Splits a helper spec `type.in:out`.
+fn helper(spec: &str) -> Result<(&str, &str, &str), ImportError> {
+    let bad = || ImportError(format!("helper '{spec}' should read 'type.input:output'"));
+    let (t, rest) = spec.split_once('.').ok_or_else(bad)?;
+    let (i, o) = rest.split_once(':').ok_or_else(bad)?;
+    Ok((t, i, o))
 }
 
 /// Why a Framework3D graph could not be imported.
@@ -24,9 +143,393 @@ pub fn is_f3d(raw: &serde_json::Value) -> bool {
         .all(|k| raw.get(k).is_some())
 }
 
-/// Converts a Framework3D saved node tree into a cgnodes graph.
-pub fn import(_raw: &serde_json::Value, _aliases: &Aliases) -> Result<GraphFile, ImportError> {
-    Err(ImportError(
-        "importing Framework3D graphs is not implemented yet".into(),
-    ))
+/// The built-in maps, overridden and extended by `aliases`.
+pub fn node_maps(aliases: &Aliases) -> Result<BTreeMap<String, NodeMap>, ImportError> {
+    let mut maps: BTreeMap<String, NodeMap> =
+        serde_json::from_str(BUILTIN).map_err(|e| ImportError(format!("built-in maps: {e}")))?;
+    for (k, v) in &aliases.nodes {
+        if k.starts_with('_') {
+            continue;
+        }
+        let m: NodeMap = serde_json::from_value(v.clone())
+            .map_err(|e| ImportError(format!("alias for '{k}': {e}")))?;
+        maps.insert(k.clone(), m);
+    }
+    Ok(maps)
+}
+
+struct F3dSocket {
+    identifier: String,
+    value: Option<serde_json::Value>,
+}
+
+struct F3dNode {
+    id: i64,
+    id_name: String,
+    inputs: Vec<i64>,
+    outputs: Vec<i64>,
+}
+
+fn sockets_in_order(v: Option<&serde_json::Value>) -> Vec<i64> {
+    let mut s: Vec<(i64, i64)> = v
+        .and_then(|v| v.as_object())
+        .map(|o| {
+            o.iter()
+                .filter_map(|(k, id)| Some((k.parse().ok()?, id.as_i64()?)))
+                .collect()
+        })
+        .unwrap_or_default();
+    // keys "0","1",...,"10" are sorted as strings in the file: order by number
+    s.sort();
+    s.into_iter().map(|(_, id)| id).collect()
+}
+
+/// Converts a Framework3D saved node tree into a cgnodes graph, using the built-in nodes to
+/// check that every target node exists.
+pub fn import(raw: &serde_json::Value, aliases: &Aliases) -> Result<GraphFile, ImportError> {
+    import_with(raw, aliases, &Registry::builtin())
+}
+
+fn short_name(id_name: &str) -> &str {
+    id_name
+        .strip_prefix("geom_")
+        .or_else(|| id_name.strip_prefix("func_"))
+        .unwrap_or(id_name)
+}
+
+/// A literal for socket `decl` from a Framework3D widget value.
+fn literal(v: &serde_json::Value, ty: Option<&SocketType>) -> Option<serde_json::Value> {
+    use serde_json::json;
+    Some(match (ty, v) {
+        (Some(SocketType::Bool), serde_json::Value::Number(n)) => json!(n.as_f64()? != 0.0),
+        (Some(SocketType::Int), serde_json::Value::Number(n)) => json!(n.as_f64()?.round() as i64),
+        (Some(SocketType::Float), serde_json::Value::Number(n)) => json!(n.as_f64()?),
+        (Some(SocketType::String), serde_json::Value::Number(n)) => json!(n.to_string()),
+        _ => v.clone(),
+    })
+}
+
+fn missing_message(missing: &[String]) -> String {
+    format!(
+        "cgnodes nodes missing from this build: {}",
+        missing.join(", ")
+    )
+}
+
+/// Converts with `registry` to check targets (nodes and sockets must exist in it); fails
+/// when a target node is missing, naming each with its Framework3D node id.
+pub fn import_with(
+    raw: &serde_json::Value,
+    aliases: &Aliases,
+    registry: &Registry,
+) -> Result<GraphFile, ImportError> {
+    convert(raw, aliases, registry, true).map(|(g, _)| g)
+}
+
+/// Converts even when target nodes are missing from `registry` (for `import-f3d`, so the
+/// graph can be edited or run by a build that has them); returns the graph and one line per
+/// missing node, naming its Framework3D id.
+pub fn import_lenient(
+    raw: &serde_json::Value,
+    aliases: &Aliases,
+    registry: &Registry,
+) -> Result<(GraphFile, Vec<String>), ImportError> {
+    convert(raw, aliases, registry, false)
+}
+
+fn convert(
+    raw: &serde_json::Value,
+    aliases: &Aliases,
+    registry: &Registry,
+    strict: bool,
+) -> Result<(GraphFile, Vec<String>), ImportError> {
+    let maps = node_maps(aliases)?;
+    let obj = |k: &str| {
+        raw.get(k)
+            .and_then(|v| v.as_object())
+            .ok_or_else(|| ImportError(format!("'{k}' is not an object")))
+    };
+    let mut sockets: BTreeMap<i64, F3dSocket> = BTreeMap::new();
+    for (k, s) in obj("sockets_info")? {
+        let id = s
+            .get("ID")
+            .and_then(|v| v.as_i64())
+            .or_else(|| k.parse().ok())
+            .ok_or_else(|| ImportError(format!("socket '{k}' has no ID")))?;
+        let text = |f: &str| s.get(f).and_then(|v| v.as_str()).unwrap_or("").to_string();
+        sockets.insert(
+            id,
+            F3dSocket {
+                identifier: text("identifier"),
+                value: s.get("value").cloned(),
+            },
+        );
+    }
+    let mut nodes: Vec<F3dNode> = Vec::new();
+    for (k, n) in obj("nodes_info")? {
+        let id = n
+            .get("ID")
+            .and_then(|v| v.as_i64())
+            .or_else(|| k.parse().ok())
+            .ok_or_else(|| ImportError(format!("node '{k}' has no ID")))?;
+        nodes.push(F3dNode {
+            id,
+            id_name: n
+                .get("id_name")
+                .and_then(|v| v.as_str())
+                .unwrap_or("")
+                .to_string(),
+            inputs: sockets_in_order(n.get("inputs")),
+            outputs: sockets_in_order(n.get("outputs")),
+        });
+    }
+    nodes.sort_by_key(|n| n.id);
+    // Unknown id_names, all at once.
+    let unknown: Vec<String> = nodes
+        .iter()
+        .filter(|n| !maps.contains_key(&n.id_name))
+        .map(|n| format!("{} (node {})", n.id_name, n.id))
+        .collect();
+    if !unknown.is_empty() {
+        return Err(ImportError(format!(
+            "unknown Framework3D nodes: {}. Map them onto cgnodes nodes with --f3d-aliases FILE (see docs/framework3d.md)",
+            unknown.join(", ")
+        )));
+    }
+    // Missing cgnodes nodes, all at once.
+    let mut missing = Vec::new();
+    for n in &nodes {
+        let m = &maps[&n.id_name];
+        let mut need: Vec<&str> = m.node_type.iter().map(String::as_str).collect();
+        for t in m.inputs.values().chain(m.outputs.values()).flatten() {
+            if let Some((_, h)) = t.split_once(['<', '>']) {
+                need.push(helper(h)?.0);
+            }
+        }
+        for t in need {
+            if registry.get(t).is_none() {
+                missing.push(format!("{} (node {}) needs '{t}'", n.id_name, n.id));
+            }
+        }
+    }
+    if !missing.is_empty() && strict {
+        return Err(ImportError(missing_message(&missing)));
+    }
+    // Socket owner: socket id -> (node index, is_input, position).
+    let mut owner: BTreeMap<i64, (usize, bool)> = BTreeMap::new();
+    for (i, n) in nodes.iter().enumerate() {
+        for &s in &n.inputs {
+            owner.insert(s, (i, true));
+        }
+        for &s in &n.outputs {
+            owner.insert(s, (i, false));
+        }
+    }
+    let node_id = |n: &F3dNode| format!("{}_{}", short_name(&n.id_name), n.id);
+    let decl = |n: &F3dNode| -> Option<&NodeDecl> {
+        maps[&n.id_name]
+            .node_type
+            .as_ref()
+            .and_then(|t| registry.get(t))
+            .map(|d| &**d)
+    };
+    let sock_err = |n: &F3dNode, what: &str, ident: &str| {
+        ImportError(format!(
+            "{} (node {}) has {what} '{ident}' with no cgnodes counterpart; map it with --f3d-aliases",
+            n.id_name, n.id
+        ))
+    };
+    let mut out_nodes: BTreeMap<String, NodeSpec> = BTreeMap::new();
+    for n in &nodes {
+        let m = &maps[&n.id_name];
+        let Some(ty) = &m.node_type else { continue };
+        let mut meta = serde_json::json!({"f3d_id": n.id, "f3d_id_name": n.id_name});
+        if let Some(note) = &m.note {
+            meta["note"] = serde_json::json!(note);
+        }
+        if let Some(loc) = raw
+            .get("nodes")
+            .and_then(|v| v.get(format!("node:{}", n.id)))
+            .and_then(|v| v.get("location"))
+        {
+            meta["location"] = loc.clone();
+        }
+        let mut spec = NodeSpec {
+            node_type: ty.clone(),
+            params: m.params.clone(),
+            inputs: BTreeMap::new(),
+            meta: Some(meta),
+        };
+        // Widget values of unlinked inputs become parameters.
+        for &s in &n.inputs {
+            let sock = &sockets[&s];
+            let linked = obj("links_info")?
+                .values()
+                .any(|l| l.get("EndPinID").and_then(|v| v.as_i64()) == Some(s));
+            if linked {
+                continue;
+            }
+            let Some(v) = &sock.value else { continue };
+            let target = match m.inputs.get(&sock.identifier) {
+                Some(Some(t)) => t.clone(),
+                _ => continue, // dropped or unmapped: the widget value is not used
+            };
+            if let Some((sock_name, helper_spec)) = target.split_once('<') {
+                let (htype, hin, hout) = helper(helper_spec)?;
+                let hid = format!("{}_{}", node_id(n), htype);
+                let mut hp = BTreeMap::new();
+                hp.insert(hin.to_string(), v.clone());
+                out_nodes.insert(
+                    hid.clone(),
+                    NodeSpec {
+                        node_type: htype.to_string(),
+                        params: hp,
+                        inputs: BTreeMap::new(),
+                        meta: None,
+                    },
+                );
+                spec.inputs.insert(
+                    sock_name.to_string(),
+                    LinkSpec::One(format!("{hid}.{hout}")),
+                );
+                continue;
+            }
+            let ty = match decl(n) {
+                Some(d) => match d.input(&target) {
+                    Some(s) => Some(s.ty.clone()),
+                    None => return Err(sock_err(n, "input", &sock.identifier)),
+                },
+                None => None, // node missing from this build: keep the value as is
+            };
+            let mut lit = literal(v, ty.as_ref()).unwrap_or(v.clone());
+            if n.id_name == "geom_write_usd" && target == "path" {
+                lit = serde_json::json!(write_usd_path(lit.as_str().unwrap_or("")));
+            }
+            spec.params.insert(target, lit);
+        }
+        out_nodes.insert(node_id(n), spec);
+    }
+    // Links.
+    let mut links: Vec<(i64, i64, i64)> = obj("links_info")?
+        .values()
+        .filter_map(|l| {
+            Some((
+                l.get("ID")?.as_i64()?,
+                l.get("StartPinID")?.as_i64()?,
+                l.get("EndPinID")?.as_i64()?,
+            ))
+        })
+        .collect();
+    links.sort();
+    for (lid, from, to) in links {
+        let (Some(&(fi, false)), Some(&(ti, true))) = (owner.get(&from), owner.get(&to)) else {
+            return Err(ImportError(format!(
+                "link {lid} does not run from an output socket to an input socket"
+            )));
+        };
+        let (fnode, tnode) = (&nodes[fi], &nodes[ti]);
+        let (fmap, tmap) = (&maps[&fnode.id_name], &maps[&tnode.id_name]);
+        let fsock = &sockets[&from].identifier;
+        let tsock = &sockets[&to].identifier;
+        if tmap.node_type.is_none() {
+            continue; // into a removed node (storage, time gain)
+        }
+        let target = match tmap.inputs.get(tsock) {
+            Some(None) => continue, // a state or time socket the executor replaces
+            Some(Some(t)) => t.clone(),
+            None => return Err(sock_err(tnode, "linked input", tsock)),
+        };
+        if fmap.node_type.is_none() {
+            return Err(ImportError(format!(
+                "{} (node {}) input '{tsock}' is fed by {} (node {}), which cgnodes replaces by its frame executor; connect it to the node's own output instead",
+                tnode.id_name, tnode.id, fnode.id_name, fnode.id
+            )));
+        }
+        let source = match fmap.outputs.get(fsock) {
+            Some(Some(s)) => s.clone(),
+            _ => return Err(sock_err(fnode, "output", fsock)),
+        };
+        let fid = node_id(fnode);
+        let src = if let Some((s, helper_spec)) = source.split_once('>') {
+            let (htype, hin, hout) = helper(helper_spec)?;
+            let hid = format!("{fid}_{htype}");
+            let mut inputs = BTreeMap::new();
+            inputs.insert(hin.to_string(), LinkSpec::One(format!("{fid}.{s}")));
+            out_nodes.insert(
+                hid.clone(),
+                NodeSpec {
+                    node_type: htype.to_string(),
+                    params: BTreeMap::new(),
+                    inputs,
+                    meta: None,
+                },
+            );
+            format!("{hid}.{hout}")
+        } else {
+            format!("{fid}.{source}")
+        };
+        let tid = node_id(tnode);
+        let (tnode_id, tsocket) = if let Some((s, helper_spec)) = target.split_once('<') {
+            // A link into a helper-fed socket goes into the helper's input.
+            let (htype, hin, hout) = helper(helper_spec)?;
+            let hid = format!("{tid}_{htype}");
+            out_nodes.entry(hid.clone()).or_insert_with(|| NodeSpec {
+                node_type: htype.to_string(),
+                params: BTreeMap::new(),
+                inputs: BTreeMap::new(),
+                meta: None,
+            });
+            if let Some(t) = out_nodes.get_mut(&tid) {
+                t.inputs
+                    .insert(s.to_string(), LinkSpec::One(format!("{hid}.{hout}")));
+            }
+            (hid, hin.to_string())
+        } else {
+            (tid, target)
+        };
+        if let Some(t) = out_nodes.get_mut(&tnode_id) {
+            t.params.remove(&tsocket);
+            match t.inputs.remove(&tsocket) {
+                None => {
+                    t.inputs.insert(tsocket, LinkSpec::One(src));
+                }
+                Some(LinkSpec::One(prev)) => {
+                    t.inputs.insert(tsocket, LinkSpec::Many(vec![prev, src]));
+                }
+                Some(LinkSpec::Many(mut v)) => {
+                    v.push(src);
+                    t.inputs.insert(tsocket, LinkSpec::Many(v));
+                }
+            }
+        }
+    }
+    let graph = GraphFile {
+        format: crate::graph::FORMAT.to_string(),
+        version: crate::graph::VERSION,
+        nodes: out_nodes,
+        outputs: None,
+        meta: Some(serde_json::json!({
+            "imported_from": "Framework3D (USTC CG 2024) saved node tree"
+        })),
+    };
+    Ok((graph, missing))
+}
+
+/// Framework3D's `File Name` of Write USD as a path under the output directory: the file
+/// name only, with `.usda` added when it has no mesh extension.
+fn write_usd_path(p: &str) -> String {
+    let name = std::path::Path::new(p)
+        .file_name()
+        .and_then(|s| s.to_str())
+        .unwrap_or("output")
+        .to_string();
+    let lower = name.to_ascii_lowercase();
+    if [".usda", ".usd", ".obj", ".ply", ".off"]
+        .iter()
+        .any(|e| lower.ends_with(e))
+    {
+        name
+    } else {
+        format!("{name}.usda")
+    }
 }

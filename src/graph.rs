@@ -103,6 +103,11 @@ pub enum LoadError {
 /// Loads a graph file: a cgnodes graph of any supported version, or a Framework3D saved
 /// node tree (recognised by its `nodes_info`, `sockets_info` and `links_info` keys).
 pub fn load(path: &Path) -> Result<Graph, LoadError> {
+    load_with(path, &crate::f3d::Aliases::default())
+}
+
+/// Like `load`, with aliases mapping custom Framework3D node names (`--f3d-aliases`).
+pub fn load_with(path: &Path, aliases: &crate::f3d::Aliases) -> Result<Graph, LoadError> {
     let text = std::fs::read_to_string(path).map_err(|e| LoadError::Io {
         file: path.to_path_buf(),
         source: e,
@@ -113,11 +118,21 @@ pub fn load(path: &Path) -> Result<Graph, LoadError> {
     } else {
         dir
     };
-    parse(&text, path, &dir)
+    parse_with(&text, path, &dir, aliases)
 }
 
 /// Parses graph text; `file` labels errors, `dir` is where relative paths resolve.
 pub fn parse(text: &str, file: &Path, dir: &Path) -> Result<Graph, LoadError> {
+    parse_with(text, file, dir, &crate::f3d::Aliases::default())
+}
+
+/// Like `parse`, with aliases for custom Framework3D node names.
+pub fn parse_with(
+    text: &str,
+    file: &Path,
+    dir: &Path,
+    aliases: &crate::f3d::Aliases,
+) -> Result<Graph, LoadError> {
     let perr = |e: serde_json::Error| LoadError::Parse {
         file: file.to_path_buf(),
         line: e.line(),
@@ -138,8 +153,7 @@ pub fn parse(text: &str, file: &Path, dir: &Path) -> Result<Graph, LoadError> {
         .as_object()
         .ok_or_else(|| ferr("a graph file is a JSON object".into()))?;
     if crate::f3d::is_f3d(&raw) {
-        let spec = crate::f3d::import(&raw, &crate::f3d::Aliases::default())
-            .map_err(|e| ferr(e.to_string()))?;
+        let spec = crate::f3d::import(&raw, aliases).map_err(|e| ferr(e.to_string()))?;
         return Ok(Graph {
             file: file.to_path_buf(),
             dir: dir.to_path_buf(),

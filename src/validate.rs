@@ -193,6 +193,15 @@ pub struct ValidGraph {
 /// Validates `graph` against `registry`, applying `--set` overrides (node, socket, JSON value)
 /// first. Returns every error found.
 pub fn validate(graph: &Graph, registry: &Registry) -> Result<ValidGraph, Vec<GraphError>> {
+    validate_with(graph, registry, &[])
+}
+
+/// Like `validate`, also looking for input files in `asset_dirs` (`--assets`).
+pub fn validate_with(
+    graph: &Graph,
+    registry: &Registry,
+    asset_dirs: &[std::path::PathBuf],
+) -> Result<ValidGraph, Vec<GraphError>> {
     let file = graph.file.clone();
     let spec = &graph.spec;
     let mut errors = Vec::new();
@@ -281,6 +290,7 @@ pub fn validate(graph: &Graph, registry: &Registry) -> Result<ValidGraph, Vec<Gr
                             if let Value::String(p) = &v {
                                 let path = crate::node::FileEnv {
                                     graph_dir: graph.dir.clone(),
+                                    asset_dirs: asset_dirs.to_vec(),
                                     ..Default::default()
                                 }
                                 .input_path(p);

@@ -1,6 +1,23 @@
-//! param nodes.
+//! Parameterization nodes: boundary mapping, minimal surfaces, Tutte's embedding with three
+//! weightings, texture mapping, UV layout rendering and distortion metrics.
+
+pub mod boundary_map;
+pub mod laplacian;
+pub mod minimal_surface;
+pub mod nested_dissection;
+pub mod render_uv;
+pub mod texture_map;
+pub mod tutte;
+pub mod uv_metrics;
 
 use crate::registry::Registry;
 
 /// Registers the param nodes.
-pub fn register(_r: &mut Registry) {}
+pub fn register(r: &mut Registry) {
+    boundary_map::register(r);
+    minimal_surface::register(r);
+    render_uv::register(r);
+    texture_map::register(r);
+    tutte::register(r);
+    uv_metrics::register(r);
+}

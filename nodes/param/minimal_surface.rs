@@ -1,0 +1,150 @@
+//! `minimal_surface`: the discrete minimal surface spanning a mesh's boundary.
+//!
+//! Solves the Laplace equation `sum_j w_ij (x_i - x_j) = 0` for every interior vertex with the
+//! boundary vertices (all loops) fixed at their own positions: one linear step towards the
+//! minimal surface (Pinkall and Polthier 1993) with uniform weights (the membrane of the USTC
+//! course) or cotangent weights taken from the input geometry. The three coordinates share one
+//! sparse Cholesky factorization.
+
+use super::laplacian::{cotangent_weights, fan_triangles, solve_dirichlet_on, uniform_weights};
+use super::tutte::parse_weights;
+use super::tutte::TutteWeights;
+use crate::prelude::*;
+
+/// The minimal surface's vertex positions: interior vertices solved, boundary vertices (and
+/// vertices used by no face) kept. `weights` is `Uniform` or `Cotangent` (mean-value weights
+/// also work and use a sparse LU). Returns the positions and the number of edges with a
+/// negative cotangent weight.
+pub fn minimal_surface(
+    mesh: &Mesh,
+    weights: TutteWeights,
+) -> Result<(Vec<[f64; 3]>, usize), NodeError> {
+    let topo = mesh.topology();
+    if topo.boundary_loops.is_empty() {
+        return Err(NodeError::topology(
+            "mesh",
+            "mesh is closed (no boundary loop); a minimal surface needs a fixed boundary",
+        ));
+    }
+    if !topo.nonmanifold_edges.is_empty() {
+        return Err(NodeError::topology(
+            "mesh",
+            format!(
+                "mesh has {} edges with more than two faces; a manifold is needed",
+                topo.nonmanifold_edges.len()
+            ),
+        ));
+    }
+    let tris = fan_triangles(mesh);
+    let n = mesh.num_vertices();
+    let mut fixed: Vec<Option<[f64; 3]>> = vec![None; n];
+    let mut used = vec![false; n];
+    for t in &tris {
+        for &v in t {
+            used[v as usize] = true;
+        }
+    }
+    for v in 0..n {
+        if !used[v] {
+            fixed[v] = Some(mesh.positions[v]);
+        }
+    }
+    for lp in &topo.boundary_loops {
+        for &v in lp {
+            fixed[v as usize] = Some(mesh.positions[v as usize]);
+        }
+    }
+    let bad = |m: String| NodeError::invalid("mesh", m);
+    let (w, neg, sym) = match weights {
+        TutteWeights::Uniform => (uniform_weights(&tris), 0, true),
+        TutteWeights::Cotangent => {
+            let (w, neg) = cotangent_weights(&mesh.positions, &tris).map_err(bad)?;
+            (w, neg, true)
+        }
+        TutteWeights::MeanValue => (
+            super::laplacian::mean_value_weights(&mesh.positions, &tris).map_err(bad)?,
+            0,
+            false,
+        ),
+    };
+    let x = solve_dirichlet_on(&w, &fixed, sym, Some(&mesh.positions)).map_err(|e| {
+        NodeError::new(
+            e.kind,
+            format!("{} (every connected component needs a boundary)", e.message),
+        )
+    })?;
+    Ok((x, neg))
+}
+
+fn declare(b: &mut NodeBuilder) {
+    b.doc("Minimal surface: interior vertices from the Laplace equation, boundary fixed at its own positions.")
+        .category("param");
+    b.add_input::<Mesh>("mesh");
+    b.add_input::<String>("weights")
+        .choices(&["uniform", "cotangent"])
+        .doc("uniform (membrane) or cotangent weights of the input geometry.");
+    b.add_output::<Mesh>("mesh");
+}
+
+fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
+    let mesh: Arc<Mesh> = ctx.input("mesh")?;
+    let w = ctx.input::<String>("weights")?;
+    if w == "mean_value" {
+        return Err(NodeError::invalid("weights", "use uniform or cotangent"));
+    }
+    let (x, neg) = minimal_surface(&mesh, parse_weights(&w)?)?;
+    if w == "cotangent" {
+        ctx.log(format!(
+            "{neg} edges with negative cotangent weight (obtuse triangles)"
+        ));
+    }
+    let mut out = (*mesh).clone();
+    out.positions = x;
+    out.normals = None;
+    ctx.set_output("mesh", out);
+    Ok(())
+}
+
+/// Registers `minimal_surface`.
+pub fn register(r: &mut Registry) {
+    r.add("minimal_surface", declare, execute);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bumpy_disk_with_planar_boundary_becomes_planar() {
+        // a grid disk on z = x + 2y with interior vertices lifted: the solution is planar again
+        let n = 8;
+        let mut p = Vec::new();
+        for j in 0..=n {
+            for i in 0..=n {
+                let (x, y) = (i as f64 / n as f64, j as f64 / n as f64);
+                let inner = i > 0 && j > 0 && i < n && j < n;
+                let bump = if inner {
+                    ((i * 7 + j * 3) % 5) as f64 * 0.1
+                } else {
+                    0.0
+                };
+                p.push([x, y, x + 2.0 * y + bump]);
+            }
+        }
+        let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
+        let mut t = Vec::new();
+        for j in 0..n {
+            for i in 0..n {
+                t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+                t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+            }
+        }
+        let m = Mesh::from_triangles(p, &t).unwrap();
+        for w in [TutteWeights::Uniform, TutteWeights::Cotangent] {
+            let (x, _) = minimal_surface(&m, w).unwrap();
+            for q in &x {
+                assert!((q[2] - q[0] - 2.0 * q[1]).abs() < 1e-10, "{w:?} {q:?}");
+            }
+        }
+    }
+}

@@ -6,7 +6,7 @@
 //! per second, with the same scene under 1x sampling without shadows as the baseline
 //! measured in the same run, and 4x supersampling for comparison.
 
-use cgnodes::nodes::mesh::load::load_obj;
+use cgnodes::nodes::mesh::load::{load_mesh, LoadOptions};
 use cgnodes::nodes::render::primitive::plane_mesh;
 use cgnodes::nodes::render::raster::{render, AntiAliasing, RasterOptions};
 use cgnodes::types::*;
@@ -32,7 +32,7 @@ fn cpu_seconds() -> f64 {
 fn main() {
     let path = std::env::var("CGNODES_IGEA")
         .unwrap_or_else(|_| "/work/shared/assets/meshes/igea_front.obj".into());
-    let mesh = match load_obj(std::path::Path::new(&path)) {
+    let mesh = match load_mesh(std::path::Path::new(&path), &LoadOptions::default()) {
         Ok(m) => m,
         Err(e) => {
             eprintln!("cannot load {path}: {e}");

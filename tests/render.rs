@@ -91,7 +91,11 @@ fn slanted_triangle_depth_is_perspective_correct() {
         let t = 3.0 / (1.0 - y0 / 2.0);
         let d = px(&out.depth, i, j);
         assert_eq!(d[3], 1.0);
-        assert!((d[0] as f64 - t).abs() < 1e-4, "pixel {i},{j}: {} vs {t}", d[0]);
+        assert!(
+            (d[0] as f64 - t).abs() < 1e-4,
+            "pixel {i},{j}: {} vs {t}",
+            d[0]
+        );
         let p = px(&out.position, i, j);
         assert!((p[0] as f64 - x0 * t).abs() < 1e-4 && (p[1] as f64 - y0 * t).abs() < 1e-4);
     }
@@ -152,7 +156,11 @@ fn lambert_lit_plane_matches_the_formula() {
         for k in 0..3 {
             let dir_e = 2.0 * [1.0, 1.0, 0.5][k] * s;
             let want = base[k] * (0.2 + dir_e + point);
-            assert!((c[k] as f64 - want).abs() < 1e-5, "{i},{j}[{k}]: {} vs {want}", c[k]);
+            assert!(
+                (c[k] as f64 - want).abs() < 1e-5,
+                "{i},{j}[{k}]: {} vs {want}",
+                c[k]
+            );
         }
     }
 }
@@ -386,7 +394,10 @@ fn mipmaps_keep_a_far_checkerboard_from_aliasing() {
             }
         }
         let m = v.iter().sum::<f64>() / v.len() as f64;
-        (m, (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / v.len() as f64).sqrt())
+        (
+            m,
+            (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / v.len() as f64).sqrt(),
+        )
     };
     let with = render(&scene, &cam, &opts(true)).unwrap();
     let without = render(&scene, &cam, &opts(false)).unwrap();
@@ -446,7 +457,10 @@ fn antialiasing_blends_edges_and_is_deterministic() {
         let q = p[0] as f64 / 0.8 * 16.0;
         assert!((q - q.round()).abs() < 1e-4);
     }
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
     let b = pool.install(|| render(&scene, &cam, &o).unwrap());
     assert_eq!(a.color.pixels, b.color.pixels);
     // Supersampling agrees with multisampling on a flat unlit colour.
@@ -463,8 +477,8 @@ fn golden_scene() -> (Scene, Camera) {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
     let tex_bytes = std::fs::read(root.join("assets/course/green_checkerboard.png")).unwrap();
     let tex = decode_image(&tex_bytes, ColorSpace::Srgb).unwrap();
-    let bunny = cgnodes::nodes::mesh::load::load_obj(&root.join("assets/meshes/bunny_closed.obj"))
-        .unwrap();
+    let bunny =
+        cgnodes::nodes::mesh::load::load_obj(&root.join("assets/meshes/bunny_closed.obj")).unwrap();
     // Scale the bunny (about 0.15 tall) up 10x and stand it on y = 0.
     let (lo, _) = bunny.bounds();
     let mut b = bunny.clone();
@@ -525,7 +539,8 @@ fn golden_image_matches_within_tolerance() {
     let out = render(&scene, &cam, &opts).unwrap();
     let png = encode_image(&out.color, ImageFileFormat::Png, 0.0, 0.0).unwrap();
     let got = decode_image(&png, ColorSpace::Raw).unwrap();
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/render/golden_raster.png");
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/render/golden_raster.png");
     if std::env::var_os("CGNODES_BLESS").is_some() {
         std::fs::write(&path, &png).unwrap();
     }
@@ -544,5 +559,8 @@ fn golden_image_matches_within_tolerance() {
     }
     let mean = sum / (3.0 * got.pixels.len() as f64);
     // Floating-point differences across platforms move a few edge pixels by a step or two.
-    assert!(mean < 1.0 / 255.0 && bad < 30, "mean {mean}, {bad} channels off by > 8/255");
+    assert!(
+        mean < 1.0 / 255.0 && bad < 30,
+        "mean {mean}, {bad} channels off by > 8/255"
+    );
 }

@@ -341,7 +341,7 @@ fn checker(n: u32, cells: u32) -> Image {
     let mut img = Image::new(n, n, [0.0, 0.0, 0.0, 1.0]);
     for y in 0..n {
         for x in 0..n {
-            if (x * cells / n + y * cells / n) % 2 == 0 {
+            if (x * cells / n + y * cells / n).is_multiple_of(2) {
                 img.set(x, y, [1.0; 4]);
             }
         }
@@ -477,8 +477,11 @@ fn golden_scene() -> (Scene, Camera) {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
     let tex_bytes = std::fs::read(root.join("assets/course/green_checkerboard.png")).unwrap();
     let tex = decode_image(&tex_bytes, ColorSpace::Srgb).unwrap();
-    let bunny =
-        cgnodes::nodes::mesh::load::load_obj(&root.join("assets/meshes/bunny_closed.obj")).unwrap();
+    let bunny = cgnodes::nodes::mesh::load::load_mesh(
+        &root.join("assets/meshes/bunny_closed.obj"),
+        &Default::default(),
+    )
+    .unwrap();
     // Scale the bunny (about 0.15 tall) up 10x and stand it on y = 0.
     let (lo, _) = bunny.bounds();
     let mut b = bunny.clone();

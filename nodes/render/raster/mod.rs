@@ -448,8 +448,8 @@ pub fn render(scene: &Scene, cam: &Camera, opts: &RasterOptions) -> Result<Rende
                                 if opts.aa == AntiAliasing::Supersampling {
                                     if let Some(sf) = sh.surface(id as usize, xc, yc, 1.0, true) {
                                         count += 1;
-                                        for c in 0..3 {
-                                            acc[c] += sf.color[c];
+                                        for (a, c) in acc.iter_mut().zip(sf.color) {
+                                            *a += c;
                                         }
                                     }
                                 }
@@ -482,8 +482,8 @@ pub fn render(scene: &Scene, cam: &Camera, opts: &RasterOptions) -> Result<Rende
                             if opts.aa == AntiAliasing::Multisampling {
                                 if let Some(sf) = sh.surface(gr.0 as usize, x, y, step, true) {
                                     count += 1;
-                                    for c in 0..3 {
-                                        acc[c] += sf.color[c] * gr.1 as f64;
+                                    for (a, c) in acc.iter_mut().zip(sf.color) {
+                                        *a += c * gr.1 as f64;
                                     }
                                     if gi == nearest {
                                         pass_surf = Some(sf);
@@ -493,8 +493,8 @@ pub fn render(scene: &Scene, cam: &Camera, opts: &RasterOptions) -> Result<Rende
                                 pass_surf = sh.surface(gr.0 as usize, x, y, step, false);
                             }
                         }
-                        for c in 0..3 {
-                            acc[c] += opts.background[c] * empty as f64;
+                        for (a, c) in acc.iter_mut().zip(opts.background) {
+                            *a += c * empty as f64;
                         }
                         crow[px] = [
                             (acc[0] / n_samples) as f32,

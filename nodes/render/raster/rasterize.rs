@@ -54,7 +54,7 @@ pub fn setup_triangle(
     let c12 = cross(h[1], h[2]);
     let det = dot(h[0], c12);
     let scale = (dot(h[0], h[0]) * dot(h[1], h[1]) * dot(h[2], h[2])).sqrt();
-    if !(det.abs() > 1e-14 * scale) || !det.is_finite() {
+    if det.is_nan() || det.abs() <= 1e-14 * scale || !det.is_finite() {
         return None;
     }
     let inv = [
@@ -302,8 +302,8 @@ mod tests {
         let c = [1.0 / 3.0, 1.0 / 3.0, 7.0 / 3.0];
         let (x, y) = (8.0 + 10.0 * c[0] / c[2], 8.0 - 10.0 * c[1] / c[2]);
         let b = barycentric(&t.inv, x, y).unwrap();
-        for k in 0..3 {
-            assert!((b[k] - 1.0 / 3.0).abs() < 1e-12);
+        for bk in b {
+            assert!((bk - 1.0 / 3.0).abs() < 1e-12);
         }
         // Screen-space (affine) interpolation would give a different depth here.
         let z = b[0] * 1.0 + b[1] * 2.0 + b[2] * 4.0;
@@ -317,7 +317,7 @@ mod tests {
         let h = v.map(|p| [8.0 * p[2] + 4.0 * p[0], 8.0 * p[2] - 4.0 * p[1], p[2]]);
         let t = setup_triangle(h, v.map(|p| p[2]), 0.1, 16, 16);
         let r = rasterize(&[t], 16, 16, 0.1, 100.0, true);
-        assert!(r.ids.iter().any(|&i| i == 0));
+        assert!(r.ids.contains(&0));
         assert!(r.depth.iter().all(|&d| d == f32::INFINITY || d >= 0.1));
     }
 

@@ -192,6 +192,7 @@ pub fn point_shadow_map(tris: &[[[f64; 3]; 3]], pos: [f64; 3], res: u32, near: f
 /// Percentage-closer filter over a face: the fraction of taps around pixel `(x, y)` whose
 /// stored depth is not nearer than `z - bias`. Taps off the map count as lit
 /// (directional) or clamp to the edge (cube faces).
+#[allow(clippy::too_many_arguments)]
 fn pcf(depth: &[f32], res: u32, x: f64, y: f64, z: f64, bias: f64, r: i64, clamp: bool) -> f64 {
     let (cx, cy) = (x.floor() as i64, y.floor() as i64);
     let n = res as i64;

@@ -56,18 +56,25 @@ impl MipTexture {
     /// Builds the pyramid by 2x2 box filtering down to 1x1 (only level 0 when
     /// `mipmaps` is false). Odd sizes round down; the last row or column folds in.
     pub fn new(img: &Image, mipmaps: bool) -> MipTexture {
-        let mut levels = vec![Level {
-            w: img.width.max(1) as usize,
-            h: img.height.max(1) as usize,
-            px: if img.pixels.is_empty() {
-                vec![[1.0; 4]]
-            } else {
-                img.pixels.clone()
-            },
-        }];
-        while mipmaps {
+        let (w, h) = (img.width as usize, img.height as usize);
+        let level0 = if w > 0 && h > 0 && img.pixels.len() == w * h {
+            Level {
+                w,
+                h,
+                px: img.pixels.clone(),
+            }
+        } else {
+            // A malformed image samples as white rather than reading out of bounds.
+            Level {
+                w: 1,
+                h: 1,
+                px: vec![[1.0; 4]],
+            }
+        };
+        let mut levels = vec![level0];
+        loop {
             let l = levels.last().expect("level 0 exists");
-            if l.w == 1 && l.h == 1 {
+            if !mipmaps || (l.w == 1 && l.h == 1) {
                 break;
             }
             let (w, h) = ((l.w / 2).max(1), (l.h / 2).max(1));

@@ -6,7 +6,9 @@ pub mod image_io;
 pub mod light;
 pub mod material;
 pub mod primitive;
+pub mod raster;
 pub mod scene;
+pub mod uv_project;
 
 use crate::registry::Registry;
 
@@ -18,4 +20,6 @@ pub fn register(r: &mut Registry) {
     scene::register(r);
     image_io::register(r);
     primitive::register(r);
+    raster::register(r);
+    uv_project::register(r);
 }

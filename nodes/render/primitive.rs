@@ -32,15 +32,31 @@ pub fn plane_mesh(size: f64, center: [f64; 3], n: usize, uv_scale: f64) -> Mesh 
     }
     let nv = pos.len();
     let mut m = Mesh::from_triangles(pos, &tris).expect("valid indices by construction");
-    m.uvs = Some(Attribute {
-        domain: Domain::Vertex,
-        values: uvs,
-    });
     m.normals = Some(Attribute {
         domain: Domain::Vertex,
         values: vec![[0.0, 1.0, 0.0]; nv],
     });
+    m.uvs = Some(Attribute {
+        domain: Domain::Vertex,
+        values: uvs,
+    });
     m
+}
+
+/// Turns a Y-up mesh made by `plane_mesh` Z-up: rotates it by +90 degrees about the X
+/// axis through `center`, so the normal +Y becomes +Z (for Z-up scenes such as USD's).
+pub fn y_up_to_z_up(m: &mut Mesh, center: [f64; 3]) {
+    let rot = |p: [f64; 3]| [p[0], -p[2], p[1]];
+    for p in &mut m.positions {
+        let d = [p[0] - center[0], p[1] - center[1], p[2] - center[2]];
+        let r = rot(d);
+        *p = [center[0] + r[0], center[1] + r[1], center[2] + r[2]];
+    }
+    if let Some(n) = &mut m.normals {
+        for v in &mut n.values {
+            *v = rot(*v);
+        }
+    }
 }
 
 fn declare(b: &mut NodeBuilder) {
@@ -60,6 +76,9 @@ fn declare(b: &mut NodeBuilder) {
     b.add_input::<f64>("uv_scale")
         .default(1.0)
         .doc("UVs run from 0 to uv_scale (texture repeats).");
+    b.add_input::<String>("up")
+        .choices(&["y", "z"])
+        .doc("Axis the plane faces (y: XZ plane; z: XY plane, for Z-up scenes).");
     b.add_output::<Mesh>("mesh");
 }
 
@@ -77,7 +96,12 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     if !uv_scale.is_finite() || center.iter().any(|c| !c.is_finite()) {
         return Err(NodeError::invalid("center", "values must be finite"));
     }
-    ctx.set_output("mesh", plane_mesh(size, center, n as usize, uv_scale));
+    let up: String = ctx.input("up")?;
+    let mut m = plane_mesh(size, center, n as usize, uv_scale);
+    if up == "z" {
+        y_up_to_z_up(&mut m, center);
+    }
+    ctx.set_output("mesh", m);
     Ok(())
 }
 
@@ -102,6 +126,10 @@ mod tests {
             let n = super::super::camera::cross(e1, e2);
             assert!(n[1] > 0.0 && n[0].abs() < 1e-12 && n[2].abs() < 1e-12);
         }
+        let mut z = m.clone();
+        y_up_to_z_up(&mut z, [0.0, 1.0, 0.0]);
+        assert_eq!(z.bounds(), ([-1.0, 0.0, 1.0], [1.0, 2.0, 1.0]));
+        assert_eq!(z.normals.as_ref().unwrap().values[0], [0.0, 0.0, 1.0]);
         let uv = &m.uvs.as_ref().unwrap().values;
         // UV u follows x, v follows -z.
         for (p, t) in m.positions.iter().zip(uv) {

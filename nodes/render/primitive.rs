@@ -128,7 +128,8 @@ mod tests {
         }
         let mut z = m.clone();
         y_up_to_z_up(&mut z, [0.0, 1.0, 0.0]);
-        assert_eq!(z.bounds(), ([-1.0, 0.0, 1.0], [1.0, 2.0, 1.0]));
+        // Rotated about the X axis through the centre: the XY plane at z = center.z.
+        assert_eq!(z.bounds(), ([-1.0, 0.0, 0.0], [1.0, 2.0, 0.0]));
         assert_eq!(z.normals.as_ref().unwrap().values[0], [0.0, 0.0, 1.0]);
         let uv = &m.uvs.as_ref().unwrap().values;
         // UV u follows x, v follows -z.

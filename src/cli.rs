@@ -419,6 +419,7 @@ fn cmd_run(registry: &Registry, args: RunArgs) -> i32 {
             allow_write_anywhere: args.allow_write_anywhere,
         },
         progress,
+        measure_memory: args.profile || args.profile_json.is_some(),
     };
     let mut code = 0;
     let mut profile = Vec::new();

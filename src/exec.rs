@@ -22,6 +22,8 @@ pub struct RunOptions {
     pub files: FileEnv,
     /// Progress callback for long nodes.
     pub progress: Option<ProgressFn>,
+    /// Record resident memory after each node (for `--profile`; costs a /proc read per node).
+    pub measure_memory: bool,
 }
 
 /// What happened to one node in a run.
@@ -266,7 +268,9 @@ impl Executor {
         };
         let result = self.evaluate(sh, i, &mut report);
         report.ms = t0.elapsed().as_secs_f64() * 1e3;
-        report.rss_kib = read_status_kib("VmRSS:");
+        if sh.opts.measure_memory {
+            report.rss_kib = read_status_kib("VmRSS:");
+        }
         *sh.slots[i].lock().unwrap_or_else(|p| p.into_inner()) = Some(result);
         *sh.reports[i].lock().unwrap_or_else(|p| p.into_inner()) = Some(report);
         for &d in &sh.dependents[i] {

@@ -38,8 +38,10 @@ impl Aabb {
     #[inline]
     pub fn union(&self, o: &Aabb) -> Aabb {
         let mut r = *self;
-        r.grow(o.min);
-        r.grow(o.max);
+        for k in 0..3 {
+            r.min[k] = r.min[k].min(o.min[k]);
+            r.max[k] = r.max[k].max(o.max[k]);
+        }
         r
     }
 
@@ -145,16 +147,33 @@ impl RayPre {
 /// `(t, b1, b2)` with `0 < t < tmax`; edges shared by two triangles are never missed.
 #[inline(always)]
 pub fn intersect_triangle(r: &RayPre, tri: &[V3; 3], tmax: f32) -> Option<(f32, f32, f32)> {
+    match (r.kx, r.ky, r.kz) {
+        (1, 2, 0) => tri_test::<1, 2, 0>(r, tri, tmax),
+        (2, 1, 0) => tri_test::<2, 1, 0>(r, tri, tmax),
+        (2, 0, 1) => tri_test::<2, 0, 1>(r, tri, tmax),
+        (0, 2, 1) => tri_test::<0, 2, 1>(r, tri, tmax),
+        (0, 1, 2) => tri_test::<0, 1, 2>(r, tri, tmax),
+        _ => tri_test::<1, 0, 2>(r, tri, tmax),
+    }
+}
+
+/// The test with the axis permutation fixed at compile time (no indexed loads).
+#[inline(always)]
+fn tri_test<const KX: usize, const KY: usize, const KZ: usize>(
+    r: &RayPre,
+    tri: &[V3; 3],
+    tmax: f32,
+) -> Option<(f32, f32, f32)> {
     let a = sub(tri[0], r.org);
     let b = sub(tri[1], r.org);
     let c = sub(tri[2], r.org);
     // Shear and scale the vertices (eq. 5).
-    let ax = a[r.kx] - r.sx * a[r.kz];
-    let ay = a[r.ky] - r.sy * a[r.kz];
-    let bx = b[r.kx] - r.sx * b[r.kz];
-    let by = b[r.ky] - r.sy * b[r.kz];
-    let cx = c[r.kx] - r.sx * c[r.kz];
-    let cy = c[r.ky] - r.sy * c[r.kz];
+    let ax = a[KX] - r.sx * a[KZ];
+    let ay = a[KY] - r.sy * a[KZ];
+    let bx = b[KX] - r.sx * b[KZ];
+    let by = b[KY] - r.sy * b[KZ];
+    let cx = c[KX] - r.sx * c[KZ];
+    let cy = c[KY] - r.sy * c[KZ];
     // Scaled barycentrics (2-D edge functions).
     let mut u = cx * by - cy * bx;
     let mut v = ax * cy - ay * cx;
@@ -175,9 +194,9 @@ pub fn intersect_triangle(r: &RayPre, tri: &[V3; 3], tmax: f32) -> Option<(f32, 
     if det == 0.0 {
         return None;
     }
-    let az = r.sz * a[r.kz];
-    let bz = r.sz * b[r.kz];
-    let cz = r.sz * c[r.kz];
+    let az = r.sz * a[KZ];
+    let bz = r.sz * b[KZ];
+    let cz = r.sz * c[KZ];
     let t = u * az + v * bz + w * cz;
     // Sign-aware depth test without dividing (section 3.4).
     if det > 0.0 {
@@ -199,9 +218,10 @@ fn intersect_aabb(r: &RayPre, b: &Aabb, tmax: f32) -> Option<f32> {
     for k in 0..3 {
         let ta = (b.min[k] - r.org[k]) * r.inv[k];
         let tb = (b.max[k] - r.org[k]) * r.inv[k];
-        // min/max ignore NaN (0 * inf), keeping the previous bound.
-        t0 = t0.max(ta.min(tb));
-        t1 = t1.min(ta.max(tb));
+        // Plain comparisons (minss/maxss): a NaN from 0 * inf keeps the previous bound.
+        let (lo, hi) = if ta < tb { (ta, tb) } else { (tb, ta) };
+        t0 = if lo > t0 { lo } else { t0 };
+        t1 = if hi < t1 { hi } else { t1 };
     }
     // Widen slightly so round-off in the slab test cannot cull a hit on a box face
     // (Ize 2013, "Robust BVH Ray Traversal": multiply by 1 + 2 gamma(3)).
@@ -279,8 +299,8 @@ fn build_rec(info: &[PrimInfo], mut ids: Vec<u32>) -> BuildNode {
         }
     }
     let leaf_cost = bounds.half_area() * n as f32;
-    // Traversal cost 1 against intersection cost 1 per triangle, relative to the parent.
-    let split_cost = bounds.half_area() + best.0;
+    // Traversal cost 1/8 of a triangle test, as in PBRT (Pharr et al., 4th ed., 7.3.2).
+    let split_cost = 0.125 * bounds.half_area() + best.0;
     if best.0.is_infinite() {
         // All centroids coincide: a leaf if small, else split the list in half.
         if n <= LEAF_MAX {
@@ -321,12 +341,14 @@ impl Bvh {
                 for p in t {
                     b.grow(*p);
                 }
+                // The vertex centroid (not the box centre) tells apart the two halves of
+                // a quad, whose boxes coincide.
                 PrimInfo {
                     bounds: b,
                     centroid: [
-                        0.5 * (b.min[0] + b.max[0]),
-                        0.5 * (b.min[1] + b.max[1]),
-                        0.5 * (b.min[2] + b.max[2]),
+                        (t[0][0] + t[1][0] + t[2][0]) / 3.0,
+                        (t[0][1] + t[1][1] + t[2][1]) / 3.0,
+                        (t[0][2] + t[1][2] + t[2][2]) / 3.0,
                     ],
                 }
             })
@@ -401,20 +423,38 @@ impl Bvh {
             return None;
         }
         let r = RayPre::new(org, dir);
+        match (r.kx, r.ky, r.kz) {
+            (1, 2, 0) => self.traverse_k::<ANY, 1, 2, 0>(&r, tmax),
+            (2, 1, 0) => self.traverse_k::<ANY, 2, 1, 0>(&r, tmax),
+            (2, 0, 1) => self.traverse_k::<ANY, 2, 0, 1>(&r, tmax),
+            (0, 2, 1) => self.traverse_k::<ANY, 0, 2, 1>(&r, tmax),
+            (0, 1, 2) => self.traverse_k::<ANY, 0, 1, 2>(&r, tmax),
+            _ => self.traverse_k::<ANY, 1, 0, 2>(&r, tmax),
+        }
+    }
+
+    fn traverse_k<const ANY: bool, const KX: usize, const KY: usize, const KZ: usize>(
+        &self,
+        r: &RayPre,
+        tmax: f32,
+    ) -> Option<Hit> {
+        let r = *r;
         let mut best: Option<Hit> = None;
         let mut tmax = tmax;
-        let mut stack = [0u32; 64];
+        // Stack of (node, entry distance): a popped node is skipped once a closer hit has
+        // been found than its entry distance.
+        let mut stack = [(0u32, 0.0f32); 96];
         let mut sp = 0usize;
         let mut node = 0usize;
         if intersect_aabb(&r, &self.nodes[0].bounds, tmax).is_none() {
             return None;
         }
-        loop {
+        'outer: loop {
             let n = &self.nodes[node];
             if n.count > 0 {
                 let s = n.first as usize;
                 for i in s..s + n.count as usize {
-                    if let Some((t, u, v)) = intersect_triangle(&r, &self.tris[i], tmax) {
+                    if let Some((t, u, v)) = tri_test::<KX, KY, KZ>(&r, &self.tris[i], tmax) {
                         tmax = t;
                         best = Some(Hit {
                             t,
@@ -433,9 +473,13 @@ impl Bvh {
                 let tb = intersect_aabb(&r, &self.nodes[a + 1].bounds, tmax);
                 match (ta, tb) {
                     (Some(x), Some(y)) => {
-                        let (near, far) = if x <= y { (a, a + 1) } else { (a + 1, a) };
+                        let (near, far, tfar) = if x <= y {
+                            (a, a + 1, y)
+                        } else {
+                            (a + 1, a, x)
+                        };
                         if sp < stack.len() {
-                            stack[sp] = far as u32;
+                            stack[sp] = (far as u32, tfar);
                             sp += 1;
                         }
                         node = near;
@@ -452,11 +496,15 @@ impl Bvh {
                     (None, None) => {}
                 }
             }
-            if sp == 0 {
-                break;
+            while sp > 0 {
+                sp -= 1;
+                let (n, t) = stack[sp];
+                if t <= tmax {
+                    node = n as usize;
+                    continue 'outer;
+                }
             }
-            sp -= 1;
-            node = stack[sp] as usize;
+            break;
         }
         best
     }
@@ -558,6 +606,17 @@ mod tests {
                 "ray {i} slipped through the mesh"
             );
         }
+    }
+
+    #[test]
+    fn empty_box_is_the_union_identity() {
+        let b = Aabb {
+            min: [0.0, 1.0, 2.0],
+            max: [1.0, 2.0, 3.0],
+        };
+        assert_eq!(Aabb::EMPTY.union(&b), b);
+        assert_eq!(b.union(&Aabb::EMPTY), b);
+        assert_eq!(Aabb::EMPTY.union(&Aabb::EMPTY).half_area(), 0.0);
     }
 
     #[test]

@@ -7,6 +7,7 @@ pub mod path;
 pub mod render_scene;
 pub mod sampling;
 pub mod scene_load;
+pub mod whitted;
 
 use crate::registry::Registry;
 
@@ -14,4 +15,5 @@ use crate::registry::Registry;
 pub fn register(r: &mut Registry) {
     path::register(r);
     scene_load::register(r);
+    whitted::register(r);
 }

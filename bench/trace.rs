@@ -99,8 +99,12 @@ fn svg_chart(rows: &[Row], path: &Path) {
     }
     let (w, h, m) = (640.0, 420.0, 60.0);
     let lx = |t: f64| t.log10();
-    let (t0, t1) = pts.iter().fold((f64::MAX, f64::MIN), |a, p| (a.0.min(lx(p.1)), a.1.max(lx(p.1))));
-    let (e0, e1) = pts.iter().fold((f64::MAX, f64::MIN), |a, p| (a.0.min(lx(p.2)), a.1.max(lx(p.2))));
+    let (t0, t1) = pts.iter().fold((f64::MAX, f64::MIN), |a, p| {
+        (a.0.min(lx(p.1)), a.1.max(lx(p.1)))
+    });
+    let (e0, e1) = pts.iter().fold((f64::MAX, f64::MIN), |a, p| {
+        (a.0.min(lx(p.2)), a.1.max(lx(p.2)))
+    });
     let (t0, t1, e0, e1) = (t0.floor(), t1.ceil(), e0.floor(), e1.ceil());
     let sx = |t: f64| m + (lx(t) - t0) / (t1 - t0) * (w - 2.0 * m);
     let sy = |e: f64| h - m - (lx(e) - e0) / (e1 - e0) * (h - 2.0 * m);
@@ -126,11 +130,22 @@ fn svg_chart(rows: &[Row], path: &Path) {
             .filter(|p| p.0 == *name)
             .map(|p| format!("{:.1},{:.1}", sx(p.1), sy(p.2)))
             .collect();
-        s += &format!("<polyline fill='none' stroke='{c}' stroke-width='2' points='{}'/>\n", line.join(" "));
+        s += &format!(
+            "<polyline fill='none' stroke='{c}' stroke-width='2' points='{}'/>\n",
+            line.join(" ")
+        );
         for p in pts.iter().filter(|p| p.0 == *name) {
-            s += &format!("<circle cx='{:.1}' cy='{:.1}' r='3' fill='{c}'/>\n", sx(p.1), sy(p.2));
+            s += &format!(
+                "<circle cx='{:.1}' cy='{:.1}' r='3' fill='{c}'/>\n",
+                sx(p.1),
+                sy(p.2)
+            );
         }
-        s += &format!("<text x='{}' y='{}' fill='{c}'>{name}</text>\n", w - m - 150.0, m + 16.0 * (i as f64 + 1.0));
+        s += &format!(
+            "<text x='{}' y='{}' fill='{c}'>{name}</text>\n",
+            w - m - 150.0,
+            m + 16.0 * (i as f64 + 1.0)
+        );
     }
     s += "</svg>\n";
     std::fs::write(path, s).unwrap();
@@ -138,9 +153,15 @@ fn svg_chart(rows: &[Row], path: &Path) {
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
-    let get = |k: &str| args.iter().position(|a| a == k).and_then(|i| args.get(i + 1).cloned());
+    let get = |k: &str| {
+        args.iter()
+            .position(|a| a == k)
+            .and_then(|i| args.get(i + 1).cloned())
+    };
     let quick = args.iter().any(|a| a == "--quick");
-    let ref_spp: u32 = get("--ref-spp").and_then(|s| s.parse().ok()).unwrap_or(2048);
+    let ref_spp: u32 = get("--ref-spp")
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(2048);
     let spps: Vec<u32> = get("--spp")
         .map(|s| s.split(',').filter_map(|x| x.parse().ok()).collect())
         .unwrap_or(vec![4, 16, 64, 256]);
@@ -162,7 +183,10 @@ fn main() {
     let t = Instant::now();
     let sc = RenderScene::new(&scene).unwrap();
     let cam = PinholeCamera::new(&cam).unwrap();
-    println!("scene flatten + BVH: {:.3} ms", t.elapsed().as_secs_f64() * 1e3);
+    println!(
+        "scene flatten + BVH: {:.3} ms",
+        t.elapsed().as_secs_f64() * 1e3
+    );
     let settings = |spp: u32, seed: u64| PathSettings {
         spp,
         max_depth: 8,
@@ -206,7 +230,10 @@ fn main() {
     // Mean squared noise of the reference itself, removed from every measured RMSE.
     let ref_noise2 = mean_masked(&ref_var);
     let corrected = |e: f64| (e * e - ref_noise2).max(0.0).sqrt();
-    println!("reference noise (rms, light masked): {:.5}", ref_noise2.sqrt());
+    println!(
+        "reference noise (rms, light masked): {:.5}",
+        ref_noise2.sqrt()
+    );
     let mut rows = Vec::new();
     for &spp in &spps {
         let (img, _, secs, cpu) = run(spp, 1);
@@ -254,7 +281,10 @@ fn main() {
     for r in rows.iter().filter(|r| r.who != "cgnodes") {
         if let Some(e) = r.rmse {
             let ours: Vec<&Row> = rows.iter().filter(|q| q.who == "cgnodes").collect();
-            if let Some(w) = ours.windows(2).find(|w| w[0].secs <= r.secs && r.secs <= w[1].secs) {
+            if let Some(w) = ours
+                .windows(2)
+                .find(|w| w[0].secs <= r.secs && r.secs <= w[1].secs)
+            {
                 let f = (r.secs.ln() - w[0].secs.ln()) / (w[1].secs.ln() - w[0].secs.ln());
                 let eo = (w[0].rmse.unwrap().ln() * (1.0 - f) + w[1].rmse.unwrap().ln() * f).exp();
                 println!(

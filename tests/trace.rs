@@ -240,7 +240,11 @@ fn ref_stats() -> serde_json::Value {
 
 fn triple(v: &serde_json::Value) -> [f64; 3] {
     let a = v.as_array().unwrap();
-    [a[0].as_f64().unwrap(), a[1].as_f64().unwrap(), a[2].as_f64().unwrap()]
+    [
+        a[0].as_f64().unwrap(),
+        a[1].as_f64().unwrap(),
+        a[2].as_f64().unwrap(),
+    ]
 }
 
 fn check_cornell(filter: Filter, key: &str, mean_key: &str) {

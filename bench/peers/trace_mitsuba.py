@@ -24,16 +24,22 @@ import mitsuba as mi  # noqa: E402
 ap = argparse.ArgumentParser()
 ap.add_argument("--spp", default="4,16,64")
 ap.add_argument("--variants", default="scalar_rgb,llvm_ad_rgb")
+ap.add_argument("--probe", default=None, help=argparse.SUPPRESS)
 ap.add_argument("--out", default=os.path.join(os.path.dirname(__file__), "..", "..", "target", "trace_bench"))
 a = ap.parse_args()
+if a.probe:  # child process: does this variant render at all? (LLVM may abort the process)
+    mi.set_variant(a.probe)
+    mi.render(mi.load_dict(mi.cornell_box()), spp=1)
+    sys.exit(0)
 os.makedirs(a.out, exist_ok=True)
 runs = []
 for variant in a.variants.split(","):
-    try:
-        mi.set_variant(variant)
-    except Exception as e:  # noqa: BLE001
-        print(f"{variant}: unavailable ({e})")
+    probe = subprocess.run([sys.executable, __file__, "--probe", variant], capture_output=True, text=True)
+    if probe.returncode != 0:
+        err = (probe.stderr.strip().splitlines() or ["?"])[0]
+        print(f"{variant}: unavailable ({err})")
         continue
+    mi.set_variant(variant)
     d = mi.cornell_box()
     d["sensor"]["film"]["rfilter"] = {"type": "box"}
     scene = mi.load_dict(d)
@@ -49,5 +55,5 @@ for variant in a.variants.split(","):
         mpaths = 256 * 256 * spp / secs / 1e6
         print(f"{variant} box {spp:5d} spp: {secs:7.3f} s, {mpaths:.2f} Mpaths/s")
         runs.append({"variant": variant, "spp": spp, "seconds": secs, "exr": name})
-with open(os.path.join(a.out, "mitsuba.json"), "w") as f:
-    json.dump({"mitsuba": mi.__version__ if hasattr(mi, "__version__") else "?", "runs": runs}, f, indent=1)
+        with open(os.path.join(a.out, "mitsuba.json"), "w") as f:
+            json.dump({"mitsuba": getattr(mi, "__version__", "?"), "runs": runs}, f, indent=1)

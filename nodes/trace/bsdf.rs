@@ -6,9 +6,7 @@
 //!
 //! `weight` of a sample is f cos / pdf, the factor the path throughput is multiplied by.
 
-use super::sampling::{
-    add, cosine_hemisphere, dot, normalize, onb, scale, sub, V3,
-};
+use super::sampling::{add, cosine_hemisphere, dot, normalize, onb, scale, sub, V3};
 use std::f32::consts::{FRAC_1_PI, PI};
 
 /// A scattering model.
@@ -312,7 +310,10 @@ mod tests {
             integral += (m.pdf(ng, wo, wi) * 2.0 * PI) as f64;
         }
         let integral = integral / k as f64;
-        assert!(integral < 1.01 && integral > 0.9, "pdf integrates to {integral}");
+        assert!(
+            integral < 1.01 && integral > 0.9,
+            "pdf integrates to {integral}"
+        );
     }
 
     #[test]

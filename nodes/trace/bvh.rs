@@ -473,11 +473,7 @@ impl Bvh {
                 let tb = intersect_aabb(&r, &self.nodes[a + 1].bounds, tmax);
                 match (ta, tb) {
                     (Some(x), Some(y)) => {
-                        let (near, far, tfar) = if x <= y {
-                            (a, a + 1, y)
-                        } else {
-                            (a + 1, a, x)
-                        };
+                        let (near, far, tfar) = if x <= y { (a, a + 1, y) } else { (a + 1, a, x) };
                         if sp < stack.len() {
                             stack[sp] = (far as u32, tfar);
                             sp += 1;
@@ -560,7 +556,9 @@ mod tests {
         for _ in 0..2000 {
             let org = [r.next_f32() * 6.0 - 1.0, r.next_f32() * 6.0 - 1.0, -2.0];
             let dir = normalize([r.next_f32() - 0.5, r.next_f32() - 0.5, 1.0]);
-            let a = bvh.intersect(org, dir, f32::INFINITY).map(|h| (h.t, h.prim));
+            let a = bvh
+                .intersect(org, dir, f32::INFINITY)
+                .map(|h| (h.t, h.prim));
             let b = brute(&tris, org, dir);
             assert_eq!(a.map(|x| x.1), b.map(|x| x.1));
             if let (Some(a), Some(b)) = (a, b) {

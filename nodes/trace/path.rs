@@ -15,9 +15,7 @@
 //! splatted into the neighbouring pixels and normalised by the summed filter weights.
 
 use super::render_scene::{PinholeCamera, RenderScene};
-use super::sampling::{
-    add, dot, length, max_comp, mul, power_heuristic, scale, sub, Pcg32, V3,
-};
+use super::sampling::{add, dot, length, max_comp, mul, power_heuristic, scale, sub, Pcg32, V3};
 use crate::prelude::*;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -75,7 +73,14 @@ impl Default for PathSettings {
 }
 
 /// Radiance arriving at `org` from direction `-dir` (unit `dir`), estimated with one path.
-pub fn radiance(sc: &RenderScene, org: V3, dir: V3, tmax: f32, rng: &mut Pcg32, s: &PathSettings) -> V3 {
+pub fn radiance(
+    sc: &RenderScene,
+    org: V3,
+    dir: V3,
+    tmax: f32,
+    rng: &mut Pcg32,
+    s: &PathSettings,
+) -> V3 {
     let mut l = [0.0f32; 3];
     let mut thr = [1.0f32; 3];
     let mut eta = 1.0f32;
@@ -133,7 +138,11 @@ pub fn radiance(sc: &RenderScene, org: V3, dir: V3, tmax: f32, rng: &mut Pcg32, 
                         if max_comp(le) > 0.0 && cos_l > 0.0 {
                             let f = bsdf.eval(mat.albedo, ng, wo, wi);
                             if max_comp(f) > 0.0 {
-                                let side = if dot(ng, wi) > 0.0 { ng } else { scale(ng, -1.0) };
+                                let side = if dot(ng, wi) > 0.0 {
+                                    ng
+                                } else {
+                                    scale(ng, -1.0)
+                                };
                                 let o = sc.offset(p, side);
                                 if !sc.bvh.occluded(o, sub(ls.p, o), 1.0 - 1e-4) {
                                     let p_light = ls.pdf_area * dist2 / cos_l;
@@ -172,14 +181,22 @@ pub fn radiance(sc: &RenderScene, org: V3, dir: V3, tmax: f32, rng: &mut Pcg32, 
                     } => {
                         let d = super::sampling::v3(*direction);
                         let wi = scale(d, -1.0 / length(d));
-                        (wi, scale(super::sampling::v3(*color), *intensity as f32), f32::INFINITY)
+                        (
+                            wi,
+                            scale(super::sampling::v3(*color), *intensity as f32),
+                            f32::INFINITY,
+                        )
                     }
                 };
                 let f = bsdf.eval(mat.albedo, ng, wo, wi);
                 if max_comp(f) <= 0.0 {
                     continue;
                 }
-                let side = if dot(ng, wi) > 0.0 { ng } else { scale(ng, -1.0) };
+                let side = if dot(ng, wi) > 0.0 {
+                    ng
+                } else {
+                    scale(ng, -1.0)
+                };
                 let o = sc.offset(p, side);
                 let dir_l = if tmax_l.is_finite() {
                     sub(
@@ -220,7 +237,11 @@ pub fn radiance(sc: &RenderScene, org: V3, dir: V3, tmax: f32, rng: &mut Pcg32, 
         if tmaxc <= 0.0 || !tmaxc.is_finite() {
             break;
         }
-        let side = if dot(ng, bs.wi) > 0.0 { ng } else { scale(ng, -1.0) };
+        let side = if dot(ng, bs.wi) > 0.0 {
+            ng
+        } else {
+            scale(ng, -1.0)
+        };
         org = sc.offset(p, side);
         dir = bs.wi;
         tmax = f32::INFINITY;
@@ -450,7 +471,10 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let filter: String = ctx.input("filter")?;
     let strategy: String = ctx.input("strategy")?;
     if !(1..=1_000_000).contains(&spp) {
-        return Err(NodeError::invalid("spp", format!("spp {spp} must be in 1..=1000000")));
+        return Err(NodeError::invalid(
+            "spp",
+            format!("spp {spp} must be in 1..=1000000"),
+        ));
     }
     if max_depth == 0 || max_depth < -1 {
         return Err(NodeError::invalid(
@@ -459,7 +483,10 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
         ));
     }
     if rr_depth < 1 {
-        return Err(NodeError::invalid("rr_depth", "rr_depth must be at least 1"));
+        return Err(NodeError::invalid(
+            "rr_depth",
+            "rr_depth must be at least 1",
+        ));
     }
     let s = PathSettings {
         spp: spp as u32,
@@ -473,7 +500,12 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
         filter: match filter.as_str() {
             "box" => Filter::Box,
             "gaussian" => Filter::Gaussian,
-            f => return Err(NodeError::invalid("filter", format!("unknown filter '{f}'"))),
+            f => {
+                return Err(NodeError::invalid(
+                    "filter",
+                    format!("unknown filter '{f}'"),
+                ))
+            }
         },
         strategy: match strategy.as_str() {
             "mis" => Strategy::Mis,
@@ -496,7 +528,11 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     };
     let t0 = std::time::Instant::now();
     let (color, variance) = render_path(&scene, camera.as_deref(), &s, &report).map_err(|e| {
-        let socket = if e.contains("camera") { "camera" } else { "scene" };
+        let socket = if e.contains("camera") {
+            "camera"
+        } else {
+            "scene"
+        };
         NodeError::invalid(socket, e)
     })?;
     let secs = t0.elapsed().as_secs_f64();

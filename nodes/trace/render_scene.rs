@@ -182,7 +182,10 @@ impl PinholeCamera {
     pub fn ray_dir(&self, x: f32, y: f32) -> V3 {
         let sx = (2.0 * x / self.width as f32 - 1.0) * self.tan_x;
         let sy = (1.0 - 2.0 * y / self.height as f32) * self.tan_y;
-        normalize(add(add(self.fwd, scale(self.right, sx)), scale(self.up, sy)))
+        normalize(add(
+            add(self.fwd, scale(self.right, sx)),
+            scale(self.up, sy),
+        ))
     }
 }
 
@@ -263,9 +266,7 @@ impl RenderScene {
             if mat.is_emitter() && areas[i] > 0.0 {
                 emitters.push(i as u32);
                 let sides = if mat.two_sided_emission { 2.0 } else { 1.0 };
-                weights.push(
-                    areas[i] as f64 * sides * (luminance(mat.emission) as f64).max(1e-6),
-                );
+                weights.push(areas[i] as f64 * sides * (luminance(mat.emission) as f64).max(1e-6));
             }
         }
         let emitter_dist = Distribution1D::new(&weights);
@@ -287,7 +288,8 @@ impl RenderScene {
                     color,
                     intensity,
                 } => {
-                    if !position.iter().chain(color).all(|x| x.is_finite()) || !intensity.is_finite()
+                    if !position.iter().chain(color).all(|x| x.is_finite())
+                        || !intensity.is_finite()
                     {
                         return Err("a point light has a non-finite parameter".into());
                     }

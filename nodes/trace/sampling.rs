@@ -223,7 +223,11 @@ impl Distribution1D {
         for w in weights {
             let w = w.max(0.0);
             acc += w;
-            cdf.push(if total > 0.0 { (acc / total) as f32 } else { 0.0 });
+            cdf.push(if total > 0.0 {
+                (acc / total) as f32
+            } else {
+                0.0
+            });
             pmf.push(if total > 0.0 { (w / total) as f32 } else { 0.0 });
         }
         if let Some(l) = cdf.last_mut() {
@@ -269,7 +273,13 @@ mod tests {
     fn pcg32_matches_reference_stream() {
         // pcg32-demo (pcg32_srandom_r(42, 54)) prints these first outputs.
         let mut r = Pcg32::new(42, 54);
-        let want = [0xa15c02b7u32, 0x7b47f409, 0xba1d3330, 0x83d2f293, 0xbfa4784b];
+        let want = [
+            0xa15c02b7u32,
+            0x7b47f409,
+            0xba1d3330,
+            0x83d2f293,
+            0xbfa4784b,
+        ];
         for w in want {
             assert_eq!(r.next_u32(), w);
         }

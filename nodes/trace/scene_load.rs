@@ -39,7 +39,9 @@ pub fn material_from_mtl(m: &tobj::Material, two_sided_emission: bool) -> Materi
         kind,
         base_color,
         roughness,
-        metallic: ks.map(|c| c[0].max(c[1]).max(c[2]).clamp(0.0, 1.0)).unwrap_or(0.0),
+        metallic: ks
+            .map(|c| c[0].max(c[1]).max(c[2]).clamp(0.0, 1.0))
+            .unwrap_or(0.0),
         emission: f3(m.emissive).unwrap_or([0.0; 3]),
         two_sided_emission,
         ..Default::default()
@@ -124,7 +126,11 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let ne = scene
         .objects
         .iter()
-        .filter(|o| o.material.as_ref().is_some_and(|m| m.emission.iter().any(|x| *x > 0.0)))
+        .filter(|o| {
+            o.material
+                .as_ref()
+                .is_some_and(|m| m.emission.iter().any(|x| *x > 0.0))
+        })
         .count();
     ctx.log(format!("{} objects, {ne} emissive", scene.objects.len()));
     ctx.set_output("scene", scene);

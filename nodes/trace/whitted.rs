@@ -76,7 +76,11 @@ pub fn trace(
     let mat = sc.material(tri);
     let wo = scale(dir, -1.0);
     let p = add(org, scale(dir, hit.t));
-    let n = if dot(ng, wo) < 0.0 { scale(ng, -1.0) } else { ng };
+    let n = if dot(ng, wo) < 0.0 {
+        scale(ng, -1.0)
+    } else {
+        ng
+    };
     let mut l = sc.emitted(tri, wo);
     let recurse = depth < s.max_depth;
     match mat.bsdf {
@@ -173,7 +177,10 @@ pub fn trace(
         let area = 0.5 * super::sampling::length(super::bvh::triangle_normal(t));
         let w = area / pts.len() as f32;
         for &(b1, b2) in pts {
-            let q = add(add(scale(t[0], 1.0 - b1 - b2), scale(t[1], b1)), scale(t[2], b2));
+            let q = add(
+                add(scale(t[0], 1.0 - b1 - b2), scale(t[1], b1)),
+                scale(t[2], b2),
+            );
             let d = sub(q, p);
             let r2 = dot(d, d);
             if r2 <= 0.0 {
@@ -261,8 +268,10 @@ pub fn render_whitted(
 }
 
 fn declare(b: &mut NodeBuilder) {
-    b.doc("Whitted ray tracing: Blinn-Phong with shadow rays, mirror reflection, Fresnel refraction.")
-        .category("render");
+    b.doc(
+        "Whitted ray tracing: Blinn-Phong with shadow rays, mirror reflection, Fresnel refraction.",
+    )
+    .category("render");
     b.add_input::<Scene>("scene");
     b.add_input::<Camera>("camera")
         .optional()
@@ -294,16 +303,25 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let ambient: f64 = ctx.input("ambient")?;
     let aa: i64 = ctx.input("aa")?;
     if !(1..=64).contains(&max_depth) {
-        return Err(NodeError::invalid("max_depth", "max_depth must be in 1..=64"));
+        return Err(NodeError::invalid(
+            "max_depth",
+            "max_depth must be in 1..=64",
+        ));
     }
     if !(1..=4096).contains(&light_samples) {
-        return Err(NodeError::invalid("light_samples", "light_samples must be in 1..=4096"));
+        return Err(NodeError::invalid(
+            "light_samples",
+            "light_samples must be in 1..=4096",
+        ));
     }
     if !(1..=16).contains(&aa) {
         return Err(NodeError::invalid("aa", "aa must be in 1..=16"));
     }
     if !(ambient.is_finite() && ambient >= 0.0) {
-        return Err(NodeError::invalid("ambient", "ambient must be finite and >= 0"));
+        return Err(NodeError::invalid(
+            "ambient",
+            "ambient must be finite and >= 0",
+        ));
     }
     let s = WhittedSettings {
         max_depth: max_depth as u32,
@@ -319,7 +337,11 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
         }
     };
     let img = render_whitted(&scene, camera.as_deref(), &s, &report).map_err(|e| {
-        let socket = if e.contains("camera") { "camera" } else { "scene" };
+        let socket = if e.contains("camera") {
+            "camera"
+        } else {
+            "scene"
+        };
         NodeError::invalid(socket, e)
     })?;
     ctx.set_output("color", img);
@@ -425,7 +447,10 @@ mod tests {
         };
         let img = render_whitted(&scene, None, &WhittedSettings::default(), &|_| {}).unwrap();
         let c = img.get(4, 4);
-        assert!((c[0] - 1.0).abs() < 1e-4 && (c[2] - 0.25).abs() < 1e-4, "{c:?}");
+        assert!(
+            (c[0] - 1.0).abs() < 1e-4 && (c[2] - 0.25).abs() < 1e-4,
+            "{c:?}"
+        );
         // max_depth 1: no reflection.
         let s = WhittedSettings {
             max_depth: 1,

@@ -84,6 +84,7 @@ fn load_exr(p: &Path) -> Option<Image> {
 struct Row {
     who: String,
     spp: u32,
+    /// Process CPU seconds (fair under a loaded machine), else wall seconds.
     secs: f64,
     rmse: Option<f64>,
 }
@@ -111,10 +112,10 @@ fn svg_chart(rows: &[Row], path: &Path) {
     let mut s = format!(
         "<svg xmlns='http://www.w3.org/2000/svg' width='{w}' height='{h}' font-family='sans-serif' font-size='12'>\n<rect width='100%' height='100%' fill='white'/>\n"
     );
-    s += &format!("<text x='{}' y='20' text-anchor='middle'>Cornell box 256x256, max_depth 8, box filter: RMSE (light masked) vs seconds, log-log</text>\n", w / 2.0);
+    s += &format!("<text x='{}' y='20' text-anchor='middle'>Cornell box 256x256, max_depth 8, box filter: RMSE (light masked) vs process CPU seconds, log-log</text>\n", w / 2.0);
     for d in (t0 as i32)..=(t1 as i32) {
         let x = sx(10f64.powi(d));
-        s += &format!("<line x1='{x}' y1='{}' x2='{x}' y2='{}' stroke='#ddd'/><text x='{x}' y='{}' text-anchor='middle'>1e{d} s</text>\n", m, h - m, h - m + 16.0);
+        s += &format!("<line x1='{x}' y1='{}' x2='{x}' y2='{}' stroke='#ddd'/><text x='{x}' y='{}' text-anchor='middle'>1e{d} s CPU</text>\n", m, h - m, h - m + 16.0);
     }
     for d in (e0 as i32)..=(e1 as i32) {
         let y = sy(10f64.powi(d));
@@ -240,13 +241,14 @@ fn main() {
         let paths = 256.0 * 256.0 * spp as f64;
         let e = corrected(rmse(&img, &reference));
         println!(
-            "cgnodes box {spp:>5} spp: {secs:7.3} s wall ({cpu:.2} s CPU, {threads} threads), {:.2} Mpaths/s, rmse_excl_light {e:.5}",
-            paths / secs / 1e6
+            "cgnodes box {spp:>5} spp: {secs:7.3} s wall ({cpu:.2} s CPU, {threads} threads), {:.2} Mpaths/s, {:.2} Mpaths per CPU-second, rmse_excl_light {e:.5}",
+            paths / secs / 1e6,
+            paths / cpu.max(1e-9) / 1e6
         );
         rows.push(Row {
             who: "cgnodes".into(),
             spp,
-            secs,
+            secs: cpu,
             rmse: Some(e),
         });
     }
@@ -257,17 +259,19 @@ fn main() {
             let variant = r["variant"].as_str().unwrap_or("?").to_string();
             let spp = r["spp"].as_u64().unwrap_or(0) as u32;
             let secs = r["seconds"].as_f64().unwrap_or(0.0);
+            let cpu = r["cpu_seconds"].as_f64().unwrap_or(f64::NAN);
             let img = r["exr"].as_str().and_then(|p| load_exr(&out.join(p)));
             let e = img.map(|i| corrected(rmse(&i, &reference)));
             println!(
-                "mitsuba {variant} box {spp:>5} spp: {secs:7.3} s wall, {:.2} Mpaths/s, rmse_excl_light {}",
+                "mitsuba {variant} box {spp:>5} spp: {secs:7.3} s wall ({cpu:.2} s CPU), {:.2} Mpaths/s, {:.2} Mpaths per CPU-second, rmse_excl_light {}",
                 256.0 * 256.0 * spp as f64 / secs / 1e6,
+                256.0 * 256.0 * spp as f64 / cpu / 1e6,
                 e.map_or("-".into(), |e| format!("{e:.5}"))
             );
             rows.push(Row {
                 who: format!("mitsuba {variant}"),
                 spp,
-                secs,
+                secs: if cpu.is_finite() { cpu } else { secs },
                 rmse: e,
             });
         }
@@ -288,7 +292,7 @@ fn main() {
                 let f = (r.secs.ln() - w[0].secs.ln()) / (w[1].secs.ln() - w[0].secs.ln());
                 let eo = (w[0].rmse.unwrap().ln() * (1.0 - f) + w[1].rmse.unwrap().ln() * f).exp();
                 println!(
-                    "equal time {:.3} s: {} spp {} rmse {e:.5}, cgnodes {eo:.5} (ratio {:.2})",
+                    "equal CPU time {:.3} s: {} spp {} rmse {e:.5}, cgnodes {eo:.5} (ratio {:.2})",
                     r.secs,
                     r.who,
                     r.spp,

@@ -295,8 +295,8 @@ mod tests {
                 assert!((length(s.wi) - 1.0).abs() < 1e-4);
                 let f = m.eval(alb, ng, wo, s.wi);
                 let p = m.pdf(ng, wo, s.wi);
-                for k in 0..3 {
-                    assert!((f[k] / p - s.weight[k]).abs() < 1e-3 * (1.0 + s.weight[k]));
+                for (k, fk) in f.iter().enumerate() {
+                    assert!((fk / p - s.weight[k]).abs() < 1e-3 * (1.0 + s.weight[k]));
                 }
             }
         }

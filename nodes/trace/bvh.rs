@@ -28,9 +28,9 @@ impl Aabb {
     /// Grows the box to hold point `p`.
     #[inline]
     pub fn grow(&mut self, p: V3) {
-        for k in 0..3 {
-            self.min[k] = self.min[k].min(p[k]);
-            self.max[k] = self.max[k].max(p[k]);
+        for ((lo, hi), x) in self.min.iter_mut().zip(self.max.iter_mut()).zip(p) {
+            *lo = lo.min(x);
+            *hi = hi.max(x);
         }
     }
 
@@ -446,9 +446,7 @@ impl Bvh {
         let mut stack = [(0u32, 0.0f32); 96];
         let mut sp = 0usize;
         let mut node = 0usize;
-        if intersect_aabb(&r, &self.nodes[0].bounds, tmax).is_none() {
-            return None;
-        }
+        intersect_aabb(&r, &self.nodes[0].bounds, tmax)?;
         'outer: loop {
             let n = &self.nodes[node];
             if n.count > 0 {
@@ -631,8 +629,8 @@ mod tests {
         for n in bvh.nodes.iter().filter(|n| n.count > 0) {
             for t in &bvh.tris[n.first as usize..(n.first + n.count) as usize] {
                 for p in t {
-                    for k in 0..3 {
-                        assert!(p[k] >= n.bounds.min[k] && p[k] <= n.bounds.max[k]);
+                    for (k, x) in p.iter().enumerate() {
+                        assert!(*x >= n.bounds.min[k] && *x <= n.bounds.max[k]);
                     }
                 }
             }

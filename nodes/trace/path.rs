@@ -88,10 +88,8 @@ pub fn radiance(
     let mut prev_delta = true;
     let mut depth = 0u32;
     let (mut org, mut dir, mut tmax) = (org, dir, tmax);
-    loop {
-        let Some(hit) = sc.intersect(org, dir, tmax) else {
-            break; // no environment: escaping rays carry nothing
-        };
+    // No environment: a ray that escapes ends the path and carries nothing.
+    while let Some(hit) = sc.intersect(org, dir, tmax) {
         let tri = hit.prim;
         let ng = sc.normals[tri as usize];
         let mat = sc.material(tri);

@@ -45,15 +45,18 @@ for variant in a.variants.split(","):
     scene = mi.load_dict(d)
     mi.render(scene, spp=1, seed=0)  # warm up (JIT, thread pool)
     for spp in [int(s) for s in a.spp.split(",")]:
+        c0 = time.process_time()
         t0 = time.perf_counter()
         img = mi.render(scene, spp=spp, seed=1)
         if hasattr(img, "numpy"):
             img.numpy()  # force evaluation for the JIT variants
         secs = time.perf_counter() - t0
+        cpu = time.process_time() - c0
         name = f"mitsuba_{variant}_box_{spp}.exr"
         mi.Bitmap(img).write(os.path.join(a.out, name))
         mpaths = 256 * 256 * spp / secs / 1e6
-        print(f"{variant} box {spp:5d} spp: {secs:7.3f} s, {mpaths:.2f} Mpaths/s")
-        runs.append({"variant": variant, "spp": spp, "seconds": secs, "exr": name})
+        print(f"{variant} box {spp:5d} spp: {secs:7.3f} s ({cpu:.2f} s CPU), {mpaths:.2f} Mpaths/s, "
+              f"{256 * 256 * spp / max(cpu, 1e-9) / 1e6:.2f} Mpaths per CPU-second")
+        runs.append({"variant": variant, "spp": spp, "seconds": secs, "cpu_seconds": cpu, "exr": name})
         with open(os.path.join(a.out, "mitsuba.json"), "w") as f:
             json.dump({"mitsuba": getattr(mi, "__version__", "?"), "runs": runs}, f, indent=1)

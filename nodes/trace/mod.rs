@@ -1,6 +1,19 @@
-//! trace nodes.
+//! Ray and path tracing: a binned-SAH BVH with watertight intersection, sampling
+//! routines, BSDFs, an OBJ + MTL scene loader, a Whitted ray tracer and a path tracer.
+
+pub mod bsdf;
+pub mod bvh;
+pub mod path;
+pub mod render_scene;
+pub mod sampling;
+pub mod scene_load;
+pub mod whitted;
 
 use crate::registry::Registry;
 
 /// Registers the trace nodes.
-pub fn register(_r: &mut Registry) {}
+pub fn register(r: &mut Registry) {
+    path::register(r);
+    scene_load::register(r);
+    whitted::register(r);
+}

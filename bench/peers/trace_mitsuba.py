@@ -1,0 +1,62 @@
+#!/usr/bin/env python3
+"""Mitsuba 3 peer for `cargo bench --bench trace`: renders mi.cornell_box() (256x256,
+path integrator, max_depth 8, box filter) at a few spp, timed in-process around mi.render,
+and writes the images to target/trace_bench/ with mitsuba.json for the Rust bench to score
+against the same reference.
+
+    python3 bench/peers/trace_mitsuba.py [--spp 4,16,64] [--variants scalar_rgb,llvm_ad_rgb]
+
+Installs `mitsuba` and `numpy` with pip if they are missing. llvm_ad_rgb needs LLVM
+(Debian's libllvm19); a variant that fails to load is skipped and reported.
+"""
+import argparse, json, os, subprocess, sys, time
+
+def ensure(mod, pkg):
+    try:
+        __import__(mod)
+    except ImportError:
+        subprocess.check_call([sys.executable, "-m", "pip", "install", "-q", pkg])
+
+ensure("numpy", "numpy")
+ensure("mitsuba", "mitsuba")
+import mitsuba as mi  # noqa: E402
+
+ap = argparse.ArgumentParser()
+ap.add_argument("--spp", default="4,16,64")
+ap.add_argument("--variants", default="scalar_rgb,llvm_ad_rgb")
+ap.add_argument("--probe", default=None, help=argparse.SUPPRESS)
+ap.add_argument("--out", default=os.path.join(os.path.dirname(__file__), "..", "..", "target", "trace_bench"))
+a = ap.parse_args()
+if a.probe:  # child process: does this variant render at all? (LLVM may abort the process)
+    mi.set_variant(a.probe)
+    mi.render(mi.load_dict(mi.cornell_box()), spp=1)
+    sys.exit(0)
+os.makedirs(a.out, exist_ok=True)
+runs = []
+for variant in a.variants.split(","):
+    probe = subprocess.run([sys.executable, __file__, "--probe", variant], capture_output=True, text=True)
+    if probe.returncode != 0:
+        err = (probe.stderr.strip().splitlines() or ["?"])[0]
+        print(f"{variant}: unavailable ({err})")
+        continue
+    mi.set_variant(variant)
+    d = mi.cornell_box()
+    d["sensor"]["film"]["rfilter"] = {"type": "box"}
+    scene = mi.load_dict(d)
+    mi.render(scene, spp=1, seed=0)  # warm up (JIT, thread pool)
+    for spp in [int(s) for s in a.spp.split(",")]:
+        c0 = time.process_time()
+        t0 = time.perf_counter()
+        img = mi.render(scene, spp=spp, seed=1)
+        if hasattr(img, "numpy"):
+            img.numpy()  # force evaluation for the JIT variants
+        secs = time.perf_counter() - t0
+        cpu = time.process_time() - c0
+        name = f"mitsuba_{variant}_box_{spp}.exr"
+        mi.Bitmap(img).write(os.path.join(a.out, name))
+        mpaths = 256 * 256 * spp / secs / 1e6
+        print(f"{variant} box {spp:5d} spp: {secs:7.3f} s ({cpu:.2f} s CPU), {mpaths:.2f} Mpaths/s, "
+              f"{256 * 256 * spp / max(cpu, 1e-9) / 1e6:.2f} Mpaths per CPU-second")
+        runs.append({"variant": variant, "spp": spp, "seconds": secs, "cpu_seconds": cpu, "exr": name})
+        with open(os.path.join(a.out, "mitsuba.json"), "w") as f:
+            json.dump({"mitsuba": getattr(mi, "__version__", "?"), "runs": runs}, f, indent=1)

@@ -1,0 +1,304 @@
+//! Path tracing speed and equal-time error on the Cornell box, beside Mitsuba 3.
+//!
+//! `cargo bench --bench trace` renders `assets/cornell/` (256x256, max_depth 8, box filter)
+//! at several spp, reports wall time and millions of paths per second, and the RMSE (light
+//! pixels masked as in the reference's SCENE.md: rows 28..=45, cols 101..=154) against a
+//! high-spp reference rendered by cgnodes (cached in `target/trace_bench/`; the reference's
+//! own noise, known from its variance image, is subtracted in quadrature). If
+//! `bench/peers/trace_mitsuba.py` has been run first, its Mitsuba renders
+//! (`target/trace_bench/mitsuba.json` + EXRs) are scored against the same reference, and a
+//! chart of RMSE against time for both goes to `docs/path_tracing_rmse.svg`.
+//!
+//! Options (after `--`): `--ref-spp N` (default 2048), `--spp a,b,c` (default 4,16,64,256),
+//! `--quick` (one 64-spp timing, no reference).
+
+use cgnodes::nodes::trace::path::{render, Filter, PathSettings, Strategy};
+use cgnodes::nodes::trace::render_scene::{PinholeCamera, RenderScene};
+use cgnodes::nodes::trace::scene_load::load_obj_scene;
+use cgnodes::types::{Camera, FovAxis, Image};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+fn cpu_seconds() -> f64 {
+    // utime + stime of this process, in clock ticks (field 14 and 15 of /proc/self/stat).
+    let s = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
+    let rest = s.rsplit(')').next().unwrap_or("");
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    let t = |i: usize| f.get(i).and_then(|x| x.parse::<f64>().ok()).unwrap_or(0.0);
+    (t(11) + t(12)) / 100.0
+}
+
+fn masked(x: u32, y: u32) -> bool {
+    (28..=45).contains(&y) && (101..=154).contains(&x)
+}
+
+fn rmse(a: &Image, b: &Image) -> f64 {
+    let mut s = 0.0;
+    let mut n = 0.0;
+    for y in 0..a.height {
+        for x in 0..a.width {
+            if masked(x, y) {
+                continue;
+            }
+            let (p, q) = (a.get(x, y), b.get(x, y));
+            for k in 0..3 {
+                let d = p[k] as f64 - q[k] as f64;
+                s += d * d;
+                n += 1.0;
+            }
+        }
+    }
+    (s / n).sqrt()
+}
+
+fn mean_masked(v: &Image) -> f64 {
+    let mut s = 0.0;
+    let mut n = 0.0;
+    for y in 0..v.height {
+        for x in 0..v.width {
+            if !masked(x, y) {
+                let p = v.get(x, y);
+                s += (p[0] + p[1] + p[2]) as f64;
+                n += 3.0;
+            }
+        }
+    }
+    s / n
+}
+
+fn save_exr(img: &Image, p: &Path) {
+    let buf: Vec<f32> = img.pixels.iter().flat_map(|p| [p[0], p[1], p[2]]).collect();
+    let im = image::Rgb32FImage::from_raw(img.width, img.height, buf).unwrap();
+    im.save(p).unwrap();
+}
+
+fn load_exr(p: &Path) -> Option<Image> {
+    let im = image::open(p).ok()?.into_rgb32f();
+    Some(Image {
+        width: im.width(),
+        height: im.height(),
+        pixels: im.pixels().map(|q| [q[0], q[1], q[2], 1.0]).collect(),
+    })
+}
+
+struct Row {
+    who: String,
+    spp: u32,
+    /// Process CPU seconds (fair under a loaded machine), else wall seconds.
+    secs: f64,
+    rmse: Option<f64>,
+}
+
+fn svg_chart(rows: &[Row], path: &Path) {
+    let pts: Vec<(&str, f64, f64)> = rows
+        .iter()
+        .filter_map(|r| r.rmse.map(|e| (r.who.as_str(), r.secs, e)))
+        .filter(|p| p.1 > 0.0 && p.2 > 0.0)
+        .collect();
+    if pts.is_empty() {
+        return;
+    }
+    let (w, h, m) = (640.0, 420.0, 60.0);
+    let lx = |t: f64| t.log10();
+    let (t0, t1) = pts.iter().fold((f64::MAX, f64::MIN), |a, p| {
+        (a.0.min(lx(p.1)), a.1.max(lx(p.1)))
+    });
+    let (e0, e1) = pts.iter().fold((f64::MAX, f64::MIN), |a, p| {
+        (a.0.min(lx(p.2)), a.1.max(lx(p.2)))
+    });
+    let (t0, t1, e0, e1) = (t0.floor(), t1.ceil(), e0.floor(), e1.ceil());
+    let sx = |t: f64| m + (lx(t) - t0) / (t1 - t0) * (w - 2.0 * m);
+    let sy = |e: f64| h - m - (lx(e) - e0) / (e1 - e0) * (h - 2.0 * m);
+    let mut s = format!(
+        "<svg xmlns='http://www.w3.org/2000/svg' width='{w}' height='{h}' font-family='sans-serif' font-size='12'>\n<rect width='100%' height='100%' fill='white'/>\n"
+    );
+    s += &format!("<text x='{}' y='20' text-anchor='middle'>Cornell box 256x256, max_depth 8, box filter: RMSE (light masked) vs process CPU seconds, log-log</text>\n", w / 2.0);
+    for d in (t0 as i32)..=(t1 as i32) {
+        let x = sx(10f64.powi(d));
+        s += &format!("<line x1='{x}' y1='{}' x2='{x}' y2='{}' stroke='#ddd'/><text x='{x}' y='{}' text-anchor='middle'>1e{d} s CPU</text>\n", m, h - m, h - m + 16.0);
+    }
+    for d in (e0 as i32)..=(e1 as i32) {
+        let y = sy(10f64.powi(d));
+        s += &format!("<line x1='{m}' y1='{y}' x2='{}' y2='{y}' stroke='#ddd'/><text x='{}' y='{}' text-anchor='end'>1e{d}</text>\n", w - m, m - 4.0, y + 4.0);
+    }
+    let colors = ["#d62728", "#1f77b4", "#2ca02c", "#9467bd"];
+    let mut names: Vec<&str> = pts.iter().map(|p| p.0).collect();
+    names.dedup();
+    for (i, name) in names.iter().enumerate() {
+        let c = colors[i % colors.len()];
+        let line: Vec<String> = pts
+            .iter()
+            .filter(|p| p.0 == *name)
+            .map(|p| format!("{:.1},{:.1}", sx(p.1), sy(p.2)))
+            .collect();
+        s += &format!(
+            "<polyline fill='none' stroke='{c}' stroke-width='2' points='{}'/>\n",
+            line.join(" ")
+        );
+        for p in pts.iter().filter(|p| p.0 == *name) {
+            s += &format!(
+                "<circle cx='{:.1}' cy='{:.1}' r='3' fill='{c}'/>\n",
+                sx(p.1),
+                sy(p.2)
+            );
+        }
+        s += &format!(
+            "<text x='{}' y='{}' fill='{c}'>{name}</text>\n",
+            w - m - 150.0,
+            m + 16.0 * (i as f64 + 1.0)
+        );
+    }
+    s += "</svg>\n";
+    std::fs::write(path, s).unwrap();
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let get = |k: &str| {
+        args.iter()
+            .position(|a| a == k)
+            .and_then(|i| args.get(i + 1).cloned())
+    };
+    let quick = args.iter().any(|a| a == "--quick");
+    let ref_spp: u32 = get("--ref-spp")
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(2048);
+    let spps: Vec<u32> = get("--spp")
+        .map(|s| s.split(',').filter_map(|x| x.parse().ok()).collect())
+        .unwrap_or(vec![4, 16, 64, 256]);
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let out = root.join("target/trace_bench");
+    std::fs::create_dir_all(&out).unwrap();
+    let scene = load_obj_scene(&root.join("assets/cornell/cornell_box.obj"), false).unwrap();
+    let cam = Camera {
+        eye: [0.0, 0.0, 3.9],
+        target: [0.0; 3],
+        up: [0.0, 1.0, 0.0],
+        fov_deg: 39.3077,
+        fov_axis: FovAxis::Smaller,
+        width: 256,
+        height: 256,
+        near: 0.001,
+        far: 100.0,
+    };
+    let t = Instant::now();
+    let sc = RenderScene::new(&scene).unwrap();
+    let cam = PinholeCamera::new(&cam).unwrap();
+    println!(
+        "scene flatten + BVH: {:.3} ms",
+        t.elapsed().as_secs_f64() * 1e3
+    );
+    let settings = |spp: u32, seed: u64| PathSettings {
+        spp,
+        max_depth: 8,
+        rr_depth: 5,
+        seed,
+        filter: Filter::Box,
+        strategy: Strategy::Mis,
+    };
+    let threads = rayon::current_num_threads();
+    let run = |spp: u32, seed: u64| {
+        let c0 = cpu_seconds();
+        let t0 = Instant::now();
+        let (img, var) = render(&sc, &cam, &settings(spp, seed), &|_| {});
+        let secs = t0.elapsed().as_secs_f64();
+        let cpu = cpu_seconds() - c0;
+        (img, var, secs, cpu)
+    };
+    if quick {
+        let (_, _, secs, cpu) = run(64, 1);
+        let paths = 256.0 * 256.0 * 64.0;
+        println!(
+            "cgnodes 64 spp: {secs:.3} s wall, {cpu:.2} s CPU on {threads} threads: {:.2} Mpaths/s wall, {:.2} Mpaths per CPU-second",
+            paths / secs / 1e6,
+            paths / cpu.max(1e-9) / 1e6
+        );
+        return;
+    }
+    let ref_path: PathBuf = out.join(format!("ref_box_{ref_spp}.exr"));
+    let ref_var_path: PathBuf = out.join(format!("ref_box_{ref_spp}_var.exr"));
+    let (reference, ref_var) = match (load_exr(&ref_path), load_exr(&ref_var_path)) {
+        (Some(r), Some(v)) => (r, v),
+        _ => {
+            println!("rendering the {ref_spp}-spp reference (cached afterwards)...");
+            let (r, v, secs, _) = run(ref_spp, 987_654_321);
+            println!("  {secs:.1} s");
+            save_exr(&r, &ref_path);
+            save_exr(&v, &ref_var_path);
+            (r, v)
+        }
+    };
+    // Mean squared noise of the reference itself, removed from every measured RMSE.
+    let ref_noise2 = mean_masked(&ref_var);
+    let corrected = |e: f64| (e * e - ref_noise2).max(0.0).sqrt();
+    println!(
+        "reference noise (rms, light masked): {:.5}",
+        ref_noise2.sqrt()
+    );
+    let mut rows = Vec::new();
+    for &spp in &spps {
+        let (img, _, secs, cpu) = run(spp, 1);
+        let paths = 256.0 * 256.0 * spp as f64;
+        let e = corrected(rmse(&img, &reference));
+        println!(
+            "cgnodes box {spp:>5} spp: {secs:7.3} s wall ({cpu:.2} s CPU, {threads} threads), {:.2} Mpaths/s, {:.2} Mpaths per CPU-second, rmse_excl_light {e:.5}",
+            paths / secs / 1e6,
+            paths / cpu.max(1e-9) / 1e6
+        );
+        rows.push(Row {
+            who: "cgnodes".into(),
+            spp,
+            secs: cpu,
+            rmse: Some(e),
+        });
+    }
+    let mj = out.join("mitsuba.json");
+    if let Ok(text) = std::fs::read_to_string(&mj) {
+        let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+        for r in v["runs"].as_array().cloned().unwrap_or_default() {
+            let variant = r["variant"].as_str().unwrap_or("?").to_string();
+            let spp = r["spp"].as_u64().unwrap_or(0) as u32;
+            let secs = r["seconds"].as_f64().unwrap_or(0.0);
+            let cpu = r["cpu_seconds"].as_f64().unwrap_or(f64::NAN);
+            let img = r["exr"].as_str().and_then(|p| load_exr(&out.join(p)));
+            let e = img.map(|i| corrected(rmse(&i, &reference)));
+            println!(
+                "mitsuba {variant} box {spp:>5} spp: {secs:7.3} s wall ({cpu:.2} s CPU), {:.2} Mpaths/s, {:.2} Mpaths per CPU-second, rmse_excl_light {}",
+                256.0 * 256.0 * spp as f64 / secs / 1e6,
+                256.0 * 256.0 * spp as f64 / cpu / 1e6,
+                e.map_or("-".into(), |e| format!("{e:.5}"))
+            );
+            rows.push(Row {
+                who: format!("mitsuba {variant}"),
+                spp,
+                secs: if cpu.is_finite() { cpu } else { secs },
+                rmse: e,
+            });
+        }
+    } else {
+        println!("(no Mitsuba runs: run `python3 bench/peers/trace_mitsuba.py` first)");
+    }
+    let docs = root.join("docs");
+    std::fs::create_dir_all(&docs).unwrap();
+    svg_chart(&rows, &docs.join("path_tracing_rmse.svg"));
+    // Equal-time comparison: interpolate each peer's RMSE at cgnodes' times (log-log).
+    for r in rows.iter().filter(|r| r.who != "cgnodes") {
+        if let Some(e) = r.rmse {
+            let ours: Vec<&Row> = rows.iter().filter(|q| q.who == "cgnodes").collect();
+            if let Some(w) = ours
+                .windows(2)
+                .find(|w| w[0].secs <= r.secs && r.secs <= w[1].secs)
+            {
+                let f = (r.secs.ln() - w[0].secs.ln()) / (w[1].secs.ln() - w[0].secs.ln());
+                let eo = (w[0].rmse.unwrap().ln() * (1.0 - f) + w[1].rmse.unwrap().ln() * f).exp();
+                println!(
+                    "equal CPU time {:.3} s: {} spp {} rmse {e:.5}, cgnodes {eo:.5} (ratio {:.2})",
+                    r.secs,
+                    r.who,
+                    r.spp,
+                    e / eo
+                );
+            }
+        }
+    }
+}

@@ -1,0 +1,383 @@
+//! The renderer's view of a `Scene`: every object triangulated into one f32 triangle list
+//! with a BVH over it, compact per-triangle materials, the emissive triangles with a
+//! distribution for sampling them by power (area times emitted luminance), and a pinhole
+//! camera that turns film positions into rays. Shared by `render_path` and `render_whitted`.
+
+use super::bsdf::Bsdf;
+use super::bvh::{triangle_normal, Bvh, Hit};
+use super::sampling::{
+    add, cross, dot, length, luminance, max_comp, normalize, scale, sub, uniform_triangle, v3,
+    Distribution1D, V3,
+};
+use crate::types::{Camera, Light, Material, MaterialKind, Scene};
+
+/// A material reduced to what the tracers evaluate.
+#[derive(Clone, Debug)]
+pub struct RMaterial {
+    /// Scattering model.
+    pub bsdf: Bsdf,
+    /// Diffuse albedo / specular tint (linear RGB).
+    pub albedo: V3,
+    /// Emitted radiance.
+    pub emission: V3,
+    /// Whether emission leaves both faces (otherwise only the front, where the winding is
+    /// counter-clockwise).
+    pub two_sided_emission: bool,
+    /// Phong exponent for the Whitted tracer, from roughness (shininess = 2 / r^2 - 2).
+    pub shininess: f32,
+    /// Phong specular weight for the Whitted tracer (`metallic`, floor 0.04 when rough < 1).
+    pub specular: f32,
+}
+
+impl RMaterial {
+    /// Converts a scene material.
+    pub fn from_material(m: &Material) -> RMaterial {
+        let bsdf = match m.kind {
+            MaterialKind::Diffuse => Bsdf::Diffuse,
+            MaterialKind::Mirror => Bsdf::Mirror,
+            MaterialKind::Dielectric { ior } => Bsdf::Dielectric {
+                eta: if ior.is_finite() && ior > 0.0 {
+                    ior as f32
+                } else {
+                    1.5
+                },
+            },
+            MaterialKind::Conductor { roughness } => {
+                let r = if roughness.is_finite() {
+                    roughness.clamp(0.0, 1.0) as f32
+                } else {
+                    0.5
+                };
+                if r < 1e-3 {
+                    Bsdf::Mirror
+                } else {
+                    // alpha = roughness^2 (Burley 2012 remapping).
+                    Bsdf::Conductor {
+                        alpha: (r * r).max(1e-3),
+                    }
+                }
+            }
+        };
+        let clean = |c: [f64; 3], hi: f64| {
+            let mut o = v3(c);
+            for x in &mut o {
+                *x = if x.is_finite() {
+                    x.clamp(0.0, hi as f32)
+                } else {
+                    0.0
+                };
+            }
+            o
+        };
+        let r = if m.roughness.is_finite() {
+            m.roughness.clamp(0.02, 1.0) as f32
+        } else {
+            0.5
+        };
+        RMaterial {
+            bsdf,
+            albedo: clean(m.base_color, 1.0),
+            emission: clean(m.emission, f64::MAX),
+            two_sided_emission: m.two_sided_emission,
+            shininess: (2.0 / (r * r) - 2.0).max(1.0),
+            specular: if m.metallic.is_finite() {
+                (m.metallic as f32).clamp(0.04, 1.0)
+            } else {
+                0.04
+            },
+        }
+    }
+
+    /// Whether the surface emits.
+    pub fn is_emitter(&self) -> bool {
+        max_comp(self.emission) > 0.0
+    }
+}
+
+/// A point on an emissive triangle sampled for next-event estimation.
+#[derive(Clone, Copy, Debug)]
+pub struct LightSample {
+    /// The point.
+    pub p: V3,
+    /// Unit geometric normal there.
+    pub n: V3,
+    /// Triangle index.
+    pub tri: u32,
+    /// Density per unit area (selection probability over the triangle's area).
+    pub pdf_area: f32,
+}
+
+/// A pinhole camera (Mitsuba `perspective` without depth of field).
+#[derive(Clone, Debug)]
+pub struct PinholeCamera {
+    /// Eye position.
+    pub eye: V3,
+    right: V3,
+    up: V3,
+    fwd: V3,
+    tan_x: f32,
+    tan_y: f32,
+    /// Image width.
+    pub width: u32,
+    /// Image height.
+    pub height: u32,
+    /// Far clip.
+    pub far: f32,
+}
+
+impl PinholeCamera {
+    /// Builds the camera; +x of the image is `forward x up` (world +x on the right for a
+    /// camera looking down -z with +y up, as in Mitsuba's `look_at`).
+    pub fn new(c: &Camera) -> Result<PinholeCamera, String> {
+        let fin = |a: [f64; 3]| a.iter().all(|x| x.is_finite());
+        if !fin(c.eye) || !fin(c.target) || !fin(c.up) {
+            return Err("camera eye/target/up must be finite".into());
+        }
+        if c.width == 0 || c.height == 0 || c.width > 16384 || c.height > 16384 {
+            return Err(format!(
+                "camera resolution {}x{} must be between 1 and 16384",
+                c.width, c.height
+            ));
+        }
+        if !(c.fov_deg > 0.0 && c.fov_deg < 180.0) {
+            return Err(format!(
+                "camera fov {} must be in (0, 180) degrees",
+                c.fov_deg
+            ));
+        }
+        let eye = v3(c.eye);
+        let d = sub(v3(c.target), eye);
+        if length(d) == 0.0 {
+            return Err("camera target equals eye".into());
+        }
+        let fwd = normalize(d);
+        let right = cross(fwd, v3(c.up));
+        if length(right) < 1e-6 {
+            return Err("camera up is parallel to the viewing direction".into());
+        }
+        let right = normalize(right);
+        let up = cross(right, fwd);
+        let tan_y = (0.5 * c.vertical_fov()).tan() as f32;
+        let tan_x = tan_y * c.width as f32 / c.height as f32;
+        Ok(PinholeCamera {
+            eye,
+            right,
+            up,
+            fwd,
+            tan_x,
+            tan_y,
+            width: c.width,
+            height: c.height,
+            far: if c.far > 0.0 && c.far.is_finite() {
+                c.far as f32
+            } else {
+                f32::INFINITY
+            },
+        })
+    }
+
+    /// The unit direction through film position (`x`, `y`) in pixels, (0, 0) at the top-left
+    /// corner of the image.
+    #[inline]
+    pub fn ray_dir(&self, x: f32, y: f32) -> V3 {
+        let sx = (2.0 * x / self.width as f32 - 1.0) * self.tan_x;
+        let sy = (1.0 - 2.0 * y / self.height as f32) * self.tan_y;
+        normalize(add(
+            add(self.fwd, scale(self.right, sx)),
+            scale(self.up, sy),
+        ))
+    }
+}
+
+/// The flattened scene.
+#[derive(Clone, Debug)]
+pub struct RenderScene {
+    /// BVH over every triangle.
+    pub bvh: Bvh,
+    /// Triangle corners, in the caller's order (index = `Hit::prim`).
+    pub tris: Vec<[V3; 3]>,
+    /// Unit geometric normal per triangle (counter-clockwise winding).
+    pub normals: Vec<V3>,
+    /// Material index per triangle.
+    pub tri_mat: Vec<u32>,
+    /// Materials.
+    pub materials: Vec<RMaterial>,
+    /// Emissive triangles.
+    pub emitters: Vec<u32>,
+    /// Emitter distribution over `emitters` (area times luminance of the emission).
+    pub emitter_dist: Distribution1D,
+    /// Per triangle: density per unit area of sampling a point on it (0 for non-emitters).
+    pub light_pdf_area: Vec<f32>,
+    /// Point and directional lights.
+    pub lights: Vec<Light>,
+    /// Ray offset length for leaving a surface (relative to the scene's size).
+    pub eps: f32,
+}
+
+impl RenderScene {
+    /// Flattens `scene`: triangulates every object, resolves materials (the object's, else
+    /// the mesh's, else the default grey diffuse) and builds the BVH and emitter table.
+    pub fn new(scene: &Scene) -> Result<RenderScene, String> {
+        let mut tris = Vec::new();
+        let mut tri_mat = Vec::new();
+        let mut materials = Vec::new();
+        for (oi, obj) in scene.objects.iter().enumerate() {
+            let mat = obj
+                .material
+                .as_deref()
+                .or(obj.mesh.material.as_deref())
+                .cloned()
+                .unwrap_or_default();
+            let mi = materials.len() as u32;
+            materials.push(RMaterial::from_material(&mat));
+            let mesh = &obj.mesh;
+            for (vi, p) in mesh.positions.iter().enumerate() {
+                if !p.iter().all(|x| x.is_finite()) {
+                    return Err(format!("object {oi}: vertex {vi} is not finite"));
+                }
+            }
+            let n = mesh.positions.len() as u32;
+            for f in mesh.faces() {
+                if f.len() < 3 || f.iter().any(|&i| i >= n) {
+                    return Err(format!("object {oi}: a face has a bad vertex index"));
+                }
+                // Fan triangulation (faces are planar convex polygons in practice).
+                for k in 1..f.len() - 1 {
+                    let t = [
+                        v3(mesh.positions[f[0] as usize]),
+                        v3(mesh.positions[f[k] as usize]),
+                        v3(mesh.positions[f[k + 1] as usize]),
+                    ];
+                    tris.push(t);
+                    tri_mat.push(mi);
+                }
+            }
+        }
+        let bvh = Bvh::build(&tris);
+        let normals: Vec<V3> = tris.iter().map(|t| normalize(triangle_normal(t))).collect();
+        let areas: Vec<f32> = tris
+            .iter()
+            .map(|t| 0.5 * length(triangle_normal(t)))
+            .collect();
+        let mut emitters = Vec::new();
+        let mut weights = Vec::new();
+        for (i, &m) in tri_mat.iter().enumerate() {
+            let mat = &materials[m as usize];
+            if mat.is_emitter() && areas[i] > 0.0 {
+                emitters.push(i as u32);
+                let sides = if mat.two_sided_emission { 2.0 } else { 1.0 };
+                weights.push(areas[i] as f64 * sides * (luminance(mat.emission) as f64).max(1e-6));
+            }
+        }
+        let emitter_dist = Distribution1D::new(&weights);
+        let mut light_pdf_area = vec![0.0f32; tris.len()];
+        for (k, &e) in emitters.iter().enumerate() {
+            light_pdf_area[e as usize] = emitter_dist.pmf(k) / areas[e as usize];
+        }
+        let b = bvh.bounds();
+        let diag = if tris.is_empty() {
+            1.0
+        } else {
+            length(sub(b.max, b.min))
+        };
+        let mut lights = Vec::new();
+        for l in &scene.lights {
+            match l {
+                Light::Point {
+                    position,
+                    color,
+                    intensity,
+                } => {
+                    if !position.iter().chain(color).all(|x| x.is_finite())
+                        || !intensity.is_finite()
+                    {
+                        return Err("a point light has a non-finite parameter".into());
+                    }
+                }
+                Light::Directional {
+                    direction,
+                    color,
+                    intensity,
+                } => {
+                    if !direction.iter().chain(color).all(|x| x.is_finite())
+                        || !intensity.is_finite()
+                        || direction.iter().all(|x| *x == 0.0)
+                    {
+                        return Err("a directional light needs a finite non-zero direction".into());
+                    }
+                }
+            }
+            lights.push(l.clone());
+        }
+        Ok(RenderScene {
+            bvh,
+            tris,
+            normals,
+            tri_mat,
+            materials,
+            emitters,
+            emitter_dist,
+            light_pdf_area,
+            lights,
+            eps: 1e-5 * diag.max(1e-3),
+        })
+    }
+
+    /// Closest hit.
+    #[inline]
+    pub fn intersect(&self, org: V3, dir: V3, tmax: f32) -> Option<Hit> {
+        self.bvh.intersect(org, dir, tmax)
+    }
+
+    /// The material of triangle `tri`.
+    #[inline]
+    pub fn material(&self, tri: u32) -> &RMaterial {
+        &self.materials[self.tri_mat[tri as usize] as usize]
+    }
+
+    /// A surface point moved off the surface along `n` (to the side a new ray leaves
+    /// from), so the new ray does not hit the surface it starts on.
+    #[inline]
+    pub fn offset(&self, p: V3, n: V3) -> V3 {
+        let m = p[0].abs().max(p[1].abs()).max(p[2].abs());
+        add(p, scale(n, self.eps + 4e-7 * m))
+    }
+
+    /// Samples a point on the emitters by power (one triangle by area times luminance,
+    /// then uniformly on it; Shirley et al. 1996, "Monte Carlo techniques for direct
+    /// lighting calculations").
+    #[inline]
+    pub fn sample_emitter(&self, u: f32, uv: [f32; 2]) -> Option<LightSample> {
+        if self.emitter_dist.is_empty() {
+            return None;
+        }
+        let k = self.emitter_dist.sample(u);
+        let tri = self.emitters[k];
+        let t = &self.tris[tri as usize];
+        let (b1, b2) = uniform_triangle(uv);
+        let p = add(
+            add(scale(t[0], 1.0 - b1 - b2), scale(t[1], b1)),
+            scale(t[2], b2),
+        );
+        Some(LightSample {
+            p,
+            n: self.normals[tri as usize],
+            tri,
+            pdf_area: self.light_pdf_area[tri as usize],
+        })
+    }
+
+    /// Emitted radiance of triangle `tri` toward unit direction `w` (pointing away from it).
+    #[inline]
+    pub fn emitted(&self, tri: u32, w: V3) -> V3 {
+        let m = self.material(tri);
+        if !m.is_emitter() {
+            return [0.0; 3];
+        }
+        if m.two_sided_emission || dot(self.normals[tri as usize], w) > 0.0 {
+            m.emission
+        } else {
+            [0.0; 3]
+        }
+    }
+}

@@ -1,0 +1,300 @@
+//! Path tracer checks against analytic results and against Mitsuba 3's Cornell box
+//! (`tests/data/trace/ref_stats.json`, see `assets/cornell/README.md`).
+
+use cgnodes::nodes::trace::path::{render_path, Filter, PathSettings, Strategy};
+use cgnodes::nodes::trace::scene_load::load_obj_scene;
+use cgnodes::types::{Camera, FovAxis, Image, Material, MaterialKind, Mesh, Scene, SceneObject};
+use std::path::Path;
+use std::sync::Arc;
+
+fn root() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// A UV sphere; `inward` flips the winding so the normals face the centre.
+fn sphere(c: [f64; 3], r: f64, n: usize, inward: bool) -> Mesh {
+    let mut pos = vec![[c[0], c[1] + r, c[2]], [c[0], c[1] - r, c[2]]];
+    let rings = n;
+    let segs = 2 * n;
+    for i in 1..rings {
+        let th = std::f64::consts::PI * i as f64 / rings as f64;
+        for j in 0..segs {
+            let ph = std::f64::consts::TAU * j as f64 / segs as f64;
+            pos.push([
+                c[0] + r * th.sin() * ph.cos(),
+                c[1] + r * th.cos(),
+                c[2] + r * th.sin() * ph.sin(),
+            ]);
+        }
+    }
+    let v = |i: usize, j: usize| (2 + (i - 1) * segs + j % segs) as u32;
+    let mut tris = Vec::new();
+    for j in 0..segs {
+        tris.push([0, v(1, j + 1), v(1, j)]);
+        tris.push([1, v(rings - 1, j), v(rings - 1, j + 1)]);
+        for i in 1..rings - 1 {
+            tris.push([v(i, j), v(i, j + 1), v(i + 1, j + 1)]);
+            tris.push([v(i, j), v(i + 1, j + 1), v(i + 1, j)]);
+        }
+    }
+    if inward {
+        for t in &mut tris {
+            t.swap(1, 2);
+        }
+    }
+    Mesh::from_triangles(pos, &tris).unwrap()
+}
+
+fn camera(eye: [f64; 3], target: [f64; 3], fov: f64, w: u32, h: u32) -> Camera {
+    Camera {
+        eye,
+        target,
+        up: [0.0, 1.0, 0.0],
+        fov_deg: fov,
+        fov_axis: FovAxis::Smaller,
+        width: w,
+        height: h,
+        near: 0.001,
+        far: 100.0,
+    }
+}
+
+fn mat(kind: MaterialKind, albedo: f64, emission: f64) -> Arc<Material> {
+    Arc::new(Material {
+        kind,
+        base_color: [albedo; 3],
+        emission: [emission; 3],
+        two_sided_emission: true,
+        ..Default::default()
+    })
+}
+
+fn mean(img: &Image) -> [f64; 3] {
+    let mut m = [0.0; 3];
+    for p in &img.pixels {
+        for k in 0..3 {
+            m[k] += p[k] as f64;
+        }
+    }
+    m.map(|x| x / img.pixels.len() as f64)
+}
+
+fn patch_mean(img: &Image, rows: [u32; 2], cols: [u32; 2]) -> [f64; 3] {
+    let mut m = [0.0; 3];
+    for y in rows[0]..rows[1] {
+        for x in cols[0]..cols[1] {
+            let p = img.get(x, y);
+            for k in 0..3 {
+                m[k] += p[k] as f64;
+            }
+        }
+    }
+    let n = ((rows[1] - rows[0]) * (cols[1] - cols[0])) as f64;
+    m.map(|x| x / n)
+}
+
+fn settings(spp: u32, max_depth: u32, strategy: Strategy, filter: Filter) -> PathSettings {
+    PathSettings {
+        spp,
+        max_depth,
+        rr_depth: 5,
+        seed: 1,
+        filter,
+        strategy,
+    }
+}
+
+fn noop(_: f64) {}
+
+/// White furnace: a diffuse sphere of albedo 1 inside a black sphere emitting radiance 1
+/// reflects exactly the radiance it receives, so every pixel reads 1 (for any strategy).
+#[test]
+fn white_furnace_returns_the_emission() {
+    let scene = Scene {
+        objects: vec![
+            SceneObject {
+                mesh: Arc::new(sphere([0.0; 3], 5.0, 24, true)),
+                material: Some(mat(MaterialKind::Diffuse, 0.0, 1.0)),
+            },
+            SceneObject {
+                mesh: Arc::new(sphere([0.0; 3], 1.0, 24, false)),
+                material: Some(mat(MaterialKind::Diffuse, 1.0, 0.0)),
+            },
+        ],
+        ..Default::default()
+    };
+    let cam = camera([0.0, 0.0, 3.0], [0.0; 3], 60.0, 32, 32);
+    for strategy in [Strategy::Mis, Strategy::Nee, Strategy::Bsdf] {
+        let (img, _) = render_path(
+            &scene,
+            Some(&cam),
+            &settings(64, 16, strategy, Filter::Box),
+            &noop,
+        )
+        .unwrap();
+        let m = mean(&img);
+        for k in 0..3 {
+            assert!((m[k] - 1.0).abs() < 0.01, "{strategy:?}: mean {m:?}");
+        }
+        // The sphere's centre pixel (it fills the middle of the view).
+        let c = patch_mean(&img, [10, 22], [10, 22]);
+        assert!((c[0] - 1.0).abs() < 0.05, "{strategy:?}: centre {c:?}");
+    }
+}
+
+/// Inside a closed sphere of albedo a emitting L_e, a path of at most D segments collects
+/// L_e (1 + a + ... + a^(D-1)) = L_e (1 - a^D) / (1 - a): checks Mitsuba's max_depth
+/// meaning and that Russian roulette keeps the unbounded sum L_e / (1 - a).
+#[test]
+fn albedo_below_one_loses_energy_as_the_geometric_series() {
+    let a = 0.6;
+    let scene = Scene {
+        objects: vec![SceneObject {
+            mesh: Arc::new(sphere([0.0; 3], 2.0, 16, true)),
+            material: Some(mat(MaterialKind::Diffuse, a, 1.0)),
+        }],
+        ..Default::default()
+    };
+    let cam = camera([0.3, -0.2, 0.5], [0.0, 0.0, -1.0], 60.0, 24, 24);
+    for (depth, spp) in [(1u32, 4u32), (2, 64), (3, 64), (8, 128), (u32::MAX, 256)] {
+        let (img, _) = render_path(
+            &scene,
+            Some(&cam),
+            &settings(spp, depth, Strategy::Mis, Filter::Box),
+            &noop,
+        )
+        .unwrap();
+        let want = if depth == u32::MAX {
+            1.0 / (1.0 - a)
+        } else {
+            (1.0 - a.powi(depth as i32)) / (1.0 - a)
+        };
+        let m = mean(&img)[1];
+        assert!(
+            (m - want).abs() < 0.01 * want,
+            "max_depth {depth}: mean {m}, want {want}"
+        );
+    }
+}
+
+fn cornell_scene() -> Scene {
+    load_obj_scene(&root().join("assets/cornell/cornell_box.obj"), false).unwrap()
+}
+
+fn cornell_camera(w: u32, h: u32) -> Camera {
+    camera([0.0, 0.0, 3.9], [0.0; 3], 39.3077, w, h)
+}
+
+/// Emitter sampling alone, BSDF sampling alone and their MIS combination estimate the same
+/// image: the Cornell box at low resolution, with the short box turned into a rough GGX
+/// conductor so a glossy lobe is exercised too.
+#[test]
+fn nee_bsdf_and_mis_agree_in_expectation() {
+    let mut scene = cornell_scene();
+    for o in &mut scene.objects {
+        let m = o.mesh.bounds();
+        // The short box's faces all lie within y <= -0.4 and x >= -0.04.
+        if m.1[1] <= -0.39 && m.0[0] > -0.05 && m.1[1] > -0.9 {
+            let mut mm = (**o.material.as_ref().unwrap()).clone();
+            mm.kind = MaterialKind::Conductor { roughness: 0.5 };
+            mm.base_color = [0.9, 0.7, 0.4];
+            o.material = Some(Arc::new(mm));
+        }
+    }
+    let cam = cornell_camera(32, 32);
+    let mut means = Vec::new();
+    for (strategy, spp) in [
+        (Strategy::Mis, 256),
+        (Strategy::Nee, 256),
+        (Strategy::Bsdf, 1024),
+    ] {
+        let (img, _) = render_path(
+            &scene,
+            Some(&cam),
+            &settings(spp, 8, strategy, Filter::Box),
+            &noop,
+        )
+        .unwrap();
+        // Whole image and the lower half (floor, boxes) without the light's pixels.
+        means.push((strategy, mean(&img), patch_mean(&img, [16, 32], [0, 32])));
+    }
+    let (_, m0, p0) = means[0];
+    for (s, m, p) in &means[1..] {
+        for k in 0..3 {
+            assert!(
+                (m[k] - m0[k]).abs() < 0.02 * m0[k],
+                "{s:?} whole-image mean {m:?} vs MIS {m0:?}"
+            );
+            assert!(
+                (p[k] - p0[k]).abs() < 0.03 * p0[k],
+                "{s:?} lower-half mean {p:?} vs MIS {p0:?}"
+            );
+        }
+    }
+}
+
+fn ref_stats() -> serde_json::Value {
+    let s = std::fs::read_to_string(root().join("tests/data/trace/ref_stats.json")).unwrap();
+    serde_json::from_str(&s).unwrap()
+}
+
+fn triple(v: &serde_json::Value) -> [f64; 3] {
+    let a = v.as_array().unwrap();
+    [
+        a[0].as_f64().unwrap(),
+        a[1].as_f64().unwrap(),
+        a[2].as_f64().unwrap(),
+    ]
+}
+
+fn check_cornell(filter: Filter, key: &str, mean_key: &str) {
+    let (img, var) = render_path(
+        &cornell_scene(),
+        Some(&cornell_camera(256, 256)),
+        &settings(64, 8, Strategy::Mis, filter),
+        &noop,
+    )
+    .unwrap();
+    assert_eq!((img.width, img.height), (256, 256));
+    let r = ref_stats();
+    let m = mean(&img);
+    let want = triple(&r["image_mean_rgb"][mean_key]);
+    for k in 0..3 {
+        assert!(
+            (m[k] - want[k]).abs() < 0.01 * want[k],
+            "{key}: image mean {m:?} vs Mitsuba {want:?}"
+        );
+    }
+    for (name, p) in r["patches_rows_cols_halfopen"].as_object().unwrap() {
+        let rows = triple(&serde_json::json!([p["rows"][0], p["rows"][1], 0]));
+        let cols = triple(&serde_json::json!([p["cols"][0], p["cols"][1], 0]));
+        let got = patch_mean(
+            &img,
+            [rows[0] as u32, rows[1] as u32],
+            [cols[0] as u32, cols[1] as u32],
+        );
+        let want = triple(&p[key]);
+        for k in 0..3 {
+            assert!(
+                (got[k] - want[k]).abs() < 0.03 * want[k],
+                "{key}: patch {name} {got:?} vs Mitsuba {want:?}"
+            );
+        }
+    }
+    // The variance image is the sample variance over spp: away from the light it must be
+    // of the size the reference's noise figures imply (rmse ~0.09 / sqrt(spp) box).
+    let v = patch_mean(&var, [60, 80], [140, 180]);
+    assert!(v[0] > 0.0 && v[0].sqrt() < 0.1, "variance {v:?}");
+}
+
+/// At 64 spp the box-filtered Cornell box matches Mitsuba's 8192-spp box reference.
+#[test]
+fn cornell_box_filter_matches_mitsuba() {
+    check_cornell(Filter::Box, "box", "box_8192spp");
+}
+
+/// At 64 spp the Gaussian-filtered Cornell box matches Mitsuba's 16384-spp reference.
+#[test]
+fn cornell_gaussian_filter_matches_mitsuba() {
+    check_cornell(Filter::Gaussian, "gaussian", "gaussian_16384spp");
+}

@@ -11,15 +11,13 @@ use std::path::Path;
 
 /// Converts one MTL material.
 pub fn material_from_mtl(m: &tobj::Material, two_sided_emission: bool) -> Material {
-    let f3 = |a: Option<[f32; 3]>| a.map(|c| [c[0] as f64, c[1] as f64, c[2] as f64]);
-    let kd = f3(m.diffuse).unwrap_or([0.8; 3]);
-    let ks = f3(m.specular);
+    let kd = m.diffuse.unwrap_or([0.8; 3]);
+    let ks = m.specular;
     let kind = match m.illumination_model {
         Some(3) | Some(5) => MaterialKind::Mirror,
         Some(4) | Some(6) | Some(7) => MaterialKind::Dielectric {
             ior: m
                 .optical_density
-                .map(|x| x as f64)
                 .filter(|x| x.is_finite() && *x > 0.0)
                 .unwrap_or(1.5),
         },
@@ -32,7 +30,7 @@ pub fn material_from_mtl(m: &tobj::Material, two_sided_emission: bool) -> Materi
     let roughness = m
         .shininess
         .filter(|n| n.is_finite() && *n >= 0.0)
-        .map(|n| (2.0 / (n as f64 + 2.0)).sqrt())
+        .map(|n| (2.0 / (n + 2.0)).sqrt())
         .unwrap_or(0.5);
     Material {
         name: m.name.clone(),
@@ -42,7 +40,7 @@ pub fn material_from_mtl(m: &tobj::Material, two_sided_emission: bool) -> Materi
         metallic: ks
             .map(|c| c[0].max(c[1]).max(c[2]).clamp(0.0, 1.0))
             .unwrap_or(0.0),
-        emission: f3(m.emissive).unwrap_or([0.0; 3]),
+        emission: m.emissive.unwrap_or([0.0; 3]),
         two_sided_emission,
         ..Default::default()
     }

@@ -1,0 +1,411 @@
+//! The mass-spring model as plain data: springs built from a mesh, per-vertex masses,
+//! fixed vertices, gravity and a sphere collider, with the energy, forces and Hessian
+//! blocks every integrator shares.
+//!
+//! Spring energy (Hooke, as in the course's assignment 8): `E_s = 1/2 k (|x_j - x_i| - L)^2`.
+//! Sphere penalty (course): `E_c = 1/2 k_p (s r - |x - c|)^2` when `|x - c| < s r`, `s` = 1.1.
+
+use crate::prelude::*;
+use rayon::prelude::*;
+use std::collections::HashSet;
+
+/// Springs as index pairs with rest lengths and stiffnesses.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Springs {
+    /// End vertices of each spring.
+    pub ends: Vec<[u32; 2]>,
+    /// Rest length of each spring.
+    pub rest: Vec<f64>,
+    /// Stiffness of each spring.
+    pub k: Vec<f64>,
+}
+
+impl Springs {
+    /// Number of springs.
+    pub fn len(&self) -> usize {
+        self.ends.len()
+    }
+    /// Whether there are no springs.
+    pub fn is_empty(&self) -> bool {
+        self.ends.is_empty()
+    }
+    /// Adds a spring between `a` and `b` at rest at the distance in `x`.
+    pub fn push(&mut self, a: u32, b: u32, x: &[[f64; 3]], k: f64) {
+        self.ends.push([a, b]);
+        self.rest.push(norm(sub(x[b as usize], x[a as usize])));
+        self.k.push(k);
+    }
+}
+
+/// Which springs to build from a mesh.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SpringKinds {
+    /// Across the diagonals of polygons with 4 or more corners (triangle meshes already
+    /// have their diagonals as edges).
+    pub shear: bool,
+    /// Skip-one springs along straight lines of the mesh (Provot 1995's flexion springs):
+    /// `a - v - b` where the edges `va` and `vb` are nearly opposite at rest.
+    pub bending: bool,
+    /// Stiffness factor of bending springs relative to `k`.
+    pub bending_scale: f64,
+}
+
+impl Default for SpringKinds {
+    fn default() -> Self {
+        SpringKinds {
+            shear: true,
+            bending: false,
+            bending_scale: 1.0,
+        }
+    }
+}
+
+/// Builds springs from a mesh's edges (structural), polygon diagonals (shear) and
+/// straight skip-one pairs (bending), without duplicates.
+pub fn springs_from_mesh(mesh: &Mesh, k: f64, kinds: SpringKinds) -> Springs {
+    let x = &mesh.positions;
+    let mut seen: HashSet<(u32, u32)> = HashSet::new();
+    let mut s = Springs::default();
+    let mut add = |s: &mut Springs, a: u32, b: u32, k: f64| {
+        if a != b && seen.insert((a.min(b), a.max(b))) {
+            s.push(a.min(b), a.max(b), x, k);
+        }
+    };
+    let topo = mesh.topology();
+    for e in &topo.edges {
+        add(&mut s, e[0], e[1], k);
+    }
+    if kinds.shear {
+        for f in mesh.faces() {
+            let n = f.len();
+            if n < 4 {
+                continue;
+            }
+            for i in 0..n {
+                for j in i + 2..n {
+                    if i == 0 && j == n - 1 {
+                        continue;
+                    }
+                    add(&mut s, f[i], f[j], k);
+                }
+            }
+        }
+    }
+    if kinds.bending {
+        let kb = k * kinds.bending_scale;
+        for v in 0..mesh.num_vertices() {
+            let nb = topo.neighbors(v);
+            for (ia, &a) in nb.iter().enumerate() {
+                for &b in &nb[ia + 1..] {
+                    let da = sub(x[a as usize], x[v]);
+                    let db = sub(x[b as usize], x[v]);
+                    let c = dot(da, db) / (norm(da) * norm(db)).max(1e-300);
+                    // cos < -0.95: the two edges continue each other (angle > ~162 degrees).
+                    if c < -0.95 {
+                        add(&mut s, a, b, kb);
+                    }
+                }
+            }
+        }
+    }
+    s
+}
+
+/// A sphere collider at one instant (course: penalty force outside `scale * radius`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sphere {
+    /// Centre.
+    pub center: [f64; 3],
+    /// Radius of the visible sphere.
+    pub radius: f64,
+    /// Penalty stiffness `k_p`.
+    pub k: f64,
+    /// Contact starts at `scale * radius` (the course uses 1.1).
+    pub scale: f64,
+}
+
+impl Sphere {
+    /// The contact radius `scale * radius`.
+    pub fn contact_radius(&self) -> f64 {
+        self.scale * self.radius
+    }
+}
+
+/// Everything that defines the dynamics except the state.
+#[derive(Clone, Debug, Default)]
+pub struct Model {
+    /// The springs.
+    pub springs: Springs,
+    /// Mass of each vertex (> 0).
+    pub mass: Vec<f64>,
+    /// Vertices that never move.
+    pub fixed: Vec<bool>,
+    /// Gravitational acceleration vector.
+    pub gravity: [f64; 3],
+    /// Velocity factor applied after every step (1 = none; the course uses 0.995).
+    pub damping: f64,
+}
+
+impl Model {
+    /// Number of vertices.
+    pub fn num_vertices(&self) -> usize {
+        self.mass.len()
+    }
+
+    /// Checks sizes and values; `Err` says what is wrong.
+    pub fn check(&self) -> Result<(), String> {
+        let n = self.mass.len();
+        if self.fixed.len() != n {
+            return Err(format!(
+                "{} fixed flags for {n} vertices",
+                self.fixed.len()
+            ));
+        }
+        if let Some(i) = self.mass.iter().position(|m| !(m.is_finite() && *m > 0.0)) {
+            return Err(format!("vertex {i} has mass {} (must be > 0)", self.mass[i]));
+        }
+        for (s, e) in self.springs.ends.iter().enumerate() {
+            if e[0] as usize >= n || e[1] as usize >= n {
+                return Err(format!("spring {s} refers to a vertex beyond {n}"));
+            }
+            if !(self.springs.rest[s] > 0.0 && self.springs.rest[s].is_finite()) {
+                return Err(format!(
+                    "spring {s} ({}, {}) has rest length {} (coincident vertices?)",
+                    e[0], e[1], self.springs.rest[s]
+                ));
+            }
+            if !(self.springs.k[s] >= 0.0 && self.springs.k[s].is_finite()) {
+                return Err(format!("spring {s} has stiffness {}", self.springs.k[s]));
+            }
+        }
+        if !(self.damping.is_finite() && self.damping > 0.0 && self.damping <= 1.0) {
+            return Err(format!("damping {} is not in (0, 1]", self.damping));
+        }
+        if self.gravity.iter().any(|g| !g.is_finite()) {
+            return Err("gravity is not finite".into());
+        }
+        Ok(())
+    }
+}
+
+/// Positions and velocities.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct State {
+    /// Positions.
+    pub x: Vec<[f64; 3]>,
+    /// Velocities.
+    pub v: Vec<[f64; 3]>,
+}
+
+/// Energies of a state; potential energy of gravity is measured from `x_ref`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Energy {
+    /// `1/2 sum m |v|^2`.
+    pub kinetic: f64,
+    /// Springs + gravity + collider penalty.
+    pub potential: f64,
+    /// Largest `|l - L| / L` over the springs.
+    pub max_strain: f64,
+}
+
+impl Energy {
+    /// Kinetic plus potential.
+    pub fn total(&self) -> f64 {
+        self.kinetic + self.potential
+    }
+}
+
+/// Spring energy and the largest strain.
+pub fn spring_energy(s: &Springs, x: &[[f64; 3]]) -> (f64, f64) {
+    (0..s.len())
+        .into_par_iter()
+        .with_min_len(4096)
+        .map(|i| {
+            let [a, b] = s.ends[i];
+            let l = norm(sub(x[b as usize], x[a as usize]));
+            let d = l - s.rest[i];
+            (0.5 * s.k[i] * d * d, (d / s.rest[i]).abs())
+        })
+        .reduce(|| (0.0, 0.0), |p, q| (p.0 + q.0, p.1.max(q.1)))
+}
+
+/// Penalty energy of the sphere collider.
+pub fn collider_energy(sphere: Option<&Sphere>, x: &[[f64; 3]], fixed: &[bool]) -> f64 {
+    let Some(sp) = sphere else { return 0.0 };
+    let r = sp.contact_radius();
+    x.iter()
+        .zip(fixed)
+        .filter(|(_, f)| !**f)
+        .map(|(p, _)| {
+            let d = norm(sub(*p, sp.center));
+            if d < r {
+                0.5 * sp.k * (r - d) * (r - d)
+            } else {
+                0.0
+            }
+        })
+        .sum()
+}
+
+/// Kinetic, potential (springs, gravity from `x_ref`, collider) and maximum strain.
+pub fn energy(
+    m: &Model,
+    st: &State,
+    x_ref: &[[f64; 3]],
+    sphere: Option<&Sphere>,
+) -> Energy {
+    let (es, strain) = spring_energy(&m.springs, &st.x);
+    let mut kin = 0.0;
+    let mut grav = 0.0;
+    for i in 0..m.num_vertices() {
+        kin += 0.5 * m.mass[i] * dot(st.v[i], st.v[i]);
+        grav -= m.mass[i] * dot(m.gravity, sub(st.x[i], x_ref[i]));
+    }
+    Energy {
+        kinetic: kin,
+        potential: es + grav + collider_energy(sphere, &st.x, &m.fixed),
+        max_strain: strain,
+    }
+}
+
+/// Vertex-to-spring incidence (CSR), so forces can be gathered per vertex in parallel
+/// without atomics: spring `s` appears under both ends, with sign +1 at `ends[0]`.
+#[derive(Clone, Debug, Default)]
+pub struct Incidence {
+    /// Start of each vertex's list in `items`.
+    pub start: Vec<usize>,
+    /// `(spring, sign)` pairs.
+    pub items: Vec<(u32, f64)>,
+}
+
+impl Incidence {
+    /// Builds the incidence of `s` over `n` vertices.
+    pub fn new(s: &Springs, n: usize) -> Incidence {
+        let mut count = vec![0usize; n + 1];
+        for e in &s.ends {
+            count[e[0] as usize + 1] += 1;
+            count[e[1] as usize + 1] += 1;
+        }
+        for i in 0..n {
+            count[i + 1] += count[i];
+        }
+        let mut fill = count.clone();
+        let mut items = vec![(0u32, 0.0); count[n]];
+        for (i, e) in s.ends.iter().enumerate() {
+            items[fill[e[0] as usize]] = (i as u32, 1.0);
+            fill[e[0] as usize] += 1;
+            items[fill[e[1] as usize]] = (i as u32, -1.0);
+            fill[e[1] as usize] += 1;
+        }
+        Incidence {
+            start: count,
+            items,
+        }
+    }
+}
+
+/// Spring forces per vertex, `f = -dE_s/dx`, written into `f` (overwritten).
+/// Spring `s` pulls `ends[0]` by `k (l - L) n`, `n = (x_1 - x_0)/l`.
+pub fn spring_forces(
+    s: &Springs,
+    inc: &Incidence,
+    x: &[[f64; 3]],
+    fs: &mut Vec<[f64; 3]>,
+    f: &mut [[f64; 3]],
+) {
+    fs.resize(s.len(), [0.0; 3]);
+    fs.par_iter_mut()
+        .with_min_len(2048)
+        .enumerate()
+        .for_each(|(i, out)| {
+            let [a, b] = s.ends[i];
+            let d = sub(x[b as usize], x[a as usize]);
+            let l = norm(d);
+            let c = if l > 0.0 {
+                s.k[i] * (l - s.rest[i]) / l
+            } else {
+                0.0
+            };
+            *out = scale(d, c);
+        });
+    let fs = &*fs;
+    f.par_iter_mut()
+        .with_min_len(1024)
+        .enumerate()
+        .for_each(|(v, out)| {
+            let mut acc = [0.0; 3];
+            for &(sp, sign) in &inc.items[inc.start[v]..inc.start[v + 1]] {
+                acc = axpy(acc, sign, fs[sp as usize]);
+            }
+            *out = acc;
+        });
+}
+
+/// Adds the sphere's penalty force `k_p (s r - d) n` to `f` (free vertices only).
+pub fn add_collider_forces(
+    sphere: Option<&Sphere>,
+    x: &[[f64; 3]],
+    fixed: &[bool],
+    f: &mut [[f64; 3]],
+) {
+    let Some(sp) = sphere else { return };
+    let r = sp.contact_radius();
+    for i in 0..x.len() {
+        if fixed[i] {
+            continue;
+        }
+        let d = sub(x[i], sp.center);
+        let l = norm(d);
+        if l < r && l > 0.0 {
+            f[i] = axpy(f[i], sp.k * (r - l) / l, d);
+        }
+    }
+}
+
+/// The 3x3 Hessian block `K` of one spring's energy with respect to `x_1 - x_0`,
+/// projected to be positive semi-definite: `K = k n n^T + k max(0, 1 - L/l) (I - n n^T)`.
+/// The exact block has eigenvalues `k` (along `n`) and `k (1 - L/l)` (twice), negative when
+/// the spring is compressed; clamping them at zero is the per-spring PSD projection
+/// (Teran et al. 2005 style, applied per element).
+pub fn spring_hessian_psd(d: [f64; 3], rest: f64, k: f64) -> [[f64; 3]; 3] {
+    let l = norm(d);
+    if l <= 0.0 {
+        return [[0.0; 3]; 3];
+    }
+    let n = scale(d, 1.0 / l);
+    let t = k * (1.0 - rest / l).max(0.0);
+    let mut h = [[0.0; 3]; 3];
+    for (a, row) in h.iter_mut().enumerate() {
+        for (b, e) in row.iter_mut().enumerate() {
+            let id = if a == b { 1.0 } else { 0.0 };
+            *e = k * n[a] * n[b] + t * (id - n[a] * n[b]);
+        }
+    }
+    h
+}
+
+/// `a - b`.
+#[inline]
+pub fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+/// `a + s b`.
+#[inline]
+pub fn axpy(a: [f64; 3], s: f64, b: [f64; 3]) -> [f64; 3] {
+    [a[0] + s * b[0], a[1] + s * b[1], a[2] + s * b[2]]
+}
+/// `s a`.
+#[inline]
+pub fn scale(a: [f64; 3], s: f64) -> [f64; 3] {
+    [a[0] * s, a[1] * s, a[2] * s]
+}
+/// Dot product.
+#[inline]
+pub fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+/// Euclidean norm.
+#[inline]
+pub fn norm(a: [f64; 3]) -> f64 {
+    dot(a, a).sqrt()
+}

@@ -718,3 +718,45 @@ pub fn register(r: &mut Registry) {
     r.add("mass_spring", declare, execute);
     grid::register(r);
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn selections() {
+        let m = grid::grid_mesh(10, 10, [2.0, 2.0], "xy", [0.0; 3], true).unwrap();
+        assert_eq!(select_vertices(&m, "top_corners", 2).unwrap(), vec![120, 110]);
+        assert_eq!(select_vertices(&m, "0, 39", 2).unwrap(), vec![0, 39]);
+        assert_eq!(select_vertices(&m, "top_edge", 2).unwrap(), (110..121).collect::<Vec<_>>());
+        let mut c = select_vertices(&m, "corners", 2).unwrap();
+        c.sort();
+        assert_eq!(c, vec![0, 10, 110, 120]);
+        assert!(select_vertices(&m, "", 2).unwrap().is_empty());
+        assert!(select_vertices(&m, "121", 2).is_err());
+        // A vertical cloth (xz plane) hangs from its highest side along gravity (z).
+        let v = grid::grid_mesh(4, 4, [1.0, 1.0], "xz", [0.0; 3], false).unwrap();
+        assert_eq!(select_vertices(&v, "top_corners", 2).unwrap(), vec![24, 20]);
+        let mut a = m.clone();
+        let vals = (0..121).map(|i| if i == 5 { 1.0 } else { 0.0 }).collect();
+        a.attributes.insert(
+            "pin".into(),
+            AttributeData::Float(Attribute {
+                domain: Domain::Vertex,
+                values: vals,
+            }),
+        );
+        assert_eq!(select_vertices(&a, "attr:pin", 2).unwrap(), vec![5]);
+    }
+
+    #[test]
+    fn keyframes_interpolate_linearly() {
+        let k = parse_keyframes("10: 0,0,1; 0:0,0,-1").unwrap();
+        assert_eq!(keyframed_center(&k, -3.0), Some([0.0, 0.0, -1.0]));
+        assert_eq!(keyframed_center(&k, 5.0), Some([0.0, 0.0, 0.0]));
+        assert_eq!(keyframed_center(&k, 20.0), Some([0.0, 0.0, 1.0]));
+        assert_eq!(keyframed_center(&[], 1.0), None);
+        assert!(parse_keyframes("1:0,0").is_err());
+        assert!(parse_keyframes("x:0,0,0").is_err());
+    }
+}

@@ -409,3 +409,105 @@ pub fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
 pub fn norm(a: [f64; 3]) -> f64 {
     dot(a, a).sqrt()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn one_spring(x1: [f64; 3]) -> (Springs, Vec<[f64; 3]>) {
+        let rest = vec![[0.0; 3], [1.0, 0.0, 0.0]];
+        let mut s = Springs::default();
+        s.push(0, 1, &rest, 7.0);
+        (s, vec![[0.0; 3], x1])
+    }
+
+    #[test]
+    fn forces_are_minus_energy_gradient() {
+        let (s, x) = one_spring([1.3, 0.4, -0.2]);
+        let inc = Incidence::new(&s, 2);
+        let mut fs = Vec::new();
+        let mut f = vec![[0.0; 3]; 2];
+        spring_forces(&s, &inc, &x, &mut fs, &mut f);
+        let eps = 1e-6;
+        for v in 0..2 {
+            for c in 0..3 {
+                let mut xp = x.clone();
+                let mut xm = x.clone();
+                xp[v][c] += eps;
+                xm[v][c] -= eps;
+                let g = (spring_energy(&s, &xp).0 - spring_energy(&s, &xm).0) / (2.0 * eps);
+                assert!((f[v][c] + g).abs() < 1e-6, "v{v} c{c}: {} vs {}", f[v][c], -g);
+            }
+        }
+    }
+
+    #[test]
+    fn hessian_is_exact_when_stretched_and_psd_when_compressed() {
+        for (x1, stretched) in [([1.3, 0.4, -0.2], true), ([0.5, 0.2, 0.1], false)] {
+            let (s, x) = one_spring(x1);
+            let d = sub(x[1], x[0]);
+            let k = spring_hessian_psd(d, s.rest[0], s.k[0]);
+            // Finite-difference Hessian of the energy w.r.t. x1 (= w.r.t. d).
+            let inc = Incidence::new(&s, 2);
+            let eps = 1e-6;
+            let mut exact = [[0.0; 3]; 3];
+            for c in 0..3 {
+                let mut fp = vec![[0.0; 3]; 2];
+                let mut fm = vec![[0.0; 3]; 2];
+                let (mut xp, mut xm) = (x.clone(), x.clone());
+                xp[1][c] += eps;
+                xm[1][c] -= eps;
+                spring_forces(&s, &inc, &xp, &mut Vec::new(), &mut fp);
+                spring_forces(&s, &inc, &xm, &mut Vec::new(), &mut fm);
+                for r in 0..3 {
+                    exact[r][c] = -(fp[1][r] - fm[1][r]) / (2.0 * eps);
+                }
+            }
+            let km = nalgebra::Matrix3::from_fn(|r, c| k[r][c]);
+            let em = nalgebra::Matrix3::from_fn(|r, c| exact[r][c]);
+            let ev = km.symmetric_eigen().eigenvalues;
+            assert!(ev.iter().all(|&e| e >= -1e-12), "{ev:?}");
+            if stretched {
+                assert!((km - em).norm() < 1e-5, "{km} vs {em}");
+            } else {
+                // Exact block is indefinite; projection keeps its positive eigenpair (k n n^T).
+                assert!(em.symmetric_eigen().eigenvalues.min() < 0.0);
+                let n = nalgebra::Vector3::new(d[0], d[1], d[2]).normalize();
+                assert!((km - n * n.transpose() * 7.0).norm() < 1e-12);
+            }
+        }
+    }
+
+    #[test]
+    fn shear_and_bending_springs_on_quads() {
+        let m = Mesh::new(
+            (0..9)
+                .map(|i| [(i % 3) as f64, (i / 3) as f64, 0.0])
+                .collect(),
+            vec![4; 4],
+            vec![0, 1, 4, 3, 1, 2, 5, 4, 3, 4, 7, 6, 4, 5, 8, 7],
+        )
+        .unwrap();
+        let none = SpringKinds {
+            shear: false,
+            bending: false,
+            bending_scale: 1.0,
+        };
+        assert_eq!(springs_from_mesh(&m, 1.0, none).len(), 12);
+        let shear = SpringKinds {
+            shear: true,
+            ..none
+        };
+        assert_eq!(springs_from_mesh(&m, 1.0, shear).len(), 20);
+        let all = SpringKinds {
+            bending: true,
+            bending_scale: 0.5,
+            ..shear
+        };
+        let s = springs_from_mesh(&m, 1.0, all);
+        assert_eq!(s.len(), 26);
+        assert!(s.ends.contains(&[0, 2]) && s.ends.contains(&[0, 6]));
+        assert_eq!(s.k[s.ends.iter().position(|e| *e == [0, 2]).unwrap()], 0.5);
+        assert!(!s.ends.contains(&[0, 8])); // a diagonal line is not a mesh line
+    }
+}

@@ -430,7 +430,7 @@ fn declare(b: &mut NodeBuilder) {
     b.add_input::<f64>("damping")
         .default(0.995)
         .range(1e-6, 1.0)
-        .doc("Velocity factor after each step (1 = undamped).");
+        .doc("Velocity factor per 0.01 s (per step at the course's h = 0.01; 1 = undamped).");
     b.add_input::<f64>("gravity").default(-9.8).range(-1e4, 1e4);
     b.add_input::<String>("gravity_axis").choices(&["z", "y", "x"]);
     b.add_input::<f64>("mass")
@@ -546,7 +546,9 @@ fn build(ctx: &ExecContext, mesh: &Mesh) -> Result<(Simulator, Params), NodeErro
         mass: vec![mass / n as f64; n],
         fixed,
         gravity,
-        damping,
+        // The course applies `damping` once per step of h = 0.01; scaling it to the step keeps
+        // the same decay per second whatever h and substeps are.
+        damping: damping.powf(h / 0.01),
     };
     let sphere = if ctx.input::<bool>("sphere")? {
         let r: f64 = ctx.input("sphere_radius")?;

@@ -44,8 +44,15 @@ fn median(mut v: Vec<f64>) -> f64 {
     v[v.len() / 2]
 }
 
-/// Runs `frames` frames of `substeps` steps; returns per-frame ms and total Newton iterations.
-fn run(method: Method, n: usize, frames: usize, substeps: usize) -> (Vec<f64>, usize, usize) {
+/// Runs `frames` frames of `substeps` steps, checking energy every step (as the node does,
+/// for its log) or once per frame; returns per-frame ms and total iterations.
+fn run(
+    method: Method,
+    n: usize,
+    frames: usize,
+    substeps: usize,
+    per_step_energy: bool,
+) -> (Vec<f64>, usize, usize) {
     let (model, x0) = warp_model(n);
     let springs = model.springs.len();
     let h = 1.0 / 60.0 / substeps as f64;
@@ -55,7 +62,14 @@ fn run(method: Method, n: usize, frames: usize, substeps: usize) -> (Vec<f64>, u
     for _ in 0..frames {
         let t = Instant::now();
         for _ in 0..substeps {
-            iters += sim.step(None).expect("stable").iterations;
+            iters += if per_step_energy {
+                sim.step(None).expect("stable").iterations
+            } else {
+                sim.advance(None).expect("stable")
+            };
+        }
+        if !per_step_energy {
+            sim.check_energy(None).expect("stable");
         }
         ms.push(t.elapsed().as_secs_f64() * 1e3);
     }
@@ -85,19 +99,24 @@ fn main() {
         println!("warp-lang {}", w["version"]);
     }
     println!(
-        "| grid | springs | semi_implicit ms/frame (median) | warp ms/frame (min / avg) | warp min / cgnodes |"
+        "| grid | springs | semi_implicit ms/frame, energy per frame (per step) | warp ms/frame (min / avg) | warp min / cgnodes |"
     );
     println!("|---|---|---|---|---|");
     for n in [32usize, 64, 128] {
-        let (ms, _, springs) = run(Method::SemiImplicit, n, 60, 16);
+        let (ms, _, springs) = run(Method::SemiImplicit, n, 60, 16, false);
         let ours = median(ms);
+        let logged = median(run(Method::SemiImplicit, n, 60, 16, true).0);
         let (wmin, wavg) = w
             .as_ref()
             .map(|w| (w[n.to_string()]["min"].as_f64(), w[n.to_string()]["avg"].as_f64()))
             .unwrap_or((None, None));
         let f = |x: Option<f64>| x.map(|x| format!("{x:.2}")).unwrap_or("-".into());
         let ratio = wmin.map(|m| format!("{:.2}", m / ours)).unwrap_or("-".into());
-        println!("| {n}x{n} | {springs} | {ours:.2} | {} / {} | {ratio} |", f(wmin), f(wavg));
+        println!(
+            "| {n}x{n} | {springs} | {ours:.2} ({logged:.2}) | {} / {} | {ratio} |",
+            f(wmin),
+            f(wavg)
+        );
     }
     println!();
     println!("| grid | integrator | h | ms/frame (median) | iterations/step | Newton steps/s |");
@@ -105,7 +124,7 @@ fn main() {
     for n in [32usize, 64, 128] {
         for method in [Method::Implicit, Method::Projective] {
             let frames = if n == 128 { 5 } else { 10 };
-            let (ms, iters, _) = run(method, n, frames, 1);
+            let (ms, iters, _) = run(method, n, frames, 1, true);
             let total: f64 = ms.iter().sum::<f64>() / 1e3;
             let per = iters as f64 / frames as f64;
             let rate = match method {

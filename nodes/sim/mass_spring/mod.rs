@@ -202,27 +202,33 @@ impl Simulator {
         }
     }
 
-    /// One step of length `h` with the collider at `sphere` (its position at the step's end).
+    /// One step of length `h` with the collider at `sphere` (its position at the step's end),
+    /// then the energy check: fails with `Unstable` on NaN, infinity or runaway energy.
     pub fn step(&mut self, sphere: Option<&Sphere>) -> Result<StepLog, SimError> {
+        let iterations = self.advance(sphere)?;
+        let energy = self.check_energy(sphere)?;
+        Ok(StepLog { energy, iterations })
+    }
+
+    /// One step without the energy check (only NaN and infinity are caught); returns the
+    /// iterations. For callers that check energy less often (`check_energy`), e.g. once per
+    /// frame in benchmarks.
+    pub fn advance(&mut self, sphere: Option<&Sphere>) -> Result<usize, SimError> {
         let h = self.h;
+        let step = self.steps;
         let iterations = match &mut self.solver {
             Solver::Semi(s) => {
                 s.step(&self.model, &mut self.state, h, sphere);
                 0
             }
-            Solver::Implicit(s) => {
-                s.step(&self.model, &mut self.state, h, sphere)
-                    .map_err(|e| match e.contains("finite") {
-                        true => SimError::Unstable {
-                            step: self.steps,
-                            reason: e,
-                        },
-                        false => SimError::Solver(e),
-                    })?
-            }
+            Solver::Implicit(s) => s
+                .step(&self.model, &mut self.state, h, sphere)
+                .map_err(|e| match e.contains("finite") {
+                    true => SimError::Unstable { step, reason: e },
+                    false => SimError::Solver(e),
+                })?,
             Solver::Projective(s) => s.step(&self.model, &mut self.state, sphere),
         };
-        let step = self.steps;
         self.steps += 1;
         if let Some(i) = (0..self.state.x.len()).find(|&i| {
             self.state.x[i]
@@ -235,10 +241,16 @@ impl Simulator {
                 reason: format!("vertex {i} is not finite"),
             });
         }
+        Ok(iterations)
+    }
+
+    /// The current energy, or `Unstable` when the total exceeds the initial energy by more
+    /// than the blow-up threshold.
+    pub fn check_energy(&self, sphere: Option<&Sphere>) -> Result<Energy, SimError> {
         let e = self.energy(sphere);
         if !e.total().is_finite() || e.total() - self.e0 > self.e_limit {
             return Err(SimError::Unstable {
-                step,
+                step: self.steps.saturating_sub(1),
                 reason: format!(
                     "total energy {:.4e} exceeds the initial {:.4e} by more than {:.4e}",
                     e.total(),
@@ -247,10 +259,7 @@ impl Simulator {
                 ),
             });
         }
-        Ok(StepLog {
-            energy: e,
-            iterations,
-        })
+        Ok(e)
     }
 }
 

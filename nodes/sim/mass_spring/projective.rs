@@ -111,7 +111,7 @@ impl Projective {
         for _ in 0..self.iterations {
             // Local step (eq. 15).
             let s = &m.springs;
-            self.d.par_iter_mut().enumerate().with_min_len(2048).for_each(|(i, d)| {
+            self.d.par_iter_mut().enumerate().with_min_len(8192).for_each(|(i, d)| {
                 let [a, b] = s.ends[i];
                 let e = sub(x[b as usize], x[a as usize]);
                 let l = norm(e);

@@ -36,7 +36,7 @@ impl SemiImplicit {
         st.x.par_iter_mut()
             .zip(st.v.par_iter_mut())
             .enumerate()
-            .with_min_len(1024)
+            .with_min_len(4096)
             .for_each(|(i, (x, v))| {
                 if m.fixed[i] {
                     *v = [0.0; 3];

@@ -9,6 +9,10 @@ use crate::prelude::*;
 use rayon::prelude::*;
 use std::collections::HashSet;
 
+/// Smallest chunk of springs (or vertices) a rayon task gets: below a few thousand items the
+/// loops run serially, where thread hand-off would cost more than it saves.
+const PAR_MIN: usize = 8192;
+
 /// Springs as index pairs with rest lengths and stiffnesses.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Springs {
@@ -219,7 +223,7 @@ impl Energy {
 pub fn spring_energy(s: &Springs, x: &[[f64; 3]]) -> (f64, f64) {
     (0..s.len())
         .into_par_iter()
-        .with_min_len(4096)
+        .with_min_len(PAR_MIN)
         .map(|i| {
             let [a, b] = s.ends[i];
             let l = norm(sub(x[b as usize], x[a as usize]));
@@ -315,7 +319,7 @@ pub fn spring_forces(
 ) {
     fs.resize(s.len(), [0.0; 3]);
     fs.par_iter_mut()
-        .with_min_len(2048)
+        .with_min_len(PAR_MIN)
         .enumerate()
         .for_each(|(i, out)| {
             let [a, b] = s.ends[i];
@@ -330,7 +334,7 @@ pub fn spring_forces(
         });
     let fs = &*fs;
     f.par_iter_mut()
-        .with_min_len(1024)
+        .with_min_len(PAR_MIN / 2)
         .enumerate()
         .for_each(|(v, out)| {
             let mut acc = [0.0; 3];

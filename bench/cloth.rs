@@ -91,7 +91,169 @@ fn warp() -> Option<serde_json::Value> {
     serde_json::from_str(text.lines().last()?).ok()
 }
 
+/// The reference 8x8 grid (spacing 0.1, k = 1000, m = 0.01, structural + shear + bending:
+/// 2/omega_max = 2.0751e-3 s), released from a uniform 1 % stretch, no gravity, no damping.
+fn sweep_model() -> (Model, Vec<[f64; 3]>) {
+    let mesh = grid_mesh(7, 7, [0.7, 0.7], "xy", [0.35, 0.35, 0.0], false).unwrap();
+    let kinds = SpringKinds {
+        shear: true,
+        bending: true,
+        bending_scale: 1.0,
+    };
+    let n = mesh.num_vertices();
+    let model = Model {
+        springs: springs_from_mesh(&mesh, 1000.0, kinds),
+        mass: vec![0.01; n],
+        fixed: vec![false; n],
+        gravity: [0.0; 3],
+        damping: 1.0,
+    };
+    let x0 = mesh
+        .positions
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            // 1 % stretch plus a small out-of-plane bump so all modes are excited.
+            let z = 1e-3 * ((i * 7919) % 13) as f64 / 13.0;
+            [1.01 * p[0], 1.01 * p[1], z]
+        })
+        .collect();
+    (model, x0)
+}
+
+/// Stability and energy against time step for the three integrators over 0.2 simulated seconds
+/// (at least 20 steps); writes `target/cloth_stability.svg` (copied to docs/).
+fn sweep() {
+    let dtc: f64 = 2.0751e-3;
+    let factors = [0.1, 0.25, 0.5, 0.9, 0.95, 1.05, 1.5, 2.0, 5.0, 10.0, 20.0, 50.0, 100.0];
+    let methods = [Method::SemiImplicit, Method::Implicit, Method::Projective];
+    println!();
+    println!("Energy E(T)/E0 after T = 0.2 s (at least 20 steps) on the 8x8 grid; h in units of 2/omega_max");
+    println!("| h / (2/omega_max) | semi_implicit | implicit | projective |");
+    println!("|---|---|---|---|");
+    let mut series: Vec<Vec<(f64, Option<f64>)>> = vec![Vec::new(); 3];
+    for f in factors {
+        let h = f * dtc;
+        let steps = ((0.2 / h).round() as usize).max(20);
+        let mut row = Vec::new();
+        for (mi, &m) in methods.iter().enumerate() {
+            let (model, x0) = sweep_model();
+            let mut sim = Simulator::new(model, x0, None, m, h, SolverOptions::default()).unwrap();
+            let e0 = sim.energy(None).total();
+            let mut res = None;
+            for _ in 0..steps {
+                match sim.step(None) {
+                    Ok(l) => res = Some(l.energy.total() / e0),
+                    Err(_) => {
+                        res = None;
+                        break;
+                    }
+                }
+            }
+            series[mi].push((f, res));
+            row.push(match res {
+                Some(r) => format!("{r:.3e}"),
+                None => format!("unstable (step {})", sim.steps),
+            });
+        }
+        println!("| {f} | {} | {} | {} |", row[0], row[1], row[2]);
+    }
+    let svg = chart(&series, &["semi_implicit", "implicit", "projective"]);
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/target/cloth_stability.svg");
+    if std::fs::write(path, svg).is_ok() {
+        println!("chart: {path}");
+    }
+}
+
+/// A small log-log SVG chart of E(T)/E0 against h/(2/omega_max); blow-ups drawn as crosses
+/// on the top edge.
+fn chart(series: &[Vec<(f64, Option<f64>)>], names: &[&str]) -> String {
+    let (w, h, l, r, t, b) = (640.0, 400.0, 70.0, 150.0, 30.0, 50.0);
+    let (x0, x1, y0, y1) = (0.1f64.log10(), 100f64.log10(), 1e-8f64.log10(), 10f64.log10());
+    let px = |x: f64| l + (x.log10() - x0) / (x1 - x0) * (w - l - r);
+    let py = |y: f64| t + (y1 - y.max(1e-8).log10()) / (y1 - y0) * (h - t - b);
+    let colors = ["#d62728", "#1f77b4", "#2ca02c"];
+    let mut s = format!(
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" font-family="sans-serif" font-size="12">
+<rect width="{w}" height="{h}" fill="white"/>
+<text x="{}" y="18" text-anchor="middle">Energy after 0.2 s, 8x8 spring grid, against time step</text>
+"#,
+        (w - r + l) / 2.0
+    );
+    for e in (-8..=1).step_by(1) {
+        let y = py(10f64.powi(e));
+        s += &format!(
+            "<line x1=\"{l}\" x2=\"{}\" y1=\"{y}\" y2=\"{y}\" stroke=\"#ddd\"/><text x=\"{}\" y=\"{}\" text-anchor=\"end\">1e{e}</text>\n",
+            w - r,
+            l - 6.0,
+            y + 4.0
+        );
+    }
+    for x in [0.1, 1.0, 10.0, 100.0] {
+        let xx = px(x);
+        s += &format!(
+            "<line x1=\"{xx}\" x2=\"{xx}\" y1=\"{t}\" y2=\"{}\" stroke=\"#ddd\"/><text x=\"{xx}\" y=\"{}\" text-anchor=\"middle\">{x}</text>\n",
+            h - b,
+            h - b + 16.0
+        );
+    }
+    s += &format!(
+        "<line x1=\"{0}\" x2=\"{0}\" y1=\"{t}\" y2=\"{1}\" stroke=\"black\" stroke-dasharray=\"4 3\"/>\n",
+        px(1.0),
+        h - b
+    );
+    s += &format!(
+        "<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">h / (2 / omega_max)</text>\n<text x=\"16\" y=\"{}\" transform=\"rotate(-90 16 {})\" text-anchor=\"middle\">E(T) / E(0)</text>\n",
+        (w - r + l) / 2.0,
+        h - 10.0,
+        (h - b + t) / 2.0,
+        (h - b + t) / 2.0
+    );
+    for (i, ser) in series.iter().enumerate() {
+        let pts: Vec<String> = ser
+            .iter()
+            .filter_map(|(x, y)| y.map(|y| format!("{:.1},{:.1}", px(*x), py(y))))
+            .collect();
+        s += &format!(
+            "<polyline fill=\"none\" stroke=\"{}\" stroke-width=\"2\" points=\"{}\"/>\n",
+            colors[i],
+            pts.join(" ")
+        );
+        for (x, y) in ser {
+            let (cx, cy) = (px(*x), y.map(py).unwrap_or(t + 4.0));
+            s += &match y {
+                Some(_) => format!("<circle cx=\"{cx:.1}\" cy=\"{cy:.1}\" r=\"3\" fill=\"{}\"/>\n", colors[i]),
+                None => format!(
+                    "<text x=\"{cx:.1}\" y=\"{:.1}\" fill=\"{}\" text-anchor=\"middle\" font-size=\"14\">x</text>\n",
+                    cy + 4.0,
+                    colors[i]
+                ),
+            };
+        }
+        let ly = t + 20.0 + 20.0 * i as f64;
+        s += &format!(
+            "<line x1=\"{}\" x2=\"{}\" y1=\"{ly}\" y2=\"{ly}\" stroke=\"{}\" stroke-width=\"2\"/><text x=\"{}\" y=\"{}\">{}</text>\n",
+            w - r + 10.0,
+            w - r + 30.0,
+            colors[i],
+            w - r + 36.0,
+            ly + 4.0,
+            names[i]
+        );
+    }
+    s += &format!(
+        "<text x=\"{}\" y=\"{}\" font-size=\"11\">x = blew up</text>\n</svg>\n",
+        w - r + 10.0,
+        t + 90.0
+    );
+    s
+}
+
 fn main() {
+    if std::env::args().any(|a| a == "--sweep") {
+        sweep();
+        return;
+    }
     let threads = rayon::current_num_threads();
     println!("cgnodes mass_spring, {threads} rayon threads; Warp CPU cloth benchmark settings");
     let w = warp();

@@ -16,10 +16,12 @@ use super::springs::{
     add_collider_forces, axpy, dot, norm, spring_energy, spring_forces, spring_hessian_psd, sub,
     Incidence, Model, Sphere, State, collider_energy,
 };
-use faer::linalg::solvers::Solve;
-use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::sparse::linalg::cholesky::{
+    factorize_symbolic_cholesky, LltRef, SymbolicCholesky, SymmetricOrdering,
+};
 use faer::sparse::{Argsort, Pair, SparseColMat, SymbolicSparseColMat};
-use faer::{Mat, Side};
+use faer::{Conj, Mat, Par, Side};
 
 /// Newton options.
 #[derive(Clone, Copy, Debug)]
@@ -46,7 +48,12 @@ pub struct Implicit {
     n_free: usize,
     pattern: SymbolicSparseColMat<usize>,
     argsort: Argsort<usize>,
-    symbolic: SymbolicLlt<usize>,
+    symbolic: SymbolicCholesky<usize>,
+    /// Values of the Cholesky factor (overwritten by each numeric factorization).
+    l_values: Vec<f64>,
+    /// Scratch memory for factorization and solve, kept between steps.
+    scratch: MemBuffer,
+    par: Par,
     /// Value slot of each spring's off-diagonal block (both ends free).
     spring_slot: Vec<Option<usize>>,
     vals: Vec<f64>,
@@ -100,14 +107,33 @@ impl Implicit {
         let nd = 3 * n_free;
         let (pattern, argsort) = SymbolicSparseColMat::try_new_from_indices(nd, nd, &idx)
             .map_err(|e| format!("sparse pattern: {e:?}"))?;
-        let symbolic = SymbolicLlt::try_new(pattern.as_ref(), Side::Lower)
-            .map_err(|e| format!("symbolic Cholesky: {e:?}"))?;
+        let symbolic = factorize_symbolic_cholesky(
+            pattern.as_ref(),
+            Side::Lower,
+            SymmetricOrdering::Amd,
+            Default::default(),
+        )
+        .map_err(|e| format!("symbolic Cholesky: {e:?}"))?;
+        // Small systems factor faster on one thread (and nodes already run in parallel).
+        let par = if nd >= 60_000 {
+            Par::rayon(0)
+        } else {
+            Par::Seq
+        };
+        let req = symbolic
+            .factorize_numeric_llt_scratch::<f64>(par, Default::default())
+            .or(symbolic.solve_in_place_scratch::<f64>(1, par));
+        let scratch = MemBuffer::try_new(req).map_err(|e| format!("scratch memory: {e:?}"))?;
+        let l_values = vec![0.0; symbolic.len_val()];
         Ok(Implicit {
             free,
             n_free,
             pattern,
             argsort,
             symbolic,
+            l_values,
+            scratch,
+            par,
             spring_slot,
             vals: vec![0.0; idx.len()],
             inc: Incidence::new(&m.springs, n),
@@ -237,12 +263,26 @@ impl Implicit {
             }
             let a = SparseColMat::new_from_argsort(self.pattern.clone(), &self.argsort, &self.vals)
                 .map_err(|e| format!("Hessian assembly: {e:?}"))?;
-            let llt = Llt::try_new_with_symbolic(self.symbolic.clone(), a.as_ref(), Side::Lower)
+            self.symbolic
+                .factorize_numeric_llt::<f64>(
+                    &mut self.l_values,
+                    a.as_ref(),
+                    Side::Lower,
+                    Default::default(),
+                    self.par,
+                    MemStack::new(&mut self.scratch),
+                    Default::default(),
+                )
                 .map_err(|e| format!("the Hessian is not positive definite: {e:?}"))?;
             self.numeric_count += 1;
             iters += 1;
             let mut dx = rhs.clone();
-            llt.solve_in_place(&mut dx);
+            LltRef::new(&self.symbolic, &self.l_values).solve_in_place_with_conj(
+                Conj::No,
+                dx.as_mut(),
+                self.par,
+                MemStack::new(&mut self.scratch),
+            );
             // Directional derivative grad . dx = -rhs . dx.
             let mut slope = 0.0;
             let mut step_max = 0.0f64;

@@ -494,7 +494,12 @@ struct Params {
     keys: Vec<(f64, [f64; 3])>,
 }
 
-fn build(ctx: &ExecContext, mesh: &Mesh) -> Result<(Simulator, Params), NodeError> {
+/// Reads the parameters; builds the simulator (springs, factorizations) only when `with_sim`.
+fn build(
+    ctx: &ExecContext,
+    mesh: &Mesh,
+    with_sim: bool,
+) -> Result<(Option<Simulator>, Params), NodeError> {
     let method = Method::parse(&ctx.input::<String>("integrator")?)
         .ok_or_else(|| NodeError::invalid("integrator", "unknown integrator"))?;
     let k: f64 = ctx.input("stiffness")?;
@@ -586,12 +591,18 @@ fn build(ctx: &ExecContext, mesh: &Mesh) -> Result<(Simulator, Params), NodeErro
         pd_iterations: ctx.input::<i64>("pd_iters")?.max(1) as usize,
         blowup_factor: ctx.input("blowup_factor")?,
     };
-    let sim = Simulator::new(model, mesh.positions.clone(), None, method, h, opts).map_err(
-        |e| match e.contains("positive definite") {
-            true => NodeError::singular(e),
-            false => NodeError::invalid("mesh", e),
-        },
-    )?;
+    let sim = if with_sim {
+        Some(
+            Simulator::new(model, mesh.positions.clone(), None, method, h, opts).map_err(|e| {
+                match e.contains("positive definite") {
+                    true => NodeError::singular(e),
+                    false => NodeError::invalid("mesh", e),
+                }
+            })?,
+        )
+    } else {
+        None
+    };
     Ok((
         sim,
         Params {
@@ -629,11 +640,14 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let mesh: Arc<Mesh> = ctx.input("mesh")?;
     let key = input_key(ctx, &mesh);
     let frame = ctx.frame();
-    let (sim0, params) = build(ctx, &mesh)?;
+    let restart = {
+        let st = ctx.state::<NodeState>()?;
+        st.sim.is_none() || st.key != key || frame <= st.frame
+    };
+    let (sim0, params) = build(ctx, &mesh, restart)?;
     let st = ctx.state::<NodeState>()?;
     let mut log = Table::with_columns(&LOG_COLUMNS);
-    let restart = st.sim.is_none() || st.key != key || frame <= st.frame;
-    if restart {
+    if let Some(sim0) = sim0 {
         // First frame (or new input): the rest state, no steps.
         let e = sim0.energy(params.sphere.as_ref());
         log.push_row(&[

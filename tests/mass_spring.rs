@@ -510,3 +510,52 @@ fn bad_fixed_selection_is_an_input_error() {
         assert_eq!(e.kind, ErrorKind::InvalidInput, "{sel}: {e}");
     }
 }
+
+#[test]
+fn degenerate_models_fail_cleanly_or_do_nothing() {
+    let mesh = grid_mesh(2, 2, [1.0, 1.0], "xy", [0.0; 3], true).unwrap();
+    let n = mesh.num_vertices();
+    for method in [Method::SemiImplicit, Method::Implicit, Method::Projective] {
+        // Every vertex fixed: nothing to solve, nothing moves.
+        let model = Model {
+            springs: springs_from_mesh(&mesh, 1000.0, SpringKinds::default()),
+            mass: vec![0.1; n],
+            fixed: vec![true; n],
+            gravity: [0.0, 0.0, -9.8],
+            damping: 1.0,
+        };
+        let mut sim = Simulator::new(
+            model.clone(),
+            mesh.positions.clone(),
+            None,
+            method,
+            0.01,
+            SolverOptions::default(),
+        )
+        .unwrap();
+        sim.step(None).unwrap();
+        assert_eq!(sim.state.x, mesh.positions);
+        // Coincident vertices (zero rest length) and zero mass are input errors.
+        let mut x = mesh.positions.clone();
+        x[1] = x[0];
+        let mut bad = model.clone();
+        bad.springs = springs_from_mesh(
+            &Mesh::new(x.clone(), mesh.face_counts().to_vec(), mesh.face_indices().to_vec())
+                .unwrap(),
+            1000.0,
+            SpringKinds::default(),
+        );
+        assert!(Simulator::new(bad, x, None, method, 0.01, SolverOptions::default()).is_err());
+        let mut bad = model.clone();
+        bad.mass[0] = 0.0;
+        assert!(Simulator::new(
+            bad,
+            mesh.positions.clone(),
+            None,
+            method,
+            0.01,
+            SolverOptions::default()
+        )
+        .is_err());
+    }
+}

@@ -1,71 +1,95 @@
-//! `mesh_load`: reads a mesh from a file.
+//! `mesh_load`: reads a mesh from OBJ, text USD (`.usda`), PLY (ASCII or binary) or OFF,
+//! chosen by the file's extension.
 
 use crate::prelude::*;
 use std::path::Path;
 
-/// Reads an OBJ file with tobj: positions, polygon faces, and UVs and normals per corner.
-/// All groups are merged into one mesh.
-pub fn load_obj(path: &Path) -> Result<Mesh, String> {
-    let opts = tobj::LoadOptions {
-        triangulate: false,
-        single_index: false,
-        ..Default::default()
+/// What `load_mesh` should pick out of a file.
+#[derive(Clone, Debug, Default)]
+pub struct LoadOptions {
+    /// USD prim path (`/Balls/Balls`); empty: the first Mesh.
+    pub prim: String,
+    /// OBJ group or object name; empty: all groups merged.
+    pub group: String,
+    /// Apply USD `xformOp`s of the prim and its ancestors.
+    pub apply_transform: bool,
+}
+
+/// Reads a mesh file, choosing the format by extension (`obj`, `usda`/`usd`, `ply`, `off`).
+/// Errors name the file and, for text formats, the offending line.
+pub fn load_mesh(path: &Path, opts: &LoadOptions) -> Result<Mesh, String> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase();
+    let name = path.display();
+    if !path.exists() {
+        return Err(format!("{name}: file not found"));
+    }
+    let read_text =
+        || std::fs::read_to_string(path).map_err(|e| format!("{name}: cannot read: {e}"));
+    let r = match ext.as_str() {
+        "obj" => super::obj::load_obj(path, &opts.group),
+        "usda" | "usd" => {
+            let text = read_text()?;
+            super::usda::read_usda(&text, &opts.prim, opts.apply_transform)
+        }
+        "ply" => {
+            let bytes = std::fs::read(path).map_err(|e| format!("{name}: cannot read: {e}"))?;
+            super::ply::read_ply(&bytes)
+        }
+        "off" => super::off::read_off(&read_text()?),
+        other => {
+            return Err(format!(
+                "{name}: unknown mesh format '.{other}' (obj, usda, ply, off are read)"
+            ))
+        }
     };
-    let (models, _) =
-        tobj::load_obj(path, &opts).map_err(|e| format!("{}: {e}", path.display()))?;
-    let mut positions = Vec::new();
-    let mut counts = Vec::new();
-    let mut idx = Vec::new();
-    let mut uvs = Vec::new();
-    let mut has_uv = true;
-    for m in &models {
-        let mesh = &m.mesh;
-        let base = positions.len() as u32;
-        positions.extend(
-            mesh.positions
-                .chunks_exact(3)
-                .map(|p| [p[0] as f64, p[1] as f64, p[2] as f64]),
-        );
-        if mesh.face_arities.is_empty() {
-            counts.extend(std::iter::repeat_n(3u32, mesh.indices.len() / 3));
-        } else {
-            counts.extend(&mesh.face_arities);
-        }
-        idx.extend(mesh.indices.iter().map(|&i| i + base));
-        if mesh.texcoord_indices.len() == mesh.indices.len() && !mesh.texcoords.is_empty() {
-            uvs.extend(mesh.texcoord_indices.iter().map(|&t| {
-                [
-                    mesh.texcoords[2 * t as usize] as f64,
-                    mesh.texcoords[2 * t as usize + 1] as f64,
-                ]
-            }));
-        } else {
-            has_uv = false;
-        }
-    }
-    let mut mesh =
-        Mesh::new(positions, counts, idx).map_err(|e| format!("{}: {e}", path.display()))?;
-    if has_uv && !uvs.is_empty() {
-        mesh.uvs = Some(Attribute {
-            domain: Domain::Corner,
-            values: uvs,
-        });
-    }
-    Ok(mesh)
+    r.map_err(|e| format!("{name}: {e}"))
 }
 
 fn declare(b: &mut NodeBuilder) {
-    b.doc("Reads a mesh from an OBJ file.").category("mesh");
+    b.doc("Reads a mesh from OBJ, USDA, PLY or OFF (by extension).")
+        .category("mesh");
     b.add_input::<String>("path")
         .file_in()
-        .doc("Mesh file, relative to the graph's folder.");
+        .doc("Mesh file, relative to the graph's folder (or an --assets folder).");
+    b.add_input::<String>("prim")
+        .default("")
+        .doc("USD prim path such as /Balls/Balls; empty: the first Mesh.");
+    b.add_input::<String>("group")
+        .default("")
+        .doc("OBJ group/object to load; empty: all groups merged.");
+    b.add_input::<bool>("transform")
+        .default(true)
+        .doc("Apply the USD prim's and its parents' xformOp transforms.");
     b.add_output::<Mesh>("mesh");
 }
 
 fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let p: String = ctx.input("path")?;
     let path = ctx.input_path(&p);
-    let mesh = load_obj(&path).map_err(|e| NodeError::new(ErrorKind::Io, e).at("path"))?;
+    let opts = LoadOptions {
+        prim: ctx.input("prim")?,
+        group: ctx.input("group")?,
+        apply_transform: ctx.input("transform")?,
+    };
+    let mesh = load_mesh(&path, &opts).map_err(|e| NodeError::new(ErrorKind::Io, e).at("path"))?;
+    let topo = mesh.topology();
+    if !topo.is_manifold() {
+        ctx.log(format!(
+            "warning: mesh is not manifold ({} edges with more than two faces, {} non-manifold vertices, {} edges with inconsistent orientation)",
+            topo.nonmanifold_edges.len(),
+            topo.nonmanifold_vertices.len(),
+            topo.misoriented_edges.len()
+        ));
+    }
+    ctx.log(format!(
+        "{} vertices, {} faces",
+        mesh.num_vertices(),
+        mesh.num_faces()
+    ));
     ctx.set_output("mesh", mesh);
     Ok(())
 }

@@ -1,7 +1,15 @@
 //! Mesh nodes: loading, saving, inspecting and triangulating meshes.
 
+pub mod buffer;
+pub mod compose;
+pub mod info;
 pub mod load;
+pub mod obj;
+pub mod off;
+pub mod ply;
 pub mod save;
+pub mod triangulate;
+pub mod usda;
 
 use crate::registry::Registry;
 
@@ -9,4 +17,8 @@ use crate::registry::Registry;
 pub fn register(r: &mut Registry) {
     load::register(r);
     save::register(r);
+    info::register(r);
+    triangulate::register(r);
+    compose::register(r);
+    buffer::register(r);
 }

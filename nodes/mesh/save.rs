@@ -1,51 +1,105 @@
-//! `mesh_save`: writes a mesh to a file under the output directory.
+//! `mesh_save`: writes a mesh under the output directory as OBJ (plus MTL and texture PNG
+//! when the mesh carries a material), PLY, USDA or OFF, chosen by the extension.
 
 use crate::prelude::*;
-use std::io::Write;
+use std::path::Path;
 
-/// Writes OBJ text: `v`, `vt` (per vertex or per corner) and `f` lines.
-pub fn write_obj(mesh: &Mesh, w: &mut dyn Write) -> std::io::Result<()> {
-    writeln!(w, "# written by cgnodes")?;
-    for p in &mesh.positions {
-        writeln!(w, "v {} {} {}", p[0], p[1], p[2])?;
+/// Encodes a linear RGBA image as an 8-bit sRGB PNG (IEC 61966-2-1 transfer function).
+pub fn png_bytes(img: &Image) -> Result<Vec<u8>, String> {
+    let enc = |x: f32| -> u8 {
+        let x = x.clamp(0.0, 1.0);
+        let s = if x <= 0.003_130_8 {
+            12.92 * x
+        } else {
+            1.055 * x.powf(1.0 / 2.4) - 0.055
+        };
+        (s * 255.0 + 0.5) as u8
+    };
+    let mut buf = image::RgbaImage::new(img.width, img.height);
+    for (i, p) in buf.pixels_mut().enumerate() {
+        let c = img.pixels[i];
+        *p = image::Rgba([
+            enc(c[0]),
+            enc(c[1]),
+            enc(c[2]),
+            (c[3].clamp(0.0, 1.0) * 255.0 + 0.5) as u8,
+        ]);
     }
-    let uv = mesh.uvs.as_ref().filter(|u| u.domain != Domain::Face);
-    if let Some(uv) = uv {
-        for t in &uv.values {
-            writeln!(w, "vt {} {}", t[0], t[1])?;
-        }
-    }
-    let mut c = 0usize;
-    for f in mesh.faces() {
-        write!(w, "f")?;
-        for &v in f {
-            match uv {
-                Some(uv) if uv.domain == Domain::Vertex => write!(w, " {}/{}", v + 1, v + 1)?,
-                Some(_) => write!(w, " {}/{}", v + 1, c + 1)?,
-                None => write!(w, " {}", v + 1)?,
-            }
-            c += 1;
-        }
-        writeln!(w)?;
-    }
-    Ok(())
+    let mut out = std::io::Cursor::new(Vec::new());
+    buf.write_to(&mut out, image::ImageFormat::Png)
+        .map_err(|e| e.to_string())?;
+    Ok(out.into_inner())
 }
 
 fn declare(b: &mut NodeBuilder) {
-    b.doc("Writes a mesh as OBJ under the output directory.")
+    b.doc("Writes a mesh as OBJ (+MTL, texture), PLY, USDA or OFF under the output directory.")
         .category("mesh");
     b.sink();
     b.add_input::<Mesh>("mesh");
     b.add_input::<String>("path")
         .file_out()
-        .doc("Output file; may contain {frame}.");
+        .doc("Output file (.obj, .ply, .usda, .off); may contain {frame}.");
+    b.add_input::<String>("prim")
+        .default("/mesh/mesh")
+        .doc("USDA only: prim path of the Mesh (parents become Xforms).");
+    b.add_input::<bool>("binary")
+        .default(false)
+        .doc("PLY only: binary little endian instead of ASCII.");
 }
 
 fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let mesh: Arc<Mesh> = ctx.input("mesh")?;
     let p: String = ctx.input("path")?;
+    let prim: String = ctx.input("prim")?;
+    let binary: bool = ctx.input("binary")?;
     let path = ctx.output_path("path", &p)?;
-    ctx.write_with(&path, |w| write_obj(&mesh, w))
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase();
+    match ext.as_str() {
+        "obj" => save_obj(ctx, &mesh, &path),
+        "ply" => ctx.write_with(&path, |w| super::ply::write_ply(&mesh, binary, w)),
+        "usda" | "usd" => ctx.write_with(&path, |w| super::usda::write_usda(&mesh, &prim, w)),
+        "off" => ctx.write_with(&path, |w| super::off::write_off(&mesh, w)),
+        other => Err(NodeError::invalid(
+            "path",
+            format!("unknown mesh format '.{other}' (obj, ply, usda, off are written)"),
+        )),
+    }
+}
+
+fn save_obj(ctx: &mut ExecContext, mesh: &Mesh, path: &Path) -> Result<(), NodeError> {
+    let Some(mat) = mesh.material.as_deref() else {
+        return ctx.write_with(path, |w| super::obj::write_obj(mesh, None, w));
+    };
+    let stem = path
+        .file_stem()
+        .and_then(|s| s.to_str())
+        .unwrap_or("mesh")
+        .to_string();
+    let mtl_file = format!("{stem}.mtl");
+    let name = super::obj::mtl_name(mat);
+    let mut tex_file = None;
+    if let Some(img) = &mat.base_color_texture {
+        let t = format!(
+            "{stem}_{}.png",
+            crate::nodes::mesh::usda::usd_identifier(&name)
+        );
+        let bytes = png_bytes(img).map_err(|e| NodeError::io(&path.with_file_name(&t), e))?;
+        ctx.write_file(&path.with_file_name(&t), &bytes)?;
+        tex_file = Some(t);
+    }
+    if tex_file.is_some() && mesh.uvs.is_none() {
+        ctx.log("warning: the material has a texture but the mesh has no UVs");
+    }
+    ctx.write_with(&path.with_file_name(&mtl_file), |w| {
+        super::obj::write_mtl(mat, tex_file.as_deref(), w)
+    })?;
+    ctx.write_with(path, |w| {
+        super::obj::write_obj(mesh, Some((&mtl_file, &name)), w)
+    })
 }
 
 /// Registers `mesh_save`.

@@ -1,0 +1,303 @@
+//! Wavefront OBJ: reading through tobj (polygons of any arity, per-corner UVs and normals,
+//! groups merged or one picked by name) and writing with `vt`/`vn` plus an MTL file and the
+//! texture image when the mesh carries a material.
+
+use crate::prelude::*;
+use std::collections::HashMap;
+use std::io::Write;
+use std::path::Path;
+
+/// Finds the first line of an OBJ file that is malformed or refers past the data read so far:
+/// bad numbers, NaN/infinite coordinates, faces with fewer than 3 corners, repeated or
+/// out-of-range indices. Used to put a line number on tobj's and the mesh checker's errors.
+pub fn find_bad_obj_line(text: &str) -> Option<(usize, String)> {
+    let (mut nv, mut nt, mut nn) = (0i64, 0i64, 0i64);
+    for (i, line) in text.lines().enumerate() {
+        let ln = i + 1;
+        let mut w = line.split_whitespace();
+        let Some(kw) = w.next() else { continue };
+        let nums = |w: std::str::SplitWhitespace, min: usize| -> Result<(), String> {
+            let v: Vec<&str> = w.collect();
+            if v.len() < min {
+                return Err(format!("expected {min} numbers, found {}", v.len()));
+            }
+            for s in v {
+                let x: f64 = s.parse().map_err(|_| format!("'{s}' is not a number"))?;
+                if !x.is_finite() {
+                    return Err(format!("'{s}' is not a finite number"));
+                }
+            }
+            Ok(())
+        };
+        let r = match kw {
+            "v" => {
+                nv += 1;
+                nums(w, 3)
+            }
+            "vt" => {
+                nt += 1;
+                nums(w, 1)
+            }
+            "vn" => {
+                nn += 1;
+                nums(w, 3)
+            }
+            "f" => (|| {
+                let mut seen = Vec::new();
+                for corner in w {
+                    let mut parts = corner.split('/');
+                    for (k, count) in [nv, nt, nn].into_iter().enumerate() {
+                        let Some(p) = parts.next() else { break };
+                        if p.is_empty() && k > 0 {
+                            continue;
+                        }
+                        let i: i64 = p
+                            .parse()
+                            .map_err(|_| format!("'{corner}' is not a face corner"))?;
+                        let abs = if i < 0 { count + i + 1 } else { i };
+                        if i == 0 || abs < 1 || abs > count {
+                            let what = ["vertex", "texture coordinate", "normal"][k];
+                            return Err(format!(
+                                "{what} index {i} is out of range ({count} defined so far)"
+                            ));
+                        }
+                        if k == 0 {
+                            if seen.contains(&abs) {
+                                return Err(format!("degenerate face: vertex {abs} appears twice"));
+                            }
+                            seen.push(abs);
+                        }
+                    }
+                }
+                if seen.len() < 3 {
+                    return Err(format!(
+                        "degenerate face: {} corners, a face needs at least 3",
+                        seen.len()
+                    ));
+                }
+                Ok(())
+            })(),
+            _ => Ok(()),
+        };
+        if let Err(e) = r {
+            return Some((ln, format!("{e}: '{}'", line.trim())));
+        }
+    }
+    None
+}
+
+/// Reads an OBJ file with tobj: positions, polygon faces, and UVs and normals per corner.
+/// `group` picks one `o`/`g` block by name; empty merges them all. tobj renumbers vertices
+/// per block, so when merging, vertices of different blocks at bit-identical positions are
+/// welded back together (OBJ blocks share one vertex list).
+pub fn load_obj(path: &Path, group: &str) -> Result<Mesh, String> {
+    let opts = tobj::LoadOptions {
+        triangulate: false,
+        single_index: false,
+        ..Default::default()
+    };
+    let locate = || {
+        std::fs::read_to_string(path)
+            .ok()
+            .and_then(|t| find_bad_obj_line(&t))
+    };
+    let (models, _) = match tobj::load_obj(path, &opts) {
+        Ok(r) => r,
+        Err(e) => {
+            return Err(match locate() {
+                Some((ln, msg)) => format!("line {ln}: {msg}"),
+                None => format!("{e}"),
+            })
+        }
+    };
+    let models: Vec<&tobj::Model> = if group.is_empty() {
+        models.iter().collect()
+    } else {
+        let sel: Vec<_> = models.iter().filter(|m| m.name == group).collect();
+        if sel.is_empty() {
+            let names: Vec<&str> = models.iter().map(|m| m.name.as_str()).collect();
+            return Err(format!(
+                "no group or object named '{group}'; the file has: {}",
+                names.join(", ")
+            ));
+        }
+        sel
+    };
+    let mut positions: Vec<[f64; 3]> = Vec::new();
+    let mut weld: HashMap<[u64; 3], u32> = HashMap::new();
+    let mut counts = Vec::new();
+    let mut idx = Vec::new();
+    let mut uvs = Vec::new();
+    let mut normals = Vec::new();
+    let (mut has_uv, mut has_n) = (true, true);
+    let multi = models.len() > 1;
+    for m in &models {
+        let mesh = &m.mesh;
+        let mut map = Vec::with_capacity(mesh.positions.len() / 3);
+        for p in mesh.positions.chunks_exact(3) {
+            let p = [p[0], p[1], p[2]];
+            let id = if multi {
+                let key = p.map(f64::to_bits);
+                *weld.entry(key).or_insert_with(|| {
+                    positions.push(p);
+                    positions.len() as u32 - 1
+                })
+            } else {
+                positions.push(p);
+                positions.len() as u32 - 1
+            };
+            map.push(id);
+        }
+        if mesh.face_arities.is_empty() {
+            counts.extend(std::iter::repeat_n(3u32, mesh.indices.len() / 3));
+        } else {
+            counts.extend(&mesh.face_arities);
+        }
+        idx.extend(mesh.indices.iter().map(|&i| map[i as usize]));
+        if mesh.texcoord_indices.len() == mesh.indices.len() && !mesh.texcoords.is_empty() {
+            uvs.extend(mesh.texcoord_indices.iter().map(|&t| {
+                [
+                    mesh.texcoords[2 * t as usize],
+                    mesh.texcoords[2 * t as usize + 1],
+                ]
+            }));
+        } else {
+            has_uv = false;
+        }
+        if mesh.normal_indices.len() == mesh.indices.len() && !mesh.normals.is_empty() {
+            normals.extend(mesh.normal_indices.iter().map(|&t| {
+                let t = 3 * t as usize;
+                [mesh.normals[t], mesh.normals[t + 1], mesh.normals[t + 2]]
+            }));
+        } else {
+            has_n = false;
+        }
+    }
+    let mut mesh = Mesh::new(positions, counts, idx).map_err(|e| match locate() {
+        Some((ln, msg)) => format!("line {ln}: {msg}"),
+        None => e.to_string(),
+    })?;
+    if has_uv && !uvs.is_empty() {
+        mesh.uvs = Some(Attribute {
+            domain: Domain::Corner,
+            values: uvs,
+        });
+    }
+    if has_n && !normals.is_empty() {
+        mesh.normals = Some(Attribute {
+            domain: Domain::Corner,
+            values: normals,
+        });
+    }
+    Ok(mesh)
+}
+
+/// Writes OBJ text: `v`, `vt` and `vn` (per vertex or per corner), and `f` lines with
+/// `v/vt/vn` corners. `mtl` names an MTL file and material to reference (`mtllib`/`usemtl`).
+/// Floats use Rust's shortest round-trip formatting, so reading back gives the same values.
+pub fn write_obj(mesh: &Mesh, mtl: Option<(&str, &str)>, w: &mut dyn Write) -> std::io::Result<()> {
+    writeln!(w, "# written by cgnodes")?;
+    if let Some((file, _)) = mtl {
+        writeln!(w, "mtllib {file}")?;
+    }
+    for p in &mesh.positions {
+        writeln!(w, "v {} {} {}", p[0], p[1], p[2])?;
+    }
+    let uv = mesh.uvs.as_ref().filter(|u| u.domain != Domain::Face);
+    if let Some(uv) = uv {
+        for t in &uv.values {
+            writeln!(w, "vt {} {}", t[0], t[1])?;
+        }
+    }
+    let nm = mesh.normals.as_ref();
+    if let Some(n) = nm {
+        for t in &n.values {
+            writeln!(w, "vn {} {} {}", t[0], t[1], t[2])?;
+        }
+    }
+    if let Some((_, name)) = mtl {
+        writeln!(w, "usemtl {name}")?;
+    }
+    let index = |d: Domain, v: usize, c: usize, f: usize| match d {
+        Domain::Vertex => v + 1,
+        Domain::Corner => c + 1,
+        Domain::Face => f + 1,
+    };
+    let mut c = 0usize;
+    for (f, face) in mesh.faces().enumerate() {
+        write!(w, "f")?;
+        for &v in face {
+            let v = v as usize;
+            write!(w, " {}", v + 1)?;
+            match (uv, nm) {
+                (Some(t), Some(n)) => write!(
+                    w,
+                    "/{}/{}",
+                    index(t.domain, v, c, f),
+                    index(n.domain, v, c, f)
+                )?,
+                (Some(t), None) => write!(w, "/{}", index(t.domain, v, c, f))?,
+                (None, Some(n)) => write!(w, "//{}", index(n.domain, v, c, f))?,
+                (None, None) => {}
+            }
+            c += 1;
+        }
+        writeln!(w)?;
+    }
+    Ok(())
+}
+
+/// Writes an MTL file for `mat` (`Kd`, `Ke`, `Ns` from roughness, `map_Kd` when a texture
+/// file name is given).
+pub fn write_mtl(mat: &Material, texture: Option<&str>, w: &mut dyn Write) -> std::io::Result<()> {
+    writeln!(w, "# written by cgnodes")?;
+    writeln!(w, "newmtl {}", mtl_name(mat))?;
+    let c = mat.base_color;
+    writeln!(w, "Kd {} {} {}", c[0], c[1], c[2])?;
+    writeln!(w, "Ka 0 0 0")?;
+    let e = mat.emission;
+    if e != [0.0; 3] {
+        writeln!(w, "Ke {} {} {}", e[0], e[1], e[2])?;
+    }
+    // Phong exponent from roughness (Walter et al. 2007: alpha_p = 2 / alpha^2 - 2).
+    let a = mat.roughness.clamp(0.01, 1.0);
+    writeln!(w, "Ns {}", (2.0 / (a * a) - 2.0).max(0.0))?;
+    writeln!(w, "illum 2")?;
+    if let Some(t) = texture {
+        writeln!(w, "map_Kd {t}")?;
+    }
+    Ok(())
+}
+
+/// The material's name as an MTL identifier.
+pub fn mtl_name(mat: &Material) -> String {
+    let n: String = mat
+        .name
+        .chars()
+        .map(|c| if c.is_whitespace() { '_' } else { c })
+        .collect();
+    if n.is_empty() {
+        "material".into()
+    } else {
+        n
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn locates_bad_lines() {
+        let t = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n";
+        let (ln, msg) = find_bad_obj_line(t).unwrap();
+        assert_eq!(ln, 4);
+        assert!(msg.contains("out of range"), "{msg}");
+        assert_eq!(find_bad_obj_line("v 0 0 nan\n").unwrap().0, 1);
+        assert_eq!(find_bad_obj_line("v 0 0 0\nv 1 x 0\n").unwrap().0, 2);
+        let t = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -1\nf 1 2 2\n";
+        let (ln, msg) = find_bad_obj_line(t).unwrap();
+        assert_eq!(ln, 5);
+        assert!(msg.contains("degenerate"), "{msg}");
+    }
+}

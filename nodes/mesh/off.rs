@@ -1,0 +1,129 @@
+//! Object File Format (`.off`, Geomview): `OFF`, counts, vertices, then polygons as
+//! `n i1 ... in` (trailing face colours are ignored).
+
+use crate::prelude::*;
+use std::io::Write;
+
+/// Reads OFF text. Errors carry the line number.
+pub fn read_off(text: &str) -> Result<Mesh, String> {
+    // Tokens with their line numbers, comments removed.
+    let mut lines = text
+        .lines()
+        .enumerate()
+        .map(|(i, l)| (i + 1, l.split('#').next().unwrap_or("").trim()))
+        .filter(|(_, l)| !l.is_empty());
+    let (ln, head) = lines.next().ok_or("empty file")?;
+    let rest_of_head = if let Some(r) = head.strip_prefix("COFF") {
+        r
+    } else if let Some(r) = head.strip_prefix("OFF") {
+        r
+    } else {
+        return Err(format!("line {ln}: expected 'OFF', found '{head}'"));
+    };
+    let (ln, counts_line) = if rest_of_head.trim().is_empty() {
+        lines.next().ok_or("missing vertex/face counts")?
+    } else {
+        (ln, rest_of_head.trim())
+    };
+    let counts: Vec<usize> = counts_line
+        .split_whitespace()
+        .map(|s| s.parse::<usize>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| {
+            format!("line {ln}: expected vertex, face and edge counts, found '{counts_line}'")
+        })?;
+    if counts.len() < 2 {
+        return Err(format!(
+            "line {ln}: expected vertex, face and edge counts, found '{counts_line}'"
+        ));
+    }
+    let (nv, nf) = (counts[0], counts[1]);
+    let mut positions = Vec::with_capacity(nv);
+    for k in 0..nv {
+        let (ln, l) = lines
+            .next()
+            .ok_or_else(|| format!("file ends after {k} of {nv} vertices"))?;
+        let v: Vec<f64> = l
+            .split_whitespace()
+            .map(|s| s.parse::<f64>())
+            .collect::<Result<_, _>>()
+            .map_err(|_| format!("line {ln}: malformed vertex '{l}'"))?;
+        if v.len() < 3 {
+            return Err(format!("line {ln}: a vertex needs 3 coordinates: '{l}'"));
+        }
+        if v[..3].iter().any(|x| !x.is_finite()) {
+            return Err(format!(
+                "line {ln}: vertex {k} has a non-finite coordinate: '{l}'"
+            ));
+        }
+        positions.push([v[0], v[1], v[2]]);
+    }
+    let mut fc = Vec::with_capacity(nf);
+    let mut fi = Vec::with_capacity(nf * 3);
+    for k in 0..nf {
+        let (ln, l) = lines
+            .next()
+            .ok_or_else(|| format!("file ends after {k} of {nf} faces"))?;
+        let mut w = l.split_whitespace();
+        let n: usize = w
+            .next()
+            .and_then(|s| s.parse().ok())
+            .ok_or_else(|| format!("line {ln}: malformed face '{l}'"))?;
+        if n < 3 {
+            return Err(format!("line {ln}: degenerate face with {n} corners"));
+        }
+        let start = fi.len();
+        for _ in 0..n {
+            let i: usize = w
+                .next()
+                .and_then(|s| s.parse().ok())
+                .ok_or_else(|| format!("line {ln}: malformed face '{l}'"))?;
+            if i >= nv {
+                return Err(format!(
+                    "line {ln}: vertex index {i} out of range ({nv} vertices)"
+                ));
+            }
+            if fi[start..].contains(&(i as u32)) {
+                return Err(format!(
+                    "line {ln}: degenerate face, vertex {i} appears twice"
+                ));
+            }
+            fi.push(i as u32);
+        }
+        fc.push(n as u32);
+    }
+    Mesh::new(positions, fc, fi).map_err(|e| e.to_string())
+}
+
+/// Writes OFF text (positions and faces only).
+pub fn write_off(mesh: &Mesh, w: &mut dyn Write) -> std::io::Result<()> {
+    writeln!(w, "OFF")?;
+    writeln!(w, "{} {} 0", mesh.num_vertices(), mesh.num_faces())?;
+    for p in &mesh.positions {
+        writeln!(w, "{} {} {}", p[0], p[1], p[2])?;
+    }
+    for f in mesh.faces() {
+        write!(w, "{}", f.len())?;
+        for v in f {
+            write!(w, " {v}")?;
+        }
+        writeln!(w)?;
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn reads_a_square_and_reports_lines() {
+        let t = "OFF\n# a square\n4 1 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n";
+        let m = read_off(t).unwrap();
+        assert_eq!(m.face(0), &[0, 1, 2, 3]);
+        let e = read_off(&t.replace("4 0 1 2 3", "4 0 1 2 9")).unwrap_err();
+        assert!(e.starts_with("line 8:"), "{e}");
+        let e = read_off(&t.replace("1 1 0", "1 inf 0")).unwrap_err();
+        assert!(e.starts_with("line 6:"), "{e}");
+    }
+}

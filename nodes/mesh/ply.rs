@@ -1,0 +1,502 @@
+//! Stanford PLY, ASCII and binary (little and big endian): vertices with optional normals,
+//! UVs (`s,t`, `u,v` or `texture_u,texture_v`) and colours, faces as index lists, and
+//! per-corner UVs as a face `texcoord` list (MeshLab's convention). Other elements and
+//! properties are read and skipped.
+
+use crate::prelude::*;
+use std::io::Write;
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Scalar {
+    I8,
+    U8,
+    I16,
+    U16,
+    I32,
+    U32,
+    F32,
+    F64,
+}
+
+impl Scalar {
+    fn parse(s: &str) -> Option<Scalar> {
+        Some(match s {
+            "char" | "int8" => Scalar::I8,
+            "uchar" | "uint8" => Scalar::U8,
+            "short" | "int16" => Scalar::I16,
+            "ushort" | "uint16" => Scalar::U16,
+            "int" | "int32" => Scalar::I32,
+            "uint" | "uint32" => Scalar::U32,
+            "float" | "float32" => Scalar::F32,
+            "double" | "float64" => Scalar::F64,
+            _ => return None,
+        })
+    }
+    fn size(self) -> usize {
+        match self {
+            Scalar::I8 | Scalar::U8 => 1,
+            Scalar::I16 | Scalar::U16 => 2,
+            Scalar::I32 | Scalar::U32 | Scalar::F32 => 4,
+            Scalar::F64 => 8,
+        }
+    }
+}
+
+#[derive(Clone, Debug)]
+struct Prop {
+    name: String,
+    ty: Scalar,
+    list_count: Option<Scalar>,
+}
+
+#[derive(Clone, Debug)]
+struct Element {
+    name: String,
+    count: usize,
+    props: Vec<Prop>,
+}
+
+#[derive(Clone, Copy, PartialEq)]
+enum Format {
+    Ascii,
+    Le,
+    Be,
+}
+
+/// Reads the values of a PLY body, one element instance at a time.
+trait Source {
+    fn scalar(&mut self, ty: Scalar) -> Result<f64, String>;
+    /// Called at the start of each element instance (ASCII: moves to the next line).
+    fn begin(&mut self) -> Result<(), String> {
+        Ok(())
+    }
+    fn end(&mut self) -> Result<(), String> {
+        Ok(())
+    }
+}
+
+struct Binary<'a> {
+    b: &'a [u8],
+    i: usize,
+    be: bool,
+}
+
+impl Source for Binary<'_> {
+    fn scalar(&mut self, ty: Scalar) -> Result<f64, String> {
+        let n = ty.size();
+        if self.i + n > self.b.len() {
+            return Err(format!("binary data ends early (at byte {})", self.i));
+        }
+        let mut a = [0u8; 8];
+        a[..n].copy_from_slice(&self.b[self.i..self.i + n]);
+        if self.be {
+            a[..n].reverse();
+        }
+        self.i += n;
+        Ok(match ty {
+            Scalar::I8 => a[0] as i8 as f64,
+            Scalar::U8 => a[0] as f64,
+            Scalar::I16 => i16::from_le_bytes([a[0], a[1]]) as f64,
+            Scalar::U16 => u16::from_le_bytes([a[0], a[1]]) as f64,
+            Scalar::I32 => i32::from_le_bytes([a[0], a[1], a[2], a[3]]) as f64,
+            Scalar::U32 => u32::from_le_bytes([a[0], a[1], a[2], a[3]]) as f64,
+            Scalar::F32 => f32::from_le_bytes([a[0], a[1], a[2], a[3]]) as f64,
+            Scalar::F64 => f64::from_le_bytes(a),
+        })
+    }
+}
+
+struct Ascii<'a> {
+    lines: std::iter::Peekable<std::iter::Enumerate<std::str::Lines<'a>>>,
+    cur: Vec<&'a str>,
+    pos: usize,
+    line: usize,
+    /// Lines before the body (the header), so errors give the file's line number.
+    offset: usize,
+}
+
+impl Source for Ascii<'_> {
+    fn begin(&mut self) -> Result<(), String> {
+        loop {
+            let (i, l) = self
+                .lines
+                .next()
+                .ok_or("the file ends before all elements are read")?;
+            self.line = i + 1 + self.offset;
+            self.cur = l.split_whitespace().collect();
+            self.pos = 0;
+            if !self.cur.is_empty() {
+                return Ok(());
+            }
+        }
+    }
+    fn scalar(&mut self, _ty: Scalar) -> Result<f64, String> {
+        let s = self
+            .cur
+            .get(self.pos)
+            .ok_or_else(|| format!("line {}: too few values", self.line))?;
+        self.pos += 1;
+        s.parse::<f64>()
+            .map_err(|_| format!("line {}: '{s}' is not a number", self.line))
+    }
+    fn end(&mut self) -> Result<(), String> {
+        if self.pos != self.cur.len() {
+            return Err(format!(
+                "line {}: {} values expected, {} found",
+                self.line,
+                self.pos,
+                self.cur.len()
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Reads a PLY file (ASCII or binary). Errors give the header or body line (ASCII) or the
+/// byte offset (binary).
+pub fn read_ply(bytes: &[u8]) -> Result<Mesh, String> {
+    if !bytes.starts_with(b"ply") {
+        return Err("line 1: not a PLY file (it must start with 'ply')".into());
+    }
+    // Header: text up to and including "end_header\n".
+    let end = bytes
+        .windows(10)
+        .position(|w| w == b"end_header")
+        .ok_or("no 'end_header' line")?;
+    let mut body = end + 10;
+    while body < bytes.len() && bytes[body] != b'\n' {
+        body += 1;
+    }
+    body += 1;
+    let header = std::str::from_utf8(&bytes[..end]).map_err(|_| "header is not text")?;
+    let mut format = None;
+    let mut elements: Vec<Element> = Vec::new();
+    for (i, l) in header.lines().enumerate() {
+        let ln = i + 1;
+        let w: Vec<&str> = l.split_whitespace().collect();
+        match w.first().copied() {
+            None | Some("ply") | Some("comment") | Some("obj_info") => {}
+            Some("format") => {
+                format = Some(match w.get(1).copied() {
+                    Some("ascii") => Format::Ascii,
+                    Some("binary_little_endian") => Format::Le,
+                    Some("binary_big_endian") => Format::Be,
+                    _ => return Err(format!("line {ln}: unknown format '{l}'")),
+                })
+            }
+            Some("element") => {
+                let (Some(name), Some(count)) = (w.get(1), w.get(2).and_then(|c| c.parse().ok()))
+                else {
+                    return Err(format!("line {ln}: malformed element '{l}'"));
+                };
+                elements.push(Element {
+                    name: name.to_string(),
+                    count,
+                    props: Vec::new(),
+                });
+            }
+            Some("property") => {
+                let el = elements
+                    .last_mut()
+                    .ok_or_else(|| format!("line {ln}: property before any element"))?;
+                let bad = || format!("line {ln}: malformed property '{l}'");
+                let p = if w.get(1) == Some(&"list") {
+                    Prop {
+                        list_count: Some(w.get(2).and_then(|s| Scalar::parse(s)).ok_or_else(bad)?),
+                        ty: w.get(3).and_then(|s| Scalar::parse(s)).ok_or_else(bad)?,
+                        name: w.get(4).ok_or_else(bad)?.to_string(),
+                    }
+                } else {
+                    Prop {
+                        list_count: None,
+                        ty: w.get(1).and_then(|s| Scalar::parse(s)).ok_or_else(bad)?,
+                        name: w.get(2).ok_or_else(bad)?.to_string(),
+                    }
+                };
+                el.props.push(p);
+            }
+            Some(_) => return Err(format!("line {ln}: unknown header line '{l}'")),
+        }
+    }
+    let format = format.ok_or("the header has no 'format' line")?;
+    let header_lines = header.lines().count() + 1;
+    let text_body;
+    let mut src: Box<dyn Source> = match format {
+        Format::Ascii => {
+            text_body = std::str::from_utf8(&bytes[body.min(bytes.len())..])
+                .map_err(|_| "ASCII body is not text")?;
+            Box::new(Ascii {
+                lines: text_body.lines().enumerate().peekable(),
+                cur: Vec::new(),
+                pos: 0,
+                line: 0,
+                offset: header_lines,
+            })
+        }
+        f => Box::new(Binary {
+            b: bytes,
+            i: body,
+            be: f == Format::Be,
+        }),
+    };
+    let mut positions = Vec::new();
+    let mut normals = Vec::new();
+    let mut uvs = Vec::new();
+    let mut colors = Vec::new();
+    let mut corner_uvs = Vec::new();
+    let mut fc = Vec::new();
+    let mut fi = Vec::new();
+    for el in &elements {
+        let find = |n: &[&str]| el.props.iter().position(|p| n.contains(&p.name.as_str()));
+        let (px, py, pz) = (find(&["x"]), find(&["y"]), find(&["z"]));
+        let (nx, ny, nz) = (find(&["nx"]), find(&["ny"]), find(&["nz"]));
+        let (tu, tv) = (
+            find(&["s", "u", "texture_u", "texture_s"]),
+            find(&["t", "v", "texture_v", "texture_t"]),
+        );
+        let (cr, cg, cb) = (
+            find(&["red", "r", "diffuse_red"]),
+            find(&["green", "g", "diffuse_green"]),
+            find(&["blue", "b", "diffuse_blue"]),
+        );
+        let fv = find(&["vertex_indices", "vertex_index"]);
+        let ft = find(&["texcoord"]);
+        let is_vertex = el.name == "vertex";
+        let is_face = el.name == "face";
+        if is_vertex && (px.is_none() || py.is_none() || pz.is_none()) {
+            return Err("the vertex element has no x, y, z properties".into());
+        }
+        if is_face && fv.is_none() {
+            return Err("the face element has no vertex_indices list".into());
+        }
+        let mut vals: Vec<Vec<f64>> = vec![Vec::new(); el.props.len()];
+        for k in 0..el.count {
+            src.begin()?;
+            for v in vals.iter_mut() {
+                v.clear();
+            }
+            for (pi, p) in el.props.iter().enumerate() {
+                match p.list_count {
+                    None => vals[pi].push(src.scalar(p.ty)?),
+                    Some(ct) => {
+                        let n = src.scalar(ct)?;
+                        if n < 0.0 || n.fract() != 0.0 {
+                            return Err(format!("{} {k}: bad list length {n}", el.name));
+                        }
+                        for _ in 0..n as usize {
+                            vals[pi].push(src.scalar(p.ty)?);
+                        }
+                    }
+                }
+            }
+            src.end()?;
+            let g = |i: Option<usize>| i.map(|i| vals[i][0]);
+            if is_vertex {
+                let p = [
+                    vals[px.unwrap_or(0)][0],
+                    vals[py.unwrap_or(0)][0],
+                    vals[pz.unwrap_or(0)][0],
+                ];
+                if p.iter().any(|x| !x.is_finite()) {
+                    return Err(format!("vertex {k} has a non-finite coordinate {p:?}"));
+                }
+                positions.push(p);
+                if let (Some(a), Some(b), Some(c)) = (g(nx), g(ny), g(nz)) {
+                    normals.push([a, b, c]);
+                }
+                if let (Some(a), Some(b)) = (g(tu), g(tv)) {
+                    uvs.push([a, b]);
+                }
+                if let (Some(r), Some(gg), Some(b)) = (cr, cg, cb) {
+                    let scale = if el.props[r].ty == Scalar::U8 {
+                        1.0 / 255.0
+                    } else {
+                        1.0
+                    };
+                    colors.push([vals[r][0] * scale, vals[gg][0] * scale, vals[b][0] * scale]);
+                }
+            } else if is_face {
+                let idx = &vals[fv.unwrap_or(0)];
+                if idx.len() < 3 {
+                    return Err(format!("face {k} is degenerate: {} corners", idx.len()));
+                }
+                for (c, &i) in idx.iter().enumerate() {
+                    if i < 0.0 || i as usize >= positions.len() {
+                        return Err(format!(
+                            "face {k} refers to vertex {i}, but there are {} vertices",
+                            positions.len()
+                        ));
+                    }
+                    if idx[..c].contains(&i) {
+                        return Err(format!("face {k} is degenerate: vertex {i} appears twice"));
+                    }
+                    fi.push(i as u32);
+                }
+                fc.push(idx.len() as u32);
+                if let Some(t) = ft {
+                    let t = &vals[t];
+                    if t.len() != 2 * idx.len() {
+                        return Err(format!(
+                            "face {k}: texcoord list has {} values for {} corners",
+                            t.len(),
+                            idx.len()
+                        ));
+                    }
+                    corner_uvs.extend(t.chunks_exact(2).map(|c| [c[0], c[1]]));
+                }
+            }
+        }
+    }
+    let nv = positions.len();
+    let mut mesh = Mesh::new(positions, fc, fi).map_err(|e| e.to_string())?;
+    if normals.len() == nv && nv > 0 {
+        mesh.normals = Some(Attribute {
+            domain: Domain::Vertex,
+            values: normals,
+        });
+    }
+    if !corner_uvs.is_empty() {
+        mesh.uvs = Some(Attribute {
+            domain: Domain::Corner,
+            values: corner_uvs,
+        });
+    } else if uvs.len() == nv && nv > 0 {
+        mesh.uvs = Some(Attribute {
+            domain: Domain::Vertex,
+            values: uvs,
+        });
+    }
+    if colors.len() == nv && nv > 0 {
+        mesh.colors = Some(Attribute {
+            domain: Domain::Vertex,
+            values: colors,
+        });
+    }
+    Ok(mesh)
+}
+
+/// Writes a PLY file: ASCII, or binary little endian with double-precision vertices.
+/// Per-vertex normals, UVs and colours become vertex properties; per-corner UVs a face
+/// `texcoord` list.
+pub fn write_ply(mesh: &Mesh, binary: bool, w: &mut dyn Write) -> std::io::Result<()> {
+    let vn = mesh.normals.as_ref().filter(|a| a.domain == Domain::Vertex);
+    let vuv = mesh.uvs.as_ref().filter(|a| a.domain == Domain::Vertex);
+    let cuv = mesh.uvs.as_ref().filter(|a| a.domain == Domain::Corner);
+    let vc = mesh.colors.as_ref().filter(|a| a.domain == Domain::Vertex);
+    writeln!(w, "ply")?;
+    writeln!(
+        w,
+        "format {} 1.0",
+        if binary {
+            "binary_little_endian"
+        } else {
+            "ascii"
+        }
+    )?;
+    writeln!(w, "comment written by cgnodes")?;
+    writeln!(w, "element vertex {}", mesh.num_vertices())?;
+    let mut names: Vec<&str> = vec!["x", "y", "z"];
+    if vn.is_some() {
+        names.extend(["nx", "ny", "nz"]);
+    }
+    if vuv.is_some() {
+        names.extend(["s", "t"]);
+    }
+    if vc.is_some() {
+        names.extend(["red", "green", "blue"]);
+    }
+    for n in &names {
+        writeln!(w, "property double {n}")?;
+    }
+    writeln!(w, "element face {}", mesh.num_faces())?;
+    writeln!(w, "property list uchar int vertex_indices")?;
+    if cuv.is_some() {
+        writeln!(w, "property list uchar double texcoord")?;
+    }
+    writeln!(w, "end_header")?;
+    for v in 0..mesh.num_vertices() {
+        let mut row: Vec<f64> = mesh.positions[v].to_vec();
+        if let Some(a) = vn {
+            row.extend(a.values[v]);
+        }
+        if let Some(a) = vuv {
+            row.extend(a.values[v]);
+        }
+        if let Some(a) = vc {
+            row.extend(a.values[v]);
+        }
+        if binary {
+            for x in row {
+                w.write_all(&x.to_le_bytes())?;
+            }
+        } else {
+            let s: Vec<String> = row.iter().map(|x| x.to_string()).collect();
+            writeln!(w, "{}", s.join(" "))?;
+        }
+    }
+    let starts = mesh.face_starts();
+    for (f, face) in mesh.faces().enumerate() {
+        let n = face.len().min(255);
+        let uv = cuv.map(|a| &a.values[starts[f] as usize..starts[f + 1] as usize]);
+        if binary {
+            w.write_all(&[n as u8])?;
+            for &v in face {
+                w.write_all(&(v as i32).to_le_bytes())?;
+            }
+            if let Some(uv) = uv {
+                w.write_all(&[(2 * n).min(255) as u8])?;
+                for t in uv {
+                    w.write_all(&t[0].to_le_bytes())?;
+                    w.write_all(&t[1].to_le_bytes())?;
+                }
+            }
+        } else {
+            write!(w, "{n}")?;
+            for v in face {
+                write!(w, " {v}")?;
+            }
+            if let Some(uv) = uv {
+                write!(w, " {}", 2 * n)?;
+                for t in uv {
+                    write!(w, " {} {}", t[0], t[1])?;
+                }
+            }
+            writeln!(w)?;
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const SQUARE: &str = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n";
+
+    #[test]
+    fn ascii_square_and_line_numbers() {
+        let m = read_ply(SQUARE.as_bytes()).unwrap();
+        assert_eq!(m.face(0), &[0, 1, 2, 3]);
+        assert_eq!(m.positions[2], [1.0, 1.0, 0.0]);
+        let e = read_ply(SQUARE.replace("1 1 0", "1 x 0").as_bytes()).unwrap_err();
+        assert!(e.starts_with("line 12:"), "{e}");
+    }
+
+    #[test]
+    fn binary_round_trip_is_exact() {
+        let mut m = read_ply(SQUARE.as_bytes()).unwrap();
+        m.positions[1][1] = 0.1 + 0.2;
+        m.uvs = Some(Attribute {
+            domain: Domain::Corner,
+            values: vec![[0.1, 0.2], [0.3, 0.4], [0.5, 0.6], [0.7, 0.8]],
+        });
+        for binary in [false, true] {
+            let mut buf = Vec::new();
+            write_ply(&m, binary, &mut buf).unwrap();
+            let r = read_ply(&buf).unwrap();
+            assert_eq!(r.positions, m.positions);
+            assert_eq!(r.face_indices(), m.face_indices());
+            assert_eq!(r.uvs, m.uvs);
+        }
+    }
+}

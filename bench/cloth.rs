@@ -84,7 +84,10 @@ fn warp() -> Option<serde_json::Value> {
     let script = concat!(env!("CARGO_MANIFEST_DIR"), "/bench/peers/cloth_warp.py");
     let out = std::process::Command::new(py).arg(script).output().ok()?;
     if !out.status.success() {
-        eprintln!("warp benchmark failed: {}", String::from_utf8_lossy(&out.stderr));
+        eprintln!(
+            "warp benchmark failed: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
         return None;
     }
     let text = String::from_utf8_lossy(&out.stdout);
@@ -125,7 +128,9 @@ fn sweep_model() -> (Model, Vec<[f64; 3]>) {
 /// (at least 20 steps); writes `target/cloth_stability.svg` (copied to docs/).
 fn sweep() {
     let dtc: f64 = 2.0751e-3;
-    let factors = [0.1, 0.25, 0.5, 0.9, 0.95, 1.05, 1.5, 2.0, 5.0, 10.0, 20.0, 50.0, 100.0];
+    let factors = [
+        0.1, 0.25, 0.5, 0.9, 0.95, 1.05, 1.5, 2.0, 5.0, 10.0, 20.0, 50.0, 100.0,
+    ];
     let methods = [Method::SemiImplicit, Method::Implicit, Method::Projective];
     println!();
     println!("Energy E(T)/E0 after T = 0.2 s (at least 20 steps) on the 8x8 grid; h in units of 2/omega_max");
@@ -169,7 +174,12 @@ fn sweep() {
 /// on the top edge.
 fn chart(series: &[Vec<(f64, Option<f64>)>], names: &[&str]) -> String {
     let (w, h, l, r, t, b) = (640.0, 400.0, 70.0, 150.0, 30.0, 50.0);
-    let (x0, x1, y0, y1) = (0.1f64.log10(), 100f64.log10(), 1e-8f64.log10(), 10f64.log10());
+    let (x0, x1, y0, y1) = (
+        0.1f64.log10(),
+        100f64.log10(),
+        1e-8f64.log10(),
+        10f64.log10(),
+    );
     let px = |x: f64| l + (x.log10() - x0) / (x1 - x0) * (w - l - r);
     let py = |y: f64| t + (y1 - y.max(1e-8).log10()) / (y1 - y0) * (h - t - b);
     let colors = ["#d62728", "#1f77b4", "#2ca02c"];
@@ -261,21 +271,36 @@ fn main() {
         println!("warp-lang {}", w["version"]);
     }
     println!(
-        "| grid | springs | semi_implicit ms/frame, energy per frame (per step) | warp ms/frame (min / avg) | warp min / cgnodes |"
+        "| grid | springs | semi_implicit ms/frame, energy per frame (per step) | same, 1 thread | warp ms/frame (min / avg) | warp min / cgnodes 1 thread |"
     );
-    println!("|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|");
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
     for n in [32usize, 64, 128] {
         let (ms, _, springs) = run(Method::SemiImplicit, n, 60, 16, false);
-        let ours = median(ms);
+        let pool = median(ms);
+        let ours = median(
+            one.install(|| run(Method::SemiImplicit, n, 60, 16, false))
+                .0,
+        );
         let logged = median(run(Method::SemiImplicit, n, 60, 16, true).0);
         let (wmin, wavg) = w
             .as_ref()
-            .map(|w| (w[n.to_string()]["min"].as_f64(), w[n.to_string()]["avg"].as_f64()))
+            .map(|w| {
+                (
+                    w[n.to_string()]["min"].as_f64(),
+                    w[n.to_string()]["avg"].as_f64(),
+                )
+            })
             .unwrap_or((None, None));
         let f = |x: Option<f64>| x.map(|x| format!("{x:.2}")).unwrap_or("-".into());
-        let ratio = wmin.map(|m| format!("{:.2}", m / ours)).unwrap_or("-".into());
+        let ratio = wmin
+            .map(|m| format!("{:.2}", m / ours))
+            .unwrap_or("-".into());
         println!(
-            "| {n}x{n} | {springs} | {ours:.2} ({logged:.2}) | {} / {} | {ratio} |",
+            "| {n}x{n} | {springs} | {pool:.2} ({logged:.2}) | {ours:.2} | {} / {} | {ratio} |",
             f(wmin),
             f(wavg)
         );

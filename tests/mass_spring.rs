@@ -82,7 +82,10 @@ fn single_spring_period_matches_discrete_formula_and_converges() {
             "dt {dt}: period {p} vs discrete {discrete}"
         );
         let ref_meas = case["period_measured"].as_f64().unwrap();
-        assert!((p - ref_meas).abs() < 1e-7 * ref_meas, "{p} vs reference {ref_meas}");
+        assert!(
+            (p - ref_meas).abs() < 1e-7 * ref_meas,
+            "{p} vs reference {ref_meas}"
+        );
         // Bounded energy (symplectic): same oscillation amplitude as the reference.
         let ref_dev = case["E_max_rel_dev"].as_f64().unwrap();
         assert!(
@@ -107,8 +110,14 @@ fn symplectic_energy_stays_bounded_over_many_periods() {
     let wdt: f64 = 0.5;
     let bound = wdt / (2.0 - wdt);
     let (_, dev, ratio) = spring_run(Method::SemiImplicit, 0.05);
-    assert!(dev <= bound * (1.0 + 1e-6), "energy deviation {dev} > {bound}");
-    assert!(dev > 0.9 * bound, "energy deviation {dev} (expected about {bound})");
+    assert!(
+        dev <= bound * (1.0 + 1e-6),
+        "energy deviation {dev} > {bound}"
+    );
+    assert!(
+        dev > 0.9 * bound,
+        "energy deviation {dev} (expected about {bound})"
+    );
     assert!((ratio - 1.0).abs() <= bound * (1.0 + 1e-6));
     let r = reference();
     for case in r["single_spring"]["symplectic"].as_array().unwrap() {
@@ -155,7 +164,13 @@ fn grid8_model(fixed: &[usize], gravity: f64) -> (Model, Vec<[f64; 3]>) {
     let x0 = mesh
         .positions
         .iter()
-        .map(|p| [p[0] + 1e-4 * rnd(), p[1] + 1e-4 * rnd(), p[2] + 1e-4 * rnd()])
+        .map(|p| {
+            [
+                p[0] + 1e-4 * rnd(),
+                p[1] + 1e-4 * rnd(),
+                p[2] + 1e-4 * rnd(),
+            ]
+        })
         .collect();
     (model, x0)
 }
@@ -274,7 +289,10 @@ fn implicit_and_projective_stay_bounded_at_50x_the_limit() {
         let e0 = sim.energy(None).total();
         for _ in 0..100 {
             let l = sim.step(None).unwrap();
-            assert!(l.energy.total() <= e0 * (1.0 + 1e-9) + 1e-12, "{method:?} gained energy");
+            assert!(
+                l.energy.total() <= e0 * (1.0 + 1e-9) + 1e-12,
+                "{method:?} gained energy"
+            );
         }
         // Hanging from two corners under gravity: bounded, corners exact.
         let (model, x0) = grid8_model(&[56, 63], -9.8);
@@ -290,16 +308,30 @@ fn implicit_and_projective_stay_bounded_at_50x_the_limit() {
     }
     // At the same step symplectic Euler blows up immediately.
     let (model, x0) = grid8_model(&[], 0.0);
-    let mut sim =
-        Simulator::new(model, x0, None, Method::SemiImplicit, h, SolverOptions::default()).unwrap();
+    let mut sim = Simulator::new(
+        model,
+        x0,
+        None,
+        Method::SemiImplicit,
+        h,
+        SolverOptions::default(),
+    )
+    .unwrap();
     assert!((0..100).any(|_| sim.step(None).is_err()));
 }
 
 #[test]
 fn implicit_reuses_its_symbolic_factorization() {
     let (model, x0) = grid8_model(&[56, 63], -9.8);
-    let mut sim =
-        Simulator::new(model, x0, None, Method::Implicit, 0.01, SolverOptions::default()).unwrap();
+    let mut sim = Simulator::new(
+        model,
+        x0,
+        None,
+        Method::Implicit,
+        0.01,
+        SolverOptions::default(),
+    )
+    .unwrap();
     for _ in 0..20 {
         let l = sim.step(None).unwrap();
         assert!(l.iterations >= 1 && l.iterations <= 20);
@@ -326,9 +358,15 @@ fn hanging(method: Method, h: f64) -> (Simulator, Vec<usize>) {
         gravity: [0.0, 0.0, -9.8],
         damping: 0.995,
     };
-    let sim =
-        Simulator::new(model, mesh.positions.clone(), None, method, h, SolverOptions::default())
-            .unwrap();
+    let sim = Simulator::new(
+        model,
+        mesh.positions.clone(),
+        None,
+        method,
+        h,
+        SolverOptions::default(),
+    )
+    .unwrap();
     (sim, fixed)
 }
 
@@ -378,9 +416,15 @@ fn no_vertex_ends_inside_the_sphere() {
             gravity: [0.0, 0.0, -9.8],
             damping: 0.995,
         };
-        let mut sim =
-            Simulator::new(model, mesh.positions.clone(), None, method, h, SolverOptions::default())
-                .unwrap();
+        let mut sim = Simulator::new(
+            model,
+            mesh.positions.clone(),
+            None,
+            method,
+            h,
+            SolverOptions::default(),
+        )
+        .unwrap();
         let mut dmin = f64::INFINITY;
         for _ in 0..steps {
             sim.step(Some(&sphere)).unwrap();
@@ -398,7 +442,10 @@ fn no_vertex_ends_inside_the_sphere() {
         );
         // The centre vertex rests on top of the sphere.
         let c = sim.state.x[60];
-        assert!((c[2] + 1.0 - sphere.contact_radius()).abs() < 0.02, "{method:?}: {c:?}");
+        assert!(
+            (c[2] + 1.0 - sphere.contact_radius()).abs() < 0.02,
+            "{method:?}: {c:?}"
+        );
     }
 }
 
@@ -464,17 +511,27 @@ fn executor_keeps_state_across_frames() {
             .zip(&sim.state.x)
             .flat_map(|(a, b)| (0..3).map(move |c| (a[c] - b[c]).abs()))
             .fold(0.0, f64::max);
-        assert!(err < 1e-9, "frame {}: differs from a direct run by {err}", f + 1);
+        assert!(
+            err < 1e-9,
+            "frame {}: differs from a direct run by {err}",
+            f + 1
+        );
         match r.output("sim", "log") {
             Some(Value::Table(t)) => {
                 assert_eq!(t.num_rows(), 2);
-                assert_eq!(t.column("step").unwrap(), &[(2 * f - 1) as f64, (2 * f) as f64]);
+                assert_eq!(
+                    t.column("step").unwrap(),
+                    &[(2 * f - 1) as f64, (2 * f) as f64]
+                );
             }
             other => panic!("no log: {other:?}"),
         }
     }
     // The cloth has moved by the last frame.
-    assert_ne!(output_mesh(&reports[4]).positions, output_mesh(&reports[0]).positions);
+    assert_ne!(
+        output_mesh(&reports[4]).positions,
+        output_mesh(&reports[0]).positions
+    );
 }
 
 #[test]
@@ -490,7 +547,11 @@ fn explicit_blow_up_is_reported_with_frame_and_step() {
         })
         .expect("semi-implicit at h = 0.01 must fail");
     assert_eq!(err.kind, ErrorKind::Unstable);
-    assert!(err.message.contains("frame") && err.message.contains("step"), "{}", err.message);
+    assert!(
+        err.message.contains("frame") && err.message.contains("step"),
+        "{}",
+        err.message
+    );
 }
 
 #[test]
@@ -540,8 +601,12 @@ fn degenerate_models_fail_cleanly_or_do_nothing() {
         x[1] = x[0];
         let mut bad = model.clone();
         bad.springs = springs_from_mesh(
-            &Mesh::new(x.clone(), mesh.face_counts().to_vec(), mesh.face_indices().to_vec())
-                .unwrap(),
+            &Mesh::new(
+                x.clone(),
+                mesh.face_counts().to_vec(),
+                mesh.face_indices().to_vec(),
+            )
+            .unwrap(),
             1000.0,
             SpringKinds::default(),
         );

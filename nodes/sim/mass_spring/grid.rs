@@ -82,8 +82,15 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let plane: String = ctx.input("plane")?;
     let center: [f64; 3] = ctx.input("center")?;
     let tri: bool = ctx.input("triangles")?;
-    let m = grid_mesh(cu.max(1) as usize, cv.max(1) as usize, size, &plane, center, tri)
-        .map_err(|e| NodeError::invalid("plane", e))?;
+    let m = grid_mesh(
+        cu.max(1) as usize,
+        cv.max(1) as usize,
+        size,
+        &plane,
+        center,
+        tri,
+    )
+    .map_err(|e| NodeError::invalid("plane", e))?;
     ctx.set_output("mesh", m);
     Ok(())
 }

@@ -13,8 +13,8 @@
 //! every frame.
 
 use super::springs::{
-    add_collider_forces, axpy, dot, norm, spring_energy, spring_forces, spring_hessian_psd, sub,
-    Incidence, Model, Sphere, State, collider_energy,
+    add_collider_forces, axpy, collider_energy, dot, norm, spring_energy, spring_forces,
+    spring_hessian_psd, sub, Incidence, Model, Sphere, State,
 };
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::sparse::linalg::cholesky::{
@@ -146,7 +146,14 @@ impl Implicit {
     }
 
     /// `g(x)` (without the constant part of fixed vertices).
-    fn objective(&self, m: &Model, x: &[[f64; 3]], y: &[[f64; 3]], h: f64, sp: Option<&Sphere>) -> f64 {
+    fn objective(
+        &self,
+        m: &Model,
+        x: &[[f64; 3]],
+        y: &[[f64; 3]],
+        h: f64,
+        sp: Option<&Sphere>,
+    ) -> f64 {
         let mut inertia = 0.0;
         for i in 0..x.len() {
             if self.free[i].is_some() {

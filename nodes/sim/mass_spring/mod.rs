@@ -17,9 +17,7 @@ use crate::prelude::*;
 pub use implicit::{Implicit, NewtonOptions};
 pub use projective::Projective;
 pub use semi_implicit::SemiImplicit;
-pub use springs::{
-    energy, springs_from_mesh, Energy, Model, Sphere, SpringKinds, Springs, State,
-};
+pub use springs::{energy, springs_from_mesh, Energy, Model, Sphere, SpringKinds, Springs, State};
 use std::hash::{Hash, Hasher};
 
 /// Which time integrator advances the system.
@@ -221,12 +219,13 @@ impl Simulator {
                 s.step(&self.model, &mut self.state, h, sphere);
                 0
             }
-            Solver::Implicit(s) => s
-                .step(&self.model, &mut self.state, h, sphere)
-                .map_err(|e| match e.contains("finite") {
-                    true => SimError::Unstable { step, reason: e },
-                    false => SimError::Solver(e),
-                })?,
+            Solver::Implicit(s) => {
+                s.step(&self.model, &mut self.state, h, sphere)
+                    .map_err(|e| match e.contains("finite") {
+                        true => SimError::Unstable { step, reason: e },
+                        false => SimError::Solver(e),
+                    })?
+            }
             Solver::Projective(s) => s.step(&self.model, &mut self.state, sphere),
         };
         self.steps += 1;
@@ -300,7 +299,9 @@ pub fn select_vertices(mesh: &Mesh, sel: &str, gravity_axis: usize) -> Result<Ve
             }
             _ => return Err(format!("attribute '{name}' is not a per-vertex number")),
         };
-        return Ok((0..n).filter(|&i| vals.get(i).is_some_and(|v| *v != 0.0)).collect());
+        return Ok((0..n)
+            .filter(|&i| vals.get(i).is_some_and(|v| *v != 0.0))
+            .collect());
     }
     if n == 0 {
         return Ok(Vec::new());
@@ -329,11 +330,8 @@ pub fn select_vertices(mesh: &Mesh, sel: &str, gravity_axis: usize) -> Result<Ve
     let t = |i: usize| top_sign * mesh.positions[i][top];
     let u = |i: usize| mesh.positions[i][side];
     let (et, eu) = (ext[top].max(1e-300), ext[side].max(1e-300));
-    let argmax = |f: &dyn Fn(usize) -> f64| {
-        (0..n)
-            .max_by(|&a, &b| f(a).total_cmp(&f(b)))
-            .unwrap_or(0)
-    };
+    let argmax =
+        |f: &dyn Fn(usize) -> f64| (0..n).max_by(|&a, &b| f(a).total_cmp(&f(b))).unwrap_or(0);
     match sel {
         "top_edge" => {
             let tmax = (0..n).map(t).fold(f64::NEG_INFINITY, f64::max);
@@ -394,7 +392,9 @@ pub fn parse_keyframes(s: &str) -> Result<Vec<(f64, [f64; 3])>, String> {
             .collect::<Result<_, _>>()
             .map_err(|_| format!("keyframe '{part}': bad coordinates"))?;
         if c.len() != 3 || !f.is_finite() || c.iter().any(|x| !x.is_finite()) {
-            return Err(format!("keyframe '{part}' needs a frame and 3 finite numbers"));
+            return Err(format!(
+                "keyframe '{part}' needs a frame and 3 finite numbers"
+            ));
         }
         out.push((f, [c[0], c[1], c[2]]));
     }
@@ -427,11 +427,17 @@ fn declare(b: &mut NodeBuilder) {
     b.doc("Cloth as a mass-spring system: semi-implicit, implicit (Newton) or projective (Liu 2013) time steps, fixed vertices, sphere collider.")
         .category("sim");
     b.stateful();
-    b.add_input::<Mesh>("mesh").doc("Rest shape (e.g. the course's grid40x40.usda).");
+    b.add_input::<Mesh>("mesh")
+        .doc("Rest shape (e.g. the course's grid40x40.usda).");
     b.add_input::<String>("integrator")
         .choices(&["implicit", "semi_implicit", "projective"]);
-    b.add_input::<f64>("stiffness").default(1000.0).range(0.0, 1e9);
-    b.add_input::<f64>("h").default(0.01).range(1e-7, 0.5).doc("Time step (s).");
+    b.add_input::<f64>("stiffness")
+        .default(1000.0)
+        .range(0.0, 1e9);
+    b.add_input::<f64>("h")
+        .default(0.01)
+        .range(1e-7, 0.5)
+        .doc("Time step (s).");
     b.add_input::<i64>("substeps")
         .default(1i64)
         .range(1.0, 100000.0)
@@ -441,7 +447,8 @@ fn declare(b: &mut NodeBuilder) {
         .range(1e-6, 1.0)
         .doc("Velocity factor per 0.01 s (per step at the course's h = 0.01; 1 = undamped).");
     b.add_input::<f64>("gravity").default(-9.8).range(-1e4, 1e4);
-    b.add_input::<String>("gravity_axis").choices(&["z", "y", "x"]);
+    b.add_input::<String>("gravity_axis")
+        .choices(&["z", "y", "x"]);
     b.add_input::<f64>("mass")
         .default(1.0)
         .min(1e-12)
@@ -458,10 +465,17 @@ fn declare(b: &mut NodeBuilder) {
     b.add_input::<Vec<i64>>("fixed_indices")
         .optional()
         .doc("More fixed vertex indices.");
-    b.add_input::<bool>("sphere").default(false).doc("Enable the sphere collider.");
-    b.add_input::<[f64; 3]>("sphere_center").default([0.0, 0.0, -1.0]);
-    b.add_input::<f64>("sphere_radius").default(0.4).range(0.0, 1e6);
-    b.add_input::<f64>("penalty_k").default(10000.0).range(0.0, 1e12);
+    b.add_input::<bool>("sphere")
+        .default(false)
+        .doc("Enable the sphere collider.");
+    b.add_input::<[f64; 3]>("sphere_center")
+        .default([0.0, 0.0, -1.0]);
+    b.add_input::<f64>("sphere_radius")
+        .default(0.4)
+        .range(0.0, 1e6);
+    b.add_input::<f64>("penalty_k")
+        .default(10000.0)
+        .range(0.0, 1e12);
     b.add_input::<f64>("collision_scale")
         .default(1.1)
         .range(1.0, 10.0)
@@ -469,7 +483,9 @@ fn declare(b: &mut NodeBuilder) {
     b.add_input::<String>("sphere_keyframes")
         .default("")
         .doc("Moving sphere: \"frame:x,y,z; frame:x,y,z\" (overrides sphere_center).");
-    b.add_input::<i64>("newton_iters").default(20i64).range(1.0, 1000.0);
+    b.add_input::<i64>("newton_iters")
+        .default(20i64)
+        .range(1.0, 1000.0);
     b.add_input::<f64>("newton_tol")
         .default(1e-7)
         .range(0.0, 1.0)
@@ -513,7 +529,13 @@ fn build(
         _ => 2,
     };
     let mass: f64 = ctx.input("mass")?;
-    for (name, v) in [("stiffness", k), ("h", h), ("damping", damping), ("gravity", g), ("mass", mass)] {
+    for (name, v) in [
+        ("stiffness", k),
+        ("h", h),
+        ("damping", damping),
+        ("gravity", g),
+        ("mass", mass),
+    ] {
         if !v.is_finite() {
             return Err(NodeError::invalid(name, "must be finite"));
         }
@@ -570,7 +592,10 @@ fn build(
         let s: f64 = ctx.input("collision_scale")?;
         let c: [f64; 3] = ctx.input("sphere_center")?;
         if !(r.is_finite() && kp.is_finite() && s.is_finite() && c.iter().all(|x| x.is_finite())) {
-            return Err(NodeError::invalid("sphere_radius", "sphere parameters must be finite"));
+            return Err(NodeError::invalid(
+                "sphere_radius",
+                "sphere parameters must be finite",
+            ));
         }
         Some(Sphere {
             center: c,
@@ -751,9 +776,15 @@ mod tests {
     #[test]
     fn selections() {
         let m = grid::grid_mesh(10, 10, [2.0, 2.0], "xy", [0.0; 3], true).unwrap();
-        assert_eq!(select_vertices(&m, "top_corners", 2).unwrap(), vec![120, 110]);
+        assert_eq!(
+            select_vertices(&m, "top_corners", 2).unwrap(),
+            vec![120, 110]
+        );
         assert_eq!(select_vertices(&m, "0, 39", 2).unwrap(), vec![0, 39]);
-        assert_eq!(select_vertices(&m, "top_edge", 2).unwrap(), (110..121).collect::<Vec<_>>());
+        assert_eq!(
+            select_vertices(&m, "top_edge", 2).unwrap(),
+            (110..121).collect::<Vec<_>>()
+        );
         let mut c = select_vertices(&m, "corners", 2).unwrap();
         c.sort();
         assert_eq!(c, vec![0, 10, 110, 120]);

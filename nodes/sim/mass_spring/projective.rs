@@ -140,16 +140,20 @@ impl Projective {
         for _ in 0..self.iterations {
             // Local step (eq. 15).
             let s = &m.springs;
-            self.d.par_iter_mut().enumerate().with_min_len(8192).for_each(|(i, d)| {
-                let [a, b] = s.ends[i];
-                let e = sub(x[b as usize], x[a as usize]);
-                let l = norm(e);
-                *d = if l > 0.0 {
-                    scale(e, s.rest[i] / l)
-                } else {
-                    [s.rest[i], 0.0, 0.0]
-                };
-            });
+            self.d
+                .par_iter_mut()
+                .enumerate()
+                .with_min_len(8192)
+                .for_each(|(i, d)| {
+                    let [a, b] = s.ends[i];
+                    let e = sub(x[b as usize], x[a as usize]);
+                    let l = norm(e);
+                    *d = if l > 0.0 {
+                        scale(e, s.rest[i] / l)
+                    } else {
+                        [s.rest[i], 0.0, 0.0]
+                    };
+                });
             // Global step (eq. 16): b = M y/h^2 + J d (+ fixed-vertex coupling).
             let mut b = b0.clone();
             for (si, e) in s.ends.iter().enumerate() {

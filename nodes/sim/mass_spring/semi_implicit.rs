@@ -44,11 +44,7 @@ impl SemiImplicit {
                 }
                 let a = axpy(m.gravity, 1.0 / m.mass[i], f[i]);
                 let nv = axpy(*v, h, a);
-                *v = [
-                    nv[0] * m.damping,
-                    nv[1] * m.damping,
-                    nv[2] * m.damping,
-                ];
+                *v = [nv[0] * m.damping, nv[1] * m.damping, nv[2] * m.damping];
                 *x = axpy(*x, h, *v);
             });
     }

@@ -160,13 +160,13 @@ impl Model {
     pub fn check(&self) -> Result<(), String> {
         let n = self.mass.len();
         if self.fixed.len() != n {
-            return Err(format!(
-                "{} fixed flags for {n} vertices",
-                self.fixed.len()
-            ));
+            return Err(format!("{} fixed flags for {n} vertices", self.fixed.len()));
         }
         if let Some(i) = self.mass.iter().position(|m| !(m.is_finite() && *m > 0.0)) {
-            return Err(format!("vertex {i} has mass {} (must be > 0)", self.mass[i]));
+            return Err(format!(
+                "vertex {i} has mass {} (must be > 0)",
+                self.mass[i]
+            ));
         }
         for (s, e) in self.springs.ends.iter().enumerate() {
             if e[0] as usize >= n || e[1] as usize >= n {
@@ -252,12 +252,7 @@ pub fn collider_energy(sphere: Option<&Sphere>, x: &[[f64; 3]], fixed: &[bool]) 
 }
 
 /// Kinetic, potential (springs, gravity from `x_ref`, collider) and maximum strain.
-pub fn energy(
-    m: &Model,
-    st: &State,
-    x_ref: &[[f64; 3]],
-    sphere: Option<&Sphere>,
-) -> Energy {
+pub fn energy(m: &Model, st: &State, x_ref: &[[f64; 3]], sphere: Option<&Sphere>) -> Energy {
     let (es, strain) = spring_energy(&m.springs, &st.x);
     let mut kin = 0.0;
     let mut grav = 0.0;
@@ -440,7 +435,12 @@ mod tests {
                 xp[v][c] += eps;
                 xm[v][c] -= eps;
                 let g = (spring_energy(&s, &xp).0 - spring_energy(&s, &xm).0) / (2.0 * eps);
-                assert!((f[v][c] + g).abs() < 1e-6, "v{v} c{c}: {} vs {}", f[v][c], -g);
+                assert!(
+                    (f[v][c] + g).abs() < 1e-6,
+                    "v{v} c{c}: {} vs {}",
+                    f[v][c],
+                    -g
+                );
             }
         }
     }

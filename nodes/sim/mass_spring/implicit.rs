@@ -58,7 +58,6 @@ pub struct Implicit {
     spring_slot: Vec<Option<usize>>,
     vals: Vec<f64>,
     inc: Incidence,
-    fs: Vec<[f64; 3]>,
     f: Vec<[f64; 3]>,
     /// Newton options.
     pub opts: NewtonOptions,
@@ -137,7 +136,6 @@ impl Implicit {
             spring_slot,
             vals: vec![0.0; idx.len()],
             inc: Incidence::new(&m.springs, n),
-            fs: Vec::new(),
             f: vec![[0.0; 3]; n],
             opts,
             symbolic_count: 1,
@@ -193,7 +191,7 @@ impl Implicit {
         for _ in 0..self.opts.max_iters {
             // Gradient of g over free vertices: M/h^2 (x - y) - f(x).
             self.f.resize(n, [0.0; 3]);
-            spring_forces(&m.springs, &self.inc, &x, &mut self.fs, &mut self.f);
+            spring_forces(&self.inc, &x, &mut self.f);
             add_collider_forces(sp, &x, &m.fixed, &mut self.f);
             let mut rhs = Mat::<f64>::zeros(nd, 1);
             let mut gmax = 0.0f64;

@@ -13,7 +13,6 @@ use rayon::prelude::*;
 #[derive(Clone, Debug, Default)]
 pub struct SemiImplicit {
     inc: Incidence,
-    fs: Vec<[f64; 3]>,
     f: Vec<[f64; 3]>,
 }
 
@@ -22,7 +21,6 @@ impl SemiImplicit {
     pub fn new(m: &Model) -> SemiImplicit {
         SemiImplicit {
             inc: Incidence::new(&m.springs, m.num_vertices()),
-            fs: Vec::new(),
             f: vec![[0.0; 3]; m.num_vertices()],
         }
     }
@@ -30,7 +28,7 @@ impl SemiImplicit {
     /// Advances `st` by one step of length `h`; fixed vertices keep position and zero velocity.
     pub fn step(&mut self, m: &Model, st: &mut State, h: f64, sphere: Option<&Sphere>) {
         self.f.resize(m.num_vertices(), [0.0; 3]);
-        spring_forces(&m.springs, &self.inc, &st.x, &mut self.fs, &mut self.f);
+        spring_forces(&self.inc, &st.x, &mut self.f);
         add_collider_forces(sphere, &st.x, &m.fixed, &mut self.f);
         let f = &self.f;
         st.x.par_iter_mut()

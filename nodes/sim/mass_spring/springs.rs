@@ -112,7 +112,15 @@ pub fn springs_from_mesh(mesh: &Mesh, k: f64, kinds: SpringKinds) -> Springs {
             }
         }
     }
-    s
+    // Sort by end vertices: force passes then walk memory in order (vertex-local access),
+    // which at 100k springs is several times faster than the construction order.
+    let mut order: Vec<usize> = (0..s.len()).collect();
+    order.sort_by_key(|&i| s.ends[i]);
+    Springs {
+        ends: order.iter().map(|&i| s.ends[i]).collect(),
+        rest: order.iter().map(|&i| s.rest[i]).collect(),
+        k: order.iter().map(|&i| s.k[i]).collect(),
+    }
 }
 
 /// A sphere collider at one instant (course: penalty force outside `scale * radius`).
@@ -267,74 +275,69 @@ pub fn energy(m: &Model, st: &State, x_ref: &[[f64; 3]], sphere: Option<&Sphere>
     }
 }
 
-/// Vertex-to-spring incidence (CSR), so forces can be gathered per vertex in parallel
-/// without atomics: spring `s` appears under both ends, with sign +1 at `ends[0]`.
+/// Springs seen from each vertex (CSR): for vertex `v`, the other end, rest length and
+/// stiffness of each incident spring. Forces are then gathered per vertex in parallel without
+/// atomics or a per-spring buffer; each spring is evaluated from both ends, which costs less
+/// than the memory traffic it saves.
 #[derive(Clone, Debug, Default)]
 pub struct Incidence {
-    /// Start of each vertex's list in `items`.
+    /// Start of each vertex's list.
     pub start: Vec<usize>,
-    /// `(spring, sign)` pairs.
-    pub items: Vec<(u32, f64)>,
+    /// Other end of each incident spring.
+    pub other: Vec<u32>,
+    /// Rest length of each incident spring.
+    pub rest: Vec<f64>,
+    /// Stiffness of each incident spring.
+    pub k: Vec<f64>,
 }
 
 impl Incidence {
     /// Builds the incidence of `s` over `n` vertices.
     pub fn new(s: &Springs, n: usize) -> Incidence {
-        let mut count = vec![0usize; n + 1];
+        let mut start = vec![0usize; n + 1];
         for e in &s.ends {
-            count[e[0] as usize + 1] += 1;
-            count[e[1] as usize + 1] += 1;
+            start[e[0] as usize + 1] += 1;
+            start[e[1] as usize + 1] += 1;
         }
         for i in 0..n {
-            count[i + 1] += count[i];
+            start[i + 1] += start[i];
         }
-        let mut fill = count.clone();
-        let mut items = vec![(0u32, 0.0); count[n]];
+        let mut fill = start.clone();
+        let m = start[n];
+        let (mut other, mut rest, mut k) = (vec![0u32; m], vec![0.0; m], vec![0.0; m]);
         for (i, e) in s.ends.iter().enumerate() {
-            items[fill[e[0] as usize]] = (i as u32, 1.0);
-            fill[e[0] as usize] += 1;
-            items[fill[e[1] as usize]] = (i as u32, -1.0);
-            fill[e[1] as usize] += 1;
+            for (v, u) in [(e[0], e[1]), (e[1], e[0])] {
+                let j = fill[v as usize];
+                other[j] = u;
+                rest[j] = s.rest[i];
+                k[j] = s.k[i];
+                fill[v as usize] += 1;
+            }
         }
         Incidence {
-            start: count,
-            items,
+            start,
+            other,
+            rest,
+            k,
         }
     }
 }
 
-/// Spring forces per vertex, `f = -dE_s/dx`, written into `f` (overwritten).
-/// Spring `s` pulls `ends[0]` by `k (l - L) n`, `n = (x_1 - x_0)/l`.
-pub fn spring_forces(
-    s: &Springs,
-    inc: &Incidence,
-    x: &[[f64; 3]],
-    fs: &mut Vec<[f64; 3]>,
-    f: &mut [[f64; 3]],
-) {
-    fs.resize(s.len(), [0.0; 3]);
-    fs.par_iter_mut()
-        .with_min_len(PAR_MIN)
-        .enumerate()
-        .for_each(|(i, out)| {
-            let [a, b] = s.ends[i];
-            let d = sub(x[b as usize], x[a as usize]);
-            let l = norm(d);
-            let c = if l > 0.0 {
-                s.k[i] * (l - s.rest[i]) / l
-            } else {
-                0.0
-            };
-            *out = scale(d, c);
-        });
-    let fs = &*fs;
+/// Spring forces per vertex, `f = -dE_s/dx`, written into `f` (overwritten):
+/// vertex `v` is pulled towards `u` by `k (l - L) / l (x_u - x_v)` for each spring `(v, u)`.
+pub fn spring_forces(inc: &Incidence, x: &[[f64; 3]], f: &mut [[f64; 3]]) {
     f.par_iter_mut()
         .with_min_len(PAR_MIN / 2)
         .enumerate()
         .for_each(|(v, out)| {
+            let xv = x[v];
             let mut acc = [0.0; 3];
-            for &(sp, sign) in &inc.items[inc.start[v]..inc.start[v + 1]] {
-                acc = axpy(acc, sign, fs[sp as usize]);
+            for j in inc.start[v]..inc.start[v + 1] {
+                let d = sub(x[inc.other[j] as usize], xv);
+                let l = norm(d);
+                if l > 0.0 {
+                    acc = axpy(acc, inc.k[j] * (1.0 - inc.rest[j] / l), d);
+                }
             }
             *out = acc;
         });
@@ -424,9 +427,8 @@ mod tests {
     fn forces_are_minus_energy_gradient() {
         let (s, x) = one_spring([1.3, 0.4, -0.2]);
         let inc = Incidence::new(&s, 2);
-        let mut fs = Vec::new();
         let mut f = vec![[0.0; 3]; 2];
-        spring_forces(&s, &inc, &x, &mut fs, &mut f);
+        spring_forces(&inc, &x, &mut f);
         let eps = 1e-6;
         for v in 0..2 {
             for c in 0..3 {
@@ -461,8 +463,8 @@ mod tests {
                 let (mut xp, mut xm) = (x.clone(), x.clone());
                 xp[1][c] += eps;
                 xm[1][c] -= eps;
-                spring_forces(&s, &inc, &xp, &mut Vec::new(), &mut fp);
-                spring_forces(&s, &inc, &xm, &mut Vec::new(), &mut fm);
+                spring_forces(&inc, &xp, &mut fp);
+                spring_forces(&inc, &xm, &mut fm);
                 for r in 0..3 {
                     exact[r][c] = -(fp[1][r] - fm[1][r]) / (2.0 * eps);
                 }

@@ -7,6 +7,10 @@
 //! and detects blow-ups; the node wraps it with frame-to-frame state, fixed-vertex
 //! selections and a sphere collider that may move along keyframes.
 
+// Numerical kernels index several parallel arrays (positions, velocities, masses, flags) by
+// vertex; index loops read closer to the formulas than zipped iterators.
+#![allow(clippy::needless_range_loop)]
+
 pub mod grid;
 pub mod implicit;
 pub mod projective;
@@ -540,10 +544,10 @@ fn build(
             return Err(NodeError::invalid(name, "must be finite"));
         }
     }
-    if !(h > 0.0) {
+    if h <= 0.0 {
         return Err(NodeError::invalid("h", "must be positive"));
     }
-    if !(mass > 0.0) {
+    if mass <= 0.0 {
         return Err(NodeError::invalid("mass", "must be positive"));
     }
     if !(damping > 0.0 && damping <= 1.0) {

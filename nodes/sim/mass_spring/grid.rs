@@ -1,0 +1,118 @@
+//! `mesh_grid`: a flat rectangular grid of quads or triangles, centred at a point, like the
+//! course's `grid10x10.usda` (which spans -1..1 in the xy plane, 11 x 11 vertices).
+
+use crate::prelude::*;
+
+/// A grid of `cells_u x cells_v` cells spanning `size` in the plane `plane` ("xy", "xz" or
+/// "yz"), centred at `center`. Vertex `(i, j)` (i along u) has index `j * (cells_u + 1) + i`.
+/// Quads are split along the `(i, j)-(i+1, j+1)` diagonal when `triangles` is set.
+pub fn grid_mesh(
+    cells_u: usize,
+    cells_v: usize,
+    size: [f64; 2],
+    plane: &str,
+    center: [f64; 3],
+    triangles: bool,
+) -> Result<Mesh, String> {
+    if cells_u == 0 || cells_v == 0 {
+        return Err("a grid needs at least one cell along each side".into());
+    }
+    let (au, av) = match plane {
+        "xy" => (0, 1),
+        "xz" => (0, 2),
+        "yz" => (1, 2),
+        other => return Err(format!("unknown plane '{other}' (xy, xz or yz)")),
+    };
+    let (nu, nv) = (cells_u + 1, cells_v + 1);
+    let mut pos = Vec::with_capacity(nu * nv);
+    for j in 0..nv {
+        for i in 0..nu {
+            let mut p = center;
+            p[au] += size[0] * (i as f64 / cells_u as f64 - 0.5);
+            p[av] += size[1] * (j as f64 / cells_v as f64 - 0.5);
+            pos.push(p);
+        }
+    }
+    let (mut counts, mut idx) = (Vec::new(), Vec::new());
+    for j in 0..cells_v {
+        for i in 0..cells_u {
+            let a = (j * nu + i) as u32;
+            let (b, c, d) = (a + 1, a + 1 + nu as u32, a + nu as u32);
+            if triangles {
+                counts.extend([3, 3]);
+                idx.extend([a, b, c, a, c, d]);
+            } else {
+                counts.push(4);
+                idx.extend([a, b, c, d]);
+            }
+        }
+    }
+    Mesh::new(pos, counts, idx).map_err(|e| e.to_string())
+}
+
+fn declare(b: &mut NodeBuilder) {
+    b.doc("A flat rectangular grid mesh (cloth), like the course's gridNxN.usda.")
+        .category("mesh");
+    b.add_input::<i64>("cells_u")
+        .default(10i64)
+        .range(1.0, 4096.0)
+        .doc("Cells along the first axis of the plane.");
+    b.add_input::<i64>("cells_v")
+        .default(10i64)
+        .range(1.0, 4096.0)
+        .doc("Cells along the second axis of the plane.");
+    b.add_input::<[f64; 2]>("size")
+        .default([2.0, 2.0])
+        .doc("Extent along the two axes.");
+    b.add_input::<String>("plane").choices(&["xy", "xz", "yz"]);
+    b.add_input::<[f64; 3]>("center").default([0.0, 0.0, 0.0]);
+    b.add_input::<bool>("triangles")
+        .default(true)
+        .doc("Split each quad into two triangles (as the course grids are).");
+    b.add_output::<Mesh>("mesh");
+}
+
+fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
+    let cu: i64 = ctx.input("cells_u")?;
+    let cv: i64 = ctx.input("cells_v")?;
+    let size: [f64; 2] = ctx.input("size")?;
+    if size.iter().any(|s| !(s.is_finite() && *s > 0.0)) {
+        return Err(NodeError::invalid("size", "both extents must be positive"));
+    }
+    let plane: String = ctx.input("plane")?;
+    let center: [f64; 3] = ctx.input("center")?;
+    let tri: bool = ctx.input("triangles")?;
+    let m = grid_mesh(
+        cu.max(1) as usize,
+        cv.max(1) as usize,
+        size,
+        &plane,
+        center,
+        tri,
+    )
+    .map_err(|e| NodeError::invalid("plane", e))?;
+    ctx.set_output("mesh", m);
+    Ok(())
+}
+
+/// Registers `mesh_grid`.
+pub fn register(r: &mut Registry) {
+    r.add("mesh_grid", declare, execute);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn grid_matches_course_layout() {
+        let m = grid_mesh(10, 10, [2.0, 2.0], "xy", [0.0; 3], true).unwrap();
+        assert_eq!(m.num_vertices(), 121);
+        assert_eq!(m.num_faces(), 200);
+        assert_eq!(m.positions[0], [-1.0, -1.0, 0.0]);
+        assert_eq!(m.positions[120], [1.0, 1.0, 0.0]);
+        // A disk: Euler characteristic 1.
+        assert_eq!(m.topology().euler_characteristic(), 1);
+        assert!(grid_mesh(0, 3, [1.0, 1.0], "xy", [0.0; 3], false).is_err());
+    }
+}

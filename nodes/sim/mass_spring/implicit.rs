@@ -1,0 +1,355 @@
+//! Backward (implicit) Euler as an optimization (Martin et al. 2011, "Example-based elastic
+//! materials"; Gast et al. 2015, "Optimization integrator for large time steps"):
+//!
+//! `x_{n+1} = argmin_x g(x)`, `g(x) = 1/(2h^2) (x - y)^T M (x - y) + E(x)`,
+//! `y = x_n + h v_n + h^2 g_ext`, `v_{n+1} = damping (x_{n+1} - x_n) / h`.
+//!
+//! Newton's method on `g` with the sparse Hessian `M/h^2 + sum_s K_s` where each spring's
+//! 3x3 block is projected to be positive semi-definite (so the Newton direction always
+//! descends), a backtracking line search with the Armijo condition, and fixed vertices
+//! eliminated by the selection matrix `S` (unknowns are the free vertices only: the system
+//! is `S^T H S dx = -S^T grad g`, Baraff & Witkin 1998 §5.3 in its reduced form). The sparse
+//! Cholesky's symbolic analysis is computed once per model and reused by every Newton step of
+//! every frame.
+
+use super::springs::{
+    add_collider_forces, axpy, collider_energy, dot, norm, spring_energy, spring_forces,
+    spring_hessian_psd, sub, Incidence, Model, Sphere, State,
+};
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::sparse::linalg::cholesky::{
+    factorize_symbolic_cholesky, LltRef, SymbolicCholesky, SymmetricOrdering,
+};
+use faer::sparse::{Argsort, Pair, SparseColMat, SymbolicSparseColMat};
+use faer::{Conj, Mat, Par, Side};
+
+/// Newton options.
+#[derive(Clone, Copy, Debug)]
+pub struct NewtonOptions {
+    /// Most Newton iterations per step.
+    pub max_iters: usize,
+    /// Stop when the largest vertex move of a Newton step is below this (length units).
+    pub tol: f64,
+}
+
+impl Default for NewtonOptions {
+    fn default() -> Self {
+        NewtonOptions {
+            max_iters: 20,
+            tol: 1e-7,
+        }
+    }
+}
+
+/// The reduced sparsity pattern and its symbolic Cholesky, built once per model.
+pub struct Implicit {
+    /// Index of each vertex among the free ones (`None` when fixed).
+    free: Vec<Option<u32>>,
+    n_free: usize,
+    pattern: SymbolicSparseColMat<usize>,
+    argsort: Argsort<usize>,
+    symbolic: SymbolicCholesky<usize>,
+    /// Values of the Cholesky factor (overwritten by each numeric factorization).
+    l_values: Vec<f64>,
+    /// Scratch memory for factorization and solve, kept between steps.
+    scratch: MemBuffer,
+    par: Par,
+    /// Value slot of each spring's off-diagonal block (both ends free).
+    spring_slot: Vec<Option<usize>>,
+    vals: Vec<f64>,
+    inc: Incidence,
+    f: Vec<[f64; 3]>,
+    /// Newton options.
+    pub opts: NewtonOptions,
+    /// How many symbolic factorizations were computed (1 for the life of the solver).
+    pub symbolic_count: usize,
+    /// How many numeric factorizations (= Newton steps) were computed.
+    pub numeric_count: usize,
+}
+
+impl Implicit {
+    /// Builds the reduced pattern `S^T H S` and its symbolic factorization.
+    pub fn new(m: &Model, opts: NewtonOptions) -> Result<Implicit, String> {
+        let n = m.num_vertices();
+        let mut free = vec![None; n];
+        let mut n_free = 0usize;
+        for i in 0..n {
+            if !m.fixed[i] {
+                free[i] = Some(n_free as u32);
+                n_free += 1;
+            }
+        }
+        let mut idx: Vec<Pair<usize, usize>> = Vec::new();
+        // Diagonal 3x3 blocks, lower triangle (row >= col).
+        for v in 0..n_free {
+            for a in 0..3 {
+                for b in 0..=a {
+                    idx.push(Pair::new(3 * v + a, 3 * v + b));
+                }
+            }
+        }
+        let mut spring_slot = vec![None; m.springs.len()];
+        for (s, e) in m.springs.ends.iter().enumerate() {
+            if let (Some(p), Some(q)) = (free[e[0] as usize], free[e[1] as usize]) {
+                if p == q {
+                    continue;
+                }
+                let (p, q) = (p.max(q) as usize, p.min(q) as usize);
+                spring_slot[s] = Some(idx.len());
+                for a in 0..3 {
+                    for b in 0..3 {
+                        idx.push(Pair::new(3 * p + a, 3 * q + b));
+                    }
+                }
+            }
+        }
+        let nd = 3 * n_free;
+        let (pattern, argsort) = SymbolicSparseColMat::try_new_from_indices(nd, nd, &idx)
+            .map_err(|e| format!("sparse pattern: {e:?}"))?;
+        let symbolic = factorize_symbolic_cholesky(
+            pattern.as_ref(),
+            Side::Lower,
+            SymmetricOrdering::Amd,
+            Default::default(),
+        )
+        .map_err(|e| format!("symbolic Cholesky: {e:?}"))?;
+        // Small systems factor faster on one thread (and nodes already run in parallel).
+        let par = if nd >= 60_000 {
+            Par::rayon(0)
+        } else {
+            Par::Seq
+        };
+        let req = symbolic
+            .factorize_numeric_llt_scratch::<f64>(par, Default::default())
+            .or(symbolic.solve_in_place_scratch::<f64>(1, par));
+        let scratch = MemBuffer::try_new(req).map_err(|e| format!("scratch memory: {e:?}"))?;
+        let l_values = vec![0.0; symbolic.len_val()];
+        Ok(Implicit {
+            free,
+            n_free,
+            pattern,
+            argsort,
+            symbolic,
+            l_values,
+            scratch,
+            par,
+            spring_slot,
+            vals: vec![0.0; idx.len()],
+            inc: Incidence::new(&m.springs, n),
+            f: vec![[0.0; 3]; n],
+            opts,
+            symbolic_count: 1,
+            numeric_count: 0,
+        })
+    }
+
+    /// `g(x)` (without the constant part of fixed vertices).
+    fn objective(
+        &self,
+        m: &Model,
+        x: &[[f64; 3]],
+        y: &[[f64; 3]],
+        h: f64,
+        sp: Option<&Sphere>,
+    ) -> f64 {
+        let mut inertia = 0.0;
+        for i in 0..x.len() {
+            if self.free[i].is_some() {
+                let d = sub(x[i], y[i]);
+                inertia += 0.5 * m.mass[i] * dot(d, d);
+            }
+        }
+        inertia / (h * h) + spring_energy(&m.springs, x).0 + collider_energy(sp, x, &m.fixed)
+    }
+
+    /// Advances `st` by one backward Euler step; returns the number of Newton iterations.
+    /// Fails when the Hessian is not positive definite (it cannot be with positive masses,
+    /// unless values are not finite) or the state is not finite.
+    pub fn step(
+        &mut self,
+        m: &Model,
+        st: &mut State,
+        h: f64,
+        sp: Option<&Sphere>,
+    ) -> Result<usize, String> {
+        let n = m.num_vertices();
+        let y: Vec<[f64; 3]> = (0..n)
+            .map(|i| {
+                if m.fixed[i] {
+                    st.x[i]
+                } else {
+                    axpy(axpy(st.x[i], h, st.v[i]), h * h, m.gravity)
+                }
+            })
+            .collect();
+        // Initial guess: the inertial position y.
+        let mut x: Vec<[f64; 3]> = y.clone();
+        let ih2 = 1.0 / (h * h);
+        let nd = 3 * self.n_free;
+        let mut iters = 0;
+        let mut g0 = self.objective(m, &x, &y, h, sp);
+        for _ in 0..self.opts.max_iters {
+            // Gradient of g over free vertices: M/h^2 (x - y) - f(x).
+            self.f.resize(n, [0.0; 3]);
+            spring_forces(&self.inc, &x, &mut self.f);
+            add_collider_forces(sp, &x, &m.fixed, &mut self.f);
+            let mut rhs = Mat::<f64>::zeros(nd, 1);
+            let mut gmax = 0.0f64;
+            for i in 0..n {
+                if let Some(p) = self.free[i] {
+                    let grad = axpy(
+                        [-self.f[i][0], -self.f[i][1], -self.f[i][2]],
+                        m.mass[i] * ih2,
+                        sub(x[i], y[i]),
+                    );
+                    for a in 0..3 {
+                        rhs[(3 * p as usize + a, 0)] = -grad[a];
+                        gmax = gmax.max(grad[a].abs());
+                    }
+                }
+            }
+            if !gmax.is_finite() {
+                return Err("the gradient is not finite".into());
+            }
+            if gmax == 0.0 {
+                break;
+            }
+            // Hessian values in the pattern's order.
+            self.vals.iter_mut().for_each(|v| *v = 0.0);
+            for i in 0..n {
+                if let Some(p) = self.free[i] {
+                    let base = 6 * p as usize;
+                    let mut c = 0;
+                    for a in 0..3 {
+                        for b in 0..=a {
+                            if a == b {
+                                self.vals[base + c] += m.mass[i] * ih2;
+                            }
+                            c += 1;
+                        }
+                    }
+                }
+            }
+            for (s, e) in m.springs.ends.iter().enumerate() {
+                let [i, j] = [e[0] as usize, e[1] as usize];
+                let k = spring_hessian_psd(sub(x[j], x[i]), m.springs.rest[s], m.springs.k[s]);
+                for v in [i, j] {
+                    if let Some(p) = self.free[v] {
+                        add_lower(&mut self.vals[6 * p as usize..], &k, 1.0);
+                    }
+                }
+                if let Some(slot) = self.spring_slot[s] {
+                    for a in 0..3 {
+                        for b in 0..3 {
+                            self.vals[slot + 3 * a + b] -= k[a][b];
+                        }
+                    }
+                }
+            }
+            if let Some(spd) = sp {
+                // Gauss-Newton (PSD) part of the penalty Hessian: k_p n n^T.
+                let r = spd.contact_radius();
+                for i in 0..n {
+                    if let Some(p) = self.free[i] {
+                        let d = sub(x[i], spd.center);
+                        let l = norm(d);
+                        if l < r && l > 0.0 {
+                            let nn = [d[0] / l, d[1] / l, d[2] / l];
+                            let mut kb = [[0.0; 3]; 3];
+                            for a in 0..3 {
+                                for b in 0..3 {
+                                    kb[a][b] = spd.k * nn[a] * nn[b];
+                                }
+                            }
+                            add_lower(&mut self.vals[6 * p as usize..], &kb, 1.0);
+                        }
+                    }
+                }
+            }
+            let a = SparseColMat::new_from_argsort(self.pattern.clone(), &self.argsort, &self.vals)
+                .map_err(|e| format!("Hessian assembly: {e:?}"))?;
+            self.symbolic
+                .factorize_numeric_llt::<f64>(
+                    &mut self.l_values,
+                    a.as_ref(),
+                    Side::Lower,
+                    Default::default(),
+                    self.par,
+                    MemStack::new(&mut self.scratch),
+                    Default::default(),
+                )
+                .map_err(|e| format!("the Hessian is not positive definite: {e:?}"))?;
+            self.numeric_count += 1;
+            iters += 1;
+            let mut dx = rhs.clone();
+            LltRef::new(&self.symbolic, &self.l_values).solve_in_place_with_conj(
+                Conj::No,
+                dx.as_mut(),
+                self.par,
+                MemStack::new(&mut self.scratch),
+            );
+            // Directional derivative grad . dx = -rhs . dx.
+            let mut slope = 0.0;
+            let mut step_max = 0.0f64;
+            for r in 0..nd {
+                slope -= rhs[(r, 0)] * dx[(r, 0)];
+                step_max = step_max.max(dx[(r, 0)].abs());
+            }
+            if !step_max.is_finite() {
+                return Err("the Newton step is not finite".into());
+            }
+            // Backtracking line search (Armijo, c = 1e-4; Nocedal & Wright, Alg. 3.1).
+            let mut alpha = 1.0;
+            let mut xt = x.clone();
+            let mut accepted = false;
+            for _ in 0..40 {
+                for i in 0..n {
+                    if let Some(p) = self.free[i] {
+                        let p = 3 * p as usize;
+                        xt[i] = axpy(x[i], alpha, [dx[(p, 0)], dx[(p + 1, 0)], dx[(p + 2, 0)]]);
+                    }
+                }
+                let gt = self.objective(m, &xt, &y, h, sp);
+                if gt <= g0 + 1e-4 * alpha * slope {
+                    g0 = gt;
+                    accepted = true;
+                    break;
+                }
+                alpha *= 0.5;
+            }
+            if !accepted {
+                break; // no decrease possible in floating point: at the minimum
+            }
+            std::mem::swap(&mut x, &mut xt);
+            if alpha * step_max < self.opts.tol {
+                break;
+            }
+        }
+        for i in 0..n {
+            if self.free[i].is_some() {
+                let v = sub(x[i], st.x[i]);
+                st.v[i] = [
+                    v[0] / h * m.damping,
+                    v[1] / h * m.damping,
+                    v[2] / h * m.damping,
+                ];
+                st.x[i] = x[i];
+            } else {
+                st.v[i] = [0.0; 3];
+            }
+        }
+        Ok(iters)
+    }
+}
+
+/// Adds `s * k` to a diagonal block stored as its lower triangle row by row
+/// (`(0,0), (1,0), (1,1), (2,0), (2,1), (2,2)`).
+fn add_lower(dst: &mut [f64], k: &[[f64; 3]; 3], s: f64) {
+    let mut c = 0;
+    for a in 0..3 {
+        for b in 0..=a {
+            dst[c] += s * k[a][b];
+            c += 1;
+        }
+    }
+}

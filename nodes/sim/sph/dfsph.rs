@@ -173,6 +173,7 @@ pub fn step(f: &mut Fluid, dt: f64) -> Result<StepStats, String> {
     });
     let (it, kappa) = solve_density(f, &alpha, vol, dt);
     iterations += it;
+    // The pressure output is the density solver's (as in SPlisHSPlasH); see docs/sph.md.
     let rho0 = f.params.rest_density;
     f.p = kappa
         .par_iter()

@@ -242,7 +242,12 @@ impl Fluid {
             let layers = (h / bs).ceil() as usize;
             let bx = boundary::box_particles(params.box_min, params.box_max, bs, layers, dim);
             let bgrid = Grid::build(&bx, h)?;
-            let bvol = boundary::volumes(&bx, &bgrid, &kernel);
+            let mut bsp = [bs; 3];
+            for a in 0..dim {
+                let len = params.box_max[a] - params.box_min[a];
+                bsp[a] = len / (len / bs).round().max(1.0);
+            }
+            let bvol = vec![boundary::lattice_volume(bsp, &kernel, dim); bx.len()];
             (bx, bvol, bgrid)
         } else {
             (Vec::new(), Vec::new(), Grid::default())
@@ -392,8 +397,9 @@ impl Fluid {
             .sqrt()
     }
 
-    /// The next step size: `dt`, or with `cfl > 0` the CFL bound `cfl * 2r / v_max`
-    /// (and for WCSPH also `cfl * h / c` with the EOS sound speed `c = sqrt(k gamma / rho0)`).
+    /// The next step size: `dt`, or with `cfl > 0` the CFL bound `cfl * 2r / v_max`, the
+    /// explicit viscosity bound, and for WCSPH also `cfl * h / c` with the EOS sound speed
+    /// `c = sqrt(k gamma / rho0)`.
     pub fn step_size(&self) -> f64 {
         let p = &self.params;
         if p.cfl <= 0.0 {
@@ -403,6 +409,12 @@ impl Fluid {
         let vmax = self.max_speed() + (p.gravity.abs() * p.dt);
         if vmax > 0.0 {
             dt = dt.min(p.cfl * 2.0 * p.particle_radius / vmax);
+        }
+        if p.viscosity > 0.0 {
+            // Explicit viscosity: dt <= 0.125 l^2 / nu with the smoothing length l = h/2
+            // (Monaghan 1992).
+            let l = 0.5 * self.kernel.h;
+            dt = dt.min(0.125 * l * l / p.viscosity);
         }
         if p.solver == Solver::Wcsph && p.stiffness > 0.0 {
             let c = (p.stiffness * p.exponent / p.rest_density).sqrt();

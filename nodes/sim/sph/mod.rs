@@ -3,6 +3,7 @@
 //! `points_save` to write particles as PLY. See `docs/sph.md`.
 
 pub mod boundary;
+pub mod dam_break;
 pub mod dfsph;
 pub mod fluid;
 pub mod grid;

@@ -309,3 +309,105 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
 pub fn register(r: &mut Registry) {
     r.add("sph_fluid", declare, execute);
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::collections::BTreeMap;
+
+    fn run(
+        r: &Registry,
+        params: &[(&str, Value)],
+        state: &mut Option<Box<dyn std::any::Any + Send>>,
+        frame: i64,
+    ) -> Result<BTreeMap<String, Value>, NodeError> {
+        let decl = r.get("sph_fluid").unwrap();
+        let inputs: BTreeMap<String, Value> = params
+            .iter()
+            .map(|(k, v)| (k.to_string(), v.clone()))
+            .collect();
+        let files = FileEnv::default();
+        let mut ctx = ExecContext::standalone(decl, inputs, state, &files, frame);
+        (decl.exec.as_ref().unwrap())(&mut ctx)?;
+        Ok(ctx.take_outputs())
+    }
+
+    fn small() -> Vec<(&'static str, Value)> {
+        vec![
+            ("dimension", Value::Int(2)),
+            ("sim_box_max", Value::Vec3([1.0, 1.0, 0.0])),
+            ("particle_box_max", Value::Vec3([0.3, 0.3, 0.0])),
+            ("particle_radius", Value::Float(0.02)),
+            ("stiffness", Value::Float(2e4)),
+        ]
+    }
+
+    #[test]
+    fn frames_advance_and_parameters_reset_the_state() {
+        let mut r = Registry::new();
+        register(&mut r);
+        let mut st = None;
+        run(&r, &small(), &mut st, 0).unwrap();
+        let out = run(&r, &small(), &mut st, 1).unwrap();
+        let Some(Value::Table(log)) = out.get("log") else {
+            panic!("no log")
+        };
+        let t = log.column("time").unwrap();
+        assert_eq!(t.len(), 3);
+        assert!((t[2] - 2.0 / 30.0).abs() < 1e-9);
+        let Some(Value::Points(p)) = out.get("points") else {
+            panic!("no points")
+        };
+        // 0.2 / 0.04 = 5 particles per axis (spacing 2r in the block [0.1, 0.3]^2).
+        assert_eq!(p.dim, 2);
+        assert_eq!(p.positions.len(), 25);
+        assert!(p.scalars.contains_key("density"));
+        // Free fall for 2/30 s lowers the mean height 0.2 by g t^2 / 2 = 0.022 (no floor yet).
+        let mean_y = p.positions.iter().map(|x| x[1]).sum::<f64>() / 25.0;
+        assert!((mean_y - (0.2 - 0.5 * 9.8 * (2.0f64 / 30.0).powi(2))).abs() < 2e-3);
+        let Some(Value::Image(img)) = out.get("image") else {
+            panic!("no image")
+        };
+        assert_eq!((img.width, img.height), (256, 256));
+        // A changed parameter restarts the simulation.
+        let mut changed = small();
+        changed.push(("viscosity", Value::Float(0.01)));
+        let out = run(&r, &changed, &mut st, 2).unwrap();
+        let Some(Value::Table(log)) = out.get("log") else {
+            panic!("no log")
+        };
+        assert_eq!(log.column("time").unwrap().len(), 2);
+    }
+
+    #[test]
+    fn blow_up_is_reported_with_frame_and_step() {
+        let mut r = Registry::new();
+        register(&mut r);
+        let mut st = None;
+        let mut p = small();
+        p.extend([
+            ("cfl", Value::Float(0.0)),
+            ("dt", Value::Float(0.05)),
+            ("stiffness", Value::Float(1e7)),
+            ("frame_dt", Value::Float(1.0)),
+        ]);
+        let e = run(&r, &p, &mut st, 0).unwrap_err();
+        assert_eq!(e.kind, ErrorKind::Unstable);
+        assert!(
+            e.message.contains("frame 0") && e.message.contains("step"),
+            "{}",
+            e.message
+        );
+    }
+
+    #[test]
+    fn bad_boxes_are_rejected() {
+        let mut r = Registry::new();
+        register(&mut r);
+        let mut st = None;
+        let mut p = small();
+        p.push(("particle_box_max", Value::Vec3([2.0, 0.3, 0.0])));
+        let e = run(&r, &p, &mut st, 0).unwrap_err();
+        assert_eq!(e.kind, ErrorKind::InvalidInput);
+    }
+}

@@ -29,7 +29,9 @@ fn ours(solver: Solver, r: f64, exp: &[(f64, f64)]) -> Run {
     let sim = dam_break::run(&mut f, T_END, 0.005).unwrap();
     let seconds = t0.elapsed().as_secs_f64();
     Run {
-        name: format!("cgnodes {solver:?}").to_uppercase().replace("CGNODES", "cgnodes"),
+        name: format!("cgnodes {solver:?}")
+            .to_uppercase()
+            .replace("CGNODES", "cgnodes"),
         r,
         particles: f.len(),
         steps: f.steps,
@@ -79,15 +81,38 @@ fn svg(runs: &[Run]) -> String {
         let _ = writeln!(s, "<line x1='{l}' x2='{}' y1='{y}' y2='{y}' stroke='#ddd'/><text x='5' y='{}'>{:+.0} %</text>", w - 20.0, py(e) + 4.0, e * 100.0, y = py(e));
     }
     for t in [1.0, 1.5, 2.0, 2.5, 3.0, 3.5] {
-        let _ = writeln!(s, "<text x='{}' y='{}'>{t}</text>", px(t) - 8.0, h - b + 16.0);
+        let _ = writeln!(
+            s,
+            "<text x='{}' y='{}'>{t}</text>",
+            px(t) - 8.0,
+            h - b + 16.0
+        );
     }
     let _ = writeln!(s, "<text x='{}' y='{}'>T = t sqrt(2g/a) (experiment)</text><text x='{l}' y='14'>front error (T_sim - T_exp) / T_exp, anchored at T = 1.19, Z = 1.44</text>", w / 2.0 - 80.0, h - 6.0);
-    let colors = ["#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#17becf", "#7f7f7f"];
+    let colors = [
+        "#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#17becf", "#7f7f7f",
+    ];
     for (k, run) in runs.iter().enumerate() {
         let c = colors[k % colors.len()];
-        let pts: Vec<String> = run.errors.iter().map(|(t, e)| format!("{:.1},{:.1}", px(*t), py(*e))).collect();
-        let _ = writeln!(s, "<polyline fill='none' stroke='{c}' stroke-width='1.5' points='{}'/>", pts.join(" "));
-        let _ = writeln!(s, "<text x='{}' y='{}' fill='{c}'>{} r = {} ({} particles)</text>", w - 300.0, h - b - 10.0 - 14.0 * k as f64, run.name, run.r, run.particles);
+        let pts: Vec<String> = run
+            .errors
+            .iter()
+            .map(|(t, e)| format!("{:.1},{:.1}", px(*t), py(*e)))
+            .collect();
+        let _ = writeln!(
+            s,
+            "<polyline fill='none' stroke='{c}' stroke-width='1.5' points='{}'/>",
+            pts.join(" ")
+        );
+        let _ = writeln!(
+            s,
+            "<text x='{}' y='{}' fill='{c}'>{} r = {} ({} particles)</text>",
+            w - 300.0,
+            h - b - 10.0 - 14.0 * k as f64,
+            run.name,
+            run.r,
+            run.particles
+        );
     }
     s.push_str("</svg>\n");
     s
@@ -115,17 +140,30 @@ fn main() {
             None => eprintln!("SPlisHSPlasH peer unavailable (set SPH_PEER_PYTHON)"),
         }
     }
-    println!("| solver | r | particles | steps | s | particle-steps/s | front error (RMS rel. in T) |");
+    println!(
+        "| solver | r | particles | steps | s | particle-steps/s | front error (RMS rel. in T) |"
+    );
     println!("|---|---|---|---|---|---|---|");
-    let mut csv = String::from("solver,r,particles,steps,seconds,particle_steps_per_s,front_error\n");
+    let mut csv =
+        String::from("solver,r,particles,steps,seconds,particle_steps_per_s,front_error\n");
     for run in &runs {
         let ps = run.particles as f64 * run.steps as f64 / run.seconds;
         let e = dam_break::rms(&run.errors);
         println!(
             "| {} | {} | {} | {} | {:.2} | {:.2} M | {:.1} % |",
-            run.name, run.r, run.particles, run.steps, run.seconds, ps / 1e6, e * 100.0
+            run.name,
+            run.r,
+            run.particles,
+            run.steps,
+            run.seconds,
+            ps / 1e6,
+            e * 100.0
         );
-        let _ = writeln!(csv, "{},{},{},{},{:.3},{:.0},{:.4}", run.name, run.r, run.particles, run.steps, run.seconds, ps, e);
+        let _ = writeln!(
+            csv,
+            "{},{},{},{},{:.3},{:.0},{:.4}",
+            run.name, run.r, run.particles, run.steps, run.seconds, ps, e
+        );
     }
     let docs = root.join("docs");
     let _ = std::fs::create_dir_all(&docs);

@@ -27,8 +27,16 @@ fn dam_break_front_matches_martin_moyce() {
         let sim = dam_break::run(&mut f, 3.5, 0.005).unwrap();
         let errs = dam_break::anchored_errors(&sim, &exp);
         let e = dam_break::rms(&errs);
-        eprintln!("{solver:?}: front error {e:.4} over {} points, {} steps", errs.len(), f.steps);
-        assert!(errs.len() >= 10, "{solver:?}: only {} points compared", errs.len());
+        eprintln!(
+            "{solver:?}: front error {e:.4} over {} points, {} steps",
+            errs.len(),
+            f.steps
+        );
+        assert!(
+            errs.len() >= 10,
+            "{solver:?}: only {} points compared",
+            errs.len()
+        );
         assert!(e < 0.05, "{solver:?}: front error {e}");
         // Until it reaches the far wall (Z = 4) the front only advances.
         assert!(sim
@@ -135,7 +143,10 @@ fn hydrostatic_pressure_is_linear_in_depth() {
             "{solver:?}: dp/dy = {slope:.1} (rho0 g = {:.1}), layer deviation {worst:.4} of p_max {pmax:.0}; layers {:?}",
             -expect, pts.iter().map(|p| p.1.round()).collect::<Vec<_>>()
         );
-        assert!((slope / expect - 1.0).abs() < 0.05, "{solver:?}: slope {slope}");
+        assert!(
+            (slope / expect - 1.0).abs() < 0.05,
+            "{solver:?}: slope {slope}"
+        );
         assert!(worst < 0.05, "{solver:?}: layers deviate by {worst}");
     }
 }
@@ -168,7 +179,11 @@ fn momentum_is_conserved_without_walls() {
                 *v = [
                     0.3 + (7.0 * x[1]).sin(),
                     -0.2 + (5.0 * x[0]).cos(),
-                    if dim == 3 { (3.0 * x[0] * x[1]).sin() } else { 0.0 },
+                    if dim == 3 {
+                        (3.0 * x[0] * x[1]).sin()
+                    } else {
+                        0.0
+                    },
                 ];
             }
             let p0 = f.momentum();
@@ -176,9 +191,17 @@ fn momentum_is_conserved_without_walls() {
             f.advance(0.05).unwrap();
             let p1 = f.momentum();
             let scale = (2.0 * f.mass * f.len() as f64 * e0).sqrt();
-            let dp = ((p1[0] - p0[0]).powi(2) + (p1[1] - p0[1]).powi(2) + (p1[2] - p0[2]).powi(2)).sqrt();
-            eprintln!("{solver:?} {dim}-D: |dp| / |m v| = {:.2e}, steps {}", dp / scale, f.steps);
-            assert!(dp < 1e-10 * scale, "{solver:?} {dim}-D: momentum changed by {dp}");
+            let dp = ((p1[0] - p0[0]).powi(2) + (p1[1] - p0[1]).powi(2) + (p1[2] - p0[2]).powi(2))
+                .sqrt();
+            eprintln!(
+                "{solver:?} {dim}-D: |dp| / |m v| = {:.2e}, steps {}",
+                dp / scale,
+                f.steps
+            );
+            assert!(
+                dp < 1e-10 * scale,
+                "{solver:?} {dim}-D: momentum changed by {dp}"
+            );
         }
     }
 }

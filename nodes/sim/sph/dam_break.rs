@@ -9,7 +9,10 @@ use super::fluid::{Boundary, Fluid, Solver, SphParams};
 pub fn parse_martin_moyce(text: &str) -> Result<Vec<(f64, f64)>, String> {
     let mut header: Vec<&str> = Vec::new();
     let mut out = Vec::new();
-    for line in text.lines().filter(|l| !l.starts_with('#') && !l.trim().is_empty()) {
+    for line in text
+        .lines()
+        .filter(|l| !l.starts_with('#') && !l.trim().is_empty())
+    {
         let cells: Vec<&str> = line.split(',').collect();
         if header.is_empty() {
             header = cells;

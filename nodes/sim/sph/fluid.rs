@@ -189,7 +189,7 @@ impl Fluid {
                 return Err("the particle box must lie inside the simulation box".into());
             }
             let len = pmax[a] - pmin[a];
-            if !(len > 0.0) {
+            if len.is_nan() || len <= 0.0 {
                 return Err(format!("the particle box is empty along axis {a}"));
             }
             match counts {
@@ -226,7 +226,11 @@ impl Fluid {
         let m = [
             (h / s[0]).ceil() as i64,
             (h / s[1]).ceil() as i64,
-            if dim == 3 { (h / s[2]).ceil() as i64 } else { 0 },
+            if dim == 3 {
+                (h / s[2]).ceil() as i64
+            } else {
+                0
+            },
         ];
         for k in -m[2]..=m[2] {
             for j in -m[1]..=m[1] {
@@ -243,9 +247,9 @@ impl Fluid {
             let bx = boundary::box_particles(params.box_min, params.box_max, bs, layers, dim);
             let bgrid = Grid::build(&bx, h)?;
             let mut bsp = [bs; 3];
-            for a in 0..dim {
+            for (a, sp) in bsp.iter_mut().enumerate().take(dim) {
                 let len = params.box_max[a] - params.box_min[a];
-                bsp[a] = len / (len / bs).round().max(1.0);
+                *sp = len / (len / bs).round().max(1.0);
             }
             let bvol = vec![boundary::lattice_volume(bsp, &kernel, dim); bx.len()];
             (bx, bvol, bgrid)
@@ -475,7 +479,10 @@ impl Fluid {
                 dt = if left <= dt { left } else { 0.5 * left };
             }
             self.step(dt).map_err(|e| {
-                format!("step {} (t = {:.4} s, dt = {dt:.2e}): {e}", self.steps, self.time)
+                format!(
+                    "step {} (t = {:.4} s, dt = {dt:.2e}): {e}",
+                    self.steps, self.time
+                )
             })?;
             left -= dt;
             n += 1;
@@ -492,10 +499,14 @@ impl Fluid {
             diag += (p.box_max[a] - p.box_min[a]).powi(2);
         }
         let vlim = 50.0 * (2.0 * p.gravity.abs().max(1.0) * diag.sqrt()).sqrt();
-        let bad = self.x.par_iter().zip(self.v.par_iter()).position_any(|(x, v)| {
-            !(x.iter().all(|c| c.is_finite()) && v.iter().all(|c| c.is_finite()))
-                || dot(*v, *v) > vlim * vlim
-        });
+        let bad = self
+            .x
+            .par_iter()
+            .zip(self.v.par_iter())
+            .position_any(|(x, v)| {
+                !(x.iter().all(|c| c.is_finite()) && v.iter().all(|c| c.is_finite()))
+                    || dot(*v, *v) > vlim * vlim
+            });
         if let Some(i) = bad {
             return Err(format!(
                 "particle {i} has position {:?} and velocity {:?} (speed limit {vlim:.1} m/s); \
@@ -504,7 +515,7 @@ impl Fluid {
             ));
         }
         let rmax = self.rho.iter().cloned().fold(0.0, f64::max);
-        if !(rmax < 2.0 * p.rest_density) {
+        if rmax.is_nan() || rmax >= 2.0 * p.rest_density {
             return Err(format!(
                 "the density reached {rmax:.1} (rest density {}); the fluid is collapsing: \
                  raise the stiffness or lower dt",

@@ -59,7 +59,7 @@ impl Grid {
             total *= n;
             dims[a] = n as usize;
         }
-        if !(total <= MAX_CELLS as f64) {
+        if total.is_nan() || total > MAX_CELLS as f64 {
             return Err(format!(
                 "the particles spread over {total:.3e} grid cells (more than {MAX_CELLS}); \
                  use a smaller box or larger particles"
@@ -146,7 +146,9 @@ mod tests {
         let mut pts = Vec::new();
         let mut s = 12345u64;
         let mut rnd = || {
-            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             (s >> 11) as f64 / (1u64 << 53) as f64
         };
         for _ in 0..500 {

@@ -119,7 +119,11 @@ mod tests {
                     xm[a] -= eps;
                     let r = |v: [f64; 3]| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
                     let fd = (kern.w(r(xp)) - kern.w(r(xm))) / (2.0 * eps);
-                    assert!((fd - g[a]).abs() < 1e-5 * kern.w_zero() / 0.2, "{fd} {}", g[a]);
+                    assert!(
+                        (fd - g[a]).abs() < 1e-5 * kern.w_zero() / 0.2,
+                        "{fd} {}",
+                        g[a]
+                    );
                 }
             }
             assert_eq!(kern.grad([0.3, 0.0, 0.0]), [0.0; 3]);

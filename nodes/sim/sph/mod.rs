@@ -12,7 +12,7 @@ pub mod points_save;
 pub mod sph_fluid;
 pub mod wcsph;
 
-pub use fluid::{Boundary, Fluid, SphParams, Solver};
+pub use fluid::{Boundary, Fluid, Solver, SphParams};
 
 use crate::registry::Registry;
 

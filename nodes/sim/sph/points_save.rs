@@ -79,7 +79,10 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let binary = ctx.input::<String>("format")? == "binary";
     let path = ctx.output_path("path", &p)?;
     if path.extension().and_then(|e| e.to_str()) != Some("ply") {
-        return Err(NodeError::invalid("path", format!("'{p}' should end in .ply")));
+        return Err(NodeError::invalid(
+            "path",
+            format!("'{p}' should end in .ply"),
+        ));
     }
     ctx.write_with(&path, |w| write_ply(&pts, binary, w))
 }

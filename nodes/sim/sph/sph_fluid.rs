@@ -4,7 +4,7 @@
 //! history in Martin & Moyce's dimensionless units. The state restarts on the first frame,
 //! when the frame goes backwards, or when any parameter changes.
 
-use super::fluid::{Boundary, Fluid, SphParams, Solver};
+use super::fluid::{Boundary, Fluid, Solver, SphParams};
 use crate::prelude::*;
 
 /// The particles as `Points` with `velocity`, `density`, `pressure`, `speed` and `color`.
@@ -14,7 +14,10 @@ pub fn to_points(f: &Fluid, vref: f64) -> Points {
         positions: f.x.clone(),
         ..Default::default()
     };
-    let speed: Vec<f64> = f.v.iter().map(|v| super::fluid::dot(*v, *v).sqrt()).collect();
+    let speed: Vec<f64> =
+        f.v.iter()
+            .map(|v| super::fluid::dot(*v, *v).sqrt())
+            .collect();
     pts.vectors.insert(
         "color".into(),
         speed.iter().map(|s| speed_color(s / vref)).collect(),
@@ -113,10 +116,8 @@ impl SphState {
             f.height(),
         ]);
         let g = f.params.gravity.abs();
-        self.front.push_row(&[
-            self.n * f.time * (g / self.a).sqrt(),
-            front / self.a,
-        ]);
+        self.front
+            .push_row(&[self.n * f.time * (g / self.a).sqrt(), front / self.a]);
     }
 }
 
@@ -124,19 +125,24 @@ fn declare(b: &mut NodeBuilder) {
     b.doc("SPH fluid (WCSPH or DFSPH) in a box; advances one frame per execution.")
         .category("sim");
     b.stateful();
-    b.add_input::<i64>("dimension").default(3i64).range(2.0, 3.0);
+    b.add_input::<i64>("dimension")
+        .default(3i64)
+        .range(2.0, 3.0);
     b.add_input::<String>("solver")
         .choices(&["wcsph", "dfsph"])
         .doc("wcsph: the course's weakly compressible SPH; dfsph: divergence-free SPH (Bender & Koschier 2017), incompressible to max_density_error.");
     b.add_input::<String>("boundary")
         .choices(&["particles", "walls"])
         .doc("particles: Akinci 2012 boundary particles sampling the box; walls: clamp with restitution only.");
-    b.add_input::<[f64; 3]>("sim_box_min").default([0.0, 0.0, 0.0]);
-    b.add_input::<[f64; 3]>("sim_box_max").default([1.0, 1.0, 1.0]);
+    b.add_input::<[f64; 3]>("sim_box_min")
+        .default([0.0, 0.0, 0.0]);
+    b.add_input::<[f64; 3]>("sim_box_max")
+        .default([1.0, 1.0, 1.0]);
     b.add_input::<[f64; 3]>("particle_box_min")
         .default([0.1, 0.1, 0.1])
         .doc("Initial fluid block (the fluid starts at rest).");
-    b.add_input::<[f64; 3]>("particle_box_max").default([0.6, 0.6, 0.6]);
+    b.add_input::<[f64; 3]>("particle_box_max")
+        .default([0.6, 0.6, 0.6]);
     b.add_input::<[f64; 3]>("num_particle_per_axis")
         .default([0.0, 0.0, 0.0])
         .doc("Particles per axis in the block; 0 fills it with spacing 2r.");
@@ -144,7 +150,9 @@ fn declare(b: &mut NodeBuilder) {
         .default(0.025)
         .range(1e-5, 10.0)
         .doc("Particle radius r; the support radius is 4r.");
-    b.add_input::<f64>("rest_density").default(1000.0).range(1e-3, 1e6);
+    b.add_input::<f64>("rest_density")
+        .default(1000.0)
+        .range(1e-3, 1e6);
     b.add_input::<f64>("stiffness")
         .default(500.0)
         .range(0.0, 1e9)
@@ -170,7 +178,9 @@ fn declare(b: &mut NodeBuilder) {
         .default(0.4)
         .range(0.0, 2.0)
         .doc("Adaptive step dt <= cfl * 2r / v_max; 0 keeps dt fixed.");
-    b.add_input::<f64>("restitution").default(0.0).range(0.0, 1.0);
+    b.add_input::<f64>("restitution")
+        .default(0.0)
+        .range(0.0, 1.0);
     b.add_input::<i64>("max_iterations")
         .default(100i64)
         .range(1.0, 10000.0);
@@ -181,7 +191,9 @@ fn declare(b: &mut NodeBuilder) {
     b.add_input::<bool>("divergence")
         .default(true)
         .doc("DFSPH: run the divergence-free solver.");
-    b.add_input::<i64>("image_width").default(256i64).range(8.0, 4096.0);
+    b.add_input::<i64>("image_width")
+        .default(256i64)
+        .range(8.0, 4096.0);
     b.add_output::<Points>("points")
         .doc("Particles with velocity, density, pressure, speed and color.");
     b.add_output::<Image>("image")
@@ -192,7 +204,10 @@ fn declare(b: &mut NodeBuilder) {
     );
 }
 
-fn read_params(ctx: &ExecContext) -> Result<(SphParams, [f64; 3], [f64; 3], Option<[usize; 3]>), NodeError> {
+/// Simulation parameters, the fluid block corners and the optional particle counts.
+type Setup = (SphParams, [f64; 3], [f64; 3], Option<[usize; 3]>);
+
+fn read_params(ctx: &ExecContext) -> Result<Setup, NodeError> {
     let solver = match ctx.input::<String>("solver")?.as_str() {
         "dfsph" => Solver::Dfsph,
         _ => Solver::Wcsph,
@@ -221,10 +236,7 @@ fn read_params(ctx: &ExecContext) -> Result<(SphParams, [f64; 3], [f64; 3], Opti
         max_density_error: ctx.input("max_density_error")?,
         divergence: ctx.input("divergence")?,
     };
-    for (name, v) in [
-        ("sim_box_min", prm.box_min),
-        ("sim_box_max", prm.box_max),
-    ] {
+    for (name, v) in [("sim_box_min", prm.box_min), ("sim_box_max", prm.box_max)] {
         if v.iter().any(|c| !c.is_finite()) {
             return Err(NodeError::invalid(name, "must be finite"));
         }
@@ -232,8 +244,12 @@ fn read_params(ctx: &ExecContext) -> Result<(SphParams, [f64; 3], [f64; 3], Opti
     let pmin: [f64; 3] = ctx.input("particle_box_min")?;
     let pmax: [f64; 3] = ctx.input("particle_box_max")?;
     let counts: [f64; 3] = ctx.input("num_particle_per_axis")?;
-    let counts = if counts[..prm.dim].iter().all(|&c| c >= 1.0 && c < 1e6) {
-        Some([counts[0] as usize, counts[1] as usize, counts[2].max(1.0) as usize])
+    let counts = if counts[..prm.dim].iter().all(|&c| (1.0..1e6).contains(&c)) {
+        Some([
+            counts[0] as usize,
+            counts[1] as usize,
+            counts[2].max(1.0) as usize,
+        ])
     } else if counts.iter().all(|&c| c == 0.0) {
         None
     } else {
@@ -255,7 +271,8 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     if st.fluid.is_none() || st.key != key || frame <= st.last_frame {
         let mut f = Fluid::block(prm.clone(), pmin, pmax, counts)
             .map_err(|e| NodeError::invalid("particle_box_min", e))?;
-        f.refresh().map_err(|e| NodeError::invalid("particle_radius", e))?;
+        f.refresh()
+            .map_err(|e| NodeError::invalid("particle_radius", e))?;
         *st = SphState {
             key,
             a: f.front().max(1e-12),
@@ -281,7 +298,9 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let res = f.advance(frame_dt).and_then(|_| f.refresh());
     if let Err(e) = res {
         st.fluid = None;
-        return Err(NodeError::unstable(format!("SPH blew up in frame {frame} at {e}")));
+        return Err(NodeError::unstable(format!(
+            "SPH blew up in frame {frame} at {e}"
+        )));
     }
     st.last_frame = frame;
     st.record(frame);

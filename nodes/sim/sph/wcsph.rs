@@ -19,7 +19,11 @@ pub fn step(f: &mut Fluid, dt: f64) -> Result<StepStats, String> {
     f.compute_densities();
     let prm = &f.params;
     let (rho0, k, gamma) = (prm.rest_density, prm.stiffness, prm.exponent);
-    f.p = f.rho.par_iter().map(|&r| pressure(r, rho0, k, gamma)).collect();
+    f.p = f
+        .rho
+        .par_iter()
+        .map(|&r| pressure(r, rho0, k, gamma))
+        .collect();
     let mut acc = f.non_pressure_accelerations();
     let (m, rho, p, bvol) = (f.mass, &f.rho, &f.p, &f.bvol);
     acc.par_iter_mut()

@@ -28,9 +28,10 @@ fn dam_break_front_matches_martin_moyce() {
         let errs = dam_break::anchored_errors(&sim, &exp);
         let e = dam_break::rms(&errs);
         eprintln!(
-            "{solver:?}: front error {e:.4} over {} points, {} steps",
+            "{solver:?}: front error {e:.4} over {} points, {} steps, {} iterations",
             errs.len(),
-            f.steps
+            f.steps,
+            f.total_iterations
         );
         assert!(
             errs.len() >= 10,

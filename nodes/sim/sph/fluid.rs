@@ -146,6 +146,8 @@ pub struct Fluid {
     pub steps: usize,
     /// Iterations of the last step.
     pub last: StepStats,
+    /// Solver iterations over all steps.
+    pub total_iterations: usize,
 }
 
 pub(crate) fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
@@ -273,6 +275,7 @@ impl Fluid {
             time: 0.0,
             steps: 0,
             last: StepStats::default(),
+            total_iterations: 0,
             params,
         })
     }
@@ -465,6 +468,7 @@ impl Fluid {
         };
         self.time += dt;
         self.steps += 1;
+        self.total_iterations += self.last.iterations;
         self.check()
     }
 

@@ -1,0 +1,158 @@
+//! `light_point` and `light_directional`: the scene's light sources.
+//!
+//! A point light radiates `color * intensity` (W/sr per channel) in every direction, so the
+//! irradiance it gives a surface at distance d facing it is `color * intensity / d^2`; a
+//! directional light gives irradiance `color * intensity` on a surface facing it.
+
+use crate::prelude::*;
+
+/// A point light; fails on non-finite or negative values.
+pub fn point_light(position: [f64; 3], color: [f64; 3], intensity: f64) -> Result<Light, String> {
+    check(&position, &color, intensity)?;
+    Ok(Light::Point {
+        position,
+        color,
+        intensity,
+    })
+}
+
+/// A directional light travelling along `direction` (normalized here); fails on a zero
+/// direction or non-finite or negative values.
+pub fn directional_light(
+    direction: [f64; 3],
+    color: [f64; 3],
+    intensity: f64,
+) -> Result<Light, String> {
+    check(&direction, &color, intensity)?;
+    let n = super::camera::norm(direction);
+    if n.is_nan() || n <= 1e-12 {
+        return Err("direction must not be zero".into());
+    }
+    Ok(Light::Directional {
+        direction: super::camera::scale(direction, 1.0 / n),
+        color,
+        intensity,
+    })
+}
+
+fn check(p: &[f64; 3], color: &[f64; 3], intensity: f64) -> Result<(), String> {
+    if p.iter().chain(color).any(|x| !x.is_finite()) || !intensity.is_finite() {
+        return Err("values must be finite".into());
+    }
+    if color.iter().any(|&c| c < 0.0) || intensity < 0.0 {
+        return Err("color and intensity must not be negative".into());
+    }
+    Ok(())
+}
+
+fn declare_point(b: &mut NodeBuilder) {
+    b.doc("A point light radiating color * intensity (W/sr) in every direction.")
+        .category("render");
+    b.add_input::<[f64; 3]>("position")
+        .default([2.0, 4.0, 3.0])
+        .doc("Light position.");
+    b.add_input::<Color>("color")
+        .default(Color([1.0, 1.0, 1.0]))
+        .doc("Linear RGB colour.");
+    b.add_input::<f64>("intensity")
+        .default(10.0)
+        .min(0.0)
+        .doc("Radiant intensity (irradiance at distance d is intensity / d^2).");
+    b.add_output::<Light>("light");
+}
+
+fn execute_point(ctx: &mut ExecContext) -> Result<(), NodeError> {
+    let c: Color = ctx.input("color")?;
+    let l = point_light(ctx.input("position")?, c.0, ctx.input("intensity")?)
+        .map_err(|e| NodeError::invalid("intensity", e))?;
+    ctx.set_output("light", l);
+    Ok(())
+}
+
+fn declare_directional(b: &mut NodeBuilder) {
+    b.doc("A distant light travelling along a direction, with irradiance color * intensity.")
+        .category("render");
+    b.add_input::<[f64; 3]>("direction")
+        .default([-1.0, -2.0, -1.0])
+        .doc("Direction the light travels (from the light towards the scene).");
+    b.add_input::<Color>("color")
+        .default(Color([1.0, 1.0, 1.0]))
+        .doc("Linear RGB colour.");
+    b.add_input::<f64>("intensity")
+        .default(1.0)
+        .min(0.0)
+        .doc("Irradiance on a surface facing the light.");
+    b.add_output::<Light>("light");
+}
+
+fn execute_directional(ctx: &mut ExecContext) -> Result<(), NodeError> {
+    let c: Color = ctx.input("color")?;
+    let l = directional_light(ctx.input("direction")?, c.0, ctx.input("intensity")?)
+        .map_err(|e| NodeError::invalid("direction", e))?;
+    ctx.set_output("light", l);
+    Ok(())
+}
+
+/// Registers `light_point` and `light_directional`.
+pub fn register(r: &mut Registry) {
+    r.add("light_point", declare_point, execute_point);
+    r.add(
+        "light_directional",
+        declare_directional,
+        execute_directional,
+    );
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::collections::BTreeMap;
+
+    fn run(name: &str, inputs: BTreeMap<String, Value>) -> Result<Light, NodeError> {
+        let mut r = Registry::new();
+        register(&mut r);
+        let decl = r.get(name).unwrap();
+        let mut state = None;
+        let files = FileEnv::default();
+        let mut ctx = ExecContext::standalone(decl, inputs, &mut state, &files, 0);
+        (decl.exec.as_ref().unwrap())(&mut ctx)?;
+        match &ctx.take_outputs()["light"] {
+            Value::Light(l) => Ok((**l).clone()),
+            _ => panic!("not a light"),
+        }
+    }
+
+    #[test]
+    fn point_light_takes_its_inputs() {
+        let mut inp = BTreeMap::new();
+        inp.insert("position".into(), Value::Vec3([1.0, 2.0, 3.0]));
+        inp.insert("color".into(), Value::Color([0.5, 0.25, 1.0]));
+        inp.insert("intensity".into(), Value::Float(7.0));
+        assert_eq!(
+            run("light_point", inp).unwrap(),
+            Light::Point {
+                position: [1.0, 2.0, 3.0],
+                color: [0.5, 0.25, 1.0],
+                intensity: 7.0
+            }
+        );
+    }
+
+    #[test]
+    fn directional_light_is_normalized_and_checked() {
+        let mut inp = BTreeMap::new();
+        inp.insert("direction".into(), Value::Vec3([0.0, -3.0, 4.0]));
+        match run("light_directional", inp).unwrap() {
+            Light::Directional { direction, .. } => {
+                assert!((direction[1] + 0.6).abs() < 1e-12 && (direction[2] - 0.8).abs() < 1e-12)
+            }
+            _ => panic!(),
+        }
+        let mut inp = BTreeMap::new();
+        inp.insert("direction".into(), Value::Vec3([0.0; 3]));
+        assert!(run("light_directional", inp).is_err());
+        let mut inp = BTreeMap::new();
+        inp.insert("intensity".into(), Value::Float(-1.0));
+        assert!(run("light_point", inp).is_err());
+    }
+}

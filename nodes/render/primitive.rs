@@ -1,0 +1,112 @@
+//! `mesh_plane`: a flat, subdivided ground plane with planar UVs and normals, for scenes.
+
+use crate::prelude::*;
+
+/// A square plane of side `size` centred at `center`, in the XZ plane facing +Y, split into
+/// `n` x `n` quads (two triangles each, counter-clockwise seen from +Y). UVs run over
+/// 0..`uv_scale` along +X and -Z (so a texture reads upright from above), normals are +Y.
+pub fn plane_mesh(size: f64, center: [f64; 3], n: usize, uv_scale: f64) -> Mesh {
+    let n = n.max(1);
+    let mut pos = Vec::with_capacity((n + 1) * (n + 1));
+    let mut uvs = Vec::with_capacity((n + 1) * (n + 1));
+    for j in 0..=n {
+        for i in 0..=n {
+            let s = i as f64 / n as f64;
+            let t = j as f64 / n as f64;
+            pos.push([
+                center[0] + (s - 0.5) * size,
+                center[1],
+                center[2] + (0.5 - t) * size,
+            ]);
+            uvs.push([s * uv_scale, t * uv_scale]);
+        }
+    }
+    let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
+    let mut tris = Vec::with_capacity(2 * n * n);
+    for j in 0..n {
+        for i in 0..n {
+            // Rows go towards -Z as j grows, so (i,j),(i+1,j),(i+1,j+1) is CCW from +Y.
+            tris.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+            tris.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+        }
+    }
+    let nv = pos.len();
+    let mut m = Mesh::from_triangles(pos, &tris).expect("valid indices by construction");
+    m.uvs = Some(Attribute {
+        domain: Domain::Vertex,
+        values: uvs,
+    });
+    m.normals = Some(Attribute {
+        domain: Domain::Vertex,
+        values: vec![[0.0, 1.0, 0.0]; nv],
+    });
+    m
+}
+
+fn declare(b: &mut NodeBuilder) {
+    b.doc("A flat square plane facing +Y with planar UVs (a ground plane).")
+        .category("render");
+    b.add_input::<f64>("size")
+        .default(4.0)
+        .min(1e-9)
+        .doc("Side length.");
+    b.add_input::<[f64; 3]>("center")
+        .default([0.0, 0.0, 0.0])
+        .doc("Centre of the plane.");
+    b.add_input::<i64>("subdivisions")
+        .default(1i64)
+        .range(1.0, 1024.0)
+        .doc("Quads per side.");
+    b.add_input::<f64>("uv_scale")
+        .default(1.0)
+        .doc("UVs run from 0 to uv_scale (texture repeats).");
+    b.add_output::<Mesh>("mesh");
+}
+
+fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
+    let size: f64 = ctx.input("size")?;
+    let center: [f64; 3] = ctx.input("center")?;
+    let n: i64 = ctx.input("subdivisions")?;
+    let uv_scale: f64 = ctx.input("uv_scale")?;
+    if !(size > 0.0 && size.is_finite()) {
+        return Err(NodeError::invalid("size", "must be positive"));
+    }
+    if !(1..=1024).contains(&n) {
+        return Err(NodeError::invalid("subdivisions", "must lie in 1..=1024"));
+    }
+    if !uv_scale.is_finite() || center.iter().any(|c| !c.is_finite()) {
+        return Err(NodeError::invalid("center", "values must be finite"));
+    }
+    ctx.set_output("mesh", plane_mesh(size, center, n as usize, uv_scale));
+    Ok(())
+}
+
+/// Registers `mesh_plane`.
+pub fn register(r: &mut Registry) {
+    r.add("mesh_plane", declare, execute);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn plane_faces_up_with_planar_uvs() {
+        let m = plane_mesh(2.0, [0.0, 1.0, 0.0], 3, 1.0);
+        assert_eq!(m.num_faces(), 18);
+        assert_eq!(m.bounds(), ([-1.0, 1.0, -1.0], [1.0, 1.0, 1.0]));
+        for t in m.triangles().unwrap() {
+            let p = |k: usize| m.positions[t[k] as usize];
+            let e1 = super::super::camera::sub(p(1), p(0));
+            let e2 = super::super::camera::sub(p(2), p(0));
+            let n = super::super::camera::cross(e1, e2);
+            assert!(n[1] > 0.0 && n[0].abs() < 1e-12 && n[2].abs() < 1e-12);
+        }
+        let uv = &m.uvs.as_ref().unwrap().values;
+        // UV u follows x, v follows -z.
+        for (p, t) in m.positions.iter().zip(uv) {
+            assert!((t[0] - (p[0] + 1.0) / 2.0).abs() < 1e-12);
+            assert!((t[1] - (1.0 - p[2]) / 2.0).abs() < 1e-12);
+        }
+    }
+}

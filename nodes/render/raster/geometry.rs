@@ -1,0 +1,252 @@
+//! Scene geometry flattened for rasterization: world-space triangles with per-corner
+//! normals, UVs and tangent frames, and the material of each triangle.
+//!
+//! Tangent frames follow Lengyel, "Computing Tangent Space Basis Vectors for an Arbitrary
+//! Mesh" (2001): per triangle, T and B solve `e1 = du1 T + dv1 B`, `e2 = du2 T + dv2 B`;
+//! they are summed at the vertices, T is made orthogonal to the normal (Gram-Schmidt) and
+//! the handedness `w = sign((N x T) . B)` is kept so `B = w N x T`.
+
+use crate::prelude::*;
+use crate::types::Domain;
+
+/// All triangles of a scene, with their corner attributes.
+#[derive(Clone, Debug, Default)]
+pub struct SceneGeometry {
+    /// World positions of the three corners.
+    pub pos: Vec<[[f64; 3]; 3]>,
+    /// Unit shading normals at the corners.
+    pub nrm: Vec<[[f64; 3]; 3]>,
+    /// UVs at the corners (zeros when the mesh has none).
+    pub uv: Vec<[[f64; 2]; 3]>,
+    /// Tangents with handedness (x, y, z, w) at the corners (zeros without UVs).
+    pub tan: Vec<[[f64; 4]; 3]>,
+    /// Index into `materials` of each triangle.
+    pub mat: Vec<u32>,
+    /// Whether the triangle's mesh has UVs.
+    pub has_uv: Vec<bool>,
+    /// The materials (resolved: object's, else mesh's, else the default).
+    pub materials: Vec<Arc<Material>>,
+    /// Bounding box of all positions.
+    pub bounds: ([f64; 3], [f64; 3]),
+}
+
+fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+fn normalize(a: [f64; 3]) -> Option<[f64; 3]> {
+    let n = dot(a, a).sqrt();
+    (n > 1e-300 && n.is_finite()).then(|| [a[0] / n, a[1] / n, a[2] / n])
+}
+
+/// Flattens a scene's meshes to triangles (polygons fan-triangulated). Normals come from
+/// the mesh when it has them, else area-weighted vertex normals; tangents from the UVs.
+pub fn scene_geometry(scene: &Scene) -> Result<SceneGeometry, String> {
+    let mut g = SceneGeometry::default();
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    let default_mat = Arc::new(Material::default());
+    for (oi, obj) in scene.objects.iter().enumerate() {
+        let mesh = obj.mesh.triangulated();
+        let tris = mesh.triangles().unwrap_or_default();
+        if tris.is_empty() {
+            continue;
+        }
+        if mesh.positions.iter().flatten().any(|x| !x.is_finite()) {
+            return Err(format!("mesh {oi} has non-finite positions"));
+        }
+        let material = obj
+            .material
+            .clone()
+            .or_else(|| mesh.material.clone())
+            .unwrap_or_else(|| default_mat.clone());
+        let mi = match g.materials.iter().position(|m| Arc::ptr_eq(m, &material)) {
+            Some(i) => i,
+            None => {
+                g.materials.push(material);
+                g.materials.len() - 1
+            }
+        } as u32;
+        let p = &mesh.positions;
+        for q in p {
+            for k in 0..3 {
+                lo[k] = lo[k].min(q[k]);
+                hi[k] = hi[k].max(q[k]);
+            }
+        }
+        // Normals per corner.
+        let corner_normals: Vec<[[f64; 3]; 3]> = match &mesh.normals {
+            Some(a) if attr_len_ok(a.domain, a.values.len(), p.len(), tris.len()) => (0..tris
+                .len())
+                .map(|t| {
+                    std::array::from_fn(|k| {
+                        let v = match a.domain {
+                            Domain::Vertex => a.values[tris[t][k] as usize],
+                            Domain::Corner => a.values[3 * t + k],
+                            Domain::Face => a.values[t],
+                        };
+                        normalize(v).unwrap_or([0.0, 0.0, 1.0])
+                    })
+                })
+                .collect(),
+            _ => {
+                let mut vn = vec![[0.0; 3]; p.len()];
+                for t in &tris {
+                    let n = cross(
+                        sub(p[t[1] as usize], p[t[0] as usize]),
+                        sub(p[t[2] as usize], p[t[0] as usize]),
+                    );
+                    for &v in t {
+                        for k in 0..3 {
+                            vn[v as usize][k] += n[k];
+                        }
+                    }
+                }
+                tris.iter()
+                    .map(|t| {
+                        let f = normalize(cross(
+                            sub(p[t[1] as usize], p[t[0] as usize]),
+                            sub(p[t[2] as usize], p[t[0] as usize]),
+                        ))
+                        .unwrap_or([0.0, 0.0, 1.0]);
+                        std::array::from_fn(|k| normalize(vn[t[k] as usize]).unwrap_or(f))
+                    })
+                    .collect()
+            }
+        };
+        // UVs per corner.
+        let corner_uvs: Option<Vec<[[f64; 2]; 3]>> = match &mesh.uvs {
+            Some(a) if attr_len_ok(a.domain, a.values.len(), p.len(), tris.len()) => Some(
+                (0..tris.len())
+                    .map(|t| {
+                        std::array::from_fn(|k| match a.domain {
+                            Domain::Vertex => a.values[tris[t][k] as usize],
+                            Domain::Corner => a.values[3 * t + k],
+                            Domain::Face => a.values[t],
+                        })
+                    })
+                    .collect(),
+            ),
+            _ => None,
+        };
+        // Tangents (Lengyel 2001), accumulated per position vertex.
+        let corner_tans: Vec<[[f64; 4]; 3]> = match &corner_uvs {
+            None => vec![[[0.0; 4]; 3]; tris.len()],
+            Some(uvs) => {
+                let mut tv = vec![[0.0; 3]; p.len()];
+                let mut bv = vec![[0.0; 3]; p.len()];
+                for (t, tri) in tris.iter().enumerate() {
+                    let [p0, p1, p2] = tri.map(|v| p[v as usize]);
+                    let [w0, w1, w2] = uvs[t];
+                    let (e1, e2) = (sub(p1, p0), sub(p2, p0));
+                    let (du1, dv1) = (w1[0] - w0[0], w1[1] - w0[1]);
+                    let (du2, dv2) = (w2[0] - w0[0], w2[1] - w0[1]);
+                    let det = du1 * dv2 - du2 * dv1;
+                    if det.abs() < 1e-20 {
+                        continue;
+                    }
+                    let r = 1.0 / det;
+                    let tt: [f64; 3] = std::array::from_fn(|k| (e1[k] * dv2 - e2[k] * dv1) * r);
+                    let bb: [f64; 3] = std::array::from_fn(|k| (e2[k] * du1 - e1[k] * du2) * r);
+                    for &v in tri {
+                        for k in 0..3 {
+                            tv[v as usize][k] += tt[k];
+                            bv[v as usize][k] += bb[k];
+                        }
+                    }
+                }
+                (0..tris.len())
+                    .map(|t| {
+                        std::array::from_fn(|k| {
+                            let v = tris[t][k] as usize;
+                            let n = corner_normals[t][k];
+                            let tt = tv[v];
+                            let ortho = sub(tt, scale3(n, dot(n, tt)));
+                            match normalize(ortho) {
+                                Some(o) => {
+                                    let w = if dot(cross(n, o), bv[v]) < 0.0 { -1.0 } else { 1.0 };
+                                    [o[0], o[1], o[2], w]
+                                }
+                                None => [0.0; 4],
+                            }
+                        })
+                    })
+                    .collect()
+            }
+        };
+        for (t, tri) in tris.iter().enumerate() {
+            g.pos.push(tri.map(|v| p[v as usize]));
+            g.nrm.push(corner_normals[t]);
+            g.uv.push(corner_uvs.as_ref().map(|u| u[t]).unwrap_or([[0.0; 2]; 3]));
+            g.has_uv.push(corner_uvs.is_some());
+            g.tan.push(corner_tans[t]);
+            g.mat.push(mi);
+        }
+    }
+    if g.pos.is_empty() {
+        lo = [0.0; 3];
+        hi = [0.0; 3];
+    }
+    g.bounds = (lo, hi);
+    Ok(g)
+}
+
+fn scale3(a: [f64; 3], s: f64) -> [f64; 3] {
+    [a[0] * s, a[1] * s, a[2] * s]
+}
+
+fn attr_len_ok(d: Domain, n: usize, nv: usize, nt: usize) -> bool {
+    match d {
+        Domain::Vertex => n == nv,
+        Domain::Corner => n == 3 * nt,
+        Domain::Face => n == nt,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn plane_tangents_follow_u_and_materials_resolve() {
+        // The plane's u runs along +x and v along -z, normal +y: T = +x, B = -z, and
+        // (N x T) = y x x = -z, so the handedness is +1.
+        let m = crate::nodes::render::primitive::plane_mesh(2.0, [0.0; 3], 2, 1.0);
+        let red = Arc::new(Material {
+            base_color: [1.0, 0.0, 0.0],
+            ..Default::default()
+        });
+        let scene = Scene {
+            objects: vec![
+                SceneObject {
+                    mesh: Arc::new(m.clone()),
+                    material: None,
+                },
+                SceneObject {
+                    mesh: Arc::new(m),
+                    material: Some(red.clone()),
+                },
+            ],
+            ..Default::default()
+        };
+        let g = scene_geometry(&scene).unwrap();
+        assert_eq!(g.pos.len(), 16);
+        assert_eq!(g.materials.len(), 2);
+        assert_eq!(g.materials[1], red);
+        for t in &g.tan {
+            for c in t {
+                assert!((c[0] - 1.0).abs() < 1e-12 && c[1].abs() < 1e-12 && c[3] == 1.0);
+            }
+        }
+        assert_eq!(g.bounds, ([-1.0, 0.0, -1.0], [1.0, 0.0, 1.0]));
+    }
+}

@@ -246,6 +246,21 @@ impl Fluid {
         let (bx, bvol, bgrid) = if params.boundary == Boundary::Particles {
             let bs = 2.0 * r;
             let layers = (h / bs).ceil() as usize;
+            let (mut outer, mut inner) = (1.0f64, 1.0f64);
+            for a in 0..dim {
+                let n = ((params.box_max[a] - params.box_min[a]) / bs)
+                    .round()
+                    .max(1.0);
+                outer *= n + 2.0 * layers as f64;
+                inner *= n;
+            }
+            if outer - inner > 20e6 {
+                return Err(format!(
+                    "the box walls need {:.3e} boundary particles (limit 20 million); use a \
+                     smaller box, larger particles or boundary = walls",
+                    outer - inner
+                ));
+            }
             let bx = boundary::box_particles(params.box_min, params.box_max, bs, layers, dim);
             let bgrid = Grid::build(&bx, h)?;
             let mut bsp = [bs; 3];

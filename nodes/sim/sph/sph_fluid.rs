@@ -428,5 +428,13 @@ mod tests {
         p.push(("particle_box_max", Value::Vec3([2.0, 0.3, 0.0])));
         let e = run(&r, &p, &mut st, 0).unwrap_err();
         assert_eq!(e.kind, ErrorKind::InvalidInput);
+        // A huge 3-D box with tiny particles would need billions of wall particles.
+        let p = vec![
+            ("sim_box_max", Value::Vec3([100.0; 3])),
+            ("particle_radius", Value::Float(0.01)),
+        ];
+        let e = run(&r, &p, &mut st, 0).unwrap_err();
+        assert_eq!(e.kind, ErrorKind::InvalidInput);
+        assert!(e.message.contains("boundary particles"), "{}", e.message);
     }
 }

@@ -119,11 +119,12 @@ fn solve_density(f: &mut Fluid, alpha: &[f64], vol: f64, dt: f64) -> (usize, Vec
 }
 
 /// The divergence-free solver: Jacobi iterations until the average compressive density
-/// rate times `dt` is below `max_density_error / 10` (at least 1 iteration). Particles
+/// rate times `dt` is below `max_density_error` (at least 1 iteration; SPlisHSPlasH uses
+/// the same tolerance for both solvers by default). Particles
 /// with few neighbours (free surface) are left alone, as in Bender & Koschier 2017.
 fn solve_divergence(f: &mut Fluid, alpha: &[f64], vol: f64, dt: f64) -> usize {
     let n = f.len();
-    let eta = 0.1 * f.params.max_density_error / dt;
+    let eta = f.params.max_density_error / dt;
     let min_nb = if f.params.dim == 2 { 6 } else { 18 };
     let mut it = 0;
     while it < f.params.max_iterations {

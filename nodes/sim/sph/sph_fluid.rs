@@ -1,0 +1,440 @@
+//! `sph_fluid`: Framework3D's `geom_sph_fluid` as a stateful node. Each execution advances
+//! the fluid by one frame (`frame_dt`, in steps of `dt` or adaptive CFL steps) and outputs
+//! the particles, an image of them coloured by speed, the run log and the dam-break front
+//! history in Martin & Moyce's dimensionless units. The state restarts on the first frame,
+//! when the frame goes backwards, or when any parameter changes.
+
+use super::fluid::{Boundary, Fluid, Solver, SphParams};
+use crate::prelude::*;
+
+/// The particles as `Points` with `velocity`, `density`, `pressure`, `speed` and `color`.
+pub fn to_points(f: &Fluid, vref: f64) -> Points {
+    let mut pts = Points {
+        dim: f.params.dim as u8,
+        positions: f.x.clone(),
+        ..Default::default()
+    };
+    let speed: Vec<f64> =
+        f.v.iter()
+            .map(|v| super::fluid::dot(*v, *v).sqrt())
+            .collect();
+    pts.vectors.insert(
+        "color".into(),
+        speed.iter().map(|s| speed_color(s / vref)).collect(),
+    );
+    pts.vectors.insert("velocity".into(), f.v.clone());
+    pts.scalars.insert("density".into(), f.rho.clone());
+    pts.scalars.insert("pressure".into(), f.p.clone());
+    pts.scalars.insert("speed".into(), speed);
+    pts
+}
+
+/// A blue-cyan-yellow-red ramp over `t` in [0, 1].
+pub fn speed_color(t: f64) -> [f64; 3] {
+    let t = t.clamp(0.0, 1.0);
+    let stops = [
+        [0.05, 0.15, 0.6],
+        [0.1, 0.7, 0.9],
+        [0.95, 0.9, 0.2],
+        [0.9, 0.15, 0.1],
+    ];
+    let s = t * 3.0;
+    let k = (s.floor() as usize).min(2);
+    let u = s - k as f64;
+    let (a, b) = (stops[k], stops[k + 1]);
+    [
+        a[0] + u * (b[0] - a[0]),
+        a[1] + u * (b[1] - a[1]),
+        a[2] + u * (b[2] - a[2]),
+    ]
+}
+
+/// Splats the particles as discs of the particle radius, orthographically onto the plane of
+/// x and the up axis (looking along +y in 3-D, far particles drawn first), over the box.
+pub fn splat(f: &Fluid, width: u32, vref: f64) -> Image {
+    let p = &f.params;
+    let up = f.up();
+    let (x0, x1) = (p.box_min[0], p.box_max[0]);
+    let (y0, y1) = (p.box_min[up], p.box_max[up]);
+    let scale = width as f64 / (x1 - x0);
+    let height = (((y1 - y0) * scale).round() as u32).clamp(1, 8192);
+    let mut img = Image::new(width, height, [0.02, 0.02, 0.03, 1.0]);
+    let mut order: Vec<usize> = (0..f.len()).collect();
+    if p.dim == 3 {
+        order.sort_by(|&a, &b| f.x[b][1].total_cmp(&f.x[a][1]));
+    }
+    let rad = (p.particle_radius * scale).max(0.75);
+    for i in order {
+        let cx = (f.x[i][0] - x0) * scale;
+        let cy = (y1 - f.x[i][up]) * scale;
+        let c = speed_color(super::fluid::dot(f.v[i], f.v[i]).sqrt() / vref);
+        let px = [c[0] as f32, c[1] as f32, c[2] as f32, 1.0];
+        let (lx, hx) = ((cx - rad).floor().max(0.0), (cx + rad).ceil());
+        let (ly, hy) = ((cy - rad).floor().max(0.0), (cy + rad).ceil());
+        let mut yy = ly;
+        while yy < hy.min(height as f64) {
+            let mut xx = lx;
+            while xx < hx.min(width as f64) {
+                let (dx, dy) = (xx + 0.5 - cx, yy + 0.5 - cy);
+                if dx * dx + dy * dy <= rad * rad {
+                    img.set(xx as u32, yy as u32, px);
+                }
+                xx += 1.0;
+            }
+            yy += 1.0;
+        }
+    }
+    img
+}
+
+/// What the node keeps between frames.
+#[derive(Default)]
+pub struct SphState {
+    key: String,
+    fluid: Option<Fluid>,
+    last_frame: i64,
+    log: Table,
+    front: Table,
+    a: f64,
+    n: f64,
+}
+
+impl SphState {
+    fn record(&mut self, frame: i64) {
+        let Some(f) = &self.fluid else { return };
+        let (emax, eavg) = f.density_error();
+        let front = f.front();
+        self.log.push_row(&[
+            frame as f64,
+            f.time,
+            f.steps as f64,
+            f.last.iterations as f64,
+            emax,
+            eavg,
+            f.kinetic_energy(),
+            front,
+            f.height(),
+        ]);
+        let g = f.params.gravity.abs();
+        self.front
+            .push_row(&[self.n * f.time * (g / self.a).sqrt(), front / self.a]);
+    }
+}
+
+fn declare(b: &mut NodeBuilder) {
+    b.doc("SPH fluid (WCSPH or DFSPH) in a box; advances one frame per execution.")
+        .category("sim");
+    b.stateful();
+    b.add_input::<i64>("dimension")
+        .default(3i64)
+        .range(2.0, 3.0);
+    b.add_input::<String>("solver")
+        .choices(&["wcsph", "dfsph"])
+        .doc("wcsph: the course's weakly compressible SPH; dfsph: divergence-free SPH (Bender & Koschier 2017), incompressible to max_density_error.");
+    b.add_input::<String>("boundary")
+        .choices(&["particles", "walls"])
+        .doc("particles: Akinci 2012 boundary particles sampling the box; walls: clamp with restitution only.");
+    b.add_input::<[f64; 3]>("sim_box_min")
+        .default([0.0, 0.0, 0.0]);
+    b.add_input::<[f64; 3]>("sim_box_max")
+        .default([1.0, 1.0, 1.0]);
+    b.add_input::<[f64; 3]>("particle_box_min")
+        .default([0.1, 0.1, 0.1])
+        .doc("Initial fluid block (the fluid starts at rest).");
+    b.add_input::<[f64; 3]>("particle_box_max")
+        .default([0.6, 0.6, 0.6]);
+    b.add_input::<[f64; 3]>("num_particle_per_axis")
+        .default([0.0, 0.0, 0.0])
+        .doc("Particles per axis in the block; 0 fills it with spacing 2r.");
+    b.add_input::<f64>("particle_radius")
+        .default(0.025)
+        .range(1e-5, 10.0)
+        .doc("Particle radius r; the support radius is 4r.");
+    b.add_input::<f64>("rest_density")
+        .default(1000.0)
+        .range(1e-3, 1e6);
+    b.add_input::<f64>("stiffness")
+        .default(500.0)
+        .range(0.0, 1e9)
+        .doc("WCSPH k in p = k((rho/rho0)^gamma - 1).");
+    b.add_input::<f64>("exponent").default(7.0).range(1.0, 20.0);
+    b.add_input::<f64>("viscosity")
+        .default(0.03)
+        .range(0.0, 100.0)
+        .doc("Kinematic viscosity of the course's SPH Laplacian (m^2/s).");
+    b.add_input::<f64>("gravity")
+        .default(-9.8)
+        .range(-1e3, 1e3)
+        .doc("Along the up axis: y in 2-D, z in 3-D.");
+    b.add_input::<f64>("dt")
+        .default(0.01)
+        .range(1e-7, 1.0)
+        .doc("Time step; the largest step when cfl > 0.");
+    b.add_input::<f64>("frame_dt")
+        .default(1.0 / 30.0)
+        .range(1e-6, 10.0)
+        .doc("Simulated time per frame.");
+    b.add_input::<f64>("cfl")
+        .default(0.4)
+        .range(0.0, 2.0)
+        .doc("Adaptive step dt <= cfl * 2r / v_max; 0 keeps dt fixed.");
+    b.add_input::<f64>("restitution")
+        .default(0.0)
+        .range(0.0, 1.0);
+    b.add_input::<i64>("max_iterations")
+        .default(100i64)
+        .range(1.0, 10000.0);
+    b.add_input::<f64>("max_density_error")
+        .default(0.001)
+        .range(1e-7, 0.5)
+        .doc("DFSPH: target average compression (fraction).");
+    b.add_input::<bool>("divergence")
+        .default(true)
+        .doc("DFSPH: run the divergence-free solver.");
+    b.add_input::<i64>("image_width")
+        .default(256i64)
+        .range(8.0, 4096.0);
+    b.add_output::<Points>("points")
+        .doc("Particles with velocity, density, pressure, speed and color.");
+    b.add_output::<Image>("image")
+        .doc("Particles splatted on the x/up plane, coloured by speed.");
+    b.add_output::<Table>("log").doc("One row per frame since the start: frame, time, steps, iterations, max_density_error, avg_density_error, kinetic_energy, front, height.");
+    b.add_output::<Table>("front").doc(
+        "Front history in Martin & Moyce units: T = n t sqrt(g/a), Z = front/a, with a and n^2 a the initial block width and height.",
+    );
+}
+
+/// Simulation parameters, the fluid block corners and the optional particle counts.
+type Setup = (SphParams, [f64; 3], [f64; 3], Option<[usize; 3]>);
+
+fn read_params(ctx: &ExecContext) -> Result<Setup, NodeError> {
+    let solver = match ctx.input::<String>("solver")?.as_str() {
+        "dfsph" => Solver::Dfsph,
+        _ => Solver::Wcsph,
+    };
+    let boundary = match ctx.input::<String>("boundary")?.as_str() {
+        "walls" => Boundary::Walls,
+        _ => Boundary::Particles,
+    };
+    let prm = SphParams {
+        dim: ctx.input::<i64>("dimension")? as usize,
+        solver,
+        boundary,
+        box_min: ctx.input("sim_box_min")?,
+        box_max: ctx.input("sim_box_max")?,
+        particle_radius: ctx.input("particle_radius")?,
+        support_factor: 4.0,
+        rest_density: ctx.input("rest_density")?,
+        stiffness: ctx.input("stiffness")?,
+        exponent: ctx.input("exponent")?,
+        viscosity: ctx.input("viscosity")?,
+        gravity: ctx.input("gravity")?,
+        dt: ctx.input("dt")?,
+        cfl: ctx.input("cfl")?,
+        restitution: ctx.input("restitution")?,
+        max_iterations: ctx.input::<i64>("max_iterations")?.max(1) as usize,
+        max_density_error: ctx.input("max_density_error")?,
+        divergence: ctx.input("divergence")?,
+    };
+    for (name, v) in [("sim_box_min", prm.box_min), ("sim_box_max", prm.box_max)] {
+        if v.iter().any(|c| !c.is_finite()) {
+            return Err(NodeError::invalid(name, "must be finite"));
+        }
+    }
+    let pmin: [f64; 3] = ctx.input("particle_box_min")?;
+    let pmax: [f64; 3] = ctx.input("particle_box_max")?;
+    let counts: [f64; 3] = ctx.input("num_particle_per_axis")?;
+    let counts = if counts[..prm.dim].iter().all(|&c| (1.0..1e6).contains(&c)) {
+        Some([
+            counts[0] as usize,
+            counts[1] as usize,
+            counts[2].max(1.0) as usize,
+        ])
+    } else if counts.iter().all(|&c| c == 0.0) {
+        None
+    } else {
+        return Err(NodeError::invalid(
+            "num_particle_per_axis",
+            format!("{counts:?}: give all counts (1 to 1e6) or all 0 for spacing 2r"),
+        ));
+    };
+    Ok((prm, pmin, pmax, counts))
+}
+
+fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
+    let (prm, pmin, pmax, counts) = read_params(ctx)?;
+    let frame_dt: f64 = ctx.input("frame_dt")?;
+    let width = ctx.input::<i64>("image_width")? as u32;
+    let key = format!("{prm:?} {pmin:?} {pmax:?} {counts:?} {frame_dt}");
+    let frame = ctx.frame();
+    let st = ctx.state::<SphState>()?;
+    if st.fluid.is_none() || st.key != key || frame <= st.last_frame {
+        let mut f = Fluid::block(prm.clone(), pmin, pmax, counts)
+            .map_err(|e| NodeError::invalid("particle_box_min", e))?;
+        f.refresh()
+            .map_err(|e| NodeError::invalid("particle_radius", e))?;
+        *st = SphState {
+            key,
+            a: f.front().max(1e-12),
+            n: (f.height() / f.front().max(1e-12)).sqrt(),
+            fluid: Some(f),
+            last_frame: frame,
+            log: Table::with_columns(&[
+                "frame",
+                "time",
+                "steps",
+                "iterations",
+                "max_density_error",
+                "avg_density_error",
+                "kinetic_energy",
+                "front",
+                "height",
+            ]),
+            front: Table::with_columns(&["T", "Z"]),
+        };
+        st.record(frame - 1);
+    }
+    let f = st.fluid.as_mut().expect("initialised above");
+    let res = f.advance(frame_dt).and_then(|_| f.refresh());
+    if let Err(e) = res {
+        st.fluid = None;
+        return Err(NodeError::unstable(format!(
+            "SPH blew up in frame {frame} at {e}"
+        )));
+    }
+    st.last_frame = frame;
+    st.record(frame);
+    let f = st.fluid.as_ref().expect("initialised above");
+    let up = f.up();
+    let vref = (2.0 * prm.gravity.abs().max(1e-3) * (prm.box_max[up] - prm.box_min[up])).sqrt();
+    let pts = to_points(f, vref);
+    let img = splat(f, width, vref);
+    let (log, front) = (st.log.clone(), st.front.clone());
+    let msg = format!(
+        "t = {:.4} s, {} steps, {} particles",
+        f.time,
+        f.steps,
+        f.len()
+    );
+    ctx.log(msg);
+    ctx.set_output("points", pts);
+    ctx.set_output("image", img);
+    ctx.set_output("log", log);
+    ctx.set_output("front", front);
+    Ok(())
+}
+
+/// Registers `sph_fluid`.
+pub fn register(r: &mut Registry) {
+    r.add("sph_fluid", declare, execute);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::collections::BTreeMap;
+
+    fn run(
+        r: &Registry,
+        params: &[(&str, Value)],
+        state: &mut Option<Box<dyn std::any::Any + Send>>,
+        frame: i64,
+    ) -> Result<BTreeMap<String, Value>, NodeError> {
+        let decl = r.get("sph_fluid").unwrap();
+        let inputs: BTreeMap<String, Value> = params
+            .iter()
+            .map(|(k, v)| (k.to_string(), v.clone()))
+            .collect();
+        let files = FileEnv::default();
+        let mut ctx = ExecContext::standalone(decl, inputs, state, &files, frame);
+        (decl.exec.as_ref().unwrap())(&mut ctx)?;
+        Ok(ctx.take_outputs())
+    }
+
+    fn small() -> Vec<(&'static str, Value)> {
+        vec![
+            ("dimension", Value::Int(2)),
+            ("sim_box_max", Value::Vec3([1.0, 1.0, 0.0])),
+            ("particle_box_max", Value::Vec3([0.3, 0.3, 0.0])),
+            ("particle_radius", Value::Float(0.02)),
+            ("stiffness", Value::Float(2e4)),
+        ]
+    }
+
+    #[test]
+    fn frames_advance_and_parameters_reset_the_state() {
+        let mut r = Registry::new();
+        register(&mut r);
+        let mut st = None;
+        run(&r, &small(), &mut st, 0).unwrap();
+        let out = run(&r, &small(), &mut st, 1).unwrap();
+        let Some(Value::Table(log)) = out.get("log") else {
+            panic!("no log")
+        };
+        let t = log.column("time").unwrap();
+        assert_eq!(t.len(), 3);
+        assert!((t[2] - 2.0 / 30.0).abs() < 1e-9);
+        let Some(Value::Points(p)) = out.get("points") else {
+            panic!("no points")
+        };
+        // 0.2 / 0.04 = 5 particles per axis (spacing 2r in the block [0.1, 0.3]^2).
+        assert_eq!(p.dim, 2);
+        assert_eq!(p.positions.len(), 25);
+        assert!(p.scalars.contains_key("density"));
+        // Free fall for 2/30 s lowers the mean height 0.2 by g t^2 / 2 = 0.022 (no floor yet).
+        let mean_y = p.positions.iter().map(|x| x[1]).sum::<f64>() / 25.0;
+        assert!((mean_y - (0.2 - 0.5 * 9.8 * (2.0f64 / 30.0).powi(2))).abs() < 2e-3);
+        let Some(Value::Image(img)) = out.get("image") else {
+            panic!("no image")
+        };
+        assert_eq!((img.width, img.height), (256, 256));
+        // A changed parameter restarts the simulation.
+        let mut changed = small();
+        changed.push(("viscosity", Value::Float(0.01)));
+        let out = run(&r, &changed, &mut st, 2).unwrap();
+        let Some(Value::Table(log)) = out.get("log") else {
+            panic!("no log")
+        };
+        assert_eq!(log.column("time").unwrap().len(), 2);
+    }
+
+    #[test]
+    fn blow_up_is_reported_with_frame_and_step() {
+        let mut r = Registry::new();
+        register(&mut r);
+        let mut st = None;
+        let mut p = small();
+        p.extend([
+            ("cfl", Value::Float(0.0)),
+            ("dt", Value::Float(0.05)),
+            ("stiffness", Value::Float(1e7)),
+            ("frame_dt", Value::Float(1.0)),
+        ]);
+        let e = run(&r, &p, &mut st, 0).unwrap_err();
+        assert_eq!(e.kind, ErrorKind::Unstable);
+        assert!(
+            e.message.contains("frame 0") && e.message.contains("step"),
+            "{}",
+            e.message
+        );
+    }
+
+    #[test]
+    fn bad_boxes_are_rejected() {
+        let mut r = Registry::new();
+        register(&mut r);
+        let mut st = None;
+        let mut p = small();
+        p.push(("particle_box_max", Value::Vec3([2.0, 0.3, 0.0])));
+        let e = run(&r, &p, &mut st, 0).unwrap_err();
+        assert_eq!(e.kind, ErrorKind::InvalidInput);
+        // A huge 3-D box with tiny particles would need billions of wall particles.
+        let p = vec![
+            ("sim_box_max", Value::Vec3([100.0; 3])),
+            ("particle_radius", Value::Float(0.01)),
+        ];
+        let e = run(&r, &p, &mut st, 0).unwrap_err();
+        assert_eq!(e.kind, ErrorKind::InvalidInput);
+        assert!(e.message.contains("boundary particles"), "{}", e.message);
+    }
+}

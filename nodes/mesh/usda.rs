@@ -567,7 +567,7 @@ fn num(v: &UsdValue, line: usize) -> Result<f64, String> {
     }
 }
 
-fn list<'a>(a: &'a UsdAttr) -> Result<&'a [UsdValue], String> {
+fn list(a: &UsdAttr) -> Result<&[UsdValue], String> {
     match &a.value {
         Some(UsdValue::List(v)) => Ok(v),
         Some(UsdValue::Dict(_)) => Err(err(

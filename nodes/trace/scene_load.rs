@@ -70,7 +70,7 @@ pub fn load_obj_scene(path: &Path, two_sided_emission: bool) -> Result<Scene, St
         let positions: Vec<[f64; 3]> = mesh
             .positions
             .chunks_exact(3)
-            .map(|p| [p[0] as f64, p[1] as f64, p[2] as f64])
+            .map(|p| [p[0], p[1], p[2]])
             .collect();
         let counts = if mesh.face_arities.is_empty() {
             vec![3u32; mesh.indices.len() / 3]

@@ -107,6 +107,25 @@ fn range(vals: impl Iterator<Item = f64>, log: bool) -> (f64, f64) {
     }
 }
 
+/// A short tick label: three significant digits, no trailing zeros, exponent form outside
+/// 1e-3..1e5 (log axes otherwise print long, overlapping labels).
+fn tick_label(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    let a = v.abs();
+    if !(1e-3..1e5).contains(&a) {
+        return format!("{v:.2e}");
+    }
+    let decimals = (2 - a.log10().floor() as i32).max(0) as usize;
+    let s = format!("{v:.decimals$}");
+    if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s
+    }
+}
+
 fn draw_on<DB: DrawingBackend>(chart: &Chart, root: &DrawingArea<DB, Shift>) -> Result<(), String>
 where
     DB::ErrorType: 'static,
@@ -137,6 +156,10 @@ where
             ctx.configure_mesh()
                 .x_desc(chart.x_label.as_str())
                 .y_desc(chart.y_label.as_str())
+                .x_labels(7)
+                .y_labels(8)
+                .x_label_formatter(&|v| tick_label(*v))
+                .y_label_formatter(&|v| tick_label(*v))
                 .label_style(("sans-serif", 14))
                 .draw()
                 .map_err(e)?;
@@ -205,6 +228,16 @@ where
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn tick_labels_are_short() {
+        assert_eq!(tick_label(600.0), "600");
+        assert_eq!(tick_label(0.61451), "0.615");
+        assert_eq!(tick_label(2.5), "2.5");
+        assert_eq!(tick_label(12345.0), "12345");
+        assert_eq!(tick_label(1e-6), "1.00e-6");
+        assert_eq!(tick_label(0.0), "0");
+    }
 
     #[test]
     fn draws_svg_and_png() {

@@ -300,6 +300,13 @@ pub fn run(
                 ..Default::default()
             };
             exec.reset_states();
+            // Before the last frame, only failures of the simulations and what they read end
+            // the run: a node that feeds no stateful node (a metric over a series that is
+            // still too short, say) runs again at the last frame, where it counts.
+            let stateful: Vec<usize> = (0..valid.nodes.len())
+                .filter(|&i| valid.nodes[i].decl.stateful)
+                .collect();
+            let feeds_state = valid.needed(&stateful);
             let mut last = None;
             for f in frames.0..=frames.1 {
                 let r = exec.run(&valid, &opts, f);
@@ -312,8 +319,11 @@ pub fn run(
                             0.0
                         };
                 }
+                let counts = |id: &str| {
+                    f == frames.1 || valid.index.get(id).is_some_and(|&i| feeds_state[i])
+                };
                 let failed = r.nodes.iter().find_map(|n| match &n.status {
-                    NodeStatus::Failed(e) => Some((
+                    NodeStatus::Failed(e) if counts(&n.id) => Some((
                         e.kind.to_string(),
                         format!("{} ({}): {e}", n.id, n.node_type),
                     )),

@@ -198,3 +198,38 @@ fn chart_puts_a_sweep_and_a_peer_on_one_plot() {
     assert_eq!(bad.status.code(), Some(3));
     assert!(String::from_utf8_lossy(&bad.stderr).contains("no column 'nope'"));
 }
+
+/// Over frames, a metric that cannot be computed before the last frame (its series is still
+/// too short) does not end the run, while a simulation failing on an earlier frame does.
+#[test]
+fn a_sweep_over_frames_counts_metric_failures_only_at_the_last_frame() {
+    let dir = tempfile::tempdir().unwrap();
+    let graph = r#"{"format":"cgnodes-graph","version":1,"nodes":{
+      "grid":{"type":"mesh_grid","params":{"cells_u":2,"cells_v":2}},
+      "sim":{"type":"mass_spring","inputs":{"mesh":"grid.mesh"},
+             "params":{"integrator":"semi_implicit","h":0.001,"substeps":10,"fixed":"top_corners"}},
+      "cmp":{"type":"compare_series","inputs":{"series":"sim.log"},
+             "params":{"reference":"ref.csv","x_column":"time","y_column":"kinetic","error_in":"y"}}},
+      "outputs":["cmp"]}"#;
+    std::fs::write(dir.path().join("g.json"), graph).unwrap();
+    // Inside the last frame's steps (t = 0.011 ... 0.02) only.
+    std::fs::write(
+        dir.path().join("ref.csv"),
+        "time,kinetic\n0.012,0.001\n0.018,0.002\n",
+    )
+    .unwrap();
+    let spec = SweepSpec {
+        graph: "g.json".into(),
+        vary: vec![parse_vary("sim.h=0.001,0.5").unwrap()],
+        measure: vec!["cmp.error".into()],
+        frames: Some("0..2".into()),
+        ..Default::default()
+    };
+    let rows = run_and_write(&spec, dir.path(), &Registry::builtin(), Some(1)).unwrap();
+    assert_eq!(rows.len(), 2);
+    assert!(rows[0].ok, "{}", rows[0].error);
+    assert!(rows[0].measures[0].is_finite());
+    assert!(!rows[1].ok);
+    assert_eq!(rows[1].error_kind, "unstable");
+    assert!(rows[1].error.starts_with("frame 1:"), "{}", rows[1].error);
+}

@@ -233,3 +233,31 @@ fn a_sweep_over_frames_counts_metric_failures_only_at_the_last_frame() {
     assert_eq!(rows[1].error_kind, "unstable");
     assert!(rows[1].error.starts_with("frame 1:"), "{}", rows[1].error);
 }
+
+/// A measured node runs even when the graph's outputs do not include it (metric nodes are
+/// rarely writers), and only the requested work runs besides it.
+#[test]
+fn measured_nodes_run_although_the_graph_outputs_leave_them_out() {
+    let dir = tempfile::tempdir().unwrap();
+    let graph = r#"{"format":"cgnodes-graph","version":1,"nodes":{
+      "source":{"type":"slow_source","params":{"value":8}},
+      "half":{"type":"math","params":{"op":"div","b":2},"inputs":{"a":"source.value"}},
+      "w":{"type":"table_write","params":{"path":"e.csv"},"inputs":{"value":"source.value"}}},
+      "outputs":["w"]}"#;
+    std::fs::write(dir.path().join("g.json"), graph).unwrap();
+    let counts: Arc<Mutex<HashMap<String, usize>>> = Arc::default();
+    let r = registry(counts.clone());
+    let spec = SweepSpec {
+        graph: "g.json".into(),
+        vary: vec![parse_vary("source.value=2,6").unwrap()],
+        measure: vec!["half.value".into()],
+        ..Default::default()
+    };
+    let rows = run_and_write(&spec, dir.path(), &r, Some(1)).unwrap();
+    assert_eq!(rows.len(), 2);
+    assert!(rows.iter().all(|r| r.ok), "{}", rows[0].error);
+    assert_eq!(rows[0].measures[0], 1.0);
+    assert_eq!(rows[1].measures[0], 3.0);
+    // The writer the graph asks for ran too.
+    assert!(rows[0].node_ms.contains_key("w"), "{:?}", rows[0].node_ms);
+}

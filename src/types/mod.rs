@@ -9,6 +9,8 @@ mod scene;
 mod topology;
 mod value;
 
+pub mod vec3;
+
 pub use mesh::{Attribute, AttributeData, Domain, Mesh, MeshError};
 pub use misc::{Curve, Image, Joint, Points, Skeleton, Table};
 pub use scene::{Camera, FovAxis, Light, Material, MaterialKind, Scene, SceneObject};

@@ -386,31 +386,7 @@ pub fn spring_hessian_psd(d: [f64; 3], rest: f64, k: f64) -> [[f64; 3]; 3] {
     h
 }
 
-/// `a - b`.
-#[inline]
-pub fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-/// `a + s b`.
-#[inline]
-pub fn axpy(a: [f64; 3], s: f64, b: [f64; 3]) -> [f64; 3] {
-    [a[0] + s * b[0], a[1] + s * b[1], a[2] + s * b[2]]
-}
-/// `s a`.
-#[inline]
-pub fn scale(a: [f64; 3], s: f64) -> [f64; 3] {
-    [a[0] * s, a[1] * s, a[2] * s]
-}
-/// Dot product.
-#[inline]
-pub fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-/// Euclidean norm.
-#[inline]
-pub fn norm(a: [f64; 3]) -> f64 {
-    dot(a, a).sqrt()
-}
+pub use crate::types::vec3::{axpy, dot, norm, scale, sub};
 
 #[cfg(test)]
 mod tests {

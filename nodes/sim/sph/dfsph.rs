@@ -164,9 +164,13 @@ pub fn step(f: &mut Fluid, dt: f64) -> Result<StepStats, String> {
     f.compute_densities();
     let vol = f.mass / f.params.rest_density;
     let alpha = factors(f, vol);
+    let cap = f.params.max_iterations;
     let mut iterations = 0;
+    let mut capped = 0;
     if f.params.divergence {
-        iterations += solve_divergence(f, &alpha, vol, dt);
+        let it = solve_divergence(f, &alpha, vol, dt);
+        iterations += it;
+        capped += usize::from(it >= cap);
     }
     let acc = f.non_pressure_accelerations();
     f.v.par_iter_mut().zip(acc.par_iter()).for_each(|(v, a)| {
@@ -174,6 +178,7 @@ pub fn step(f: &mut Fluid, dt: f64) -> Result<StepStats, String> {
     });
     let (it, kappa) = solve_density(f, &alpha, vol, dt);
     iterations += it;
+    capped += usize::from(it >= cap);
     // The pressure output is the density solver's (as in SPlisHSPlasH); see docs/sph.md.
     let rho0 = f.params.rest_density;
     f.p = kappa
@@ -182,5 +187,5 @@ pub fn step(f: &mut Fluid, dt: f64) -> Result<StepStats, String> {
         .map(|(k, r)| k * r * r / rho0)
         .collect();
     f.advect(dt);
-    Ok(StepStats { iterations })
+    Ok(StepStats { iterations, capped })
 }

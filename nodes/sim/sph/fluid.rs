@@ -86,7 +86,7 @@ impl Default for SphParams {
             dt: 0.01,
             cfl: 0.4,
             restitution: 0.0,
-            max_iterations: 100,
+            max_iterations: 1000,
             max_density_error: 1e-3,
             divergence: true,
         }
@@ -110,6 +110,8 @@ pub struct Nb {
 pub struct StepStats {
     /// Solver iterations this step (density + divergence for DFSPH; 0 for WCSPH).
     pub iterations: usize,
+    /// DFSPH solves this step that stopped at `max_iterations` before reaching the tolerance.
+    pub capped: usize,
 }
 
 /// The fluid: particle state, boundary particles, neighbour lists and scratch arrays.
@@ -148,6 +150,8 @@ pub struct Fluid {
     pub last: StepStats,
     /// Solver iterations over all steps.
     pub total_iterations: usize,
+    /// DFSPH solves over all steps stopped by `max_iterations` (unconverged).
+    pub capped_solves: usize,
 }
 
 pub(crate) fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
@@ -291,6 +295,7 @@ impl Fluid {
             steps: 0,
             last: StepStats::default(),
             total_iterations: 0,
+            capped_solves: 0,
             params,
         })
     }
@@ -484,6 +489,7 @@ impl Fluid {
         self.time += dt;
         self.steps += 1;
         self.total_iterations += self.last.iterations;
+        self.capped_solves += self.last.capped;
         self.check()
     }
 

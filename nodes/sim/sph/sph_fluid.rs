@@ -114,6 +114,7 @@ impl SphState {
             f.kinetic_energy(),
             front,
             f.height(),
+            f.capped_solves as f64,
         ]);
         let g = f.params.gravity.abs();
         self.front
@@ -182,8 +183,9 @@ fn declare(b: &mut NodeBuilder) {
         .default(0.0)
         .range(0.0, 1.0);
     b.add_input::<i64>("max_iterations")
-        .default(100i64)
-        .range(1.0, 10000.0);
+        .default(1000i64)
+        .range(1.0, 100000.0)
+        .doc("DFSPH: Jacobi iteration cap per solve; a solve stopped by the cap leaves compression that blows fine resolutions apart.");
     b.add_input::<f64>("max_density_error")
         .default(0.001)
         .range(1e-7, 0.5)
@@ -198,7 +200,7 @@ fn declare(b: &mut NodeBuilder) {
         .doc("Particles with velocity, density, pressure, speed and color.");
     b.add_output::<Image>("image")
         .doc("Particles splatted on the x/up plane, coloured by speed.");
-    b.add_output::<Table>("log").doc("One row per frame since the start: frame, time, steps, iterations, max_density_error, avg_density_error, kinetic_energy, front, height.");
+    b.add_output::<Table>("log").doc("One row per frame since the start: frame, time, steps, iterations, max_density_error, avg_density_error, kinetic_energy, front, height, capped_solves (DFSPH solves so far stopped by max_iterations unconverged).");
     b.add_output::<Table>("front").doc(
         "Front history in Martin & Moyce units: T = n t sqrt(g/a), Z = front/a, with a and n^2 a the initial block width and height.",
     );
@@ -289,6 +291,7 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
                 "kinetic_energy",
                 "front",
                 "height",
+                "capped_solves",
             ]),
             front: Table::with_columns(&["T", "Z"]),
         };
@@ -310,6 +313,7 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let pts = to_points(f, vref);
     let img = splat(f, width, vref);
     let (log, front) = (st.log.clone(), st.front.clone());
+    let capped = f.capped_solves;
     let msg = format!(
         "t = {:.4} s, {} steps, {} particles",
         f.time,
@@ -317,6 +321,13 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
         f.len()
     );
     ctx.log(msg);
+    if capped > 0 {
+        ctx.log(format!(
+            "warning: {} DFSPH solves stopped at max_iterations = {} before reaching \
+             max_density_error; raise max_iterations or shorten dt",
+            capped, prm.max_iterations
+        ));
+    }
     ctx.set_output("points", pts);
     ctx.set_output("image", img);
     ctx.set_output("log", log);

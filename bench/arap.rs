@@ -9,9 +9,11 @@
 //! vertex orders can be matched by position. Time per iteration excludes setup
 //! (our frames and factorization; libigl's precomputation), which is reported separately.
 //! Writes `target/bench/arap/*.csv` (energy against time) and `docs/arap_energy_time.svg`.
+//! `ARAP_REFACTOR=PER_ITERATION,BLOCKED_RUN,GROWTH` overrides the fold-free mode's refactor
+//! schedule (`RefactorSchedule`; `3,0,0` refactors on every blocked round, as before the schedule).
 
 use cgnodes::nodes::mesh::obj::load_obj;
-use cgnodes::nodes::param::arap::{arap_parameterize, ArapOptions, ArapResult};
+use cgnodes::nodes::param::arap::{arap_parameterize, ArapOptions, ArapResult, RefactorSchedule};
 use cgnodes::nodes::param::tutte::{tutte_parameterize, BoundaryShape, TutteWeights};
 use cgnodes::nodes::param::uv_metrics::uv_metrics;
 use std::fmt::Write as _;
@@ -32,6 +34,7 @@ struct Outcome {
     iter_ms: f64,
     energy: f64,
     flips: usize,
+    refactors: Option<usize>,
 }
 
 fn main() {
@@ -55,7 +58,7 @@ fn main() {
     std::fs::create_dir_all(&out_dir).expect("create target/bench/arap");
     let mut seen = std::collections::BTreeSet::new();
     let mut table = String::from(
-        "| mesh (faces) | method | setup ms | ms / iteration | ratio to libigl | ARAP E | flips |\n|---|---|---|---|---|---|---|\n",
+        "| mesh (faces) | method | setup ms | ms / iteration | ratio to libigl | ARAP E | flips | refactors |\n|---|---|---|---|---|---|---|---|\n",
     );
     let mut chart_curves: Vec<(String, Vec<Curve>)> = Vec::new();
     for path in meshes {
@@ -82,6 +85,7 @@ fn main() {
                 iterations,
                 tolerance: 0.0,
                 injective,
+                refactor: schedule(),
                 ..Default::default()
             };
             let r = arap_parameterize(&mesh.positions, &tris, &init, &opts).expect("arap");
@@ -92,7 +96,18 @@ fn main() {
                 "ours, plain"
             };
             curves.push(curve(label, &r, tutte_ms));
-            ours.push((label, outcome(&r, m.arap_energy, m.flipped + m.collapsed)));
+            let mut o = outcome(&r, m.arap_energy, m.flipped + m.collapsed);
+            o.refactors = Some(r.refactors);
+            eprintln!(
+                "{name} {label}: {} iterations, stop {} {}, {} refactors, {} reweighted, {} collapsed",
+                r.log.len() - 1,
+                r.stop_reason.as_str(),
+                r.stop_detail,
+                r.refactors,
+                r.reweighted,
+                m.collapsed
+            );
+            ours.push((label, o));
             write_csv(
                 &out_dir.join(format!("{name}_{}.csv", label.replace([',', ' '], ""))),
                 &r,
@@ -134,11 +149,12 @@ fn main() {
                 iter_ms: json["iteration_ms"].as_f64().unwrap_or(f64::NAN),
                 energy: last["energy"].as_f64().unwrap_or(f64::NAN),
                 flips: last["flips"].as_u64().unwrap_or(0) as usize,
+                refactors: None,
             }
         });
         let _ = writeln!(
             table,
-            "| {name} ({}) | start: Tutte mean-value | {tutte_ms:.0} | | | {:.4} | {} |",
+            "| {name} ({}) | start: Tutte mean-value | {tutte_ms:.0} | | | {:.4} | {} | |",
             tris.len(),
             m0.arap_energy,
             m0.flipped
@@ -149,20 +165,24 @@ fn main() {
             });
             let _ = writeln!(
                 table,
-                "| {name} | {label} | {:.0} | {:.2} | {ratio} | {:.4} | {} |",
-                o.setup_ms, o.iter_ms, o.energy, o.flips
+                "| {name} | {label} | {:.0} | {:.2} | {ratio} | {:.4} | {} | {} |",
+                o.setup_ms,
+                o.iter_ms,
+                o.energy,
+                o.flips,
+                o.refactors.map_or(String::new(), |r| r.to_string())
             );
         }
         match &igl_outcome {
             Some(g) => {
                 let _ = writeln!(
                     table,
-                    "| {name} | libigl (from harmonic) | {:.0} | {:.2} | 1 | {:.4} | {} |",
+                    "| {name} | libigl (from harmonic) | {:.0} | {:.2} | 1 | {:.4} | {} | |",
                     g.setup_ms, g.iter_ms, g.energy, g.flips
                 );
             }
             None => {
-                let _ = writeln!(table, "| {name} | libigl | not available | | | | |");
+                let _ = writeln!(table, "| {name} | libigl | not available | | | | | |");
             }
         }
         chart_curves.push((format!("{name} ({} faces)", tris.len()), curves));
@@ -185,6 +205,22 @@ fn outcome(r: &ArapResult, energy: f64, flips: usize) -> Outcome {
         iter_ms: (last - first) / n,
         energy,
         flips,
+        refactors: None,
+    }
+}
+
+/// The refactor schedule, from `ARAP_REFACTOR` if set.
+fn schedule() -> RefactorSchedule {
+    let d = RefactorSchedule::default();
+    let Ok(v) = std::env::var("ARAP_REFACTOR") else {
+        return d;
+    };
+    let f: Vec<&str> = v.split(',').collect();
+    let get = |i: usize| f.get(i).and_then(|x| x.trim().parse::<f64>().ok());
+    RefactorSchedule {
+        per_iteration: get(0).map_or(d.per_iteration, |x| x as usize),
+        blocked_run: get(1).map_or(d.blocked_run, |x| x as usize),
+        growth: get(2).unwrap_or(d.growth),
     }
 }
 
@@ -200,17 +236,18 @@ fn curve(label: &str, r: &ArapResult, offset_ms: f64) -> Curve {
 }
 
 fn write_csv(path: &Path, r: &ArapResult) {
-    let mut s = String::from("iteration,energy,flips,elapsed_ms,step,blocked\n");
+    let mut s = String::from("iteration,energy,flips,elapsed_ms,step,blocked,refactors\n");
     for x in &r.log {
         let _ = writeln!(
             s,
-            "{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{}",
             x.iteration,
             x.energy,
             x.flips,
             x.elapsed_ms,
             x.step,
-            u8::from(x.blocked)
+            u8::from(x.blocked),
+            x.refactors
         );
     }
     let _ = std::fs::write(path, s);

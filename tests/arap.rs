@@ -142,3 +142,85 @@ fn fold_free_on_every_course_disk_mesh() {
         }
     }
 }
+
+#[test]
+fn fold_free_long_run_keeps_area_floor_and_is_deterministic() {
+    // With tolerance 0 and many iterations, a blocked triangle used to be allowed to halve its
+    // area every iteration (collapse), and parallel sums in scheduling order made the run
+    // differ between calls. Now each triangle keeps its UV area above
+    // min(1e-6 · its 3-D area · start ratio, half its start area), and sums are ordered.
+    use cgnodes::nodes::param::arap::frames::TriangleFrames;
+    let mesh = load("assets/meshes/camel_b.obj");
+    let tris = mesh.triangles().unwrap();
+    let init =
+        tutte_parameterize(&mesh, TutteWeights::MeanValue, BoundaryShape::Circle, true).unwrap();
+    let opts = ArapOptions {
+        iterations: 150,
+        tolerance: 0.0,
+        injective: true,
+        ..Default::default()
+    };
+    let a = arap_parameterize(&mesh.positions, &tris, &init, &opts).unwrap();
+    let b = arap_parameterize(&mesh.positions, &tris, &init, &opts).unwrap();
+    assert_eq!(a.log.len(), b.log.len(), "stopping iteration differs");
+    for (x, y) in a.log.iter().zip(&b.log) {
+        assert_eq!(
+            (x.energy.to_bits(), x.step.to_bits(), x.refactors),
+            (y.energy.to_bits(), y.step.to_bits(), y.refactors),
+            "iteration {}",
+            x.iteration
+        );
+    }
+    assert_eq!(a.uv, b.uv);
+    assert!(
+        a.refactors > 0,
+        "camel_b blocks: the schedule must refactor"
+    );
+    let f = TriangleFrames::new(&mesh.positions, &tris).unwrap();
+    let orient = if (0..f.len()).map(|t| f.signed_area2(t, &init)).sum::<f64>() > 0.0 {
+        1.0
+    } else {
+        -1.0
+    };
+    let a0: Vec<f64> = (0..f.len())
+        .map(|t| orient * f.signed_area2(t, &init))
+        .collect();
+    let ratio0 = a0.iter().sum::<f64>() / (2.0 * f.total_area);
+    for (t, &start) in a0.iter().enumerate() {
+        let floor = (1e-6 * 2.0 * f.area[t] * ratio0).min(0.5 * start);
+        let now = orient * f.signed_area2(t, &a.uv);
+        assert!(
+            now >= floor * (1.0 - 1e-9),
+            "triangle {t}: twice the area {now:e} below its floor {floor:e}"
+        );
+    }
+    let m = uv_metrics(&mesh.positions, &tris, &a.uv);
+    assert_eq!((m.flipped, m.collapsed, a.flips), (0, 0, 0));
+}
+
+#[test]
+fn fold_free_runs_are_bit_identical_on_a_many_chunk_mesh() {
+    // 44k triangles: 22 chunks of 2048, so an unordered parallel sum could differ between
+    // runs; the ordered sums make the logs bit-identical
+    let mesh = load("assets/meshes/nefertiti_front.obj");
+    let tris = mesh.triangles().unwrap();
+    let init =
+        tutte_parameterize(&mesh, TutteWeights::MeanValue, BoundaryShape::Circle, true).unwrap();
+    let opts = ArapOptions {
+        iterations: 12,
+        tolerance: 0.0,
+        ..Default::default()
+    };
+    let runs: Vec<Vec<(u64, u64)>> = (0..3)
+        .map(|_| {
+            let r = arap_parameterize(&mesh.positions, &tris, &init, &opts).unwrap();
+            r.log
+                .iter()
+                .map(|x| (x.energy.to_bits(), x.step.to_bits()))
+                .collect()
+        })
+        .collect();
+    assert_eq!(runs[0].len(), 13);
+    assert_eq!(runs[0], runs[1]);
+    assert_eq!(runs[0], runs[2]);
+}

@@ -33,6 +33,8 @@ pub struct ArapOptions {
     /// `None`: ARAP (rotations). `Some(λ)`: the hybrid model of Liu et al. 2008 §4.3, where
     /// `λ = 0` is ASAP's similarity and `λ → ∞` tends to ARAP.
     pub lambda: Option<f64>,
+    /// When the fold-free mode refactors the Laplacian after stiffening triangles.
+    pub refactor: RefactorSchedule,
 }
 
 impl Default for ArapOptions {
@@ -43,6 +45,38 @@ impl Default for ArapOptions {
             injective: true,
             pin: None,
             lambda: None,
+            refactor: RefactorSchedule::default(),
+        }
+    }
+}
+
+/// When the fold-free mode refreshes the Cholesky factor of the reweighted Laplacian.
+///
+/// Stiffened weights accumulate every blocked iteration, but the numeric refactorization
+/// (the costliest part of an iteration) runs only when one of the triggers below fires; in
+/// between, the stale factor still gives a descent direction (any SPD matrix does) and the
+/// max-step limit and Armijo's test keep the iteration fold-free and monotone. A triangle
+/// that keeps blocking keeps stiffening meanwhile, so it is frozen once the factor is fresh.
+/// Besides the triggers below, the factor is refreshed when the triangle that limits the
+/// step is already below its area margin, or when the orientation-preserving step vanishes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RefactorSchedule {
+    /// Refactorizations allowed per iteration (each followed by a new solve and max-step pass).
+    pub per_iteration: usize,
+    /// Refactor once the step has been blocked (cut below half the best step) this many
+    /// iterations running with stiffened weights pending.
+    pub blocked_run: usize,
+    /// ... or as soon as the triangles stiffened since the last refactorization exceed this
+    /// fraction of all triangles.
+    pub growth: f64,
+}
+
+impl Default for RefactorSchedule {
+    fn default() -> Self {
+        RefactorSchedule {
+            per_iteration: 1,
+            blocked_run: 4,
+            growth: 1.0,
         }
     }
 }
@@ -64,6 +98,8 @@ pub struct ArapIteration {
     pub step: f64,
     /// Whether the step was cut short to keep every triangle's orientation.
     pub blocked: bool,
+    /// Numeric refactorizations of the reweighted Laplacian during this iteration.
+    pub refactors: usize,
 }
 
 /// What `arap_parameterize` returns.
@@ -81,6 +117,8 @@ pub struct ArapResult {
     pub energy: f64,
     /// Times a triangle's weight was raised by the fold-free mode (0: plain local/global).
     pub reweighted: usize,
+    /// Numeric refactorizations after reweighting (the initial factorization not counted).
+    pub refactors: usize,
     /// Details of a `NoProgress` stop (empty otherwise).
     pub stop_detail: String,
 }
@@ -95,16 +133,18 @@ const MAX_BACKTRACKS: usize = 40;
 /// When the orientation-preserving step is below this fraction of the best step along the
 /// direction, the blocking triangles are stiffened and the direction recomputed.
 const BLOCKED_STEP: f64 = 0.5;
-/// Reweighting rounds per iteration (each refactors the Laplacian numerically).
-const REWEIGHT_ROUNDS: usize = 3;
 /// Factor applied to a blocking triangle's weight.
 const REWEIGHT_FACTOR: f64 = 10.0;
 /// Largest weight.
 const MAX_WEIGHT: f64 = 1e8;
 /// Fold-free steps keep every triangle's UV area above this fraction of its 3-D area (after
-/// scaling the layout to the 3-D area), or above half its current area if already smaller,
-/// so that blocked triangles are not squeezed towards zero area.
+/// scaling the start's layout to the 3-D area), or above half its current area if already
+/// smaller, so that blocked triangles are not squeezed towards zero area...
 const AREA_MARGIN: f64 = 1e-3;
+/// ... and never below this fraction of its 3-D area (or half its area in the start if that
+/// is smaller): without a fixed floor a triangle could halve its area every iteration and
+/// collapse over many iterations.
+const AREA_FLOOR: f64 = 1e-6;
 /// Below this orientation-preserving step length the iteration is stalled.
 const MIN_STEP: f64 = 1e-12;
 
@@ -232,6 +272,21 @@ pub fn arap_parameterize(
         None
     };
     let mut weights = vec![1.0; if opts.injective { m } else { 0 }];
+    let sched = opts.refactor;
+    // per triangle, twice the UV area of the margin and of the hard floor (see AREA_MARGIN)
+    let floor2: Vec<[f64; 2]> = if opts.injective {
+        let a2: Vec<f64> = (0..m).map(|t| frames.signed_area2(t, &uv)).collect();
+        let ratio = a2.iter().sum::<f64>() / (2.0 * frames.total_area);
+        a2.iter()
+            .zip(&frames.area)
+            .map(|(&a2, &area)| {
+                let a3 = 2.0 * area * ratio;
+                [AREA_MARGIN * a3, (AREA_FLOOR * a3).min(0.5 * a2)]
+            })
+            .collect()
+    } else {
+        Vec::new()
+    };
 
     // Right-hand side weights per corner: b_i += L_t · w_t,i with
     // w_t,i = Σ_(j≠i) cot θ_ij (x_i - x_j) (Liu et al. 2008, eq. 6).
@@ -265,10 +320,15 @@ pub fn arap_parameterize(
         elapsed_ms: ms(start),
         step: 0.0,
         blocked: false,
+        refactors: 0,
     }];
     let mut stop = StopReason::Iterations;
     let mut rhs = Mat::<f64>::zeros(nf, 2);
+    let mut gradient = Mat::<f64>::zeros(nf, 2);
     let mut reweighted = 0usize;
+    let mut refactors = 0usize;
+    // stiffenings not yet in the factor, and blocked iterations since the last refactor
+    let (mut pending, mut blocked_run) = (0usize, 0usize);
     let mut detail = String::new();
     let mut d = vec![[0.0; 2]; n];
     let mut trial = uv.clone();
@@ -311,7 +371,7 @@ pub fn arap_parameterize(
                 }
             }
         }
-        let gradient = rhs.clone();
+        gradient.copy_from(&rhs);
         factor.solve_in_place(rhs.as_mut());
         for (f, &v) in free_vertices.iter().enumerate() {
             d[v] = [-rhs[(f, 0)], -rhs[(f, 1)]];
@@ -321,32 +381,46 @@ pub fn arap_parameterize(
         let mut step = 1.0;
         let mut slope = 0.0; // derivative of the energy along d at step 0 (negative)
         let mut blocked = false;
+        let mut iter_refactors = 0;
         if opts.injective {
-            let mut dir = directional(&frames, &uv, &d, &targets, &mut limits);
-            let mut rounds = 0;
-            while STEP_SAFETY * dir.max_step < BLOCKED_STEP * dir.best_step
-                && rounds < REWEIGHT_ROUNDS
-            {
-                // Blocked: stiffen the triangles that the step would flip and solve again.
-                let changed = reweight(&limits, dir.best_step, &mut weights);
-                if changed == 0 {
+            let mut dir = directional(&frames, &uv, &d, &targets, &floor2, &mut limits);
+            loop {
+                if STEP_SAFETY * dir.max_step >= BLOCKED_STEP * dir.best_step {
+                    blocked_run = 0;
                     break;
                 }
+                // Blocked: stiffen the triangles that the step would flip (weights accumulate;
+                // the factor is refreshed on the schedule's triggers only).
+                if iter_refactors == 0 {
+                    blocked_run += 1;
+                }
+                let changed = reweight(&limits, dir.best_step, &mut weights);
+                pending += changed;
                 reweighted += changed;
-                rounds += 1;
-                let lower: Vec<Triplet<usize, usize, f64>> = trip
-                    .iter()
-                    .zip(&trip_tri)
-                    .map(|(x, &t)| Triplet::new(x.row, x.col, x.val * weights[t as usize]))
-                    .collect();
-                factor.refactor(&lower, Par::rayon(0)).map_err(singular)?;
+                let due = blocked_run >= sched.blocked_run
+                    || pending as f64 >= sched.growth * m as f64
+                    || dir.squeezed
+                    || dir.max_step < MIN_STEP;
+                if pending == 0 || !due || iter_refactors >= sched.per_iteration {
+                    break;
+                }
+                factor
+                    .refactor_with(
+                        trip.len(),
+                        |k| trip[k].val * weights[trip_tri[k] as usize],
+                        Par::rayon(0),
+                    )
+                    .map_err(singular)?;
+                (pending, blocked_run) = (0, 0);
+                iter_refactors += 1;
                 rhs.copy_from(&gradient);
                 factor.solve_in_place(rhs.as_mut());
                 for (f, &v) in free_vertices.iter().enumerate() {
                     d[v] = [-rhs[(f, 0)], -rhs[(f, 1)]];
                 }
-                dir = directional(&frames, &uv, &d, &targets, &mut limits);
+                dir = directional(&frames, &uv, &d, &targets, &floor2, &mut limits);
             }
+            refactors += iter_refactors;
             slope = dir.slope / total_area; // per unit area, like `energy`
             step = dir.best_step.min(STEP_SAFETY * dir.max_step);
             blocked = STEP_SAFETY * dir.max_step < dir.best_step;
@@ -407,6 +481,7 @@ pub fn arap_parameterize(
             elapsed_ms: ms(start),
             step,
             blocked,
+            refactors: iter_refactors,
         });
         if e_old - energy <= opts.tolerance * e_old {
             // a step cut short by a triangle about to flip is a stall, not convergence
@@ -431,6 +506,7 @@ pub fn arap_parameterize(
         flips,
         energy,
         reweighted,
+        refactors,
         stop_detail: detail,
     })
 }
@@ -447,18 +523,25 @@ fn evaluate(
     lambda: Option<f64>,
     targets: &mut [Similarity],
 ) -> (f64, usize) {
-    targets
-        .par_iter_mut()
-        .with_min_len(PAR_CHUNK)
+    // fixed chunks summed in order: the result does not depend on rayon's scheduling
+    let parts: Vec<(f64, usize)> = targets
+        .par_chunks_mut(PAR_CHUNK)
         .enumerate()
-        .map(|(t, out)| {
-            let j = frames.jacobian(t, uv);
-            let (l, e) = local_step(&j, lambda);
-            *out = l;
-            let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
-            (frames.area[t] * e, usize::from(det <= 0.0))
+        .map(|(c, chunk)| {
+            let (mut e_sum, mut flips) = (0.0, 0);
+            for (k, out) in chunk.iter_mut().enumerate() {
+                let t = c * PAR_CHUNK + k;
+                let j = frames.jacobian(t, uv);
+                let (l, e) = local_step(&j, lambda);
+                *out = l;
+                let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
+                e_sum += frames.area[t] * e;
+                flips += usize::from(det <= 0.0);
+            }
+            (e_sum, flips)
         })
-        .reduce(|| (0.0, 0), |a, b| (a.0 + b.0, a.1 + b.1))
+        .collect();
+    parts.iter().fold((0.0, 0), |a, b| (a.0 + b.0, a.1 + b.1))
 }
 
 /// What the energy does along a direction `δ` with the targets held fixed.
@@ -469,49 +552,62 @@ struct Directional {
     best_step: f64,
     /// Largest step keeping every triangle's orientation.
     max_step: f64,
+    /// Whether the triangle that sets `max_step` is already below its area margin (it is
+    /// being squeezed towards its hard floor: stiffening it cannot wait).
+    squeezed: bool,
 }
 
 /// One parallel pass over the triangles: slope and curvature of the targets' quadratic
-/// along `dir`, and each triangle's orientation limit (written to `limits`).
+/// along `dir`, and each triangle's orientation limit (written to `limits`): the step at
+/// which its UV area would drop to its floor, `max(hard, min(margin, half the current area))`
+/// with `floor2 = [margin, hard]` (twice the areas). Sums are taken over fixed chunks in a fixed
+/// order, so the result does not depend on rayon's scheduling.
 fn directional(
     frames: &TriangleFrames,
     uv: &[[f64; 2]],
     dir: &[[f64; 2]],
     targets: &[Similarity],
+    floor2: &[[f64; 2]],
     limits: &mut [f64],
 ) -> Directional {
-    // UV-to-3D area ratio, for the area margin below which no triangle is pushed
-    let uv_area2: f64 = (0..frames.len())
-        .into_par_iter()
-        .with_min_len(PAR_CHUNK)
-        .map(|t| frames.signed_area2(t, uv).abs())
-        .sum();
-    let ratio = uv_area2 / (2.0 * frames.total_area);
-    let (slope, curv, max_step) = limits
-        .par_iter_mut()
-        .with_min_len(PAR_CHUNK)
+    let parts: Vec<(f64, f64, f64, bool)> = limits
+        .par_chunks_mut(PAR_CHUNK)
         .enumerate()
-        .map(|(t, lim)| {
-            let j0 = frames.jacobian(t, uv);
-            let jd = frames.jacobian(t, dir);
-            let [a, b] = targets[t];
-            let l = [[a, -b], [b, a]];
-            let (mut g, mut c) = (0.0, 0.0);
-            for r in 0..2 {
-                for k in 0..2 {
-                    g += (j0[r][k] - l[r][k]) * jd[r][k];
-                    c += jd[r][k] * jd[r][k];
+        .map(|(ci, chunk)| {
+            let (mut slope, mut curv, mut max_step, mut squeezed) =
+                (0.0, 0.0, f64::INFINITY, false);
+            for (k, lim) in chunk.iter_mut().enumerate() {
+                let t = ci * PAR_CHUNK + k;
+                let j0 = frames.jacobian(t, uv);
+                let jd = frames.jacobian(t, dir);
+                let [a, b] = targets[t];
+                let l = [[a, -b], [b, a]];
+                let (mut g, mut c) = (0.0, 0.0);
+                for r in 0..2 {
+                    for k in 0..2 {
+                        g += (j0[r][k] - l[r][k]) * jd[r][k];
+                        c += jd[r][k] * jd[r][k];
+                    }
+                }
+                let [margin, hard] = floor2[t];
+                let a2 = frames.signed_area2(t, uv);
+                let floor = hard.max(margin.min(0.5 * a2));
+                *lim = triangle_max_step_above(frames, t, uv, dir, 1.0, floor);
+                slope += 2.0 * frames.area[t] * g;
+                curv += frames.area[t] * c;
+                if *lim < max_step {
+                    max_step = *lim;
+                    squeezed = a2 < margin;
                 }
             }
-            let a2 = frames.signed_area2(t, uv);
-            let floor2 = (AREA_MARGIN * 2.0 * frames.area[t] * ratio).min(0.5 * a2);
-            *lim = triangle_max_step_above(frames, t, uv, dir, 1.0, floor2);
-            (2.0 * frames.area[t] * g, frames.area[t] * c, *lim)
+            (slope, curv, max_step, squeezed)
         })
-        .reduce(
-            || (0.0, 0.0, f64::INFINITY),
-            |x, y| (x.0 + y.0, x.1 + y.1, x.2.min(y.2)),
-        );
+        .collect();
+    let (slope, curv, max_step, squeezed) =
+        parts.iter().fold((0.0, 0.0, f64::INFINITY, false), |x, y| {
+            let (m, s) = if y.2 < x.2 { (y.2, y.3) } else { (x.2, x.3) };
+            (x.0 + y.0, x.1 + y.1, m, s)
+        });
     let best_step = if curv > 0.0 {
         -slope / (2.0 * curv)
     } else {
@@ -521,11 +617,14 @@ fn directional(
         slope,
         best_step: best_step.max(0.0),
         max_step,
+        squeezed,
     }
 }
 
 /// Multiplies by `REWEIGHT_FACTOR` the weight of every triangle that would flip before
-/// `best_step` (`limits < best_step`); returns how many changed.
+/// `best_step` (`limits < best_step`); returns how many changed. Between refactorizations a
+/// triangle that keeps blocking keeps stiffening, so that it is frozen once the factor is
+/// refreshed.
 fn reweight(limits: &[f64], best_step: f64, weights: &mut [f64]) -> usize {
     let mut changed = 0;
     for (w, &lim) in weights.iter_mut().zip(limits) {
@@ -586,7 +685,7 @@ fn declare_common(b: &mut NodeBuilder) {
     b.add_output::<Mesh>("flat")
         .doc("The flattened mesh (UV, 0), at the 3-D scale.");
     b.add_output::<Table>("log").doc(
-        "Per iteration: energy, flips, elapsed_ms, step, blocked (1: cut short to avoid a flip); meta: stop_reason, flips, energy.",
+        "Per iteration: energy, flips, elapsed_ms, step, blocked (1: cut short to avoid a flip), refactors (numeric refactorizations after stiffening triangles); meta: stop_reason, flips, energy, reweighted, refactors.",
     );
 }
 
@@ -626,6 +725,7 @@ fn execute_with(ctx: &mut ExecContext, lambda: Option<f64>) -> Result<(), NodeEr
         injective,
         pin: (pin >= 0).then_some(pin as usize),
         lambda,
+        ..Default::default()
     };
     let res = arap_parameterize(&tri_mesh.positions, &triangles, &uv0, &opts)?;
     let mut table = Table::with_columns(&[
@@ -635,6 +735,7 @@ fn execute_with(ctx: &mut ExecContext, lambda: Option<f64>) -> Result<(), NodeEr
         "elapsed_ms",
         "step",
         "blocked",
+        "refactors",
     ]);
     for r in &res.log {
         table.push_row(&[
@@ -644,6 +745,7 @@ fn execute_with(ctx: &mut ExecContext, lambda: Option<f64>) -> Result<(), NodeEr
             r.elapsed_ms,
             r.step,
             f64::from(u8::from(r.blocked)),
+            r.refactors as f64,
         ]);
     }
     table
@@ -653,6 +755,9 @@ fn execute_with(ctx: &mut ExecContext, lambda: Option<f64>) -> Result<(), NodeEr
     table
         .meta
         .insert("reweighted".into(), res.reweighted.to_string());
+    table
+        .meta
+        .insert("refactors".into(), res.refactors.to_string());
     if !res.stop_detail.is_empty() {
         table
             .meta

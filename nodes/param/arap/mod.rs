@@ -16,7 +16,9 @@ pub mod local_global;
 pub mod spd;
 
 pub use asap::{asap_parameterize, AsapResult};
-pub use local_global::{arap_parameterize, ArapIteration, ArapOptions, ArapResult};
+pub use local_global::{
+    arap_parameterize, ArapIteration, ArapOptions, ArapResult, RefactorSchedule,
+};
 
 use super::tutte::{tutte_parameterize, BoundaryShape, TutteWeights};
 use crate::prelude::*;

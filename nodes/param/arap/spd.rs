@@ -14,6 +14,11 @@ use faer::{Conj, MatMut, Par, Side};
 pub struct SpdFactor {
     symbolic: SymbolicCholesky<usize>,
     values: Vec<f64>,
+    /// The matrix (lower triangle, compressed columns), kept for numeric refactorization.
+    matrix: SparseColMat<usize, f64>,
+    /// For each triplet given to `new`, the index of its entry in `matrix`'s values, so that
+    /// `refactor_with` assembles new values without sorting.
+    slot: Vec<usize>,
 }
 
 impl SpdFactor {
@@ -34,8 +39,24 @@ impl SpdFactor {
         )
         .map_err(|e| format!("symbolic Cholesky: {e:?}"))?;
         let values = vec![0.0; symbolic.len_val()];
-        let mut f = SpdFactor { symbolic, values };
-        f.numeric(&a, par)?;
+        // where each triplet lands (row indices are sorted within a column)
+        let slot = {
+            let (col_ptr, row_idx) = (a.symbolic().col_ptr(), a.symbolic().row_idx());
+            lower
+                .iter()
+                .map(|t| {
+                    let rows = &row_idx[col_ptr[t.col]..col_ptr[t.col + 1]];
+                    col_ptr[t.col] + rows.binary_search(&t.row).expect("entry in pattern")
+                })
+                .collect()
+        };
+        let mut f = SpdFactor {
+            symbolic,
+            values,
+            matrix: a,
+            slot,
+        };
+        f.numeric(par)?;
         Ok(f)
     }
 
@@ -46,13 +67,34 @@ impl SpdFactor {
         lower: &[Triplet<usize, usize, f64>],
         par: Par,
     ) -> Result<(), String> {
-        let n = self.dim();
-        let a = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, lower)
-            .map_err(|e| format!("assembling the sparse matrix: {e:?}"))?;
-        self.numeric(&a, par)
+        self.refactor_with(lower.len(), |k| lower[k].val, par)
     }
 
-    fn numeric(&mut self, a: &SparseColMat<usize, f64>, par: Par) -> Result<(), String> {
+    /// Like `refactor`, with the value of the `k`-th triplet given to `new` read from
+    /// `value(k)` (`count` must be the number of those triplets): no sorting, no allocation
+    /// beyond the factorization's workspace.
+    pub fn refactor_with(
+        &mut self,
+        count: usize,
+        value: impl Fn(usize) -> f64,
+        par: Par,
+    ) -> Result<(), String> {
+        if count != self.slot.len() {
+            return Err(format!(
+                "refactor with {count} entries, the pattern has {}",
+                self.slot.len()
+            ));
+        }
+        let vals = self.matrix.val_mut();
+        vals.fill(0.0);
+        for (k, &s) in self.slot.iter().enumerate() {
+            vals[s] += value(k);
+        }
+        self.numeric(par)
+    }
+
+    fn numeric(&mut self, par: Par) -> Result<(), String> {
+        let a = &self.matrix;
         let mut mem = MemBuffer::try_new(
             self.symbolic
                 .factorize_numeric_llt_scratch::<f64>(par, Default::default()),

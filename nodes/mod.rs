@@ -3,6 +3,7 @@
 //! algorithm itself in a plain function that Rust users can call without the runtime.
 
 pub mod basic;
+pub mod linalg;
 pub mod mesh;
 pub mod metrics;
 pub mod param;

@@ -8,8 +8,8 @@
 
 use super::frames::{local_step, similarity_parts, TriangleFrames, PAR_CHUNK};
 use super::injective::orientation_and_flips;
-use super::spd::SpdFactor;
 use super::{component_of, uv_outputs};
+use crate::nodes::linalg::SpdFactor;
 use crate::prelude::*;
 use faer::sparse::Triplet;
 use faer::{Mat, Par};

@@ -10,8 +10,8 @@
 
 use super::frames::{local_step, Similarity, TriangleFrames, PAR_CHUNK};
 use super::injective::{orientation_and_flips, triangle_max_step_above};
-use super::spd::SpdFactor;
 use super::{component_of, init_uvs, uv_outputs, StopReason};
+use crate::nodes::linalg::SpdFactor;
 use crate::prelude::*;
 use faer::sparse::Triplet;
 use faer::{Mat, Par};

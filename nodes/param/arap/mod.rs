@@ -5,7 +5,6 @@
 //! - `asap`: `asap_parameterize`, one linear solve; node `asap`.
 //! - `frames`: per-triangle isometric frames, Jacobians and closed-form 2x2 decompositions.
 //! - `injective`: the largest orientation-preserving step (Smith & Schaefer 2015) and flips.
-//! - `spd`: the sparse Cholesky factor reused across iterations.
 //!
 //! Method, costs and measurements: `docs/arap.md`.
 
@@ -13,7 +12,6 @@ pub mod asap;
 pub mod frames;
 pub mod injective;
 pub mod local_global;
-pub mod spd;
 
 pub use asap::{asap_parameterize, AsapResult};
 pub use local_global::{

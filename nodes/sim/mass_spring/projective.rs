@@ -14,22 +14,16 @@
 //! velocity, so the prefactored matrix stays valid.
 
 use super::springs::{axpy, dot, norm, scale, sub, Model, Sphere, State};
-use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::sparse::linalg::cholesky::{
-    factorize_symbolic_cholesky, LltRef, SymbolicCholesky, SymmetricOrdering,
-};
-use faer::sparse::{SparseColMat, Triplet};
-use faer::{Conj, Mat, Par, Side};
+use crate::nodes::linalg::SpdFactor;
+use faer::sparse::Triplet;
+use faer::{Mat, Par};
 use rayon::prelude::*;
 
 /// The prefactored global matrix of Liu et al. 2013 for one model and time step.
 pub struct Projective {
     free: Vec<Option<u32>>,
     n_free: usize,
-    symbolic: SymbolicCholesky<usize>,
-    l_values: Vec<f64>,
-    scratch: MemBuffer,
-    par: Par,
+    factor: SpdFactor,
     h: f64,
     /// Local/global iterations per step (Liu et al. use about 10).
     pub iterations: usize,
@@ -65,43 +59,18 @@ impl Projective {
                 t.push(Triplet::new(p, q, -k));
             }
         }
-        let a = SparseColMat::<usize, f64>::try_new_from_triplets(n_free, n_free, &t)
-            .map_err(|e| format!("sparse matrix: {e:?}"))?;
-        let symbolic = factorize_symbolic_cholesky(
-            a.symbolic(),
-            Side::Lower,
-            SymmetricOrdering::Amd,
-            Default::default(),
-        )
-        .map_err(|e| format!("symbolic Cholesky: {e:?}"))?;
+        // Small systems factor faster on one thread (and nodes already run in parallel).
         let par = if n_free >= 60_000 {
             Par::rayon(0)
         } else {
             Par::Seq
         };
-        let req = symbolic
-            .factorize_numeric_llt_scratch::<f64>(par, Default::default())
-            .or(symbolic.solve_in_place_scratch::<f64>(3, par));
-        let mut scratch = MemBuffer::try_new(req).map_err(|e| format!("scratch memory: {e:?}"))?;
-        let mut l_values = vec![0.0; symbolic.len_val()];
-        symbolic
-            .factorize_numeric_llt::<f64>(
-                &mut l_values,
-                a.as_ref(),
-                Side::Lower,
-                Default::default(),
-                par,
-                MemStack::new(&mut scratch),
-                Default::default(),
-            )
-            .map_err(|e| format!("the global matrix is not positive definite: {e:?}"))?;
+        let factor = SpdFactor::new(n_free, &t, par)
+            .map_err(|e| format!("the global matrix is not positive definite: {e}"))?;
         Ok(Projective {
             free,
             n_free,
-            symbolic,
-            l_values,
-            scratch,
-            par,
+            factor,
             h,
             iterations: iterations.max(1),
             d: vec![[0.0; 3]; m.springs.len()],
@@ -180,12 +149,7 @@ impl Projective {
                     (None, None) => {}
                 }
             }
-            LltRef::new(&self.symbolic, &self.l_values).solve_in_place_with_conj(
-                Conj::No,
-                b.as_mut(),
-                self.par,
-                MemStack::new(&mut self.scratch),
-            );
+            self.factor.solve_in_place(b.as_mut());
             for i in 0..n {
                 if let Some(p) = self.free[i] {
                     x[i] = [b[(p as usize, 0)], b[(p as usize, 1)], b[(p as usize, 2)]];

@@ -1,0 +1,6 @@
+//! Linear-algebra building blocks shared by node families (parameterization, simulation):
+//! thin wrappers over faer that keep a factorization and its scratch memory together.
+
+pub mod spd;
+
+pub use spd::SpdFactor;

@@ -8,6 +8,7 @@
 
 use crate::prelude::*;
 use crate::types::Domain;
+use rayon::prelude::*;
 
 /// All triangles of a scene, with their corner attributes.
 #[derive(Clone, Debug, Default)]
@@ -87,6 +88,7 @@ pub fn scene_geometry(scene: &Scene) -> Result<SceneGeometry, String> {
         let corner_normals: Vec<[[f64; 3]; 3]> = match &mesh.normals {
             Some(a) if attr_len_ok(a.domain, a.values.len(), p.len(), tris.len()) => (0..tris
                 .len())
+                .into_par_iter()
                 .map(|t| {
                     std::array::from_fn(|k| {
                         let v = match a.domain {
@@ -111,7 +113,7 @@ pub fn scene_geometry(scene: &Scene) -> Result<SceneGeometry, String> {
                         }
                     }
                 }
-                tris.iter()
+                tris.par_iter()
                     .map(|t| {
                         let f = normalize(cross(
                             sub(p[t[1] as usize], p[t[0] as usize]),
@@ -165,6 +167,7 @@ pub fn scene_geometry(scene: &Scene) -> Result<SceneGeometry, String> {
                     }
                 }
                 (0..tris.len())
+                    .into_par_iter()
                     .map(|t| {
                         std::array::from_fn(|k| {
                             let v = tris[t][k] as usize;
@@ -187,14 +190,17 @@ pub fn scene_geometry(scene: &Scene) -> Result<SceneGeometry, String> {
                     .collect()
             }
         };
-        for (t, tri) in tris.iter().enumerate() {
-            g.pos.push(tri.map(|v| p[v as usize]));
-            g.nrm.push(corner_normals[t]);
-            g.uv.push(corner_uvs.as_ref().map(|u| u[t]).unwrap_or([[0.0; 2]; 3]));
-            g.has_uv.push(corner_uvs.is_some());
-            g.tan.push(corner_tans[t]);
-            g.mat.push(mi);
+        let nt = tris.len();
+        g.pos
+            .par_extend(tris.par_iter().map(|tri| tri.map(|v| p[v as usize])));
+        g.nrm.extend_from_slice(&corner_normals);
+        match &corner_uvs {
+            Some(u) => g.uv.extend_from_slice(u),
+            None => g.uv.resize(g.uv.len() + nt, [[0.0; 2]; 3]),
         }
+        g.has_uv.resize(g.has_uv.len() + nt, corner_uvs.is_some());
+        g.tan.extend_from_slice(&corner_tans);
+        g.mat.resize(g.mat.len() + nt, mi);
     }
     if g.pos.is_empty() {
         lo = [0.0; 3];

@@ -111,12 +111,17 @@ fn main() {
     );
     let mut base_ms = 0.0;
     const RUNS: usize = 5;
+    // CGNODES_BENCH_ONLY=TEXT runs only the lines whose name contains TEXT (for profiling).
+    let only = std::env::var("CGNODES_BENCH_ONLY").unwrap_or_default();
     for (name, o) in [
         ("1x, no shadows (baseline), colour", &base),
         ("4x MSAA, two 2048^2 shadows, colour", &full),
         ("4x MSAA, two 2048^2 shadows, 6 passes", &all),
         ("4x SSAA, two 2048^2 shadows, colour", &ssaa),
     ] {
+        if !only.is_empty() && !name.contains(only.as_str()) {
+            continue;
+        }
         let _ = render(&scene, &cam, o).expect("render"); // warm-up
         let mut times = Vec::new();
         let mut shaded = 0;

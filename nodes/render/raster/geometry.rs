@@ -141,9 +141,9 @@ pub fn scene_geometry(scene: &Scene) -> Result<SceneGeometry, String> {
             _ => None,
         };
         // Tangents (Lengyel 2001), accumulated per position vertex.
-        let corner_tans: Vec<[[f64; 4]; 3]> = match &corner_uvs {
-            None => vec![[[0.0; 4]; 3]; tris.len()],
-            Some(uvs) => {
+        let corner_tans: Option<Vec<[[f64; 4]; 3]>> = match &corner_uvs {
+            None => None,
+            Some(uvs) => Some({
                 let mut tv = vec![[0.0; 3]; p.len()];
                 let mut bv = vec![[0.0; 3]; p.len()];
                 for (t, tri) in tris.iter().enumerate() {
@@ -188,18 +188,23 @@ pub fn scene_geometry(scene: &Scene) -> Result<SceneGeometry, String> {
                         })
                     })
                     .collect()
-            }
+            }),
         };
         let nt = tris.len();
         g.pos
             .par_extend(tris.par_iter().map(|tri| tri.map(|v| p[v as usize])));
-        g.nrm.extend_from_slice(&corner_normals);
-        match &corner_uvs {
-            Some(u) => g.uv.extend_from_slice(u),
+        // The first mesh's arrays are moved in, later ones appended (no copy of the
+        // usual single big mesh).
+        append(&mut g.nrm, corner_normals);
+        g.has_uv.resize(g.has_uv.len() + nt, corner_uvs.is_some());
+        match corner_uvs {
+            Some(u) => append(&mut g.uv, u),
             None => g.uv.resize(g.uv.len() + nt, [[0.0; 2]; 3]),
         }
-        g.has_uv.resize(g.has_uv.len() + nt, corner_uvs.is_some());
-        g.tan.extend_from_slice(&corner_tans);
+        match corner_tans {
+            Some(t) => append(&mut g.tan, t),
+            None => g.tan.resize(g.tan.len() + nt, [[0.0; 4]; 3]),
+        }
         g.mat.resize(g.mat.len() + nt, mi);
     }
     if g.pos.is_empty() {
@@ -208,6 +213,15 @@ pub fn scene_geometry(scene: &Scene) -> Result<SceneGeometry, String> {
     }
     g.bounds = (lo, hi);
     Ok(g)
+}
+
+/// Appends `v` to `dst`, moving it in when `dst` is empty.
+fn append<T: Clone>(dst: &mut Vec<T>, v: Vec<T>) {
+    if dst.is_empty() {
+        *dst = v;
+    } else {
+        dst.extend_from_slice(&v);
+    }
 }
 
 fn scale3(a: [f64; 3], s: f64) -> [f64; 3] {

@@ -195,7 +195,7 @@ pub fn point_shadow_map(tris: &[[[f64; 3]; 3]], pos: [f64; 3], res: u32, near: f
 /// (directional) or clamp to the edge (cube faces).
 #[allow(clippy::too_many_arguments)]
 fn pcf(depth: &[f32], res: u32, x: f64, y: f64, z: f64, bias: f64, r: i64, clamp: bool) -> f64 {
-    let (cx, cy) = (x.floor() as i64, y.floor() as i64);
+    let (cx, cy) = (floor_i64(x), floor_i64(y));
     let n = res as i64;
     let zt = (z - bias) as f32;
     if cx - r >= 0 && cy - r >= 0 && cx + r < n && cy + r < n {
@@ -228,6 +228,18 @@ fn pcf(depth: &[f32], res: u32, x: f64, y: f64, z: f64, bias: f64, r: i64, clamp
         }
     }
     lit as f64 / total as f64
+}
+
+/// `x.floor() as i64` without the libm call (the baseline x86-64 target has no SSE4.1
+/// rounding instruction, and this runs twice per shadow lookup).
+#[inline]
+fn floor_i64(x: f64) -> i64 {
+    let t = x as i64;
+    if (t as f64) > x {
+        t.saturating_sub(1)
+    } else {
+        t
+    }
 }
 
 impl ShadowMap {

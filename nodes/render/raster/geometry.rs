@@ -141,55 +141,52 @@ pub fn scene_geometry(scene: &Scene) -> Result<SceneGeometry, String> {
             _ => None,
         };
         // Tangents (Lengyel 2001), accumulated per position vertex.
-        let corner_tans: Option<Vec<[[f64; 4]; 3]>> = match &corner_uvs {
-            None => None,
-            Some(uvs) => Some({
-                let mut tv = vec![[0.0; 3]; p.len()];
-                let mut bv = vec![[0.0; 3]; p.len()];
-                for (t, tri) in tris.iter().enumerate() {
-                    let [p0, p1, p2] = tri.map(|v| p[v as usize]);
-                    let [w0, w1, w2] = uvs[t];
-                    let (e1, e2) = (sub(p1, p0), sub(p2, p0));
-                    let (du1, dv1) = (w1[0] - w0[0], w1[1] - w0[1]);
-                    let (du2, dv2) = (w2[0] - w0[0], w2[1] - w0[1]);
-                    let det = du1 * dv2 - du2 * dv1;
-                    if det.abs() < 1e-20 {
-                        continue;
-                    }
-                    let r = 1.0 / det;
-                    let tt: [f64; 3] = std::array::from_fn(|k| (e1[k] * dv2 - e2[k] * dv1) * r);
-                    let bb: [f64; 3] = std::array::from_fn(|k| (e2[k] * du1 - e1[k] * du2) * r);
-                    for &v in tri {
-                        for k in 0..3 {
-                            tv[v as usize][k] += tt[k];
-                            bv[v as usize][k] += bb[k];
-                        }
+        let corner_tans: Option<Vec<[[f64; 4]; 3]>> = corner_uvs.as_ref().map(|uvs| {
+            let mut tv = vec![[0.0; 3]; p.len()];
+            let mut bv = vec![[0.0; 3]; p.len()];
+            for (t, tri) in tris.iter().enumerate() {
+                let [p0, p1, p2] = tri.map(|v| p[v as usize]);
+                let [w0, w1, w2] = uvs[t];
+                let (e1, e2) = (sub(p1, p0), sub(p2, p0));
+                let (du1, dv1) = (w1[0] - w0[0], w1[1] - w0[1]);
+                let (du2, dv2) = (w2[0] - w0[0], w2[1] - w0[1]);
+                let det = du1 * dv2 - du2 * dv1;
+                if det.abs() < 1e-20 {
+                    continue;
+                }
+                let r = 1.0 / det;
+                let tt: [f64; 3] = std::array::from_fn(|k| (e1[k] * dv2 - e2[k] * dv1) * r);
+                let bb: [f64; 3] = std::array::from_fn(|k| (e2[k] * du1 - e1[k] * du2) * r);
+                for &v in tri {
+                    for k in 0..3 {
+                        tv[v as usize][k] += tt[k];
+                        bv[v as usize][k] += bb[k];
                     }
                 }
-                (0..tris.len())
-                    .into_par_iter()
-                    .map(|t| {
-                        std::array::from_fn(|k| {
-                            let v = tris[t][k] as usize;
-                            let n = corner_normals[t][k];
-                            let tt = tv[v];
-                            let ortho = sub(tt, scale3(n, dot(n, tt)));
-                            match normalize(ortho) {
-                                Some(o) => {
-                                    let w = if dot(cross(n, o), bv[v]) < 0.0 {
-                                        -1.0
-                                    } else {
-                                        1.0
-                                    };
-                                    [o[0], o[1], o[2], w]
-                                }
-                                None => [0.0; 4],
+            }
+            (0..tris.len())
+                .into_par_iter()
+                .map(|t| {
+                    std::array::from_fn(|k| {
+                        let v = tris[t][k] as usize;
+                        let n = corner_normals[t][k];
+                        let tt = tv[v];
+                        let ortho = sub(tt, scale3(n, dot(n, tt)));
+                        match normalize(ortho) {
+                            Some(o) => {
+                                let w = if dot(cross(n, o), bv[v]) < 0.0 {
+                                    -1.0
+                                } else {
+                                    1.0
+                                };
+                                [o[0], o[1], o[2], w]
                             }
-                        })
+                            None => [0.0; 4],
+                        }
                     })
-                    .collect()
-            }),
-        };
+                })
+                .collect()
+        });
         let nt = tris.len();
         g.pos
             .par_extend(tris.par_iter().map(|tri| tri.map(|v| p[v as usize])));

@@ -6,7 +6,7 @@
 
 use crate::types::Value;
 use serde::{Deserialize, Serialize};
-use std::collections::{BTreeMap, HashMap};
+use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -18,19 +18,51 @@ pub fn hex(k: &Key) -> String {
     k.iter().map(|b| format!("{b:02x}")).collect()
 }
 
-/// A node's cached result: its outputs and the files it wrote.
+/// A node's cached result: its outputs, the outputs it skipped because no one wanted them,
+/// and the files it wrote.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Entry {
     /// Output values by socket.
     pub outputs: Arc<BTreeMap<String, Value>>,
     /// Files the node wrote (a hit needs them all still present).
     pub written: Vec<PathBuf>,
+    /// Declared outputs the node did not produce because they were not wanted; a run that
+    /// wants one of them cannot be served from this entry.
+    pub skipped: Vec<String>,
 }
 
 impl Entry {
     /// Whether every file the node wrote is still there.
     pub fn files_present(&self) -> bool {
         self.written.iter().all(|p| p.exists())
+    }
+
+    /// Whether this entry holds every output in `wanted` (`None` = every output).
+    pub fn serves(&self, wanted: Option<&BTreeSet<String>>) -> bool {
+        match wanted {
+            None => self.skipped.is_empty(),
+            Some(w) => !self.skipped.iter().any(|s| w.contains(s)),
+        }
+    }
+
+    /// This fresh entry completed with the outputs of an older entry of the same key (same
+    /// inputs, so the same values): an output skipped now but produced before is kept.
+    pub fn merged_with(self, older: &Entry) -> Entry {
+        let mut outputs = (*older.outputs).clone();
+        outputs.extend(self.outputs.iter().map(|(k, v)| (k.clone(), v.clone())));
+        let mut skipped = self.skipped;
+        skipped.retain(|s| !outputs.contains_key(s));
+        let mut written = self.written;
+        for w in &older.written {
+            if !written.contains(w) {
+                written.push(w.clone());
+            }
+        }
+        Entry {
+            outputs: Arc::new(outputs),
+            written,
+            skipped,
+        }
     }
 }
 

@@ -721,6 +721,9 @@ fn cmd_run(registry: &Registry, args: RunArgs) -> i32 {
         progress,
         measure_memory: args.profile || args.profile_json.is_some(),
         recompute: Vec::new(),
+        // The command line reads no outputs after the run: writers are the targets.
+        read_outputs: Vec::new(),
+        all_outputs: false,
     };
     let mut code = 0;
     let mut profile = Vec::new();

@@ -7,7 +7,7 @@ use crate::node::{ErrorKind, ExecContext, FileEnv, FileRole, NodeError, Progress
 use crate::types::{SocketType, Value};
 use crate::validate::{InputSource, ValidGraph};
 use std::any::Any;
-use std::collections::{BTreeMap, HashMap};
+use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
@@ -27,6 +27,13 @@ pub struct RunOptions {
     /// Node ids that must run even when cached, with everything downstream of them
     /// (`cgnodes sweep --repeat` times real executions this way).
     pub recompute: Vec<String>,
+    /// Outputs the caller reads from the report after the run, as `NODE.SOCKET` (or `NODE`
+    /// for all of a node's outputs). Their nodes run as if they were targets, and these
+    /// outputs are computed even when nothing in the graph reads them: nodes may skip the
+    /// outputs no one wants (`ExecContext::output_wanted`).
+    pub read_outputs: Vec<String>,
+    /// Every node that runs computes all its outputs, wanted or not.
+    pub all_outputs: bool,
 }
 
 /// What happened to one node in a run.
@@ -75,7 +82,9 @@ pub struct RunReport {
     pub frame: i64,
     /// Every node in topological order.
     pub nodes: Vec<NodeReport>,
-    /// Outputs of every node that ran or was cached.
+    /// Outputs of every node that ran or was cached. A node that is no target may leave out
+    /// outputs nothing reads (`ExecContext::output_wanted`): name the ones you read in
+    /// `RunOptions::read_outputs`.
     pub outputs: HashMap<String, Arc<BTreeMap<String, Value>>>,
     /// Total wall time in milliseconds.
     pub total_ms: f64,
@@ -193,8 +202,49 @@ impl Executor {
                 .collect(),
             None => graph.targets.clone(),
         };
-        let need = graph.needed(&targets);
         let n = graph.nodes.len();
+        // Which outputs each node must produce: `None` = all of them (targets, and outputs
+        // the caller reads whole); else the sockets linked by needed nodes or read by name.
+        let mut wanted: Vec<Option<BTreeSet<String>>> = vec![Some(BTreeSet::new()); n];
+        let mut roots = targets.clone();
+        for &t in &targets {
+            wanted[t] = None;
+        }
+        for r in &opts.read_outputs {
+            let (id, socket) = match r.split_once('.') {
+                Some((id, socket)) => (id, Some(socket)),
+                None => (r.as_str(), None),
+            };
+            let Some(&i) = graph.index.get(id) else {
+                continue;
+            };
+            roots.push(i);
+            match (socket, &mut wanted[i]) {
+                (None, w) => *w = None,
+                (Some(sock), Some(w)) => {
+                    w.insert(sock.to_string());
+                }
+                (Some(_), None) => {}
+            }
+        }
+        let need = graph.needed(&roots);
+        for (j, node) in graph.nodes.iter().enumerate() {
+            if !need[j] {
+                continue;
+            }
+            for (_, src) in &node.inputs {
+                if let InputSource::Links(links) = src {
+                    for (j, out) in links {
+                        if let Some(w) = &mut wanted[*j] {
+                            w.insert(out.clone());
+                        }
+                    }
+                }
+            }
+        }
+        if opts.all_outputs {
+            wanted.iter_mut().for_each(|w| *w = None);
+        }
         let keys = cache_keys(graph, &need, &opts.files, frame);
         let mut fresh = vec![false; n];
         for (i, node) in graph.nodes.iter().enumerate() {
@@ -220,6 +270,7 @@ impl Executor {
             frame,
             keys: &keys,
             fresh: &fresh,
+            wanted: &wanted,
             slots: &slots,
             reports: &reports,
             dependents: &dependents,
@@ -309,11 +360,17 @@ impl Executor {
             }
         }
         let key = sh.keys[i];
+        let wanted = sh.wanted[i].as_ref();
+        // A cached entry that skipped an output wanted now is kept, to merge with the rerun.
+        let mut older = None;
         if !decl.stateful && !sh.fresh[i] {
             if let Some(e) = self.lookup(&key) {
-                report.status = NodeStatus::Cached;
-                report.written = e.written.clone();
-                return Ok(e.outputs);
+                if e.serves(wanted) {
+                    report.status = NodeStatus::Cached;
+                    report.written = e.written.clone();
+                    return Ok(e.outputs);
+                }
+                older = Some(e);
             }
         }
         let fail = |report: &mut NodeReport, e: NodeError| {
@@ -406,6 +463,7 @@ impl Executor {
             logs: Vec::new(),
             written: Vec::new(),
             progress: sh.opts.progress.clone(),
+            wanted: wanted.cloned(),
         };
         let res = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| exec(&mut ctx)));
         let outputs = std::mem::take(&mut ctx.outputs);
@@ -435,8 +493,11 @@ impl Executor {
                 );
             }
         }
+        let is_wanted = |name: &str| wanted.is_none_or(|w| w.contains(name));
+        let mut skipped = Vec::new();
         for o in &decl.outputs {
             match outputs.get(&o.name) {
+                None if !is_wanted(&o.name) => skipped.push(o.name.clone()),
                 None if o.optional => {}
                 None => {
                     return fail(
@@ -465,12 +526,16 @@ impl Executor {
                 _ => {}
             }
         }
-        let outputs = Arc::new(outputs);
+        let mut e = Entry {
+            outputs: Arc::new(outputs),
+            written: report.written.clone(),
+            skipped,
+        };
+        if let Some(older) = &older {
+            e = e.merged_with(older);
+        }
+        let outputs = e.outputs.clone();
         if !decl.stateful {
-            let e = Entry {
-                outputs: outputs.clone(),
-                written: report.written.clone(),
-            };
             if let Some(d) = &self.disk {
                 d.put(&key, &e);
             }
@@ -506,6 +571,7 @@ struct Shared<'a> {
     frame: i64,
     keys: &'a [Key],
     fresh: &'a [bool],
+    wanted: &'a [Option<BTreeSet<String>>],
     slots: &'a [Slot],
     reports: &'a [Mutex<Option<NodeReport>>],
     dependents: &'a [Vec<usize>],

@@ -26,7 +26,7 @@
 use crate::types::{FromValue, SocketType, Typed, Value};
 use serde::{Deserialize, Serialize};
 use std::any::Any;
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -540,6 +540,8 @@ pub struct ExecContext<'a> {
     pub(crate) logs: Vec<String>,
     pub(crate) written: Vec<PathBuf>,
     pub(crate) progress: Option<ProgressFn>,
+    /// The outputs someone will read; `None` = all of them.
+    pub(crate) wanted: Option<BTreeSet<String>>,
 }
 
 impl<'a> ExecContext<'a> {
@@ -568,6 +570,25 @@ impl<'a> ExecContext<'a> {
             logs: Vec::new(),
             written: Vec::new(),
             progress: None,
+            wanted: None,
+        }
+    }
+
+    /// Limits the outputs this context reports as wanted to `names` (standalone use; by
+    /// default every output is wanted).
+    pub fn want_only(&mut self, names: &[&str]) {
+        self.wanted = Some(names.iter().map(|n| n.to_string()).collect());
+    }
+
+    /// Whether anyone will read output `name`: it is linked to a node that runs, the user
+    /// asked for it (the node is a target, or `RunOptions::read_outputs` names it), or the
+    /// caller wants every output. A node may skip computing an output that is not wanted
+    /// (and not set it); nodes that never ask compute everything, which is always correct.
+    /// The cache records skipped outputs, so a later run that wants one reruns the node.
+    pub fn output_wanted(&self, name: &str) -> bool {
+        match &self.wanted {
+            None => true,
+            Some(w) => w.contains(name),
         }
     }
 

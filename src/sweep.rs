@@ -292,20 +292,14 @@ pub fn run(
                     out_dir: out_dir.clone(),
                     ..Default::default()
                 },
-                // The measured nodes run even when the graph's outputs do not need them (a
-                // metric node is usually no writer).
-                targets: Some(
-                    valid
-                        .targets
-                        .iter()
-                        .map(|&i| valid.nodes[i].id.clone())
-                        .chain(
-                            spec.measure
-                                .iter()
-                                .filter_map(|m| m.split('.').next().map(str::to_string)),
-                        )
-                        .collect(),
-                ),
+                // The measured outputs are read after the run: their nodes run even when the
+                // graph's outputs do not need them (a metric node is usually no writer), and
+                // they compute those outputs even when nothing links them.
+                read_outputs: spec
+                    .measure
+                    .iter()
+                    .filter_map(|m| m.split(':').next().map(str::to_string))
+                    .collect(),
                 recompute: if rep > 0 {
                     varied_nodes.clone()
                 } else {

@@ -680,3 +680,83 @@ fn the_committed_schema_matches_the_code() {
         "run `cgnodes schema > docs/graph.schema.json`"
     );
 }
+
+// ---------------------------------------------------------------- wanted outputs
+
+/// A registry with `pair`, a node with outputs `a` and `b` that computes only the wanted
+/// ones and records, per run, which it computed.
+fn pair_registry(log: Arc<Mutex<Vec<Vec<&'static str>>>>) -> Registry {
+    let mut r = Registry::builtin();
+    r.add(
+        "pair",
+        |b| {
+            b.add_input::<f64>("x").default(1.0);
+            b.add_output::<f64>("a");
+            b.add_output::<f64>("b");
+        },
+        move |ctx| {
+            let x: f64 = ctx.input("x")?;
+            let mut made = Vec::new();
+            for (name, v) in [("a", x + 1.0), ("b", x + 2.0)] {
+                if ctx.output_wanted(name) {
+                    ctx.set_output(name, v);
+                    made.push(name);
+                }
+            }
+            log.lock().unwrap().push(made);
+            Ok(())
+        },
+    );
+    r
+}
+
+#[test]
+fn nodes_compute_only_linked_or_requested_outputs() {
+    let log = Arc::new(Mutex::new(Vec::new()));
+    let r = pair_registry(log.clone());
+    let g = parse(
+        r#"{"format": "cgnodes-graph", "version": 1, "outputs": ["use"], "nodes": {
+            "p": {"type": "pair", "params": {"x": 1.0}},
+            "use": {"type": "math", "inputs": {"a": "p.a"}, "params": {"b": 10.0, "op": "add"}}
+        }}"#,
+    );
+    let v = valid(&g, &r);
+    let exec = Executor::new(Some(2), None).unwrap();
+    let last = || log.lock().unwrap().last().cloned();
+    // Only `a` is linked: `b` is neither computed nor reported, and that is no error.
+    let r1 = exec.run(&v, &RunOptions::default(), 0);
+    assert!(r1.ok(), "{:?}", r1.errors());
+    assert_eq!(last(), Some(vec!["a"]));
+    assert!(r1.output("p", "b").is_none());
+    assert!(
+        matches!(r1.output("use", "value"), Some(cgnodes::types::Value::Float(x)) if *x == 12.0)
+    );
+    // Reading `p.b` after the run: the cached entry skipped it, so `p` runs again; the new
+    // entry keeps `a` too.
+    let read_b = RunOptions {
+        read_outputs: vec!["p.b".into()],
+        ..Default::default()
+    };
+    let r2 = exec.run(&v, &read_b, 0);
+    assert!(matches!(r2.node("p").unwrap().status, NodeStatus::Ran));
+    assert_eq!(last(), Some(vec!["a", "b"]));
+    assert!(matches!(r2.output("p", "b"), Some(cgnodes::types::Value::Float(x)) if *x == 3.0));
+    let r3 = exec.run(&v, &read_b, 0);
+    assert!(matches!(r3.node("p").unwrap().status, NodeStatus::Cached));
+    // A target computes all its outputs; so does every node with `all_outputs`.
+    let fresh = Executor::new(Some(2), None).unwrap();
+    let target = RunOptions {
+        targets: Some(vec!["p".into()]),
+        ..Default::default()
+    };
+    fresh.run(&v, &target, 0);
+    assert_eq!(last(), Some(vec!["a", "b"]));
+    let fresh = Executor::new(Some(2), None).unwrap();
+    let all = RunOptions {
+        all_outputs: true,
+        ..Default::default()
+    };
+    fresh.run(&v, &all, 0);
+    assert_eq!(last(), Some(vec!["a", "b"]));
+    assert_eq!(log.lock().unwrap().len(), 4);
+}

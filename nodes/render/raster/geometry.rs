@@ -8,6 +8,7 @@
 
 use crate::prelude::*;
 use crate::types::Domain;
+use rayon::prelude::*;
 
 /// All triangles of a scene, with their corner attributes.
 #[derive(Clone, Debug, Default)]
@@ -87,6 +88,7 @@ pub fn scene_geometry(scene: &Scene) -> Result<SceneGeometry, String> {
         let corner_normals: Vec<[[f64; 3]; 3]> = match &mesh.normals {
             Some(a) if attr_len_ok(a.domain, a.values.len(), p.len(), tris.len()) => (0..tris
                 .len())
+                .into_par_iter()
                 .map(|t| {
                     std::array::from_fn(|k| {
                         let v = match a.domain {
@@ -111,7 +113,7 @@ pub fn scene_geometry(scene: &Scene) -> Result<SceneGeometry, String> {
                         }
                     }
                 }
-                tris.iter()
+                tris.par_iter()
                     .map(|t| {
                         let f = normalize(cross(
                             sub(p[t[1] as usize], p[t[0] as usize]),
@@ -139,62 +141,68 @@ pub fn scene_geometry(scene: &Scene) -> Result<SceneGeometry, String> {
             _ => None,
         };
         // Tangents (Lengyel 2001), accumulated per position vertex.
-        let corner_tans: Vec<[[f64; 4]; 3]> = match &corner_uvs {
-            None => vec![[[0.0; 4]; 3]; tris.len()],
-            Some(uvs) => {
-                let mut tv = vec![[0.0; 3]; p.len()];
-                let mut bv = vec![[0.0; 3]; p.len()];
-                for (t, tri) in tris.iter().enumerate() {
-                    let [p0, p1, p2] = tri.map(|v| p[v as usize]);
-                    let [w0, w1, w2] = uvs[t];
-                    let (e1, e2) = (sub(p1, p0), sub(p2, p0));
-                    let (du1, dv1) = (w1[0] - w0[0], w1[1] - w0[1]);
-                    let (du2, dv2) = (w2[0] - w0[0], w2[1] - w0[1]);
-                    let det = du1 * dv2 - du2 * dv1;
-                    if det.abs() < 1e-20 {
-                        continue;
-                    }
-                    let r = 1.0 / det;
-                    let tt: [f64; 3] = std::array::from_fn(|k| (e1[k] * dv2 - e2[k] * dv1) * r);
-                    let bb: [f64; 3] = std::array::from_fn(|k| (e2[k] * du1 - e1[k] * du2) * r);
-                    for &v in tri {
-                        for k in 0..3 {
-                            tv[v as usize][k] += tt[k];
-                            bv[v as usize][k] += bb[k];
-                        }
+        let corner_tans: Option<Vec<[[f64; 4]; 3]>> = corner_uvs.as_ref().map(|uvs| {
+            let mut tv = vec![[0.0; 3]; p.len()];
+            let mut bv = vec![[0.0; 3]; p.len()];
+            for (t, tri) in tris.iter().enumerate() {
+                let [p0, p1, p2] = tri.map(|v| p[v as usize]);
+                let [w0, w1, w2] = uvs[t];
+                let (e1, e2) = (sub(p1, p0), sub(p2, p0));
+                let (du1, dv1) = (w1[0] - w0[0], w1[1] - w0[1]);
+                let (du2, dv2) = (w2[0] - w0[0], w2[1] - w0[1]);
+                let det = du1 * dv2 - du2 * dv1;
+                if det.abs() < 1e-20 {
+                    continue;
+                }
+                let r = 1.0 / det;
+                let tt: [f64; 3] = std::array::from_fn(|k| (e1[k] * dv2 - e2[k] * dv1) * r);
+                let bb: [f64; 3] = std::array::from_fn(|k| (e2[k] * du1 - e1[k] * du2) * r);
+                for &v in tri {
+                    for k in 0..3 {
+                        tv[v as usize][k] += tt[k];
+                        bv[v as usize][k] += bb[k];
                     }
                 }
-                (0..tris.len())
-                    .map(|t| {
-                        std::array::from_fn(|k| {
-                            let v = tris[t][k] as usize;
-                            let n = corner_normals[t][k];
-                            let tt = tv[v];
-                            let ortho = sub(tt, scale3(n, dot(n, tt)));
-                            match normalize(ortho) {
-                                Some(o) => {
-                                    let w = if dot(cross(n, o), bv[v]) < 0.0 {
-                                        -1.0
-                                    } else {
-                                        1.0
-                                    };
-                                    [o[0], o[1], o[2], w]
-                                }
-                                None => [0.0; 4],
-                            }
-                        })
-                    })
-                    .collect()
             }
-        };
-        for (t, tri) in tris.iter().enumerate() {
-            g.pos.push(tri.map(|v| p[v as usize]));
-            g.nrm.push(corner_normals[t]);
-            g.uv.push(corner_uvs.as_ref().map(|u| u[t]).unwrap_or([[0.0; 2]; 3]));
-            g.has_uv.push(corner_uvs.is_some());
-            g.tan.push(corner_tans[t]);
-            g.mat.push(mi);
+            (0..tris.len())
+                .into_par_iter()
+                .map(|t| {
+                    std::array::from_fn(|k| {
+                        let v = tris[t][k] as usize;
+                        let n = corner_normals[t][k];
+                        let tt = tv[v];
+                        let ortho = sub(tt, scale3(n, dot(n, tt)));
+                        match normalize(ortho) {
+                            Some(o) => {
+                                let w = if dot(cross(n, o), bv[v]) < 0.0 {
+                                    -1.0
+                                } else {
+                                    1.0
+                                };
+                                [o[0], o[1], o[2], w]
+                            }
+                            None => [0.0; 4],
+                        }
+                    })
+                })
+                .collect()
+        });
+        let nt = tris.len();
+        g.pos
+            .par_extend(tris.par_iter().map(|tri| tri.map(|v| p[v as usize])));
+        // The first mesh's arrays are moved in, later ones appended (no copy of the
+        // usual single big mesh).
+        append(&mut g.nrm, corner_normals);
+        g.has_uv.resize(g.has_uv.len() + nt, corner_uvs.is_some());
+        match corner_uvs {
+            Some(u) => append(&mut g.uv, u),
+            None => g.uv.resize(g.uv.len() + nt, [[0.0; 2]; 3]),
         }
+        match corner_tans {
+            Some(t) => append(&mut g.tan, t),
+            None => g.tan.resize(g.tan.len() + nt, [[0.0; 4]; 3]),
+        }
+        g.mat.resize(g.mat.len() + nt, mi);
     }
     if g.pos.is_empty() {
         lo = [0.0; 3];
@@ -202,6 +210,15 @@ pub fn scene_geometry(scene: &Scene) -> Result<SceneGeometry, String> {
     }
     g.bounds = (lo, hi);
     Ok(g)
+}
+
+/// Appends `v` to `dst`, moving it in when `dst` is empty.
+fn append<T: Clone>(dst: &mut Vec<T>, v: Vec<T>) {
+    if dst.is_empty() {
+        *dst = v;
+    } else {
+        dst.extend_from_slice(&v);
+    }
 }
 
 fn scale3(a: [f64; 3], s: f64) -> [f64; 3] {

@@ -64,6 +64,66 @@ pub struct RasterOptions {
     pub mipmaps: bool,
     /// Colour where nothing is hit.
     pub background: [f64; 3],
+    /// The images to produce (default all).
+    pub passes: Passes,
+}
+
+/// Which images `render` produces. A pass left out comes back as an empty (0 x 0) image
+/// and costs neither memory nor time; without `color` nothing is lit (no shadow maps).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Passes {
+    /// Shaded colour.
+    pub color: bool,
+    /// View depth.
+    pub depth: bool,
+    /// World-space normal.
+    pub normal: bool,
+    /// World-space position.
+    pub position: bool,
+    /// Texture coordinates.
+    pub uv: bool,
+    /// Base colour.
+    pub base_color: bool,
+}
+
+impl Passes {
+    /// Every pass.
+    pub const ALL: Passes = Passes {
+        color: true,
+        depth: true,
+        normal: true,
+        position: true,
+        uv: true,
+        base_color: true,
+    };
+    /// The shaded colour only.
+    pub const COLOR: Passes = Passes {
+        color: true,
+        depth: false,
+        normal: false,
+        position: false,
+        uv: false,
+        base_color: false,
+    };
+    /// No pass (a base for struct update: `Passes { depth: true, ..Passes::NONE }`).
+    pub const NONE: Passes = Passes {
+        color: false,
+        depth: false,
+        normal: false,
+        position: false,
+        uv: false,
+        base_color: false,
+    };
+    /// Whether any pass other than colour is on.
+    fn any_surface(&self) -> bool {
+        self.depth || self.normal || self.position || self.uv || self.base_color
+    }
+}
+
+impl Default for Passes {
+    fn default() -> Self {
+        Passes::ALL
+    }
 }
 
 impl Default for RasterOptions {
@@ -83,11 +143,13 @@ impl Default for RasterOptions {
             wrap: Wrap::Repeat,
             mipmaps: true,
             background: [0.05, 0.05, 0.05],
+            passes: Passes::ALL,
         }
     }
 }
 
-/// The rendered image and passes, with counts for benchmarks.
+/// The rendered image and passes, with counts for benchmarks. Passes not asked for in
+/// `RasterOptions::passes` are empty (0 x 0) images.
 #[derive(Clone, Debug)]
 pub struct RenderOutput {
     /// Shaded linear colour.
@@ -121,6 +183,8 @@ struct MatPrep {
 /// A light with its shadow map.
 struct LightPrep {
     light: Light,
+    /// A directional light's unit direction towards it and irradiance, computed once.
+    dir: Option<([f64; 3], [f64; 3])>,
     map: Option<ShadowMap>,
 }
 
@@ -149,7 +213,11 @@ fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
 }
 fn normalize(a: [f64; 3]) -> Option<[f64; 3]> {
     let n = dot(a, a).sqrt();
-    (n > 1e-300 && n.is_finite()).then(|| [a[0] / n, a[1] / n, a[2] / n])
+    // One division and three products: shading normalizes several vectors per sample.
+    (n > 1e-300 && n.is_finite()).then(|| {
+        let r = 1.0 / n;
+        [a[0] * r, a[1] * r, a[2] * r]
+    })
 }
 fn interp3(b: [f64; 3], v: &[[f64; 3]; 3]) -> [f64; 3] {
     std::array::from_fn(|k| b[0] * v[0][k] + b[1] * v[1][k] + b[2] * v[2][k])
@@ -161,6 +229,8 @@ fn interp2(b: [f64; 3], v: &[[f64; 2]; 3]) -> [f64; 2] {
 struct Shader<'a> {
     g: &'a SceneGeometry,
     setups: &'a [Option<TriSetup>],
+    /// Unit geometric normal of each rasterized triangle (`None` when degenerate).
+    ngs: &'a [Option<[f64; 3]>],
     mats: Vec<MatPrep>,
     lights: Vec<LightPrep>,
     eye: [f64; 3],
@@ -178,7 +248,7 @@ impl Shader<'_> {
         let pos = &g.pos[t];
         let p = interp3(b, pos);
         let v = normalize(sub(self.eye, p)).unwrap_or(self.forward.map(|c| -c));
-        let mut ng = normalize(cross(sub(pos[1], pos[0]), sub(pos[2], pos[0])))?;
+        let mut ng = self.ngs[t]?;
         let flip = dot(ng, v) < 0.0;
         if flip {
             ng = ng.map(|c| -c);
@@ -237,12 +307,8 @@ impl Shader<'_> {
             }
             for lp in &self.lights {
                 let (l, e) = match &lp.light {
-                    Light::Directional {
-                        direction,
-                        color,
-                        intensity,
-                    } => match normalize(*direction) {
-                        Some(d) => (d.map(|c| -c), color.map(|c| c * intensity)),
+                    Light::Directional { .. } => match lp.dir {
+                        Some(le) => le,
                         None => continue,
                     },
                     Light::Point {
@@ -283,45 +349,88 @@ impl Shader<'_> {
 }
 
 /// Renders a scene through a camera (see the module doc). Fails on an unusable camera or
-/// non-finite geometry.
+/// non-finite geometry. Only the passes in `opts.passes` are produced.
 pub fn render(scene: &Scene, cam: &Camera, opts: &RasterOptions) -> Result<RenderOutput, String> {
     check_camera(cam)?;
     let s = opts.samples_per_axis.clamp(1, 8);
     let (w, h) = (cam.width, cam.height);
     let (ws, hs) = (w * s, h * s);
+    let passes = opts.passes;
+    let lit = passes.color;
     let g = scene_geometry(scene)?;
     let [right, up, fwd] = camera_frame(cam)?;
     let (fx, _) = focal_lengths(cam);
     let f = fx * s as f64;
     let (cx, cy) = (ws as f64 * 0.5, hs as f64 * 0.5);
     let eye = cam.eye;
-    let setups: Vec<Option<TriSetup>> = g
-        .pos
-        .par_iter()
-        .map(|t| {
-            let c = t.map(|p| {
-                let d = sub(p, eye);
-                [dot(d, right), dot(d, up), dot(d, fwd)]
-            });
-            if c.iter().all(|v| v[2] < cam.near) || c.iter().all(|v| v[2] > cam.far) {
-                return None;
-            }
-            let hh = c.map(|v| [cx * v[2] + f * v[0], cy * v[2] - f * v[1], v[2]]);
-            let st = setup_triangle(hh, c.map(|v| v[2]), cam.near, ws, hs)?;
-            // det M < 0 is counter-clockwise seen from the eye (the camera frame is
-            // left-handed and the pixel y axis points down: two sign flips and f^2 > 0).
-            if opts.cull_backfaces && !st.det_negative {
-                return None;
-            }
-            Some(st)
-        })
-        .collect();
-    let triangles = setups.iter().filter(|t| t.is_some()).count();
     // Pixel rows per band: each band is rasterized into a small sample buffer and shaded
     // right away (fused, so the full-resolution sample buffer never exists).
     const BAND_PX: usize = 8;
     let band_rows = BAND_PX as u32 * s;
-    let bins = bin_rows(&setups, hs, band_rows);
+    let res = opts.shadow_resolution.clamp(16, 8192);
+    let diag = dot(sub(g.bounds.1, g.bounds.0), sub(g.bounds.1, g.bounds.0)).sqrt();
+    // The camera's triangle setup and the shadow maps (one light per task) are
+    // independent: build them side by side.
+    let camera_setup = || {
+        let (setups, ngs): (Vec<Option<TriSetup>>, Vec<Option<[f64; 3]>>) = g
+            .pos
+            .par_iter()
+            .map(|t| {
+                let c = t.map(|p| {
+                    let d = sub(p, eye);
+                    [dot(d, right), dot(d, up), dot(d, fwd)]
+                });
+                if c.iter().all(|v| v[2] < cam.near) || c.iter().all(|v| v[2] > cam.far) {
+                    return (None, None);
+                }
+                let hh = c.map(|v| [cx * v[2] + f * v[0], cy * v[2] - f * v[1], v[2]]);
+                let Some(st) = setup_triangle(hh, c.map(|v| v[2]), cam.near, ws, hs) else {
+                    return (None, None);
+                };
+                // det M < 0 is counter-clockwise seen from the eye (the camera frame is
+                // left-handed and the pixel y axis points down: two sign flips and f^2 > 0).
+                if opts.cull_backfaces && !st.det_negative {
+                    return (None, None);
+                }
+                let ng = normalize(cross(sub(t[1], t[0]), sub(t[2], t[0])));
+                (Some(st), ng)
+            })
+            .unzip();
+        let bins = bin_rows(&setups, hs, band_rows);
+        (setups, ngs, bins)
+    };
+    let light_preps = || {
+        scene
+            .lights
+            .par_iter()
+            .map(|l| LightPrep {
+                light: l.clone(),
+                dir: match l {
+                    Light::Directional {
+                        direction,
+                        color,
+                        intensity,
+                    } => {
+                        normalize(*direction).map(|d| (d.map(|c| -c), color.map(|c| c * intensity)))
+                    }
+                    Light::Point { .. } => None,
+                },
+                map: (lit && opts.shadows && !g.pos.is_empty()).then(|| match l {
+                    Light::Directional { direction, .. } => {
+                        directional_shadow_map(&g.pos, *direction, g.bounds, res)
+                    }
+                    Light::Point { position, .. } => point_shadow_map(
+                        &g.pos,
+                        *position,
+                        (res / 2).max(16),
+                        (1e-5 * diag).max(1e-9),
+                    ),
+                }),
+            })
+            .collect::<Vec<_>>()
+    };
+    let ((setups, ngs, bins), lights) = rayon::join(camera_setup, light_preps);
+    let triangles = setups.iter().filter(|t| t.is_some()).count();
 
     let mats = g
         .materials
@@ -341,29 +450,10 @@ pub fn render(scene: &Scene, cam: &Camera, opts: &RasterOptions) -> Result<Rende
             emission: m.emission,
         })
         .collect();
-    let res = opts.shadow_resolution.clamp(16, 8192);
-    let diag = dot(sub(g.bounds.1, g.bounds.0), sub(g.bounds.1, g.bounds.0)).sqrt();
-    let lights = scene
-        .lights
-        .iter()
-        .map(|l| LightPrep {
-            light: l.clone(),
-            map: (opts.shadows && !g.pos.is_empty()).then(|| match l {
-                Light::Directional { direction, .. } => {
-                    directional_shadow_map(&g.pos, *direction, g.bounds, res)
-                }
-                Light::Point { position, .. } => point_shadow_map(
-                    &g.pos,
-                    *position,
-                    (res / 2).max(16),
-                    (1e-5 * diag).max(1e-9),
-                ),
-            }),
-        })
-        .collect();
     let sh = Shader {
         g: &g,
         setups: &setups,
+        ngs: &ngs,
         mats,
         lights,
         eye,
@@ -379,28 +469,52 @@ pub fn render(scene: &Scene, cam: &Camera, opts: &RasterOptions) -> Result<Rende
         opts.background[2] as f32,
         1.0,
     ];
-    let mut color = vec![bg; npx];
-    let mut depth = vec![zero; npx];
-    let mut normal = vec![zero; npx];
-    let mut position = vec![zero; npx];
-    let mut uvp = vec![zero; npx];
-    let mut basep = vec![zero; npx];
+    // Only the passes asked for get a buffer.
+    let alloc = |on: bool, v: [f32; 4]| if on { vec![v; npx] } else { Vec::new() };
+    let mut color = alloc(passes.color, bg);
+    let mut depth = alloc(passes.depth, zero);
+    let mut normal = alloc(passes.normal, zero);
+    let mut position = alloc(passes.position, zero);
+    let mut uvp = alloc(passes.uv, zero);
+    let mut basep = alloc(passes.base_color, zero);
     let shaded = AtomicU64::new(0);
     let wu = w as usize;
     let n_samples = (s * s) as f64;
     let band_len = wu * BAND_PX;
     let band_samples = ws as usize * band_rows as usize;
-    color
-        .par_chunks_mut(band_len)
-        .zip(depth.par_chunks_mut(band_len))
-        .zip(normal.par_chunks_mut(band_len))
-        .zip(position.par_chunks_mut(band_len))
-        .zip(uvp.par_chunks_mut(band_len))
-        .zip(basep.par_chunks_mut(band_len))
-        .enumerate()
-        .for_each_init(
-            || (Vec::new(), Vec::new()),
-            |(zbuf, ibuf), (bi, (((((cband, dband), nband), pband), uband), bband))| {
+    let nbands = bins.len();
+    type Px = [f32; 4];
+    // Each band's slice of every produced pass (`None` for passes not produced).
+    let surface_passes = passes.any_surface();
+    if lit || surface_passes {
+        let mut chunks: Vec<std::vec::IntoIter<Option<&mut [Px]>>> = [
+            &mut color,
+            &mut depth,
+            &mut normal,
+            &mut position,
+            &mut uvp,
+            &mut basep,
+        ]
+        .into_iter()
+        .map(|buf| {
+            let v: Vec<Option<&mut [Px]>> = if buf.is_empty() {
+                (0..nbands).map(|_| None).collect()
+            } else {
+                buf.chunks_mut(band_len).map(Some).collect()
+            };
+            v.into_iter()
+        })
+        .collect();
+        let bands: Vec<[Option<&mut [Px]>; 6]> = (0..nbands)
+            .map(|_| std::array::from_fn(|k| chunks[k].next().flatten()))
+            .collect();
+        bands.into_par_iter().enumerate().for_each_init(
+            || {
+                // (triangle, covered samples, sum of sample x, sum of sample y, min depth)
+                let groups: Vec<(u32, u32, f64, f64, f32)> = Vec::with_capacity(16);
+                (Vec::new(), Vec::new(), groups)
+            },
+            |(zbuf, ibuf, groups), (bi, mut out)| {
                 zbuf.clear();
                 zbuf.resize(band_samples, f32::INFINITY);
                 ibuf.clear();
@@ -419,17 +533,9 @@ pub fn render(scene: &Scene, cam: &Camera, opts: &RasterOptions) -> Result<Rende
                     Some(ibuf),
                 );
                 let mut count = 0u64;
-                // (triangle, covered samples, sum of sample x, sum of sample y, min depth)
-                let mut groups: Vec<(u32, u32, f64, f64, f32)> = Vec::with_capacity(16);
-                let rows = cband.len() / wu;
+                let rows = (y_end - y_start) as usize / s as usize;
                 for r in 0..rows {
                     let py = bi * BAND_PX + r;
-                    let crow = &mut cband[r * wu..(r + 1) * wu];
-                    let drow = &mut dband[r * wu..(r + 1) * wu];
-                    let nrow = &mut nband[r * wu..(r + 1) * wu];
-                    let prow = &mut pband[r * wu..(r + 1) * wu];
-                    let urow = &mut uband[r * wu..(r + 1) * wu];
-                    let brow = &mut bband[r * wu..(r + 1) * wu];
                     for px in 0..wu {
                         groups.clear();
                         let mut acc = [0.0f64; 3];
@@ -445,7 +551,7 @@ pub fn render(scene: &Scene, cam: &Camera, opts: &RasterOptions) -> Result<Rende
                                     continue;
                                 }
                                 let (xc, yc) = (sx as f64 + 0.5, sy as f64 + 0.5);
-                                if opts.aa == AntiAliasing::Supersampling {
+                                if lit && opts.aa == AntiAliasing::Supersampling {
                                     if let Some(sf) = sh.surface(id as usize, xc, yc, 1.0, true) {
                                         count += 1;
                                         for (a, c) in acc.iter_mut().zip(sf.color) {
@@ -479,7 +585,7 @@ pub fn render(scene: &Scene, cam: &Camera, opts: &RasterOptions) -> Result<Rende
                         let mut pass_surf = None;
                         for (gi, gr) in groups.iter().enumerate() {
                             let (x, y) = (gr.2 / gr.1 as f64, gr.3 / gr.1 as f64);
-                            if opts.aa == AntiAliasing::Multisampling {
+                            if lit && opts.aa == AntiAliasing::Multisampling {
                                 if let Some(sf) = sh.surface(gr.0 as usize, x, y, step, true) {
                                     count += 1;
                                     for (a, c) in acc.iter_mut().zip(sf.color) {
@@ -489,37 +595,59 @@ pub fn render(scene: &Scene, cam: &Camera, opts: &RasterOptions) -> Result<Rende
                                         pass_surf = Some(sf);
                                     }
                                 }
-                            } else if gi == nearest {
+                            } else if gi == nearest && surface_passes {
                                 pass_surf = sh.surface(gr.0 as usize, x, y, step, false);
                             }
                         }
-                        for (a, c) in acc.iter_mut().zip(opts.background) {
-                            *a += c * empty as f64;
+                        let o = r * wu + px;
+                        if let Some(c) = out[0].as_deref_mut() {
+                            for (a, c) in acc.iter_mut().zip(opts.background) {
+                                *a += c * empty as f64;
+                            }
+                            c[o] = [
+                                (acc[0] / n_samples) as f32,
+                                (acc[1] / n_samples) as f32,
+                                (acc[2] / n_samples) as f32,
+                                1.0,
+                            ];
                         }
-                        crow[px] = [
-                            (acc[0] / n_samples) as f32,
-                            (acc[1] / n_samples) as f32,
-                            (acc[2] / n_samples) as f32,
-                            1.0,
+                        let Some(sf) = pass_surf else {
+                            continue;
+                        };
+                        let f3 = |v: [f64; 3]| [v[0] as f32, v[1] as f32, v[2] as f32, 1.0];
+                        let d = sf.depth as f32;
+                        let vals = [
+                            [d, d, d, 1.0],
+                            f3(sf.n),
+                            f3(sf.p),
+                            [sf.uv[0] as f32, sf.uv[1] as f32, 0.0, 1.0],
+                            f3(sf.base),
                         ];
-                        if let Some(sf) = pass_surf {
-                            let d = sf.depth as f32;
-                            drow[px] = [d, d, d, 1.0];
-                            nrow[px] = [sf.n[0] as f32, sf.n[1] as f32, sf.n[2] as f32, 1.0];
-                            prow[px] = [sf.p[0] as f32, sf.p[1] as f32, sf.p[2] as f32, 1.0];
-                            urow[px] = [sf.uv[0] as f32, sf.uv[1] as f32, 0.0, 1.0];
-                            brow[px] =
-                                [sf.base[0] as f32, sf.base[1] as f32, sf.base[2] as f32, 1.0];
+                        for (band, v) in out[1..].iter_mut().zip(vals) {
+                            if let Some(b) = band.as_deref_mut() {
+                                b[o] = v;
+                            }
                         }
                     }
                 }
                 shaded.fetch_add(count, Ordering::Relaxed);
             },
         );
-    let img = |pixels| Image {
-        width: w,
-        height: h,
-        pixels,
+    }
+    let img = |pixels: Vec<Px>| {
+        if pixels.is_empty() {
+            Image {
+                width: 0,
+                height: 0,
+                pixels,
+            }
+        } else {
+            Image {
+                width: w,
+                height: h,
+                pixels,
+            }
+        }
     };
     Ok(RenderOutput {
         color: img(color),
@@ -666,18 +794,33 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
         },
         mipmaps: ctx.input("mipmaps")?,
         background: bgc.0,
+        // Only the passes someone reads are computed (and allocated).
+        passes: Passes {
+            color: ctx.output_wanted("color"),
+            depth: ctx.output_wanted("depth"),
+            normal: ctx.output_wanted("normal"),
+            position: ctx.output_wanted("position"),
+            uv: ctx.output_wanted("uv"),
+            base_color: ctx.output_wanted("base_color"),
+        },
     };
     let out = render(&scene, &cam, &opts).map_err(|e| NodeError::invalid("scene", e))?;
     ctx.log(format!(
         "{}x{} with {} samples: {} triangles, {} shading evaluations",
         cam.width, cam.height, samples, out.triangles, out.shaded
     ));
-    ctx.set_output("color", out.color);
-    ctx.set_output("depth", out.depth);
-    ctx.set_output("normal", out.normal);
-    ctx.set_output("position", out.position);
-    ctx.set_output("uv", out.uv);
-    ctx.set_output("base_color", out.base_color);
+    for (name, on, img) in [
+        ("color", opts.passes.color, out.color),
+        ("depth", opts.passes.depth, out.depth),
+        ("normal", opts.passes.normal, out.normal),
+        ("position", opts.passes.position, out.position),
+        ("uv", opts.passes.uv, out.uv),
+        ("base_color", opts.passes.base_color, out.base_color),
+    ] {
+        if on {
+            ctx.set_output(name, img);
+        }
+    }
     Ok(())
 }
 

@@ -115,7 +115,8 @@ pub fn barycentric(inv: &[[f64; 3]; 3], x: f64, y: f64) -> Option<[f64; 3]> {
     if s.abs() < 1e-300 || !s.is_finite() {
         return None;
     }
-    Some(e.map(|v| v / s))
+    let r = 1.0 / s;
+    Some(e.map(|v| v * r))
 }
 
 /// A z-buffer and the index of the nearest triangle at each pixel (`u32::MAX` = empty).

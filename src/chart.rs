@@ -126,6 +126,45 @@ fn tick_label(v: f64) -> String {
     }
 }
 
+/// The legend corner that covers the fewest points: each point is placed in the unit
+/// square of the plot (log axes in log space) and counted against a box of about the
+/// legend's size in each corner; ties keep the order upper right, upper left, lower right,
+/// lower left.
+fn legend_corner(chart: &Chart, x: (f64, f64), y: (f64, f64)) -> SeriesLabelPosition {
+    let unit = |v: f64, (lo, hi): (f64, f64), log: bool| {
+        if log {
+            (v.ln() - lo.ln()) / (hi.ln() - lo.ln())
+        } else {
+            (v - lo) / (hi - lo)
+        }
+    };
+    let pts: Vec<(f64, f64)> = chart
+        .series
+        .iter()
+        .flat_map(|s| s.points.iter())
+        .map(|p| (unit(p.0, x, chart.log_x), unit(p.1, y, chart.log_y)))
+        .filter(|p| p.0.is_finite() && p.1.is_finite())
+        .collect();
+    let rows = chart.series.len() + usize::from(!chart.failures.is_empty());
+    let (w, h) = (0.3, (0.05 + 0.04 * rows as f64).min(0.6));
+    let corners = [
+        (SeriesLabelPosition::UpperRight, 1.0 - w, 1.0, 1.0 - h, 1.0),
+        (SeriesLabelPosition::UpperLeft, 0.0, w, 1.0 - h, 1.0),
+        (SeriesLabelPosition::LowerRight, 1.0 - w, 1.0, 0.0, h),
+        (SeriesLabelPosition::LowerLeft, 0.0, w, 0.0, h),
+    ];
+    let covered = |c: &(SeriesLabelPosition, f64, f64, f64, f64)| {
+        pts.iter()
+            .filter(|p| (c.1..=c.2).contains(&p.0) && (c.3..=c.4).contains(&p.1))
+            .count()
+    };
+    let best = corners
+        .iter()
+        .min_by_key(|c| covered(c))
+        .expect("four corners");
+    best.0.clone()
+}
+
 fn draw_on<DB: DrawingBackend>(chart: &Chart, root: &DrawingArea<DB, Shift>) -> Result<(), String>
 where
     DB::ErrorType: 'static,
@@ -203,6 +242,7 @@ where
                     .legend(|(x, y)| Cross::new((x + 10, y), 6, RED.stroke_width(3)));
             }
             ctx.configure_series_labels()
+                .position(legend_corner(chart, (x0, x1), (y0, y1)))
                 .background_style(WHITE.mix(0.85))
                 .border_style(BLACK)
                 .label_font(("sans-serif", 14))
@@ -237,6 +277,26 @@ mod tests {
         assert_eq!(tick_label(12345.0), "12345");
         assert_eq!(tick_label(1e-6), "1.00e-6");
         assert_eq!(tick_label(0.0), "0");
+    }
+
+    #[test]
+    fn legend_avoids_the_corner_with_points() {
+        let chart = |points: Vec<(f64, f64)>| Chart {
+            series: vec![Series {
+                label: "a".into(),
+                points,
+            }],
+            ..Default::default()
+        };
+        let where_ = |c: &Chart| format!("{:?}", legend_corner(c, (0.0, 1.0), (0.0, 1.0)));
+        // Points in the upper right push the legend to the upper left.
+        let c = chart(vec![(0.95, 0.95), (0.9, 0.9), (0.5, 0.5)]);
+        assert_eq!(where_(&c), "UpperLeft");
+        // Points along the top push it down, to the emptier lower corner.
+        let c = chart(vec![(0.05, 0.95), (0.95, 0.95), (0.9, 0.05)]);
+        assert_eq!(where_(&c), "LowerLeft");
+        // Nothing in the way: the usual upper right.
+        assert_eq!(where_(&chart(vec![(0.5, 0.5)])), "UpperRight");
     }
 
     #[test]

@@ -7,6 +7,7 @@
 //! the handedness `w = sign((N x T) . B)` is kept so `B = w N x T`.
 
 use crate::prelude::*;
+use crate::types::vec3::{cross, dot, sub};
 use crate::types::Domain;
 use rayon::prelude::*;
 
@@ -31,19 +32,6 @@ pub struct SceneGeometry {
     pub bounds: ([f64; 3], [f64; 3]),
 }
 
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
 fn normalize(a: [f64; 3]) -> Option<[f64; 3]> {
     let n = dot(a, a).sqrt();
     (n > 1e-300 && n.is_finite()).then(|| [a[0] / n, a[1] / n, a[2] / n])

@@ -25,6 +25,7 @@ pub mod texture;
 
 use crate::nodes::render::camera::{camera_frame, check_camera, focal_lengths};
 use crate::prelude::*;
+use crate::types::vec3::{cross, dot, sub};
 use geometry::{scene_geometry, SceneGeometry};
 use rasterize::{barycentric, bin_rows, fill_rows, setup_triangle, TriSetup};
 use rayon::prelude::*;
@@ -198,19 +199,6 @@ struct Surf {
     color: [f64; 3],
 }
 
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
 fn normalize(a: [f64; 3]) -> Option<[f64; 3]> {
     let n = dot(a, a).sqrt();
     // One division and three products: shading normalizes several vectors per sample.

@@ -15,6 +15,7 @@
 //! the bands are filled in parallel (rayon), each in triangle order, so the result does
 //! not depend on the thread count.
 
+use crate::types::vec3::{cross, dot};
 use rayon::prelude::*;
 
 /// A triangle ready to rasterize: edge functions, depths and pixel bounds.
@@ -28,17 +29,6 @@ pub struct TriSetup {
     pub bbox: [u32; 4],
     /// `det M < 0`; with the camera convention of `render`, a counter-clockwise (front) face.
     pub det_negative: bool,
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
 /// Sets a triangle up from homogeneous screen coordinates `h` and corner depths. Returns

@@ -9,7 +9,14 @@ against the same reference.
 Installs `mitsuba` and `numpy` with pip if they are missing. llvm_ad_rgb needs LLVM
 (Debian's libllvm19); a variant that fails to load is skipped and reported.
 """
-import argparse, json, os, subprocess, sys, time
+import argparse, glob, json, os, subprocess, sys, time
+
+# Dr.Jit finds LLVM through DRJIT_LIBLLVM_PATH; Debian bookworm's default LLVM 15 aborts in
+# llvm_ad_rgb, so point it at libllvm19 (apt-get install libllvm19) when that is installed.
+if "DRJIT_LIBLLVM_PATH" not in os.environ:
+    found = sorted(glob.glob("/usr/lib/*/libLLVM.so.19*") + glob.glob("/usr/lib/*/libLLVM-19.so"))
+    if found:
+        os.environ["DRJIT_LIBLLVM_PATH"] = found[0]
 
 def ensure(mod, pkg):
     try:

@@ -377,10 +377,7 @@ pub fn arap_parameterize(
             }
         }
         gradient.copy_from(&rhs);
-        factor.solve_in_place(rhs.as_mut());
-        for (f, &v) in free_vertices.iter().enumerate() {
-            d[v] = [-rhs[(f, 0)], -rhs[(f, 1)]];
-        }
+        descent_direction(factor, &mut rhs, &free_vertices, &mut d);
 
         // Line search.
         let mut step = 1.0;
@@ -419,10 +416,7 @@ pub fn arap_parameterize(
                 (pending, blocked_run) = (0, 0);
                 iter_refactors += 1;
                 rhs.copy_from(&gradient);
-                factor.solve_in_place(rhs.as_mut());
-                for (f, &v) in free_vertices.iter().enumerate() {
-                    d[v] = [-rhs[(f, 0)], -rhs[(f, 1)]];
-                }
+                descent_direction(factor, &mut rhs, &free_vertices, &mut d);
                 dir = directional(&frames, &uv, &d, &targets, &floor2, &mut limits);
             }
             refactors += iter_refactors;
@@ -623,6 +617,20 @@ fn directional(
         best_step: best_step.max(0.0),
         max_step,
         squeezed,
+    }
+}
+
+/// `d = -Δ_W⁻¹ g` for the gradient `g` held in `rhs` (overwritten by the solve), scattered
+/// to the free vertices; pinned vertices keep their zero direction.
+fn descent_direction(
+    factor: &SpdFactor,
+    rhs: &mut Mat<f64>,
+    free_vertices: &[usize],
+    d: &mut [[f64; 2]],
+) {
+    factor.solve_in_place(rhs.as_mut());
+    for (f, &v) in free_vertices.iter().enumerate() {
+        d[v] = [-rhs[(f, 0)], -rhs[(f, 1)]];
     }
 }
 

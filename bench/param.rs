@@ -43,7 +43,7 @@ fn main() {
             .to_string_lossy()
             .to_string();
         let tris = fan_triangles(&m);
-        let reps = if tris.len() > 100_000 { 3 } else { 5 };
+        let reps = if tris.len() > 100_000 { 5 } else { 15 };
         let vpath = dir.path().join(format!("{name}_V.bin"));
         let fpath = dir.path().join(format!("{name}_F.bin"));
         write_f64(&vpath, m.positions.iter().flatten().copied());

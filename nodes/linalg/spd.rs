@@ -60,6 +60,47 @@ impl SpdFactor {
         Ok(f)
     }
 
+    /// Factors the matrix given by its lower triangle in compressed columns, with the given
+    /// elimination order (the `k`-th entry is the row eliminated `k`-th; faer's AMD when `None`
+    /// or when it is not a permutation). `refactor_with` then takes one value per stored entry,
+    /// in storage order.
+    pub fn from_lower(
+        a: SparseColMat<usize, f64>,
+        order: Option<&[usize]>,
+        par: Par,
+    ) -> Result<SpdFactor, String> {
+        use faer::sparse::linalg::cholesky::SymmetricOrdering;
+        let n = a.nrows();
+        let perm = order.filter(|o| o.len() == n).and_then(|fwd| {
+            let mut inv = vec![usize::MAX; n];
+            for (k, &v) in fwd.iter().enumerate() {
+                let slot = inv.get_mut(v)?;
+                if *slot != usize::MAX {
+                    return None;
+                }
+                *slot = k;
+            }
+            Some((fwd, inv))
+        });
+        let ordering = match &perm {
+            Some((fwd, inv)) => {
+                SymmetricOrdering::Custom(faer::perm::PermRef::new_checked(fwd, inv, n))
+            }
+            None => SymmetricOrdering::Amd,
+        };
+        let symbolic =
+            factorize_symbolic_cholesky(a.symbolic(), Side::Lower, ordering, Default::default())
+                .map_err(|e| format!("symbolic Cholesky: {e:?}"))?;
+        let mut f = SpdFactor {
+            values: vec![0.0; symbolic.len_val()],
+            symbolic,
+            slot: (0..a.val().len()).collect(),
+            matrix: a,
+        };
+        f.numeric(par)?;
+        Ok(f)
+    }
+
     /// Factors new values with the same pattern as the matrix given to `new` (the symbolic
     /// analysis, ordering included, is reused).
     pub fn refactor(

@@ -6,7 +6,10 @@
 //! course) or cotangent weights taken from the input geometry. The three coordinates share one
 //! sparse Cholesky factorization.
 
-use super::laplacian::{cotangent_weights, fan_triangles, solve_dirichlet_on, uniform_weights};
+use super::laplacian::{
+    corner_cotangents, fan_triangles, mean_value_weights, solve_dirichlet_on, ND_MIN_ROWS,
+};
+use super::laplacian_rows::{solve_dirichlet_rows, LaplacianRows};
 use super::tutte::parse_weights;
 use super::tutte::TutteWeights;
 use crate::prelude::*;
@@ -55,24 +58,42 @@ pub fn minimal_surface(
         }
     }
     let bad = |m: String| NodeError::invalid("mesh", m);
-    let (w, neg, sym) = match weights {
-        TutteWeights::Uniform => (uniform_weights(&tris), 0, true),
-        TutteWeights::Cotangent => {
-            let (w, neg) = cotangent_weights(&mesh.positions, &tris).map_err(bad)?;
-            (w, neg, true)
-        }
-        TutteWeights::MeanValue => (
-            super::laplacian::mean_value_weights(&mesh.positions, &tris).map_err(bad)?,
-            0,
-            false,
-        ),
-    };
-    let x = solve_dirichlet_on(&w, &fixed, sym, Some(&mesh.positions)).map_err(|e| {
+    let n = mesh.positions.len();
+    let with_hint = |e: NodeError| {
         NodeError::new(
             e.kind,
             format!("{} (every connected component needs a boundary)", e.message),
         )
-    })?;
+    };
+    let (x, neg) = match weights {
+        TutteWeights::Uniform | TutteWeights::Cotangent => {
+            let rows = if weights == TutteWeights::Uniform {
+                LaplacianRows::uniform(n, &tris)
+            } else {
+                let half: Vec<[f64; 3]> = corner_cotangents(&mesh.positions, &tris)
+                    .map_err(bad)?
+                    .iter()
+                    .map(|c| c.map(|x| 0.5 * x))
+                    .collect();
+                LaplacianRows::from_corner_weights(n, &tris, &half)
+            };
+            let order = (n > ND_MIN_ROWS).then(|| rows.nested_dissection_order(&mesh.positions));
+            let x = solve_dirichlet_rows(&rows, &fixed, order.as_deref()).map_err(with_hint)?;
+            let neg = if weights == TutteWeights::Cotangent {
+                rows.negative_edges()
+            } else {
+                0
+            };
+            (x, neg)
+        }
+        TutteWeights::MeanValue => {
+            let w = mean_value_weights(&mesh.positions, &tris).map_err(bad)?;
+            (
+                solve_dirichlet_on(&w, &fixed, false, None).map_err(with_hint)?,
+                0,
+            )
+        }
+    };
     Ok((x, neg))
 }
 

@@ -4,6 +4,7 @@
 pub mod arap;
 pub mod boundary_map;
 pub mod laplacian;
+pub mod laplacian_rows;
 pub mod minimal_surface;
 pub mod nested_dissection;
 pub mod render_uv;

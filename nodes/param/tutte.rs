@@ -16,8 +16,9 @@ use super::boundary_map::{
     map_boundary, parse_shape, parse_spacing, parse_start, rotate_loop, Spacing,
 };
 use super::laplacian::{
-    cotangent_weights, fan_triangles, mean_value_weights, solve_dirichlet_on, uniform_weights,
+    corner_cotangents, fan_triangles, mean_value_weights, solve_dirichlet_on, ND_MIN_ROWS,
 };
+use super::laplacian_rows::{DirichletFactor, LaplacianRows};
 use super::uv_metrics::uv_metrics;
 use crate::prelude::*;
 
@@ -140,10 +141,25 @@ pub fn check_tutte_topology(mesh: &Mesh, fill_holes: bool) -> Result<(), NodeErr
 
 /// Tutte's embedding with all options; see the module documentation.
 pub fn tutte(mesh: &Mesh, opts: &TutteOptions) -> Result<TutteResult, NodeError> {
-    check_tutte_topology(mesh, opts.fill_holes)?;
-    let topo = mesh.topology();
     let n = mesh.num_vertices();
     let mut triangles = fan_triangles(mesh);
+    // The symmetric system needs only the triangles: its weights, elimination order and
+    // factorization (for the vertices on single-triangle edges held fixed, which is the
+    // boundary loop of a disk) are built on one core while the connectivity is checked on the
+    // other. Filled holes change the system; it is then built again below.
+    let (checked, early) = rayon::join(
+        || check_tutte_topology(mesh, opts.fill_holes),
+        || {
+            let (rows, order) = symmetric_rows(&mesh.positions, &triangles, opts.weights)?;
+            let guess: Vec<bool> = (0..n)
+                .map(|v| rows.on_boundary[v] || rows.start[v] == rows.start[v + 1])
+                .collect();
+            let factor = DirichletFactor::new(&rows, &guess, order.as_deref());
+            Ok::<_, String>((rows, factor))
+        },
+    );
+    checked?;
+    let topo = mesh.topology();
     let mut positions = std::borrow::Cow::Borrowed(&mesh.positions);
     let loop_len = |lp: &[u32]| -> f64 {
         (0..lp.len())
@@ -197,19 +213,27 @@ pub fn tutte(mesh: &Mesh, opts: &TutteOptions) -> Result<TutteResult, NodeError>
         fixed[v as usize] = Some(*uv);
     }
     let bad = |m: String| NodeError::invalid("mesh", m);
-    let (w, negative, symmetric) = match opts.weights {
-        TutteWeights::Uniform => (uniform_weights(&triangles), 0, true),
-        TutteWeights::Cotangent => {
-            let (w, neg) = cotangent_weights(&positions, &triangles).map_err(bad)?;
-            (w, neg, true)
-        }
-        TutteWeights::MeanValue => (
-            mean_value_weights(&positions, &triangles).map_err(bad)?,
-            0,
-            false,
-        ),
+    let (mut uvs, negative) = if opts.weights == TutteWeights::MeanValue {
+        let w = mean_value_weights(&positions, &triangles).map_err(bad)?;
+        (solve_dirichlet_on(&w, &fixed, false, None)?, 0)
+    } else {
+        let is_fixed: Vec<bool> = fixed.iter().map(Option::is_some).collect();
+        let (rows, factor) = match early {
+            Ok((rows, Ok(f))) if filled == 0 && f.fixes(&is_fixed) => (rows, f),
+            _ => {
+                let (rows, order) =
+                    symmetric_rows(&positions, &triangles, opts.weights).map_err(bad)?;
+                let f = DirichletFactor::new(&rows, &is_fixed, order.as_deref())?;
+                (rows, f)
+            }
+        };
+        let negative = if opts.weights == TutteWeights::Cotangent {
+            rows.negative_edges()
+        } else {
+            0
+        };
+        (factor.solve(&rows, &fixed)?, negative)
     };
-    let mut uvs = solve_dirichlet_on(&w, &fixed, symmetric, Some(&positions))?;
     uvs.truncate(n);
     Ok(TutteResult {
         uvs,
@@ -217,6 +241,31 @@ pub fn tutte(mesh: &Mesh, opts: &TutteOptions) -> Result<TutteResult, NodeError>
         filled_holes: filled,
         boundary,
     })
+}
+
+/// The summed symmetric weights (uniform or cotangent) of `triangles` in rows, and a
+/// nested-dissection elimination order when the mesh is large enough to need one. Nothing for
+/// mean-value weights, which are not symmetric.
+#[allow(clippy::type_complexity)]
+fn symmetric_rows(
+    positions: &[[f64; 3]],
+    triangles: &[[u32; 3]],
+    weights: TutteWeights,
+) -> Result<(LaplacianRows, Option<Vec<usize>>), String> {
+    let n = positions.len();
+    let rows = match weights {
+        TutteWeights::Uniform => LaplacianRows::uniform(n, triangles),
+        TutteWeights::Cotangent => {
+            let half: Vec<[f64; 3]> = corner_cotangents(positions, triangles)?
+                .iter()
+                .map(|c| c.map(|x| 0.5 * x))
+                .collect();
+            LaplacianRows::from_corner_weights(n, triangles, &half)
+        }
+        TutteWeights::MeanValue => return Err("mean-value weights are not symmetric".into()),
+    };
+    let order = (n > ND_MIN_ROWS).then(|| rows.nested_dissection_order(positions));
+    Ok((rows, order))
 }
 
 /// The mesh flattened onto its UVs: positions (u, v, 0), same faces, normals dropped.

@@ -61,46 +61,94 @@ impl Topology {
                 next_corner[c] = if c + 1 == e { s as u32 } else { c as u32 + 1 };
             }
         }
-        // Undirected edges by sorting (min, max) keys of every corner's outgoing edge.
-        let mut keyed: Vec<(u64, u32)> = (0..nc)
-            .map(|c| {
-                let a = idx[c];
-                let b = idx[next_corner[c] as usize];
-                let (lo, hi) = if a < b { (a, b) } else { (b, a) };
-                (((lo as u64) << 32) | hi as u64, c as u32)
-            })
-            .collect();
-        keyed.sort_unstable();
-        let mut edges = Vec::new();
-        let mut edge_faces = Vec::new();
+        // Undirected edges: every corner's outgoing edge, bucketed by its smaller vertex
+        // (counting sort), each short bucket sorted by the larger one, so edges come out in
+        // (min, max) order without a global sort.
+        let ends = |c: usize| {
+            let (a, b) = (idx[c], idx[next_corner[c] as usize]);
+            if a < b {
+                (a, b)
+            } else {
+                (b, a)
+            }
+        };
+        let mut bucket = vec![0u32; nv + 1];
+        for c in 0..nc {
+            bucket[ends(c).0 as usize + 1] += 1;
+        }
+        for v in 0..nv {
+            bucket[v + 1] += bucket[v];
+        }
+        let mut slot = bucket.clone();
+        let mut keyed: Vec<(u32, u32)> = vec![(0, 0); nc];
+        for c in 0..nc {
+            let (lo, hi) = ends(c);
+            keyed[slot[lo as usize] as usize] = (hi, c as u32);
+            slot[lo as usize] += 1;
+        }
+        let mut edges = Vec::with_capacity(nc / 2 + nv);
+        let mut edge_faces = Vec::with_capacity(nc / 2 + nv);
         let mut corner_edge = vec![0u32; nc];
         let mut nonmanifold_edges = Vec::new();
         let mut misoriented_edges = Vec::new();
-        let mut i = 0;
-        while i < keyed.len() {
-            let key = keyed[i].0;
-            let mut j = i;
-            let e = edges.len() as u32;
-            let mut ef = [NONE, NONE];
-            let mut dirs = [0u32; 2];
-            while j < keyed.len() && keyed[j].0 == key {
-                let c = keyed[j].1 as usize;
-                corner_edge[c] = e;
-                let k = j - i;
-                if k < 2 {
-                    ef[k] = corner_face[c];
-                    dirs[k] = idx[c];
+        // Fans: corners at the same vertex whose faces share an edge at that vertex are joined
+        // (union-find over corners); a vertex with corners in two groups is not manifold.
+        let mut fan: Vec<u32> = (0..nc as u32).collect();
+        fn root(p: &mut [u32], mut x: u32) -> u32 {
+            while p[x as usize] != x {
+                p[x as usize] = p[p[x as usize] as usize];
+                x = p[x as usize];
+            }
+            x
+        }
+        fn join(p: &mut [u32], a: u32, b: u32) {
+            let (ra, rb) = (root(p, a), root(p, b));
+            if ra != rb {
+                p[ra.max(rb) as usize] = ra.min(rb);
+            }
+        }
+        for lo in 0..nv {
+            let run = &mut keyed[bucket[lo] as usize..bucket[lo + 1] as usize];
+            run.sort_unstable();
+            let mut i = 0;
+            while i < run.len() {
+                let hi = run[i].0;
+                let mut j = i;
+                let e = edges.len() as u32;
+                let mut ef = [NONE, NONE];
+                let mut cs = [0u32; 2];
+                while j < run.len() && run[j].0 == hi {
+                    let c = run[j].1 as usize;
+                    corner_edge[c] = e;
+                    let k = j - i;
+                    if k < 2 {
+                        ef[k] = corner_face[c];
+                        cs[k] = c as u32;
+                    }
+                    j += 1;
                 }
-                j += 1;
+                edges.push([lo as u32, hi]);
+                edge_faces.push(ef);
+                if j - i >= 2 {
+                    // the first two faces are joined across the edge, as for a manifold edge
+                    let [c0, c1] = cs;
+                    let (n0, n1) = (next_corner[c0 as usize], next_corner[c1 as usize]);
+                    let same_direction = idx[c0 as usize] == idx[c1 as usize];
+                    if same_direction {
+                        join(&mut fan, c0, c1);
+                        join(&mut fan, n0, n1);
+                    } else {
+                        join(&mut fan, c0, n1);
+                        join(&mut fan, n0, c1);
+                    }
+                    if j - i > 2 {
+                        nonmanifold_edges.push(e);
+                    } else if same_direction {
+                        misoriented_edges.push(e);
+                    }
+                }
+                i = j;
             }
-            edges.push([(key >> 32) as u32, key as u32]);
-            edge_faces.push(ef);
-            if j - i > 2 {
-                nonmanifold_edges.push(e);
-            } else if j - i == 2 && dirs[0] == dirs[1] {
-                misoriented_edges.push(e);
-            }
-            i = j;
         }
         // One-rings.
         let (neighbor_start, neighbors) =
@@ -155,59 +203,20 @@ impl Topology {
             }
             boundary_loops.push(lp);
         }
-        // Interior fans: a vertex whose incident faces split into several groups joined
-        // through its edges is not manifold (two cones touching at a tip).
-        let mut local: Vec<u32> = Vec::new();
-        for v in 0..nv {
-            let fs = &vfaces[vface_start[v] as usize..vface_start[v + 1] as usize];
-            if fs.len() < 2 || nonmanifold_vertices.last() == Some(&(v as u32)) {
-                continue;
-            }
-            local.clear();
-            local.extend(0..fs.len() as u32);
-            fn find(p: &mut [u32], mut x: u32) -> u32 {
-                while p[x as usize] != x {
-                    p[x as usize] = p[p[x as usize] as usize];
-                    x = p[x as usize];
-                }
-                x
-            }
-            for (a, &f) in fs.iter().enumerate() {
-                let (s, e) = (starts[f as usize] as usize, starts[f as usize + 1] as usize);
-                for c in s..e {
-                    let cn = next_corner[c] as usize;
-                    if idx[c] as usize != v && idx[cn] as usize != v {
-                        continue;
-                    }
-                    let [f0, f1] = edge_faces[corner_edge[c] as usize];
-                    let other = if f0 == f { f1 } else { f0 };
-                    if other == NONE {
-                        continue;
-                    }
-                    if let Some(b) = fs.iter().position(|&g| g == other) {
-                        let (ra, rb) = (find(&mut local, a as u32), find(&mut local, b as u32));
-                        local[ra as usize] = rb;
-                    }
-                }
-            }
-            let roots = (0..fs.len() as u32)
-                .filter(|&a| find(&mut local, a) == a)
-                .count();
-            if roots > 1 {
-                nonmanifold_vertices.push(v as u32);
+        // Interior fans: a vertex whose corners fall into several groups (two cones touching
+        // at a tip) is not manifold.
+        let mut fans_at = vec![0u8; nv];
+        for c in 0..nc {
+            if root(&mut fan, c as u32) == c as u32 {
+                let f = &mut fans_at[idx[c] as usize];
+                *f = f.saturating_add(1);
             }
         }
+        nonmanifold_vertices.extend((0..nv as u32).filter(|&v| fans_at[v as usize] > 1));
         nonmanifold_vertices.sort_unstable();
         nonmanifold_vertices.dedup();
         // Components by union-find over edges.
         let mut parent: Vec<u32> = (0..nv as u32).collect();
-        fn root(p: &mut [u32], mut x: u32) -> u32 {
-            while p[x as usize] != x {
-                p[x as usize] = p[p[x as usize] as usize];
-                x = p[x as usize];
-            }
-            x
-        }
         for &[a, b] in &edges {
             let (ra, rb) = (root(&mut parent, a), root(&mut parent, b));
             if ra != rb {
@@ -436,5 +445,31 @@ mod tests {
         let m = Mesh::from_triangles(p, &[[0, 1, 2], [0, 3, 4]]).unwrap();
         assert_eq!(m.topology().nonmanifold_vertices, vec![0]);
         assert!(!m.topology().is_manifold());
+    }
+
+    #[test]
+    fn two_closed_cones_touching_at_a_tip_are_not_manifold() {
+        // two tetrahedra sharing vertex 0 only: every edge has two faces, consistently
+        // oriented, and no boundary, so only the fan test at vertex 0 can see the problem
+        let p = vec![
+            [0.0; 3],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+            [-1.0, 0.0, 0.0],
+            [0.0, -1.0, 0.0],
+            [0.0, 0.0, -1.0],
+        ];
+        let tet = |a: u32, b: u32, c: u32| [[0, b, a], [0, a, c], [a, b, c], [0, c, b]];
+        let mut tris = tet(1, 2, 3).to_vec();
+        tris.extend(tet(4, 5, 6));
+        let m = Mesh::from_triangles(p, &tris).unwrap();
+        let t = m.topology();
+        assert!(t.nonmanifold_edges.is_empty() && t.misoriented_edges.is_empty());
+        assert_eq!(t.nonmanifold_vertices, vec![0]);
+        // one tetrahedron alone is manifold at every vertex
+        let p1 = vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+        let one = Mesh::from_triangles(p1, &tet(1, 2, 3)).unwrap();
+        assert!(one.topology().is_manifold());
     }
 }

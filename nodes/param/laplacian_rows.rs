@@ -1,0 +1,367 @@
+//! A symmetric mesh Laplacian kept as summed edge weights in compressed rows, and the Dirichlet
+//! (fixed-boundary) solve on it.
+//!
+//! Row `i` lists every neighbour `j` once, sorted, with the summed weight `w_ij` of all the
+//! triangles beside edge `ij`. One pass over the triangles builds it, without the global sort
+//! of a triplet list; the same rows then give the graph for the fill-reducing order, the count
+//! of negative (cotangent) weights and the lower triangle of the free-vertex system, whose
+//! columns come out sorted. `tutte` and `minimal_surface` build it while the mesh connectivity
+//! is being built on the other core.
+
+use super::laplacian::not_positive_definite;
+use super::nested_dissection::nested_dissection_order;
+use crate::nodes::linalg::spd::SpdFactor;
+use crate::prelude::*;
+use faer::sparse::SparseColMat;
+use faer::Mat;
+
+/// Summed symmetric edge weights in compressed rows (see the module documentation).
+#[derive(Clone, Debug)]
+pub struct LaplacianRows {
+    /// Row `i` is `col[start[i]..start[i + 1]]`.
+    pub start: Vec<usize>,
+    /// Neighbour of each entry, sorted within a row.
+    pub col: Vec<u32>,
+    /// Summed weight of each entry.
+    pub weight: Vec<f64>,
+    /// Vertices on an edge with a single triangle (the boundary of a manifold mesh).
+    pub on_boundary: Vec<bool>,
+}
+
+impl LaplacianRows {
+    /// Rows of `n` vertices from per-corner weights: `corner_weight[t][k]` is added to the
+    /// edge opposite corner `k` of triangle `t`, in both directions (the cotangent formula
+    /// `w_ij = (cot a_ij + cot b_ij) / 2` is `corner_weight = cot / 2`).
+    pub fn from_corner_weights(
+        n: usize,
+        triangles: &[[u32; 3]],
+        corner_weight: &[[f64; 3]],
+    ) -> LaplacianRows {
+        Self::build(n, triangles, |t, k| corner_weight[t][k])
+    }
+
+    /// Uniform weights (Tutte 1963): 1/2 per triangle beside an edge, so 1 for interior edges.
+    pub fn uniform(n: usize, triangles: &[[u32; 3]]) -> LaplacianRows {
+        Self::build(n, triangles, |_, _| 0.5)
+    }
+
+    fn build(
+        n: usize,
+        triangles: &[[u32; 3]],
+        corner_weight: impl Fn(usize, usize) -> f64,
+    ) -> LaplacianRows {
+        let mut count = vec![0usize; n + 1];
+        for tri in triangles {
+            for &v in tri {
+                count[v as usize + 1] += 2;
+            }
+        }
+        for i in 0..n {
+            count[i + 1] += count[i];
+        }
+        let mut fill = count.clone();
+        let mut raw: Vec<(u32, f64)> = vec![(0, 0.0); count[n]];
+        for (t, tri) in triangles.iter().enumerate() {
+            for k in 0..3 {
+                let (i, j) = (tri[(k + 1) % 3], tri[(k + 2) % 3]);
+                let w = corner_weight(t, k);
+                raw[fill[i as usize]] = (j, w);
+                fill[i as usize] += 1;
+                raw[fill[j as usize]] = (i, w);
+                fill[j as usize] += 1;
+            }
+        }
+        // sort each short row and merge the duplicates (each interior edge appears twice)
+        let mut start = Vec::with_capacity(n + 1);
+        let mut col = Vec::with_capacity(count[n] / 2 + n);
+        let mut weight = Vec::with_capacity(count[n] / 2 + n);
+        let mut on_boundary = vec![false; n];
+        start.push(0);
+        for (i, boundary) in on_boundary.iter_mut().enumerate() {
+            let row = &mut raw[count[i]..count[i + 1]];
+            row.sort_unstable_by_key(|e| e.0);
+            let row_start = col.len();
+            let mut k = 0;
+            while k < row.len() {
+                let j = row[k].0;
+                let mut w = 0.0;
+                let mut times = 0;
+                while k < row.len() && row[k].0 == j {
+                    w += row[k].1;
+                    times += 1;
+                    k += 1;
+                }
+                *boundary |= times == 1;
+                col.push(j);
+                weight.push(w);
+            }
+            debug_assert!(col.len() >= row_start);
+            start.push(col.len());
+        }
+        LaplacianRows {
+            start,
+            col,
+            weight,
+            on_boundary,
+        }
+    }
+
+    /// Number of vertices (rows).
+    pub fn num_vertices(&self) -> usize {
+        self.start.len() - 1
+    }
+
+    /// Undirected edges whose summed weight is negative (obtuse opposite angles for cotangent
+    /// weights).
+    pub fn negative_edges(&self) -> usize {
+        (0..self.num_vertices())
+            .map(|i| {
+                let r = self.start[i]..self.start[i + 1];
+                self.col[r.clone()]
+                    .iter()
+                    .zip(&self.weight[r])
+                    .filter(|&(&j, &w)| (j as usize) > i && w < 0.0)
+                    .count()
+            })
+            .sum()
+    }
+
+    /// Elimination order of all vertices by geometric nested dissection (see
+    /// `nested_dissection.rs`), for the factorization of any free-vertex block.
+    pub fn nested_dissection_order(&self, positions: &[[f64; 3]]) -> Vec<usize> {
+        nested_dissection_order(&self.start, &self.col, positions, 64)
+    }
+}
+
+/// Solves `sum_j w_ij (x_i - x_j) = 0` for every vertex where `fixed[i]` is `None`, the others
+/// held at their values, with a sparse Cholesky factorization of the free-vertex block. `order`
+/// (an elimination order of all vertices, e.g. `LaplacianRows::nested_dissection_order`) is
+/// restricted to the free vertices; without it faer's AMD is used. A free vertex without
+/// weights, or a system that is not positive definite, is an error.
+pub fn solve_dirichlet_rows<const D: usize>(
+    rows: &LaplacianRows,
+    fixed: &[Option<[f64; D]>],
+    order: Option<&[usize]>,
+) -> Result<Vec<[f64; D]>, NodeError> {
+    let is_fixed: Vec<bool> = fixed.iter().map(Option::is_some).collect();
+    DirichletFactor::new(rows, &is_fixed, order)?.solve(rows, fixed)
+}
+
+/// The factored free-vertex block `L_II` of a Laplacian in rows, for a given set of fixed
+/// vertices: built before the fixed values are known (they only enter the right-hand side).
+pub struct DirichletFactor {
+    /// Row of each vertex in the system, `u32::MAX` for fixed ones.
+    index: Vec<u32>,
+    /// The free vertices in row order.
+    free: Vec<u32>,
+    factor: Option<SpdFactor>,
+}
+
+impl DirichletFactor {
+    /// Assembles and factors `L_II` for the vertices where `is_fixed` is false.
+    pub fn new(
+        rows: &LaplacianRows,
+        is_fixed: &[bool],
+        order: Option<&[usize]>,
+    ) -> Result<DirichletFactor, NodeError> {
+        let n = rows.num_vertices();
+        if is_fixed.len() != n {
+            return Err(NodeError::invalid(
+                "mesh",
+                format!(
+                    "{} fixed flags for {n} vertices (internal size mismatch)",
+                    is_fixed.len()
+                ),
+            ));
+        }
+        let mut index = vec![u32::MAX; n];
+        let mut free = Vec::new();
+        for (v, &f) in is_fixed.iter().enumerate() {
+            if !f {
+                index[v] = free.len() as u32;
+                free.push(v as u32);
+            }
+        }
+        let nfree = free.len();
+        if nfree == 0 {
+            return Ok(DirichletFactor {
+                index,
+                free,
+                factor: None,
+            });
+        }
+        // Lower triangle by columns: column c (free vertex v) holds the diagonal, then the
+        // free neighbours with a larger row index, already sorted because rows are sorted by
+        // vertex and free indices grow with the vertex.
+        let mut col_ptr = Vec::with_capacity(nfree + 1);
+        let mut row_idx = Vec::with_capacity(rows.col.len() / 2 + nfree);
+        let mut values = Vec::with_capacity(rows.col.len() / 2 + nfree);
+        col_ptr.push(0usize);
+        for (c, &v) in free.iter().enumerate() {
+            let r = rows.start[v as usize]..rows.start[v as usize + 1];
+            let diag_at = values.len();
+            row_idx.push(c);
+            values.push(0.0);
+            let mut diag = 0.0;
+            for (&j, &w) in rows.col[r.clone()].iter().zip(&rows.weight[r]) {
+                diag += w;
+                let rj = index[j as usize];
+                if rj != u32::MAX && rj as usize > c {
+                    row_idx.push(rj as usize);
+                    values.push(-w);
+                }
+            }
+            if diag.abs() <= 1e-300 || !diag.is_finite() {
+                return Err(NodeError::singular(format!(
+                    "free vertex {v} has no usable edge weights (isolated or degenerate neighbourhood)"
+                )));
+            }
+            values[diag_at] = diag;
+            col_ptr.push(row_idx.len());
+        }
+        let symbolic =
+            faer::sparse::SymbolicSparseColMat::new_checked(nfree, nfree, col_ptr, None, row_idx);
+        let matrix = SparseColMat::new(symbolic, values);
+        let free_order: Option<Vec<usize>> = order.filter(|o| o.len() == n).map(|o| {
+            o.iter()
+                .filter_map(|&v| index.get(v).copied().filter(|&r| r != u32::MAX))
+                .map(|r| r as usize)
+                .collect()
+        });
+        let factor = SpdFactor::from_lower(matrix, free_order.as_deref(), faer::Par::Seq)
+            .map_err(not_positive_definite)?;
+        Ok(DirichletFactor {
+            index,
+            free,
+            factor: Some(factor),
+        })
+    }
+
+    /// Stored entries of the Cholesky factor (0 when every vertex is fixed): the fill-in the
+    /// elimination order left.
+    pub fn factor_nnz(&self) -> usize {
+        self.factor.as_ref().map_or(0, SpdFactor::factor_nnz)
+    }
+
+    /// Whether this factor was built for exactly these fixed vertices.
+    pub fn fixes(&self, is_fixed: &[bool]) -> bool {
+        self.index.len() == is_fixed.len()
+            && self
+                .index
+                .iter()
+                .zip(is_fixed)
+                .all(|(&r, &f)| (r == u32::MAX) == f)
+    }
+
+    /// The solution with the fixed vertices held at `fixed` (which must fix the same vertices
+    /// the factor was built for; see `fixes`): the fixed values enter `-L_IB x_B`.
+    pub fn solve<const D: usize>(
+        &self,
+        rows: &LaplacianRows,
+        fixed: &[Option<[f64; D]>],
+    ) -> Result<Vec<[f64; D]>, NodeError> {
+        let mut out: Vec<[f64; D]> = fixed.iter().map(|f| f.unwrap_or([0.0; D])).collect();
+        let Some(factor) = &self.factor else {
+            return Ok(out);
+        };
+        let is_fixed: Vec<bool> = fixed.iter().map(Option::is_some).collect();
+        if !self.fixes(&is_fixed) {
+            return Err(NodeError::invalid(
+                "mesh",
+                "the fixed vertices differ from those the system was factored for (internal error)",
+            ));
+        }
+        let mut rhs = Mat::<f64>::zeros(self.free.len(), D);
+        for (c, &v) in self.free.iter().enumerate() {
+            let r = rows.start[v as usize]..rows.start[v as usize + 1];
+            for (&j, &w) in rows.col[r.clone()].iter().zip(&rows.weight[r]) {
+                if let Some(x) = fixed[j as usize] {
+                    for (d, xd) in x.iter().enumerate() {
+                        rhs[(c, d)] += w * xd;
+                    }
+                }
+            }
+        }
+        factor.solve_in_place(rhs.as_mut());
+        for (c, &v) in self.free.iter().enumerate() {
+            for d in 0..D {
+                let val = rhs[(c, d)];
+                if !val.is_finite() {
+                    return Err(NodeError::singular(
+                        "the Laplace solve produced non-finite values (singular system)",
+                    ));
+                }
+                out[v as usize][d] = val;
+            }
+        }
+        Ok(out)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::laplacian::{cotangent_weights, solve_dirichlet};
+    use super::*;
+
+    /// A 6 x 6 grid of squares split into triangles, jittered so the weights differ.
+    fn grid() -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
+        let m = 6;
+        let mut p = Vec::new();
+        for j in 0..=m {
+            for i in 0..=m {
+                let jitter = ((i * 7 + j * 13) % 5) as f64 * 0.03;
+                p.push([i as f64 + jitter, j as f64 - jitter, 0.1 * (i * j) as f64]);
+            }
+        }
+        let id = |i: usize, j: usize| (j * (m + 1) + i) as u32;
+        let mut t = Vec::new();
+        for j in 0..m {
+            for i in 0..m {
+                t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+                t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+            }
+        }
+        (p, t)
+    }
+
+    #[test]
+    fn rows_solve_matches_the_triplet_assembly() {
+        let (p, t) = grid();
+        let n = p.len();
+        let (w, neg) = cotangent_weights(&p, &t).unwrap();
+        let cot = super::super::laplacian::corner_cotangents(&p, &t).unwrap();
+        let half: Vec<[f64; 3]> = cot.iter().map(|c| c.map(|x| 0.5 * x)).collect();
+        let rows = LaplacianRows::from_corner_weights(n, &t, &half);
+        assert_eq!(rows.negative_edges(), neg);
+        // every interior edge merged: 6x6 grid with diagonals has 7*6*2 + 36 = 120 edges
+        assert_eq!(rows.col.len(), 2 * 120);
+        let fixed: Vec<Option<[f64; 2]>> = (0..n)
+            .map(|v| {
+                let (i, j) = (v % 7, v / 7);
+                (i == 0 || j == 0 || i == 6 || j == 6).then_some([i as f64, (j * j) as f64])
+            })
+            .collect();
+        let a = solve_dirichlet(&w, &fixed, true).unwrap();
+        let order = rows.nested_dissection_order(&p);
+        for ord in [None, Some(order.as_slice())] {
+            let b = solve_dirichlet_rows(&rows, &fixed, ord).unwrap();
+            for (x, y) in a.iter().zip(&b) {
+                assert!((x[0] - y[0]).abs() < 1e-12 && (x[1] - y[1]).abs() < 1e-12);
+            }
+        }
+    }
+
+    #[test]
+    fn a_free_vertex_without_weights_is_an_error() {
+        let (p, t) = grid();
+        let rows = LaplacianRows::uniform(p.len() + 1, &t);
+        let mut fixed: Vec<Option<[f64; 1]>> = vec![Some([0.0]); p.len() + 1];
+        fixed[p.len()] = None; // a vertex no triangle uses, left free
+        let e = solve_dirichlet_rows(&rows, &fixed, None).unwrap_err();
+        assert!(
+            e.message.contains("no usable edge weights"),
+            "{}",
+            e.message
+        );
+    }
+}

@@ -146,7 +146,7 @@ pub fn asap_parameterize(
         }
     }
     if nf > 0 {
-        let factor = SpdFactor::new(2 * nf, &trip, Par::rayon(0)).map_err(|e| {
+        let factor = SpdFactor::new(2 * nf, &trip, Par::Seq).map_err(|e| {
             NodeError::singular(format!(
                 "the ASAP system could not be factored ({e}); the mesh may have nearly degenerate triangles"
             ))

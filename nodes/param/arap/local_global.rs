@@ -272,7 +272,7 @@ pub fn arap_parameterize(
         ))
     };
     let mut factor = if nf > 0 {
-        Some(SpdFactor::new(nf, &trip, Par::rayon(0)).map_err(singular)?)
+        Some(SpdFactor::new(nf, &trip, Par::Seq).map_err(singular)?)
     } else {
         None
     };
@@ -410,7 +410,7 @@ pub fn arap_parameterize(
                     .refactor_with(
                         trip.len(),
                         |k| trip[k].val * weights[trip_tri[k] as usize],
-                        Par::rayon(0),
+                        Par::Seq,
                     )
                     .map_err(singular)?;
                 (pending, blocked_run) = (0, 0);

@@ -300,28 +300,23 @@ impl DirichletFactor {
 
 #[cfg(test)]
 mod tests {
-    use super::super::laplacian::{cotangent_weights, solve_dirichlet};
+    use super::super::laplacian::{cotangent_weights, fan_triangles, solve_dirichlet};
     use super::*;
 
-    /// A 6 x 6 grid of squares split into triangles, jittered so the weights differ.
+    /// A 6 x 6 grid of squares split into triangles (vertex `(i, j)` is `7 j + i`), jittered
+    /// and bent so the weights differ.
     fn grid() -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
-        let m = 6;
-        let mut p = Vec::new();
-        for j in 0..=m {
-            for i in 0..=m {
+        let mesh =
+            crate::nodes::sim::mass_spring::grid::grid_mesh(6, 6, [6.0, 6.0], "xy", [3.0; 3], true)
+                .unwrap();
+        let p = (0..49)
+            .map(|v| {
+                let (i, j) = (v % 7, v / 7);
                 let jitter = ((i * 7 + j * 13) % 5) as f64 * 0.03;
-                p.push([i as f64 + jitter, j as f64 - jitter, 0.1 * (i * j) as f64]);
-            }
-        }
-        let id = |i: usize, j: usize| (j * (m + 1) + i) as u32;
-        let mut t = Vec::new();
-        for j in 0..m {
-            for i in 0..m {
-                t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-                t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-            }
-        }
-        (p, t)
+                [i as f64 + jitter, j as f64 - jitter, 0.1 * (i * j) as f64]
+            })
+            .collect();
+        (p, fan_triangles(&mesh))
     }
 
     #[test]

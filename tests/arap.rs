@@ -14,12 +14,18 @@ fn load(name: &str) -> Arc<Mesh> {
     Arc::new(load_obj(&p, "").unwrap()).triangulated()
 }
 
-/// Runs fold-free ARAP from the default Tutte start and checks the promises.
-fn check_fold_free(name: &str, iterations: usize) -> (f64, f64) {
-    let mesh = load(name);
+/// A mesh from the repository, its triangles and the default start (Tutte, mean-value weights,
+/// circle, holes filled).
+fn with_start(mesh: Arc<Mesh>) -> (Arc<Mesh>, Vec<[u32; 3]>, Vec<[f64; 2]>) {
     let tris = mesh.triangles().unwrap();
     let init =
         tutte_parameterize(&mesh, TutteWeights::MeanValue, BoundaryShape::Circle, true).unwrap();
+    (mesh, tris, init)
+}
+
+/// Runs fold-free ARAP from the default Tutte start and checks the promises.
+fn check_fold_free(name: &str, iterations: usize) -> (f64, f64) {
+    let (mesh, tris, init) = with_start(load(name));
     let opts = ArapOptions {
         iterations,
         tolerance: 0.0,
@@ -80,10 +86,7 @@ fn fold_free_on_beetle_with_holes() {
 
 #[test]
 fn plain_mode_energy_is_monotone_too() {
-    let mesh = load("assets/meshes/camel_b.obj");
-    let tris = mesh.triangles().unwrap();
-    let init =
-        tutte_parameterize(&mesh, TutteWeights::MeanValue, BoundaryShape::Circle, true).unwrap();
+    let (mesh, tris, init) = with_start(load("assets/meshes/camel_b.obj"));
     let opts = ArapOptions {
         iterations: 40,
         tolerance: 0.0,
@@ -125,10 +128,7 @@ fn fold_free_on_every_course_disk_mesh() {
             group: String::new(),
             apply_transform: true,
         };
-        let mesh = Arc::new(load_mesh(&p, &opts).unwrap()).triangulated();
-        let tris = mesh.triangles().unwrap();
-        let init = tutte_parameterize(&mesh, TutteWeights::MeanValue, BoundaryShape::Circle, true)
-            .unwrap();
+        let (mesh, tris, init) = with_start(Arc::new(load_mesh(&p, &opts).unwrap()).triangulated());
         let arap = ArapOptions {
             iterations: 15,
             ..Default::default()
@@ -150,10 +150,7 @@ fn fold_free_long_run_keeps_area_floor_and_is_deterministic() {
     // differ between calls. Now each triangle keeps its UV area above
     // min(1e-6 · its 3-D area · start ratio, half its start area), and sums are ordered.
     use cgnodes::nodes::param::arap::frames::TriangleFrames;
-    let mesh = load("assets/meshes/camel_b.obj");
-    let tris = mesh.triangles().unwrap();
-    let init =
-        tutte_parameterize(&mesh, TutteWeights::MeanValue, BoundaryShape::Circle, true).unwrap();
+    let (mesh, tris, init) = with_start(load("assets/meshes/camel_b.obj"));
     let opts = ArapOptions {
         iterations: 150,
         tolerance: 0.0,
@@ -204,10 +201,7 @@ fn fold_free_long_run_keeps_area_floor_and_is_deterministic() {
 fn fold_free_runs_are_bit_identical_on_a_many_chunk_mesh() {
     // 44k triangles: 22 chunks of 2048, so an unordered parallel sum could differ between
     // runs; the ordered sums make the logs bit-identical
-    let mesh = load("assets/meshes/nefertiti_front.obj");
-    let tris = mesh.triangles().unwrap();
-    let init =
-        tutte_parameterize(&mesh, TutteWeights::MeanValue, BoundaryShape::Circle, true).unwrap();
+    let (mesh, tris, init) = with_start(load("assets/meshes/nefertiti_front.obj"));
     let opts = ArapOptions {
         iterations: 12,
         tolerance: 0.0,

@@ -73,20 +73,6 @@ pub fn cotangent_weights(
     Ok((w, negative))
 }
 
-/// Uniform (graph Laplacian, Tutte 1963) weights: 1 per edge, for edges with two triangles
-/// (each triangle adds 1/2), so a vertex's row averages its neighbours.
-pub fn uniform_weights(triangles: &[[u32; 3]]) -> Vec<EdgeWeight> {
-    let mut w = Vec::with_capacity(triangles.len() * 6);
-    for tri in triangles {
-        for k in 0..3 {
-            let (i, j) = (tri[k], tri[(k + 1) % 3]);
-            w.push((i, j, 0.5));
-            w.push((j, i, 0.5));
-        }
-    }
-    w
-}
-
 /// Floater's mean-value weights (Floater 2003, eq. 5.1):
 /// `w_ij = (tan(a_ij / 2) + tan(b_ij / 2)) / |x_i - x_j|`, with `a_ij`, `b_ij` the angles at
 /// `x_i` of the two triangles beside edge `ij`. Always positive, not symmetric; they reproduce

@@ -8,7 +8,7 @@
 //! columns come out sorted. `tutte` and `minimal_surface` build it while the mesh connectivity
 //! is being built on the other core.
 
-use super::laplacian::not_positive_definite;
+use super::laplacian::{corner_cotangents, not_positive_definite, ND_MIN_ROWS};
 use super::nested_dissection::nested_dissection_order;
 use crate::nodes::linalg::spd::SpdFactor;
 use crate::prelude::*;
@@ -38,6 +38,24 @@ impl LaplacianRows {
         corner_weight: &[[f64; 3]],
     ) -> LaplacianRows {
         Self::build(n, triangles, |t, k| corner_weight[t][k])
+    }
+
+    /// Uniform weights, or with `cotangent` the cotangent weights of the triangles at
+    /// `positions` (an error names a degenerate triangle).
+    pub fn symmetric(
+        positions: &[[f64; 3]],
+        triangles: &[[u32; 3]],
+        cotangent: bool,
+    ) -> Result<LaplacianRows, String> {
+        let n = positions.len();
+        if !cotangent {
+            return Ok(Self::uniform(n, triangles));
+        }
+        let half: Vec<[f64; 3]> = corner_cotangents(positions, triangles)?
+            .iter()
+            .map(|c| c.map(|x| 0.5 * x))
+            .collect();
+        Ok(Self::from_corner_weights(n, triangles, &half))
     }
 
     /// Uniform weights (Tutte 1963): 1/2 per triangle beside an edge, so 1 for interior edges.
@@ -80,7 +98,6 @@ impl LaplacianRows {
         for (i, boundary) in on_boundary.iter_mut().enumerate() {
             let row = &mut raw[count[i]..count[i + 1]];
             row.sort_unstable_by_key(|e| e.0);
-            let row_start = col.len();
             let mut k = 0;
             while k < row.len() {
                 let j = row[k].0;
@@ -95,7 +112,6 @@ impl LaplacianRows {
                 col.push(j);
                 weight.push(w);
             }
-            debug_assert!(col.len() >= row_start);
             start.push(col.len());
         }
         LaplacianRows {
@@ -130,6 +146,20 @@ impl LaplacianRows {
     /// `nested_dissection.rs`), for the factorization of any free-vertex block.
     pub fn nested_dissection_order(&self, positions: &[[f64; 3]]) -> Vec<usize> {
         nested_dissection_order(&self.start, &self.col, positions, 64)
+    }
+
+    /// `nested_dissection_order` for meshes with more than `ND_MIN_ROWS` vertices; `None`
+    /// (faer's AMD) for smaller ones, where AMD is cheap.
+    pub fn fill_reducing_order(&self, positions: &[[f64; 3]]) -> Option<Vec<usize>> {
+        (self.num_vertices() > ND_MIN_ROWS).then(|| self.nested_dissection_order(positions))
+    }
+
+    /// Vertices held fixed when nothing else is known: those on the boundary (an edge with a
+    /// single triangle) and those no triangle uses.
+    pub fn boundary_or_unused(&self) -> Vec<bool> {
+        (0..self.num_vertices())
+            .map(|v| self.on_boundary[v] || self.start[v] == self.start[v + 1])
+            .collect()
     }
 }
 
@@ -324,9 +354,7 @@ mod tests {
         let (p, t) = grid();
         let n = p.len();
         let (w, neg) = cotangent_weights(&p, &t).unwrap();
-        let cot = super::super::laplacian::corner_cotangents(&p, &t).unwrap();
-        let half: Vec<[f64; 3]> = cot.iter().map(|c| c.map(|x| 0.5 * x)).collect();
-        let rows = LaplacianRows::from_corner_weights(n, &t, &half);
+        let rows = LaplacianRows::symmetric(&p, &t, true).unwrap();
         assert_eq!(rows.negative_edges(), neg);
         // every interior edge merged: 6x6 grid with diagonals has 7*6*2 + 36 = 120 edges
         assert_eq!(rows.col.len(), 2 * 120);

@@ -6,9 +6,7 @@
 //! course) or cotangent weights taken from the input geometry. The three coordinates share one
 //! sparse Cholesky factorization.
 
-use super::laplacian::{
-    corner_cotangents, fan_triangles, mean_value_weights, solve_dirichlet_on, ND_MIN_ROWS,
-};
+use super::laplacian::{fan_triangles, mean_value_weights, solve_dirichlet_on};
 use super::laplacian_rows::{solve_dirichlet_rows, LaplacianRows};
 use super::tutte::parse_weights;
 use super::tutte::TutteWeights;
@@ -58,7 +56,6 @@ pub fn minimal_surface(
         }
     }
     let bad = |m: String| NodeError::invalid("mesh", m);
-    let n = mesh.positions.len();
     let with_hint = |e: NodeError| {
         NodeError::new(
             e.kind,
@@ -67,17 +64,13 @@ pub fn minimal_surface(
     };
     let (x, neg) = match weights {
         TutteWeights::Uniform | TutteWeights::Cotangent => {
-            let rows = if weights == TutteWeights::Uniform {
-                LaplacianRows::uniform(n, &tris)
-            } else {
-                let half: Vec<[f64; 3]> = corner_cotangents(&mesh.positions, &tris)
-                    .map_err(bad)?
-                    .iter()
-                    .map(|c| c.map(|x| 0.5 * x))
-                    .collect();
-                LaplacianRows::from_corner_weights(n, &tris, &half)
-            };
-            let order = (n > ND_MIN_ROWS).then(|| rows.nested_dissection_order(&mesh.positions));
+            let rows = LaplacianRows::symmetric(
+                &mesh.positions,
+                &tris,
+                weights == TutteWeights::Cotangent,
+            )
+            .map_err(bad)?;
+            let order = rows.fill_reducing_order(&mesh.positions);
             let x = solve_dirichlet_rows(&rows, &fixed, order.as_deref()).map_err(with_hint)?;
             let neg = if weights == TutteWeights::Cotangent {
                 rows.negative_edges()

@@ -15,9 +15,7 @@
 use super::boundary_map::{
     map_boundary, parse_shape, parse_spacing, parse_start, rotate_loop, Spacing,
 };
-use super::laplacian::{
-    corner_cotangents, fan_triangles, mean_value_weights, solve_dirichlet_on, ND_MIN_ROWS,
-};
+use super::laplacian::{fan_triangles, mean_value_weights, solve_dirichlet_on};
 use super::laplacian_rows::{DirichletFactor, LaplacianRows};
 use super::uv_metrics::uv_metrics;
 use crate::prelude::*;
@@ -151,10 +149,7 @@ pub fn tutte(mesh: &Mesh, opts: &TutteOptions) -> Result<TutteResult, NodeError>
         || check_tutte_topology(mesh, opts.fill_holes),
         || {
             let (rows, order) = symmetric_rows(&mesh.positions, &triangles, opts.weights)?;
-            let guess: Vec<bool> = (0..n)
-                .map(|v| rows.on_boundary[v] || rows.start[v] == rows.start[v + 1])
-                .collect();
-            let factor = DirichletFactor::new(&rows, &guess, order.as_deref());
+            let factor = DirichletFactor::new(&rows, &rows.boundary_or_unused(), order.as_deref());
             Ok::<_, String>((rows, factor))
         },
     );
@@ -243,28 +238,19 @@ pub fn tutte(mesh: &Mesh, opts: &TutteOptions) -> Result<TutteResult, NodeError>
     })
 }
 
-/// The summed symmetric weights (uniform or cotangent) of `triangles` in rows, and a
-/// nested-dissection elimination order when the mesh is large enough to need one. Nothing for
-/// mean-value weights, which are not symmetric.
+/// The summed symmetric weights (uniform or cotangent) of `triangles` in rows and their
+/// fill-reducing order; an error for mean-value weights, which are not symmetric.
 #[allow(clippy::type_complexity)]
 fn symmetric_rows(
     positions: &[[f64; 3]],
     triangles: &[[u32; 3]],
     weights: TutteWeights,
 ) -> Result<(LaplacianRows, Option<Vec<usize>>), String> {
-    let n = positions.len();
-    let rows = match weights {
-        TutteWeights::Uniform => LaplacianRows::uniform(n, triangles),
-        TutteWeights::Cotangent => {
-            let half: Vec<[f64; 3]> = corner_cotangents(positions, triangles)?
-                .iter()
-                .map(|c| c.map(|x| 0.5 * x))
-                .collect();
-            LaplacianRows::from_corner_weights(n, triangles, &half)
-        }
-        TutteWeights::MeanValue => return Err("mean-value weights are not symmetric".into()),
-    };
-    let order = (n > ND_MIN_ROWS).then(|| rows.nested_dissection_order(positions));
+    if weights == TutteWeights::MeanValue {
+        return Err("mean-value weights are not symmetric".into());
+    }
+    let rows = LaplacianRows::symmetric(positions, triangles, weights == TutteWeights::Cotangent)?;
+    let order = rows.fill_reducing_order(positions);
     Ok((rows, order))
 }
 

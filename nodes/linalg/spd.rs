@@ -2,18 +2,38 @@
 //! solved for several right-hand sides per call.
 
 use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, LltRef, SymbolicCholesky};
-use faer::sparse::{SparseColMat, Triplet};
-use faer::{Conj, MatMut, Par, Side};
+use faer::sparse::linalg::cholesky::{
+    factorize_symbolic_cholesky, LltRef, SymbolicCholesky, SymbolicCholeskyRaw,
+};
+use faer::sparse::linalg::triangular_solve::{
+    solve_lower_triangular_in_place, solve_lower_triangular_transpose_in_place,
+};
+use faer::sparse::{SparseColMat, SymbolicSparseColMat, Triplet};
+use faer::{Conj, Mat, MatMut, Par, Side};
 
 /// `L Lᵀ` of a sparse SPD matrix (fill-reducing ordering chosen by faer).
 ///
 /// The factorization runs with the given parallelism; the triangular solves run on one
 /// thread: for the two right-hand sides of a parameterization they are memory-bound, and on
 /// the 2-core benchmark machine faer's parallel solve was several times slower.
+///
+/// For repeated solves (`prepare_many_solves`) a supernodal factor is also copied into
+/// compressed columns and solved with faer's sparse triangular solves: for one or two
+/// right-hand sides the supernodal solve spends most of its time setting up small dense
+/// products.
 pub struct SpdFactor {
     symbolic: SymbolicCholesky<usize>,
     values: Vec<f64>,
+    /// The supernodal factor in compressed columns (permuted order, diagonal first in each
+    /// column, exact zeros of relaxed supernodes dropped); `None` for a simplicial factor.
+    columns: Option<SparseColMat<usize, f64>>,
+    /// For each entry of `columns`, its index in `values`; and the indices of `values` left
+    /// out as zeros. A refactorization whose left-out entries are still zero (the padding of
+    /// relaxed supernodes always is) only gathers the values again.
+    gather: Vec<usize>,
+    dropped: Vec<usize>,
+    /// Whether `columns` is kept (see `prepare_many_solves`).
+    many_solves: bool,
     /// The matrix (lower triangle, compressed columns), kept for numeric refactorization.
     matrix: SparseColMat<usize, f64>,
     /// For each triplet given to `new`, the index of its entry in `matrix`'s values, so that
@@ -53,6 +73,10 @@ impl SpdFactor {
         let mut f = SpdFactor {
             symbolic,
             values,
+            columns: None,
+            gather: Vec::new(),
+            dropped: Vec::new(),
+            many_solves: false,
             matrix: a,
             slot,
         };
@@ -93,6 +117,10 @@ impl SpdFactor {
                 .map_err(|e| format!("symbolic Cholesky: {e:?}"))?;
         let mut f = SpdFactor {
             values: vec![0.0; symbolic.len_val()],
+            columns: None,
+            gather: Vec::new(),
+            dropped: Vec::new(),
+            many_solves: false,
             symbolic,
             slot: (0..a.val().len()).collect(),
             matrix: a,
@@ -152,7 +180,76 @@ impl SpdFactor {
                 Default::default(),
             )
             .map_err(|e| format!("Cholesky: {e:?}"))?;
+        if self.many_solves {
+            self.update_columns();
+        }
         Ok(())
+    }
+
+    /// Prepares for many solves with this factor (and its refactorizations): a supernodal
+    /// factor is copied into compressed columns, now and after every refactorization. The
+    /// first copy costs about as much as two solves (fresh memory), later ones a gather.
+    pub fn prepare_many_solves(&mut self) {
+        self.many_solves = true;
+        self.update_columns();
+    }
+
+    /// Refreshes `columns` after a numeric factorization (see `columns`).
+    fn update_columns(&mut self) {
+        let SymbolicCholeskyRaw::Supernodal(sym) = self.symbolic.raw() else {
+            return;
+        };
+        let values = &self.values;
+        if let Some(l) = self.columns.as_mut() {
+            if self.dropped.iter().all(|&k| values[k] == 0.0) {
+                for (v, &k) in l.val_mut().iter_mut().zip(&self.gather) {
+                    *v = values[k];
+                }
+                return;
+            }
+        }
+        let n = sym.nrows();
+        let (begin, end) = (sym.supernode_begin(), sym.supernode_end());
+        let (row_ptr, val_ptr, pattern) = (
+            sym.col_ptr_for_row_idx(),
+            sym.col_ptr_for_val(),
+            sym.row_idx(),
+        );
+        let mut col_ptr = Vec::with_capacity(n + 1);
+        let mut rows = Vec::with_capacity(values.len());
+        let (mut gather, mut dropped) = (Vec::with_capacity(values.len()), Vec::new());
+        col_ptr.push(0);
+        for s in 0..sym.n_supernodes() {
+            let (start, ncols) = (begin[s], end[s] - begin[s]);
+            let below = &pattern[row_ptr[s]..row_ptr[s + 1]];
+            let nrows = ncols + below.len();
+            // column-major `nrows x ncols` block; its top `ncols` rows are the diagonal block
+            for j in 0..ncols {
+                let col = val_ptr[s] + j * nrows;
+                let row_of = |i: usize| {
+                    if i < ncols {
+                        start + i
+                    } else {
+                        below[i - ncols]
+                    }
+                };
+                for i in j..nrows {
+                    // the diagonal first, as faer's sparse triangular solves expect
+                    if i == j || values[col + i] != 0.0 {
+                        rows.push(row_of(i));
+                        gather.push(col + i);
+                    } else {
+                        dropped.push(col + i);
+                    }
+                }
+                col_ptr.push(rows.len());
+            }
+        }
+        let vals = gather.iter().map(|&k| values[k]).collect();
+        // faer checks the pattern (pointers increasing, rows in range)
+        let symbolic = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, rows);
+        self.columns = Some(SparseColMat::new(symbolic, vals));
+        (self.gather, self.dropped) = (gather, dropped);
     }
 
     /// Number of unknowns.
@@ -166,7 +263,16 @@ impl SpdFactor {
     }
 
     /// Solves `A X = B` in place, every column of `rhs` at once.
-    pub fn solve_in_place(&self, rhs: MatMut<'_, f64>) {
+    pub fn solve_in_place(&self, mut rhs: MatMut<'_, f64>) {
+        if let (Some(l), Some(perm)) = (&self.columns, self.symbolic.perm()) {
+            // A = Pᵀ L Lᵀ P: permute, two triangular solves, permute back
+            let mut x = Mat::<f64>::zeros(rhs.nrows(), rhs.ncols());
+            faer::perm::permute_rows(x.as_mut(), rhs.as_ref(), perm);
+            solve_lower_triangular_in_place(l.as_ref(), Conj::No, x.as_mut(), Par::Seq);
+            solve_lower_triangular_transpose_in_place(l.as_ref(), Conj::No, x.as_mut(), Par::Seq);
+            faer::perm::permute_rows(rhs.as_mut(), x.as_ref(), perm.inverse());
+            return;
+        }
         let mut mem = MemBuffer::new(
             self.symbolic
                 .solve_in_place_scratch::<f64>(rhs.ncols(), Par::Seq),
@@ -221,5 +327,73 @@ mod tests {
         b[(n - 1, 0)] = (n + 1) as f64;
         f.solve_in_place(b.as_mut());
         assert!((b[(0, 0)] - 0.5).abs() < 1e-12);
+    }
+
+    /// The compressed-column copy of a supernodal factor solves like faer's supernodal solve,
+    /// after the first factorization and after a refactorization (gather path), and a
+    /// refactorization whose padding is no longer zero rebuilds the pattern.
+    #[test]
+    fn column_solves_match_the_supernodal_solve() {
+        // 9-point Laplacian of a k x k grid plus a small shift: large enough for supernodes
+        let k = 200;
+        let id = |i: usize, j: usize| i * k + j;
+        let mut t = Vec::new();
+        for i in 0..k {
+            for j in 0..k {
+                t.push(Triplet::new(id(i, j), id(i, j), 6.01));
+                if i + 1 < k {
+                    t.push(Triplet::new(id(i + 1, j), id(i, j), -1.0));
+                    if j + 1 < k {
+                        t.push(Triplet::new(id(i + 1, j + 1), id(i, j), -0.5));
+                    }
+                    if j > 0 {
+                        t.push(Triplet::new(id(i + 1, j - 1), id(i, j), -0.5));
+                    }
+                }
+                if j + 1 < k {
+                    t.push(Triplet::new(id(i, j + 1), id(i, j), -1.0));
+                }
+            }
+        }
+        let n = k * k;
+        let b = faer::Mat::<f64>::from_fn(n, 2, |i, c| ((i * 7 + c * 3) % 11) as f64 - 5.0);
+        let plain = SpdFactor::new(n, &t, Par::Seq).unwrap();
+        let mut fast = SpdFactor::new(n, &t, Par::Seq).unwrap();
+        fast.prepare_many_solves();
+        assert!(
+            fast.columns.is_some(),
+            "the grid should factor supernodally"
+        );
+        let check = |a: &SpdFactor, c: &SpdFactor| {
+            let (mut x, mut y) = (b.clone(), b.clone());
+            a.solve_in_place(x.as_mut());
+            c.solve_in_place(y.as_mut());
+            let diff = (&x - &y).norm_max();
+            assert!(diff < 1e-12 * x.norm_max(), "difference {diff}");
+            assert!(x.norm_max() > 0.1);
+        };
+        check(&plain, &fast);
+        // a refactorization with another diagonal shift: values gathered again
+        let t2: Vec<_> = t
+            .iter()
+            .map(|x| {
+                Triplet::new(
+                    x.row,
+                    x.col,
+                    if x.row == x.col { x.val + 0.5 } else { x.val },
+                )
+            })
+            .collect();
+        let plain2 = SpdFactor::new(n, &t2, Par::Seq).unwrap();
+        fast.refactor(&t2, Par::Seq).unwrap();
+        check(&plain2, &fast);
+        // padding that is no longer zero: rebuilt, still right
+        let dropped = fast.dropped.len();
+        assert!(dropped > 0, "relaxed supernodes should have zero padding");
+        fast.values[fast.dropped[0]] = 1.0;
+        fast.update_columns();
+        assert_eq!(fast.dropped.len(), dropped - 1);
+        fast.refactor(&t2, Par::Seq).unwrap();
+        check(&plain2, &fast);
     }
 }

@@ -138,9 +138,21 @@ pub fn similarity_parts(j: &Mat2) -> (f64, f64, f64, f64) {
 #[inline]
 pub fn signed_singular_values(j: &Mat2) -> (f64, f64) {
     let (e, h, f, g) = similarity_parts(j);
-    let q = e.hypot(h);
-    let r = f.hypot(g);
+    let q = norm2(e, h);
+    let r = norm2(f, g);
     (q + r, q - r)
+}
+
+/// `sqrt(a² + b²)`: the plain formula (libm's `hypot` took a tenth of an ARAP iteration),
+/// falling back to `hypot` when the squares overflow or underflow.
+#[inline]
+pub fn norm2(a: f64, b: f64) -> f64 {
+    let s = a * a + b * b;
+    if s.is_normal() {
+        s.sqrt()
+    } else {
+        a.hypot(b)
+    }
 }
 
 /// The target map of the local step, `L = s·R(θ)`, stored as `[s cos θ, s sin θ]`.
@@ -153,7 +165,7 @@ pub type Similarity = [f64; 2];
 #[inline]
 pub fn local_step(j: &Mat2, lambda: Option<f64>) -> (Similarity, f64) {
     let (e, h, _, _) = similarity_parts(j);
-    let q = e.hypot(h);
+    let q = norm2(e, h);
     let (c, s_) = if q > 0.0 { (e / q, h / q) } else { (1.0, 0.0) };
     let s = match lambda {
         None => 1.0,

@@ -272,7 +272,9 @@ pub fn arap_parameterize(
         ))
     };
     let mut factor = if nf > 0 {
-        Some(SpdFactor::new(nf, &trip, Par::Seq).map_err(singular)?)
+        let mut f = SpdFactor::new(nf, &trip, Par::Seq).map_err(singular)?;
+        f.prepare_many_solves();
+        Some(f)
     } else {
         None
     };

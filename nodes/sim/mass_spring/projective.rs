@@ -65,8 +65,9 @@ impl Projective {
         } else {
             Par::Seq
         };
-        let factor = SpdFactor::new(n_free, &t, par)
+        let mut factor = SpdFactor::new(n_free, &t, par)
             .map_err(|e| format!("the global matrix is not positive definite: {e}"))?;
+        factor.prepare_many_solves();
         Ok(Projective {
             free,
             n_free,

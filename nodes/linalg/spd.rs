@@ -3,7 +3,7 @@
 
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::sparse::linalg::cholesky::{
-    factorize_symbolic_cholesky, LltRef, SymbolicCholesky, SymbolicCholeskyRaw,
+    factorize_symbolic_cholesky, LltRef, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
 };
 use faer::sparse::linalg::triangular_solve::{
     solve_lower_triangular_in_place, solve_lower_triangular_transpose_in_place,
@@ -34,8 +34,10 @@ pub struct SpdFactor {
     dropped: Vec<usize>,
     /// Whether `columns` is kept (see `prepare_many_solves`).
     many_solves: bool,
-    /// The matrix (lower triangle, compressed columns), kept for numeric refactorization.
+    /// The matrix (one triangle, compressed columns), kept for numeric refactorization.
     matrix: SparseColMat<usize, f64>,
+    /// Which triangle `matrix` holds.
+    side: Side,
     /// For each triplet given to `new`, the index of its entry in `matrix`'s values, so that
     /// `refactor_with` assembles new values without sorting.
     slot: Vec<usize>,
@@ -78,10 +80,19 @@ impl SpdFactor {
             dropped: Vec::new(),
             many_solves: false,
             matrix: a,
+            side: Side::Lower,
             slot,
         };
         f.numeric(par)?;
         Ok(f)
+    }
+
+    /// Factors the matrix given by its upper triangle in compressed columns (rows sorted,
+    /// so the diagonal comes last), eliminating the rows in stored order: for a matrix
+    /// assembled in a fill-reducing order already, which spares faer a permuted copy in the
+    /// symbolic and in every numeric factorization.
+    pub fn from_upper_in_order(a: SparseColMat<usize, f64>, par: Par) -> Result<SpdFactor, String> {
+        Self::with_ordering(a, Side::Upper, SymmetricOrdering::Identity, par)
     }
 
     /// Factors the matrix given by its lower triangle in compressed columns, with the given
@@ -93,7 +104,6 @@ impl SpdFactor {
         order: Option<&[usize]>,
         par: Par,
     ) -> Result<SpdFactor, String> {
-        use faer::sparse::linalg::cholesky::SymmetricOrdering;
         let n = a.nrows();
         let perm = order.filter(|o| o.len() == n).and_then(|fwd| {
             let mut inv = vec![usize::MAX; n];
@@ -112,8 +122,17 @@ impl SpdFactor {
             }
             None => SymmetricOrdering::Amd,
         };
+        Self::with_ordering(a, Side::Lower, ordering, par)
+    }
+
+    fn with_ordering(
+        a: SparseColMat<usize, f64>,
+        side: Side,
+        ordering: SymmetricOrdering<'_, usize>,
+        par: Par,
+    ) -> Result<SpdFactor, String> {
         let symbolic =
-            factorize_symbolic_cholesky(a.symbolic(), Side::Lower, ordering, Default::default())
+            factorize_symbolic_cholesky(a.symbolic(), side, ordering, Default::default())
                 .map_err(|e| format!("symbolic Cholesky: {e:?}"))?;
         let mut f = SpdFactor {
             values: vec![0.0; symbolic.len_val()],
@@ -124,6 +143,7 @@ impl SpdFactor {
             symbolic,
             slot: (0..a.val().len()).collect(),
             matrix: a,
+            side,
         };
         f.numeric(par)?;
         Ok(f)
@@ -173,7 +193,7 @@ impl SpdFactor {
             .factorize_numeric_llt(
                 &mut self.values,
                 a.as_ref(),
-                Side::Lower,
+                self.side,
                 Default::default(),
                 par,
                 MemStack::new(&mut mem),

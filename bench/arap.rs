@@ -10,7 +10,8 @@
 //! (our frames and factorization; libigl's precomputation), which is reported separately.
 //! Writes `target/bench/arap/*.csv` (energy against time) and `docs/arap_energy_time.svg`.
 //! `ARAP_REFACTOR=PER_ITERATION,BLOCKED_RUN,GROWTH` overrides the fold-free mode's refactor
-//! schedule (`RefactorSchedule`; `3,0,0` refactors on every blocked round, as before the schedule).
+//! schedule (`RefactorSchedule`; `3,0,0` refactors on every blocked round, as before the schedule);
+//! `ARAP_LOCAL_RINGS=0` turns off the local stiffened re-solves (`ArapOptions::local_rings`).
 
 use cgnodes::nodes::mesh::obj::load_obj;
 use cgnodes::nodes::param::arap::{arap_parameterize, ArapOptions, ArapResult, RefactorSchedule};
@@ -34,7 +35,7 @@ struct Outcome {
     iter_ms: f64,
     energy: f64,
     flips: usize,
-    refactors: Option<usize>,
+    refactors: Option<(usize, usize)>,
 }
 
 fn main() {
@@ -58,7 +59,7 @@ fn main() {
     std::fs::create_dir_all(&out_dir).expect("create target/bench/arap");
     let mut seen = std::collections::BTreeSet::new();
     let mut table = String::from(
-        "| mesh (faces) | method | setup ms | ms / iteration | ratio to libigl | ARAP E | flips | refactors |\n|---|---|---|---|---|---|---|---|\n",
+        "| mesh (faces) | method | setup ms | ms / iteration | ratio to libigl | ARAP E | flips | refactors (local re-solves) |\n|---|---|---|---|---|---|---|---|\n",
     );
     let mut chart_curves: Vec<(String, Vec<Curve>)> = Vec::new();
     for path in meshes {
@@ -86,6 +87,10 @@ fn main() {
                 tolerance: 0.0,
                 injective,
                 refactor: schedule(),
+                local_rings: std::env::var("ARAP_LOCAL_RINGS")
+                    .ok()
+                    .and_then(|v| v.parse().ok())
+                    .unwrap_or(ArapOptions::default().local_rings),
                 ..Default::default()
             };
             let r = arap_parameterize(&mesh.positions, &tris, &init, &opts).expect("arap");
@@ -97,13 +102,14 @@ fn main() {
             };
             curves.push(curve(label, &r, tutte_ms));
             let mut o = outcome(&r, m.arap_energy, m.flipped + m.collapsed);
-            o.refactors = Some(r.refactors);
+            o.refactors = Some((r.refactors, r.local_solves));
             eprintln!(
-                "{name} {label}: {} iterations, stop {} {}, {} refactors, {} reweighted, {} collapsed",
+                "{name} {label}: {} iterations, stop {} {}, {} refactors, {} local re-solves, {} reweighted, {} collapsed",
                 r.log.len() - 1,
                 r.stop_reason.as_str(),
                 r.stop_detail,
                 r.refactors,
+                r.local_solves,
                 r.reweighted,
                 m.collapsed
             );
@@ -170,7 +176,8 @@ fn main() {
                 o.iter_ms,
                 o.energy,
                 o.flips,
-                o.refactors.map_or(String::new(), |r| r.to_string())
+                o.refactors
+                    .map_or(String::new(), |(r, l)| format!("{r} ({l})"))
             );
         }
         match &igl_outcome {

@@ -35,6 +35,9 @@ pub struct ArapOptions {
     pub lambda: Option<f64>,
     /// When the fold-free mode refactors the Laplacian after stiffening triangles.
     pub refactor: RefactorSchedule,
+    /// Fold-free mode: rings around the blocking triangles re-solved locally with the
+    /// stiffened weights (see `local_resolve`) before any refactorization; 0 turns it off.
+    pub local_rings: usize,
 }
 
 impl Default for ArapOptions {
@@ -46,6 +49,7 @@ impl Default for ArapOptions {
             pin: None,
             lambda: None,
             refactor: RefactorSchedule::default(),
+            local_rings: LOCAL_RINGS,
         }
     }
 }
@@ -124,9 +128,16 @@ pub struct ArapResult {
     pub reweighted: usize,
     /// Numeric refactorizations after reweighting (the initial factorization not counted).
     pub refactors: usize,
+    /// Local stiffened re-solves of blocked steps (`ArapOptions::local_rings`).
+    pub local_solves: usize,
     /// Details of a `NoProgress` stop (empty otherwise).
     pub stop_detail: String,
 }
+
+/// Default `ArapOptions::local_rings`.
+pub const LOCAL_RINGS: usize = 2;
+/// Local re-solves tried per iteration before falling back to the refactorization schedule.
+const LOCAL_ROUNDS: usize = 3;
 
 /// Armijo's sufficient-decrease constant.
 const ARMIJO_C: f64 = 1e-4;
@@ -340,6 +351,16 @@ pub fn arap_parameterize(
     let mut d = vec![[0.0; 2]; n];
     let mut trial = uv.clone();
     let mut limits = vec![f64::INFINITY; if opts.injective { m } else { 0 }];
+    let mut terms = vec![[0.0; 2]; if opts.injective { m } else { 0 }];
+    let mut touched: Vec<u32> = Vec::new();
+    let mut local_solves = 0usize;
+    let mut mark = vec![u32::MAX; if opts.injective { n } else { 0 }];
+    let mut seen = vec![false; if opts.injective { m } else { 0 }];
+    let adjacency = if opts.injective && opts.local_rings > 0 {
+        vertex_triangles(n, &frames.triangles)
+    } else {
+        (Vec::new(), Vec::new())
+    };
     let mut it = 0;
     while it < opts.iterations {
         let Some(factor) = factor.as_mut() else {
@@ -387,7 +408,57 @@ pub fn arap_parameterize(
         let mut blocked = false;
         let mut iter_refactors = 0;
         if opts.injective {
-            let mut dir = directional(&frames, &uv, &d, &targets, &floor2, &mut limits);
+            let mut dir = directional(&frames, &uv, &d, &targets, &floor2, &mut limits, &mut terms);
+            // A blocked step is first reshaped locally: the blocking triangles are stiffened
+            // and the rings around them re-solved with the stiffened weights, the rest of
+            // the global step kept (`local_resolve`); refactoring the whole Laplacian (below)
+            // is left for what that does not unblock.
+            let mut local = false;
+            if opts.local_rings > 0 {
+                for _ in 0..LOCAL_ROUNDS {
+                    if STEP_SAFETY * dir.max_step >= BLOCKED_STEP * dir.best_step {
+                        break;
+                    }
+                    let changed = reweight(&limits, dir.best_step, &mut weights);
+                    pending += changed;
+                    reweighted += changed;
+                    let solved = local_resolve(
+                        &frames,
+                        &weights,
+                        &limits,
+                        dir.best_step,
+                        opts.local_rings,
+                        &free_index,
+                        &gradient,
+                        &adjacency,
+                        &mut mark,
+                        &mut seen,
+                        &mut touched,
+                        &mut d,
+                    );
+                    if solved.is_err() {
+                        break;
+                    }
+                    dir = directional_update(
+                        &frames,
+                        &uv,
+                        &d,
+                        &targets,
+                        &floor2,
+                        &mut limits,
+                        &mut terms,
+                        &touched,
+                    );
+                    local = true;
+                    local_solves += 1;
+                }
+                if local && (dir.slope.is_nan() || dir.slope >= 0.0) {
+                    // the local re-solve lost the descent: back to the global direction
+                    rhs.copy_from(&gradient);
+                    descent_direction(factor, &mut rhs, &free_vertices, &mut d);
+                    dir = directional(&frames, &uv, &d, &targets, &floor2, &mut limits, &mut terms);
+                }
+            }
             loop {
                 if STEP_SAFETY * dir.max_step >= BLOCKED_STEP * dir.best_step {
                     blocked_run = 0;
@@ -419,7 +490,7 @@ pub fn arap_parameterize(
                 iter_refactors += 1;
                 rhs.copy_from(&gradient);
                 descent_direction(factor, &mut rhs, &free_vertices, &mut d);
-                dir = directional(&frames, &uv, &d, &targets, &floor2, &mut limits);
+                dir = directional(&frames, &uv, &d, &targets, &floor2, &mut limits, &mut terms);
             }
             refactors += iter_refactors;
             slope = dir.slope / total_area; // per unit area, like `energy`
@@ -508,6 +579,7 @@ pub fn arap_parameterize(
         energy,
         reweighted,
         refactors,
+        local_solves,
         stop_detail: detail,
     })
 }
@@ -570,45 +642,94 @@ fn directional(
     targets: &[Similarity],
     floor2: &[[f64; 2]],
     limits: &mut [f64],
+    terms: &mut [[f64; 2]],
 ) -> Directional {
-    let parts: Vec<(f64, f64, f64, bool)> = limits
+    limits
         .par_chunks_mut(PAR_CHUNK)
+        .zip(terms.par_chunks_mut(PAR_CHUNK))
         .enumerate()
-        .map(|(ci, chunk)| {
-            let (mut slope, mut curv, mut max_step, mut squeezed) =
-                (0.0, 0.0, f64::INFINITY, false);
-            for (k, lim) in chunk.iter_mut().enumerate() {
-                let t = ci * PAR_CHUNK + k;
-                let j0 = frames.jacobian(t, uv);
-                let jd = frames.jacobian(t, dir);
-                let [a, b] = targets[t];
-                let l = [[a, -b], [b, a]];
-                let (mut g, mut c) = (0.0, 0.0);
-                for r in 0..2 {
-                    for k in 0..2 {
-                        g += (j0[r][k] - l[r][k]) * jd[r][k];
-                        c += jd[r][k] * jd[r][k];
-                    }
-                }
-                let [margin, hard] = floor2[t];
-                let a2 = frames.signed_area2(t, uv);
-                let floor = hard.max(margin.min(0.5 * a2));
-                *lim = triangle_max_step_above(frames, t, uv, dir, 1.0, floor);
-                slope += 2.0 * frames.area[t] * g;
-                curv += frames.area[t] * c;
-                if *lim < max_step {
-                    max_step = *lim;
-                    squeezed = a2 < margin;
-                }
+        .for_each(|(ci, (lims, ts))| {
+            for (k, (lim, tm)) in lims.iter_mut().zip(ts.iter_mut()).enumerate() {
+                (*lim, *tm) = line_terms(frames, ci * PAR_CHUNK + k, uv, dir, targets, floor2);
             }
-            (slope, curv, max_step, squeezed)
-        })
-        .collect();
-    let (slope, curv, max_step, squeezed) =
-        parts.iter().fold((0.0, 0.0, f64::INFINITY, false), |x, y| {
-            let (m, s) = if y.2 < x.2 { (y.2, y.3) } else { (x.2, x.3) };
-            (x.0 + y.0, x.1 + y.1, m, s)
         });
+    reduce_directional(frames, uv, floor2, limits, terms)
+}
+
+/// `directional` after `dir` changed only on the triangles listed in `changed`: their terms
+/// are recomputed, the others kept.
+#[allow(clippy::too_many_arguments)]
+fn directional_update(
+    frames: &TriangleFrames,
+    uv: &[[f64; 2]],
+    dir: &[[f64; 2]],
+    targets: &[Similarity],
+    floor2: &[[f64; 2]],
+    limits: &mut [f64],
+    terms: &mut [[f64; 2]],
+    changed: &[u32],
+) -> Directional {
+    for &t in changed {
+        let t = t as usize;
+        (limits[t], terms[t]) = line_terms(frames, t, uv, dir, targets, floor2);
+    }
+    reduce_directional(frames, uv, floor2, limits, terms)
+}
+
+/// One triangle's part of `directional`: its orientation limit and its terms of the slope
+/// and curvature, `[2 A <J(uv) - L, J(δ)>, A |J(δ)|²]`.
+fn line_terms(
+    frames: &TriangleFrames,
+    t: usize,
+    uv: &[[f64; 2]],
+    dir: &[[f64; 2]],
+    targets: &[Similarity],
+    floor2: &[[f64; 2]],
+) -> (f64, [f64; 2]) {
+    let j0 = frames.jacobian(t, uv);
+    let jd = frames.jacobian(t, dir);
+    let [a, b] = targets[t];
+    let l = [[a, -b], [b, a]];
+    let (mut g, mut c) = (0.0, 0.0);
+    for r in 0..2 {
+        for k in 0..2 {
+            g += (j0[r][k] - l[r][k]) * jd[r][k];
+            c += jd[r][k] * jd[r][k];
+        }
+    }
+    let [margin, hard] = floor2[t];
+    let a2 = frames.signed_area2(t, uv);
+    let floor = hard.max(margin.min(0.5 * a2));
+    let lim = triangle_max_step_above(frames, t, uv, dir, 1.0, floor);
+    (lim, [2.0 * frames.area[t] * g, frames.area[t] * c])
+}
+
+/// Sums of the per-triangle terms (per fixed chunk, chunks in order: the result does not
+/// depend on rayon's scheduling) and the smallest limit.
+fn reduce_directional(
+    frames: &TriangleFrames,
+    uv: &[[f64; 2]],
+    floor2: &[[f64; 2]],
+    limits: &[f64],
+    terms: &[[f64; 2]],
+) -> Directional {
+    let (mut slope, mut curv) = (0.0, 0.0);
+    for chunk in terms.chunks(PAR_CHUNK) {
+        let (mut s, mut c) = (0.0, 0.0);
+        for tm in chunk {
+            s += tm[0];
+            c += tm[1];
+        }
+        slope += s;
+        curv += c;
+    }
+    let (mut max_step, mut arg) = (f64::INFINITY, usize::MAX);
+    for (t, &lim) in limits.iter().enumerate() {
+        if lim < max_step {
+            (max_step, arg) = (lim, t);
+        }
+    }
+    let squeezed = arg != usize::MAX && frames.signed_area2(arg, uv) < floor2[arg][0];
     let best_step = if curv > 0.0 {
         -slope / (2.0 * curv)
     } else {
@@ -634,6 +755,146 @@ fn descent_direction(
     for (f, &v) in free_vertices.iter().enumerate() {
         d[v] = [-rhs[(f, 0)], -rhs[(f, 1)]];
     }
+}
+
+/// The triangles of each vertex, in compressed rows (`start`, `triangle`).
+fn vertex_triangles(n: usize, triangles: &[[u32; 3]]) -> (Vec<usize>, Vec<u32>) {
+    let mut start = vec![0usize; n + 1];
+    for tri in triangles {
+        for &v in tri {
+            start[v as usize + 1] += 1;
+        }
+    }
+    for v in 0..n {
+        start[v + 1] += start[v];
+    }
+    let mut next = start.clone();
+    let mut list = vec![0u32; start[n]];
+    for (t, tri) in triangles.iter().enumerate() {
+        for &v in tri {
+            list[next[v as usize]] = t as u32;
+            next[v as usize] += 1;
+        }
+    }
+    (start, list)
+}
+
+/// Local stiffened re-solve of a blocked step: on the vertices within `rings` rings of the
+/// triangles that would reach their area floor before `best_step`, replaces `d` by the
+/// minimizer of the global step's model `g·δ + ½ δᵀ Δ_W δ` (stiffened weights `Δ_W`) with `δ`
+/// held at `d` everywhere else, a small Dirichlet problem factored on the spot. The blocking
+/// triangles then move almost rigidly with their surroundings instead of cutting the step for
+/// the whole mesh, without refactoring the global Laplacian. Returns the number of vertices
+/// re-solved; `touched` receives the triangles whose direction changed. `adjacency` lists each
+/// vertex's triangles (compressed rows); `mark` and `seen` are scratch (all `u32::MAX` and
+/// `false` on entry and exit).
+#[allow(clippy::too_many_arguments)]
+fn local_resolve(
+    frames: &TriangleFrames,
+    weights: &[f64],
+    limits: &[f64],
+    best_step: f64,
+    rings: usize,
+    free_index: &[u32],
+    gradient: &Mat<f64>,
+    adjacency: &(Vec<usize>, Vec<u32>),
+    mark: &mut [u32],
+    seen: &mut [bool],
+    touched: &mut Vec<u32>,
+    d: &mut [[f64; 2]],
+) -> Result<usize, String> {
+    let tris = &frames.triangles;
+    let (vt_start, vt) = (&adjacency.0, &adjacency.1);
+    // seed (ring 0): free vertices of the blocking triangles; `mark` holds the ring while
+    // growing, then the local index
+    let mut region: Vec<u32> = Vec::new();
+    for (tri, &lim) in tris.iter().zip(limits) {
+        if STEP_SAFETY * lim < best_step {
+            for &v in tri {
+                if mark[v as usize] == u32::MAX && free_index[v as usize] != u32::MAX {
+                    mark[v as usize] = 0;
+                    region.push(v);
+                }
+            }
+        }
+    }
+    let mut ring_start = 0;
+    for ring in 0..rings as u32 {
+        let ring_end = region.len();
+        for k in ring_start..ring_end {
+            let v = region[k] as usize;
+            for &t in &vt[vt_start[v]..vt_start[v + 1]] {
+                for &u in &tris[t as usize] {
+                    if mark[u as usize] == u32::MAX && free_index[u as usize] != u32::MAX {
+                        mark[u as usize] = ring + 1;
+                        region.push(u);
+                    }
+                }
+            }
+        }
+        ring_start = ring_end;
+    }
+    for (k, &v) in region.iter().enumerate() {
+        mark[v as usize] = k as u32;
+    }
+    let r = region.len();
+    touched.clear();
+    let result = (|| {
+        if r == 0 {
+            return Err("no free vertex to re-solve".to_string());
+        }
+        // Δ_W restricted to the region (lower triangle) and -g - Δ_W,RO d_O
+        let mut trip: Vec<Triplet<usize, usize, f64>> = Vec::new();
+        let mut rhs = Mat::<f64>::zeros(r, 2);
+        for (k, &v) in region.iter().enumerate() {
+            let f = free_index[v as usize] as usize;
+            rhs[(k, 0)] = -gradient[(f, 0)];
+            rhs[(k, 1)] = -gradient[(f, 1)];
+            for &t in &vt[vt_start[v as usize]..vt_start[v as usize + 1]] {
+                if !seen[t as usize] {
+                    seen[t as usize] = true;
+                    touched.push(t);
+                }
+            }
+        }
+        for &t in touched.iter() {
+            let (t, tri) = (t as usize, tris[t as usize]);
+            for k in 0..3 {
+                let (i, j) = (tri[(k + 1) % 3] as usize, tri[(k + 2) % 3] as usize);
+                let w = frames.cot[t][k] * weights[t];
+                let (ri, rj) = (mark[i], mark[j]);
+                for (ra, b, rb) in [(ri, j, rj), (rj, i, ri)] {
+                    if ra == u32::MAX {
+                        continue;
+                    }
+                    trip.push(Triplet::new(ra as usize, ra as usize, w));
+                    if rb == u32::MAX {
+                        // neighbour outside: held at d (zero when pinned)
+                        rhs[(ra as usize, 0)] += w * d[b][0];
+                        rhs[(ra as usize, 1)] += w * d[b][1];
+                    } else if ra > rb {
+                        trip.push(Triplet::new(ra as usize, rb as usize, -w));
+                    }
+                }
+            }
+        }
+        let f = SpdFactor::new(r, &trip, Par::Seq)?;
+        f.solve_in_place(rhs.as_mut());
+        if !rhs.col_iter().all(|c| c.iter().all(|x| x.is_finite())) {
+            return Err("non-finite local solution".to_string());
+        }
+        for (k, &v) in region.iter().enumerate() {
+            d[v as usize] = [rhs[(k, 0)], rhs[(k, 1)]];
+        }
+        Ok(r)
+    })();
+    for &v in &region {
+        mark[v as usize] = u32::MAX;
+    }
+    for &t in touched.iter() {
+        seen[t as usize] = false;
+    }
+    result
 }
 
 /// Multiplies by `REWEIGHT_FACTOR` the weight of every triangle that would flip before

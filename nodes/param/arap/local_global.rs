@@ -341,7 +341,16 @@ pub fn arap_parameterize(
         let mut blocked = false;
         let mut iter_refactors = 0;
         if opts.injective {
-            let mut dir = directional(&frames, &uv, &d, &targets, &floor2, &mut limits, &mut terms);
+            let mut dir = directional(
+                &frames,
+                &uv,
+                &d,
+                &targets,
+                &floor2,
+                &mut limits,
+                &mut terms,
+                None,
+            );
             // A blocked step is first reshaped locally: the blocking triangles are stiffened
             // and the rings around them re-solved with the stiffened weights, the rest of
             // the global step kept (`local_resolve`); refactoring the whole Laplacian (below)
@@ -372,7 +381,7 @@ pub fn arap_parameterize(
                     if solved.is_err() {
                         break;
                     }
-                    dir = directional_update(
+                    dir = directional(
                         &frames,
                         &uv,
                         &d,
@@ -380,7 +389,7 @@ pub fn arap_parameterize(
                         &floor2,
                         &mut limits,
                         &mut terms,
-                        &touched,
+                        Some(&touched),
                     );
                     local = true;
                     local_solves += 1;
@@ -389,7 +398,16 @@ pub fn arap_parameterize(
                     // the local re-solve lost the descent: back to the global direction
                     rhs.copy_from(&gradient);
                     descent_direction(factor, &mut rhs, &free_vertices, &mut d);
-                    dir = directional(&frames, &uv, &d, &targets, &floor2, &mut limits, &mut terms);
+                    dir = directional(
+                        &frames,
+                        &uv,
+                        &d,
+                        &targets,
+                        &floor2,
+                        &mut limits,
+                        &mut terms,
+                        None,
+                    );
                 }
             }
             loop {
@@ -423,7 +441,16 @@ pub fn arap_parameterize(
                 iter_refactors += 1;
                 rhs.copy_from(&gradient);
                 descent_direction(factor, &mut rhs, &free_vertices, &mut d);
-                dir = directional(&frames, &uv, &d, &targets, &floor2, &mut limits, &mut terms);
+                dir = directional(
+                    &frames,
+                    &uv,
+                    &d,
+                    &targets,
+                    &floor2,
+                    &mut limits,
+                    &mut terms,
+                    None,
+                );
             }
             refactors += iter_refactors;
             slope = dir.slope / total_area; // per unit area, like `energy`
@@ -566,8 +593,10 @@ struct Directional {
 /// One parallel pass over the triangles: slope and curvature of the targets' quadratic
 /// along `dir`, and each triangle's orientation limit (written to `limits`): the step at
 /// which its UV area would drop to its floor, `max(hard, min(margin, half the current area))`
-/// with `floor2 = [margin, hard]` (twice the areas). Sums are taken over fixed chunks in a fixed
-/// order, so the result does not depend on rayon's scheduling.
+/// with `floor2 = [margin, hard]` (twice the areas). With `changed`, `dir` differs from the
+/// last call only on those triangles: only their terms are recomputed. Sums are taken over
+/// fixed chunks in a fixed order, so the result does not depend on rayon's scheduling.
+#[allow(clippy::too_many_arguments)]
 fn directional(
     frames: &TriangleFrames,
     uv: &[[f64; 2]],
@@ -576,35 +605,24 @@ fn directional(
     floor2: &[[f64; 2]],
     limits: &mut [f64],
     terms: &mut [[f64; 2]],
+    changed: Option<&[u32]>,
 ) -> Directional {
-    limits
-        .par_chunks_mut(PAR_CHUNK)
-        .zip(terms.par_chunks_mut(PAR_CHUNK))
-        .enumerate()
-        .for_each(|(ci, (lims, ts))| {
-            for (k, (lim, tm)) in lims.iter_mut().zip(ts.iter_mut()).enumerate() {
-                (*lim, *tm) = line_terms(frames, ci * PAR_CHUNK + k, uv, dir, targets, floor2);
+    match changed {
+        Some(list) => {
+            for &t in list {
+                let t = t as usize;
+                (limits[t], terms[t]) = line_terms(frames, t, uv, dir, targets, floor2);
             }
-        });
-    reduce_directional(frames, uv, floor2, limits, terms)
-}
-
-/// `directional` after `dir` changed only on the triangles listed in `changed`: their terms
-/// are recomputed, the others kept.
-#[allow(clippy::too_many_arguments)]
-fn directional_update(
-    frames: &TriangleFrames,
-    uv: &[[f64; 2]],
-    dir: &[[f64; 2]],
-    targets: &[Similarity],
-    floor2: &[[f64; 2]],
-    limits: &mut [f64],
-    terms: &mut [[f64; 2]],
-    changed: &[u32],
-) -> Directional {
-    for &t in changed {
-        let t = t as usize;
-        (limits[t], terms[t]) = line_terms(frames, t, uv, dir, targets, floor2);
+        }
+        None => limits
+            .par_chunks_mut(PAR_CHUNK)
+            .zip(terms.par_chunks_mut(PAR_CHUNK))
+            .enumerate()
+            .for_each(|(ci, (lims, ts))| {
+                for (k, (lim, tm)) in lims.iter_mut().zip(ts.iter_mut()).enumerate() {
+                    (*lim, *tm) = line_terms(frames, ci * PAR_CHUNK + k, uv, dir, targets, floor2);
+                }
+            }),
     }
     reduce_directional(frames, uv, floor2, limits, terms)
 }
@@ -1200,25 +1218,28 @@ pub(crate) mod tests {
             .fold(0.0, f64::max);
         assert!(dmax > 1e-3);
 
+        let mut resolve = |w: &[f64], d: &mut [[f64; 2]]| {
+            let r = local_resolve(
+                &frames,
+                w,
+                &limits,
+                1.0,
+                2,
+                &free_index,
+                &g,
+                &adjacency,
+                &mut mark,
+                &mut seen,
+                &mut touched,
+                d,
+            )
+            .unwrap();
+            (r, touched.len())
+        };
         let mut d1 = d.clone();
-        let r = local_resolve(
-            &frames,
-            &vec![1.0; m],
-            &limits,
-            1.0,
-            2,
-            &free_index,
-            &g,
-            &adjacency,
-            &mut mark,
-            &mut seen,
-            &mut touched,
-            &mut d1,
-        )
-        .unwrap();
+        let (r, changed) = resolve(&vec![1.0; m], &mut d1);
         assert!(r > 6 && r < n / 2, "region of {r} vertices");
-        assert!(!touched.is_empty());
-        assert!(mark.iter().all(|&x| x == u32::MAX) && seen.iter().all(|&x| !x));
+        assert!(changed > 0);
         for (a, b) in d.iter().zip(&d1) {
             assert!((a[0] - b[0]).abs() + (a[1] - b[1]).abs() < 1e-9 * dmax);
         }
@@ -1228,21 +1249,8 @@ pub(crate) mod tests {
             w[b] = 1e8;
         }
         let mut d2 = d.clone();
-        local_resolve(
-            &frames,
-            &w,
-            &limits,
-            1.0,
-            2,
-            &free_index,
-            &g,
-            &adjacency,
-            &mut mark,
-            &mut seen,
-            &mut touched,
-            &mut d2,
-        )
-        .unwrap();
+        resolve(&w, &mut d2);
+        assert!(mark.iter().all(|&x| x == u32::MAX) && seen.iter().all(|&x| !x));
         let norm = |j: [[f64; 2]; 2]| {
             (j[0][0].powi(2) + j[0][1].powi(2) + j[1][0].powi(2) + j[1][1].powi(2)).sqrt()
         };

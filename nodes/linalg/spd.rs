@@ -208,7 +208,8 @@ impl SpdFactor {
 
     /// Prepares for many solves with this factor (and its refactorizations): a supernodal
     /// factor is copied into compressed columns, now and after every refactorization. The
-    /// first copy costs about as much as two solves (fresh memory), later ones a gather.
+    /// first copy walks and allocates the whole factor (on nefertiti_front's Tutte system it
+    /// cost more than the one solve it would speed up); later ones only gather the values.
     pub fn prepare_many_solves(&mut self) {
         self.many_solves = true;
         self.update_columns();

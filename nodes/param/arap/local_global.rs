@@ -331,9 +331,15 @@ pub fn arap_parameterize(
         // Global step, written as a preconditioned gradient step: d = -Δ_W⁻¹ ∇E. With unit
         // weights this is exactly Liu et al.'s global solve minus the current UVs;
         // ∇E at vertex i is Σ_t Σ_j cot θ_ij ((u_i - u_j) - L_t (x_i - x_j)) (eq. 6).
-        gradient_into(&frames, &corner_w, &targets, &uv, &free_index, &mut rhs);
-        gradient.copy_from(&rhs);
-        descent_direction(factor, &mut rhs, &free_vertices, &mut d);
+        gradient_into(
+            &frames,
+            &corner_w,
+            &targets,
+            &uv,
+            &free_index,
+            &mut gradient,
+        );
+        descent_direction(factor, &gradient, &mut rhs, &free_vertices, &mut d);
 
         // Line search.
         let mut step = 1.0;
@@ -396,8 +402,7 @@ pub fn arap_parameterize(
                 }
                 if local && (dir.slope.is_nan() || dir.slope >= 0.0) {
                     // the local re-solve lost the descent: back to the global direction
-                    rhs.copy_from(&gradient);
-                    descent_direction(factor, &mut rhs, &free_vertices, &mut d);
+                    descent_direction(factor, &gradient, &mut rhs, &free_vertices, &mut d);
                     dir = directional(
                         &frames,
                         &uv,
@@ -439,8 +444,7 @@ pub fn arap_parameterize(
                     .map_err(singular)?;
                 (pending, blocked_run) = (0, 0);
                 iter_refactors += 1;
-                rhs.copy_from(&gradient);
-                descent_direction(factor, &mut rhs, &free_vertices, &mut d);
+                descent_direction(factor, &gradient, &mut rhs, &free_vertices, &mut d);
                 dir = directional(
                     &frames,
                     &uv,
@@ -694,14 +698,16 @@ fn reduce_directional(
     }
 }
 
-/// `d = -Δ_W⁻¹ g` for the gradient `g` held in `rhs` (overwritten by the solve), scattered
-/// to the free vertices; pinned vertices keep their zero direction.
+/// `d = -Δ_W⁻¹ g` for the gradient `g` (one row per free vertex; `rhs` is the solve's
+/// scratch), scattered to the free vertices; pinned vertices keep their zero direction.
 fn descent_direction(
     factor: &SpdFactor,
+    gradient: &Mat<f64>,
     rhs: &mut Mat<f64>,
     free_vertices: &[usize],
     d: &mut [[f64; 2]],
 ) {
+    rhs.copy_from(gradient);
     factor.solve_in_place(rhs.as_mut());
     for (f, &v) in free_vertices.iter().enumerate() {
         d[v] = [-rhs[(f, 0)], -rhs[(f, 1)]];
@@ -1189,7 +1195,7 @@ pub(crate) mod tests {
         );
         let mut rhs = g.clone();
         let mut d = vec![[0.0; 2]; n];
-        descent_direction(&factor, &mut rhs, &free_vertices, &mut d);
+        descent_direction(&factor, &g, &mut rhs, &free_vertices, &mut d);
         // four triangles near the middle "block" the step
         let centre = |t: usize| {
             let c = frames.triangles[t].map(|v| p[v as usize]);

@@ -2,13 +2,14 @@
 //! solved for several right-hand sides per call.
 
 use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::sparse::linalg::cholesky::supernodal::SupernodalLltRef;
 use faer::sparse::linalg::cholesky::{
     factorize_symbolic_cholesky, LltRef, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
 };
 use faer::sparse::linalg::triangular_solve::{
     solve_lower_triangular_in_place, solve_lower_triangular_transpose_in_place,
 };
-use faer::sparse::{SparseColMat, SymbolicSparseColMat, Triplet};
+use faer::sparse::{SparseColMat, SparseColMatRef, SymbolicSparseColMat, Triplet};
 use faer::{Conj, Mat, MatMut, Par, Side};
 
 /// `L Lᵀ` of a sparse SPD matrix (fill-reducing ordering chosen by faer).
@@ -273,6 +274,62 @@ impl SpdFactor {
         (self.gather, self.dropped) = (gather, dropped);
     }
 
+    /// The trailing `s x s` block of the factor `L` (its last `s` columns, rows at or below
+    /// the diagonal), when the factor was computed in stored order (no permutation): `L_ss`
+    /// with `L_ss L_ssᵀ` the Schur complement of the last `s` unknowns. `None` when the
+    /// factor is permuted or `s` exceeds its size.
+    pub fn trailing_block(&self, s: usize) -> Option<Mat<f64>> {
+        let n = self.dim();
+        if s > n || self.symbolic.perm().is_some() {
+            return None;
+        }
+        let first = n - s;
+        let mut x = Mat::<f64>::zeros(s, s);
+        match self.symbolic.raw() {
+            SymbolicCholeskyRaw::Supernodal(sym) => {
+                let (begin, end) = (sym.supernode_begin(), sym.supernode_end());
+                let (row_ptr, val_ptr, pattern) = (
+                    sym.col_ptr_for_row_idx(),
+                    sym.col_ptr_for_val(),
+                    sym.row_idx(),
+                );
+                for sn in 0..sym.n_supernodes() {
+                    if end[sn] <= first {
+                        continue;
+                    }
+                    let (start, ncols) = (begin[sn], end[sn] - begin[sn]);
+                    let below = &pattern[row_ptr[sn]..row_ptr[sn + 1]];
+                    let nrows = ncols + below.len();
+                    for j in start.max(first) - start..ncols {
+                        let col = val_ptr[sn] + j * nrows;
+                        for i in j..nrows {
+                            let row = if i < ncols {
+                                start + i
+                            } else {
+                                below[i - ncols]
+                            };
+                            x[(row - first, start + j - first)] = self.values[col + i];
+                        }
+                    }
+                }
+            }
+            SymbolicCholeskyRaw::Simplicial(sym) => {
+                let (col_ptr, rows) = (sym.col_ptr(), sym.row_idx());
+                for j in first..n {
+                    for k in col_ptr[j]..col_ptr[j + 1] {
+                        x[(rows[k] - first, j - first)] = self.values[k];
+                    }
+                }
+            }
+        }
+        Some(x)
+    }
+
+    /// Whether faer chose its supernodal factorization (dense blocks) over the simplicial one.
+    pub fn is_supernodal(&self) -> bool {
+        matches!(self.symbolic.raw(), SymbolicCholeskyRaw::Supernodal(_))
+    }
+
     /// Number of unknowns.
     pub fn dim(&self) -> usize {
         self.symbolic.nrows()
@@ -281,6 +338,53 @@ impl SpdFactor {
     /// Number of stored entries of the factor (a measure of the cost of one solve).
     pub fn factor_nnz(&self) -> usize {
         self.values.len()
+    }
+
+    /// The first half of `solve_in_place`: `Y = L⁻¹ P B` in place, the rows of `Y` in
+    /// elimination order. With `backward_in_place` after it, `X = A⁻¹ B`; in between, the
+    /// trailing rows of `Y` can be changed (see `TwoDomainFactor`).
+    pub fn forward_in_place(&self, mut rhs: MatMut<'_, f64>) {
+        if let Some(perm) = self.symbolic.perm() {
+            let b = rhs.to_owned();
+            faer::perm::permute_rows(rhs.as_mut(), b.as_ref(), perm);
+        }
+        self.triangular_solve(rhs, false);
+    }
+
+    /// The second half of `solve_in_place`: `X = Pᵀ L⁻ᵀ Y` in place.
+    pub fn backward_in_place(&self, mut rhs: MatMut<'_, f64>) {
+        self.triangular_solve(rhs.as_mut(), true);
+        if let Some(perm) = self.symbolic.perm() {
+            let y = rhs.to_owned();
+            faer::perm::permute_rows(rhs.as_mut(), y.as_ref(), perm.inverse());
+        }
+    }
+
+    /// `L⁻¹` or `L⁻ᵀ` applied in place (elimination order).
+    fn triangular_solve(&self, rhs: MatMut<'_, f64>, transpose: bool) {
+        match self.symbolic.raw() {
+            SymbolicCholeskyRaw::Supernodal(sym) => {
+                let mut mem = MemBuffer::new(
+                    self.symbolic
+                        .solve_in_place_scratch::<f64>(rhs.ncols(), Par::Seq),
+                );
+                let l = SupernodalLltRef::new(sym, &self.values);
+                let stack = MemStack::new(&mut mem);
+                if transpose {
+                    l.l_transpose_solve_with_conj(Conj::No, rhs, Par::Seq, stack);
+                } else {
+                    l.l_solve_with_conj(Conj::No, rhs, Par::Seq, stack);
+                }
+            }
+            SymbolicCholeskyRaw::Simplicial(sym) => {
+                let l = SparseColMatRef::new(sym.factor(), &self.values);
+                if transpose {
+                    solve_lower_triangular_transpose_in_place(l, Conj::No, rhs, Par::Seq);
+                } else {
+                    solve_lower_triangular_in_place(l, Conj::No, rhs, Par::Seq);
+                }
+            }
+        }
     }
 
     /// Solves `A X = B` in place, every column of `rhs` at once.
@@ -394,6 +498,14 @@ mod tests {
             assert!(x.norm_max() > 0.1);
         };
         check(&plain, &fast);
+        // forward then backward substitution is the whole (permuted) solve
+        let (mut x, mut y) = (b.clone(), b.clone());
+        plain.solve_in_place(x.as_mut());
+        assert!(plain.symbolic.perm().is_some());
+        plain.forward_in_place(y.as_mut());
+        assert!((&x - &y).norm_max() > 0.1 * x.norm_max());
+        plain.backward_in_place(y.as_mut());
+        assert!((&x - &y).norm_max() < 1e-12 * x.norm_max());
         // a refactorization with another diagonal shift: values gathered again
         let t2: Vec<_> = t
             .iter()

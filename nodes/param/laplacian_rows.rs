@@ -9,8 +9,8 @@
 //! is being built on the other core.
 
 use super::laplacian::{corner_cotangents, not_positive_definite, ND_MIN_ROWS};
-use super::nested_dissection::nested_dissection_order;
-use crate::nodes::linalg::spd::SpdFactor;
+use super::nested_dissection::{nested_dissection, Dissection};
+use crate::nodes::linalg::{SpdFactor, TwoDomainFactor};
 use crate::prelude::*;
 use faer::sparse::SparseColMat;
 use faer::Mat;
@@ -144,14 +144,14 @@ impl LaplacianRows {
 
     /// Elimination order of all vertices by geometric nested dissection (see
     /// `nested_dissection.rs`), for the factorization of any free-vertex block.
-    pub fn nested_dissection_order(&self, positions: &[[f64; 3]]) -> Vec<usize> {
-        nested_dissection_order(&self.start, &self.col, positions, 64)
+    pub fn nested_dissection(&self, positions: &[[f64; 3]]) -> Dissection {
+        nested_dissection(&self.start, &self.col, positions, 64)
     }
 
-    /// `nested_dissection_order` for meshes with more than `ND_MIN_ROWS` vertices; `None`
+    /// `nested_dissection` for meshes with more than `ND_MIN_ROWS` vertices; `None`
     /// (faer's AMD) for smaller ones, where AMD is cheap.
-    pub fn fill_reducing_order(&self, positions: &[[f64; 3]]) -> Option<Vec<usize>> {
-        (self.num_vertices() > ND_MIN_ROWS).then(|| self.nested_dissection_order(positions))
+    pub fn fill_reducing_order(&self, positions: &[[f64; 3]]) -> Option<Dissection> {
+        (self.num_vertices() > ND_MIN_ROWS).then(|| self.nested_dissection(positions))
     }
 
     /// Vertices held fixed when nothing else is known: those on the boundary (an edge with a
@@ -166,6 +166,10 @@ impl LaplacianRows {
 /// Systems with at least this many free vertices solve their columns on two cores.
 const SPLIT_SOLVE_ROWS: usize = 4096;
 
+/// Systems whose two top-level nested-dissection halves each hold at least this many free
+/// vertices are factored as two domains on two cores (`TwoDomainFactor`).
+const TWO_DOMAIN_MIN_ROWS: usize = 4096;
+
 /// Whether `order` holds each of `0..n` exactly once.
 fn is_permutation(order: &[usize], n: usize) -> bool {
     let mut seen = vec![false; n];
@@ -177,13 +181,13 @@ fn is_permutation(order: &[usize], n: usize) -> bool {
 
 /// Solves `sum_j w_ij (x_i - x_j) = 0` for every vertex where `fixed[i]` is `None`, the others
 /// held at their values, with a sparse Cholesky factorization of the free-vertex block. `order`
-/// (an elimination order of all vertices, e.g. `LaplacianRows::nested_dissection_order`) is
+/// (an elimination order of all vertices, e.g. `LaplacianRows::nested_dissection`) is
 /// restricted to the free vertices; without it faer's AMD is used. A free vertex without
 /// weights, or a system that is not positive definite, is an error.
 pub fn solve_dirichlet_rows<const D: usize>(
     rows: &LaplacianRows,
     fixed: &[Option<[f64; D]>],
-    order: Option<&[usize]>,
+    order: Option<&Dissection>,
 ) -> Result<Vec<[f64; D]>, NodeError> {
     let is_fixed: Vec<bool> = fixed.iter().map(Option::is_some).collect();
     DirichletFactor::new(rows, &is_fixed, order)?.solve(rows, fixed)
@@ -196,15 +200,25 @@ pub struct DirichletFactor {
     index: Vec<u32>,
     /// The free vertices in row order.
     free: Vec<u32>,
-    factor: Option<SpdFactor>,
+    factor: Option<Factor>,
+}
+
+/// The factored free block: one factor, or two domains and their separator (one per
+/// `DirichletFactor`, so the size difference between the variants does not matter).
+#[allow(clippy::large_enum_variant)]
+enum Factor {
+    One(SpdFactor),
+    Two(TwoDomainFactor),
 }
 
 impl DirichletFactor {
-    /// Assembles and factors `L_II` for the vertices where `is_fixed` is false.
+    /// Assembles and factors `L_II` for the vertices where `is_fixed` is false, in `order`
+    /// when given (faer's AMD otherwise); when both of the order's top-level halves keep at
+    /// least `TWO_DOMAIN_MIN_ROWS` free vertices, the halves are factored on two cores.
     pub fn new(
         rows: &LaplacianRows,
         is_fixed: &[bool],
-        order: Option<&[usize]>,
+        order: Option<&Dissection>,
     ) -> Result<DirichletFactor, NodeError> {
         let n = rows.num_vertices();
         if is_fixed.len() != n {
@@ -218,7 +232,10 @@ impl DirichletFactor {
         }
         // Free vertices numbered in elimination order when there is one (the matrix is then
         // assembled already permuted), by vertex otherwise.
-        let order = order.filter(|o| is_permutation(o, n));
+        let halves = order.and_then(|d| d.halves);
+        let order = order
+            .map(|d| d.order.as_slice())
+            .filter(|o| is_permutation(o, n));
         let mut index = vec![u32::MAX; n];
         let mut free = Vec::new();
         let by_vertex = 0..n;
@@ -226,10 +243,17 @@ impl DirichletFactor {
             Some(o) => &mut o.iter().copied(),
             None => &mut by_vertex.into_iter(),
         };
-        for v in sequence {
+        // free vertices in each top-level half of the order
+        let mut free_halves = [0usize; 2];
+        for (k, v) in sequence.enumerate() {
             if !is_fixed[v] {
                 index[v] = free.len() as u32;
                 free.push(v as u32);
+                if let Some([h0, h1]) = halves {
+                    if k < h0 + h1 {
+                        free_halves[usize::from(k >= h0)] += 1;
+                    }
+                }
             }
         }
         let nfree = free.len();
@@ -290,9 +314,13 @@ impl DirichletFactor {
         let symbolic =
             faer::sparse::SymbolicSparseColMat::new_checked(nfree, nfree, col_ptr, None, row_idx);
         let matrix = SparseColMat::new(symbolic, values);
+        let [f0, f1] = free_halves;
         let factor = match order {
-            Some(_) => SpdFactor::from_upper_in_order(matrix, faer::Par::Seq),
-            None => SpdFactor::from_lower(matrix, None, faer::Par::Seq),
+            Some(_) if f0.min(f1) >= TWO_DOMAIN_MIN_ROWS && f0 + f1 < nfree => {
+                TwoDomainFactor::from_upper_in_order(matrix.as_ref(), f0, f1).map(Factor::Two)
+            }
+            Some(_) => SpdFactor::from_upper_in_order(matrix, faer::Par::Seq).map(Factor::One),
+            None => SpdFactor::from_lower(matrix, None, faer::Par::Seq).map(Factor::One),
         }
         .map_err(not_positive_definite)?;
         Ok(DirichletFactor {
@@ -305,7 +333,11 @@ impl DirichletFactor {
     /// Stored entries of the Cholesky factor (0 when every vertex is fixed): the fill-in the
     /// elimination order left.
     pub fn factor_nnz(&self) -> usize {
-        self.factor.as_ref().map_or(0, SpdFactor::factor_nnz)
+        match &self.factor {
+            None => 0,
+            Some(Factor::One(f)) => f.factor_nnz(),
+            Some(Factor::Two(f)) => f.factor_nnz(),
+        }
     }
 
     /// Whether this factor was built for exactly these fixed vertices.
@@ -347,13 +379,16 @@ impl DirichletFactor {
                 }
             }
         }
-        if D > 1 && self.free.len() >= SPLIT_SOLVE_ROWS {
-            // first column on one core, the rest on another: the triangular solves are
-            // memory-bound and both read the same factor (nefertiti_front: 4.4 -> 3.6 ms)
-            let (a, b) = rhs.as_mut().split_at_col_mut(1);
-            rayon::join(|| factor.solve_in_place(a), || factor.solve_in_place(b));
-        } else {
-            factor.solve_in_place(rhs.as_mut());
+        match factor {
+            // the two domains already solve on two cores
+            Factor::Two(f) => f.solve_in_place(rhs.as_mut()),
+            Factor::One(f) if D > 1 && self.free.len() >= SPLIT_SOLVE_ROWS => {
+                // first column on one core, the rest on another: the triangular solves are
+                // memory-bound and both read the same factor (nefertiti_front: 4.4 -> 3.6 ms)
+                let (a, b) = rhs.as_mut().split_at_col_mut(1);
+                rayon::join(|| f.solve_in_place(a), || f.solve_in_place(b));
+            }
+            Factor::One(f) => f.solve_in_place(rhs.as_mut()),
         }
         for (c, &v) in self.free.iter().enumerate() {
             for d in 0..D {
@@ -409,14 +444,58 @@ mod tests {
         let a = solve_dirichlet(&w, &fixed, true).unwrap();
         // nested dissection (one leaf here: input order), reversed, and scrambled orders
         // exercise the assembly in elimination order and its per-column sort
-        let order = rows.nested_dissection_order(&p);
-        let reversed: Vec<usize> = (0..n).rev().collect();
-        let scrambled: Vec<usize> = (0..n).map(|k| (k * 17 + 5) % n).collect();
+        let order = rows.nested_dissection(&p);
+        let plain = |order| Dissection {
+            order,
+            halves: None,
+        };
+        let reversed = plain((0..n).rev().collect());
+        let scrambled = plain((0..n).map(|k| (k * 17 + 5) % n).collect());
         for ord in [None, Some(&order), Some(&reversed), Some(&scrambled)] {
-            let ord = ord.map(Vec::as_slice);
             let b = solve_dirichlet_rows(&rows, &fixed, ord).unwrap();
             for (x, y) in a.iter().zip(&b) {
                 assert!((x[0] - y[0]).abs() < 1e-12 && (x[1] - y[1]).abs() < 1e-12);
+            }
+        }
+    }
+
+    /// A 120 x 120 grid (uniform weights reproduce linear functions) is large enough for the
+    /// two-domain factorization; the solve is exact against the analytic solution, like the
+    /// one-factor solve in AMD order.
+    #[test]
+    fn two_domain_solve_reproduces_a_linear_function() {
+        let k = 120;
+        let id = |i: usize, j: usize| (j * (k + 1) + i) as u32;
+        let mut p = Vec::new();
+        let mut t = Vec::new();
+        for j in 0..=k {
+            for i in 0..=k {
+                p.push([i as f64, j as f64, 0.0]);
+                if i < k && j < k {
+                    t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+                    t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+                }
+            }
+        }
+        let rows = LaplacianRows::uniform(p.len(), &t);
+        let exact = |v: usize| [p[v][0] + 2.0 * p[v][1], 3.0 - 0.5 * p[v][0]];
+        let fixed: Vec<Option<[f64; 2]>> = (0..p.len())
+            .map(|v| rows.on_boundary[v].then(|| exact(v)))
+            .collect();
+        let is_fixed: Vec<bool> = fixed.iter().map(Option::is_some).collect();
+        let order = rows.nested_dissection(&p);
+        let split = DirichletFactor::new(&rows, &is_fixed, Some(&order)).unwrap();
+        assert!(matches!(split.factor, Some(Factor::Two(_))));
+        let amd = DirichletFactor::new(&rows, &is_fixed, None).unwrap();
+        assert!(matches!(amd.factor, Some(Factor::One(_))));
+        for f in [&split, &amd] {
+            let x = f.solve(&rows, &fixed).unwrap();
+            for (v, xv) in x.iter().enumerate() {
+                let e = exact(v);
+                assert!(
+                    (xv[0] - e[0]).abs() < 1e-9 && (xv[1] - e[1]).abs() < 1e-9,
+                    "{v}: {xv:?} vs {e:?}"
+                );
             }
         }
     }

@@ -71,7 +71,7 @@ pub fn minimal_surface(
             )
             .map_err(bad)?;
             let order = rows.fill_reducing_order(&mesh.positions);
-            let x = solve_dirichlet_rows(&rows, &fixed, order.as_deref()).map_err(with_hint)?;
+            let x = solve_dirichlet_rows(&rows, &fixed, order.as_ref()).map_err(with_hint)?;
             let neg = if weights == TutteWeights::Cotangent {
                 rows.negative_edges()
             } else {

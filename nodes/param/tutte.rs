@@ -17,6 +17,7 @@ use super::boundary_map::{
 };
 use super::laplacian::{fan_triangles, mean_value_weights, solve_dirichlet_on};
 use super::laplacian_rows::{DirichletFactor, LaplacianRows};
+use super::nested_dissection::Dissection;
 use super::uv_metrics::uv_metrics;
 use crate::prelude::*;
 
@@ -149,7 +150,7 @@ pub fn tutte(mesh: &Mesh, opts: &TutteOptions) -> Result<TutteResult, NodeError>
         || check_tutte_topology(mesh, opts.fill_holes),
         || {
             let (rows, order) = symmetric_rows(&mesh.positions, &triangles, opts.weights)?;
-            let factor = DirichletFactor::new(&rows, &rows.boundary_or_unused(), order.as_deref());
+            let factor = DirichletFactor::new(&rows, &rows.boundary_or_unused(), order.as_ref());
             Ok::<_, String>((rows, factor))
         },
     );
@@ -218,7 +219,7 @@ pub fn tutte(mesh: &Mesh, opts: &TutteOptions) -> Result<TutteResult, NodeError>
             _ => {
                 let (rows, order) =
                     symmetric_rows(&positions, &triangles, opts.weights).map_err(bad)?;
-                let f = DirichletFactor::new(&rows, &is_fixed, order.as_deref())?;
+                let f = DirichletFactor::new(&rows, &is_fixed, order.as_ref())?;
                 (rows, f)
             }
         };
@@ -245,7 +246,7 @@ fn symmetric_rows(
     positions: &[[f64; 3]],
     triangles: &[[u32; 3]],
     weights: TutteWeights,
-) -> Result<(LaplacianRows, Option<Vec<usize>>), String> {
+) -> Result<(LaplacianRows, Option<Dissection>), String> {
     if weights == TutteWeights::MeanValue {
         return Err("mean-value weights are not symmetric".into());
     }

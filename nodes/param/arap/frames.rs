@@ -102,10 +102,21 @@ impl TriangleFrames {
     /// The Jacobian of triangle `t` under the UVs `uv`.
     #[inline]
     pub fn jacobian(&self, t: usize, uv: &[[f64; 2]]) -> Mat2 {
+        let [e1, e2] = self.edges(t, uv);
+        self.jacobian_of_edges(t, e1, e2)
+    }
+
+    /// The UV edges `u1 - u0` and `u2 - u0` of triangle `t`.
+    #[inline]
+    pub fn edges(&self, t: usize, uv: &[[f64; 2]]) -> [[f64; 2]; 2] {
         let [i, j, k] = self.triangles[t];
         let u0 = uv[i as usize];
-        let u1 = sub2(uv[j as usize], u0);
-        let u2 = sub2(uv[k as usize], u0);
+        [sub2(uv[j as usize], u0), sub2(uv[k as usize], u0)]
+    }
+
+    /// The Jacobian of triangle `t` from its UV edges (`edges`).
+    #[inline]
+    pub fn jacobian_of_edges(&self, t: usize, u1: [f64; 2], u2: [f64; 2]) -> Mat2 {
         let [p, q, r] = self.inv_edges[t];
         [
             [u1[0] * p, u1[0] * q + u2[0] * r],

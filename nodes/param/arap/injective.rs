@@ -2,7 +2,7 @@
 //! triangle's orientation (Smith & Schaefer 2015, "Bijective Parameterization with Free
 //! Boundaries", §4), and flip counting.
 
-use super::frames::{cross2, sub2, TriangleFrames, PAR_CHUNK};
+use super::frames::{cross2, TriangleFrames, PAR_CHUNK};
 use rayon::prelude::*;
 
 /// The smallest positive `t` at which triangle `t`'s signed area, moving as `uv + t·d`,
@@ -32,11 +32,16 @@ pub fn triangle_max_step_above(
     orient: f64,
     floor2: f64,
 ) -> f64 {
-    let [i, j, k] = frames.triangles[t].map(|v| v as usize);
-    let a = sub2(uv[j], uv[i]);
-    let b = sub2(uv[k], uv[i]);
-    let da = sub2(d[j], d[i]);
-    let db = sub2(d[k], d[i]);
+    let [a, b] = frames.edges(t, uv);
+    let [da, db] = frames.edges(t, d);
+    max_step_of_edges([a, b], [da, db], orient, floor2)
+}
+
+/// `triangle_max_step_above` from the triangle's UV edges `[u1 - u0, u2 - u0]` and the
+/// direction's `[d1 - d0, d2 - d0]`.
+#[inline]
+pub fn max_step_of_edges(e: [[f64; 2]; 2], de: [[f64; 2]; 2], orient: f64, floor2: f64) -> f64 {
+    let ([a, b], [da, db]) = (e, de);
     let c0 = orient * cross2(a, b) - floor2;
     let c1 = orient * (cross2(a, db) + cross2(da, b));
     let c2 = orient * cross2(da, db);

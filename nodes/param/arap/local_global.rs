@@ -8,8 +8,8 @@
 //! In fold-free mode the move towards the global solution is cut to the largest step that
 //! keeps every triangle's orientation, then backed off until the energy drops (Armijo).
 
-use super::frames::{local_step, Similarity, TriangleFrames, PAR_CHUNK};
-use super::injective::{orientation_and_flips, triangle_max_step_above};
+use super::frames::{cross2, local_step, Similarity, TriangleFrames, PAR_CHUNK};
+use super::injective::{max_step_of_edges, orientation_and_flips};
 use super::{component_of, init_uvs, uv_outputs, StopReason};
 use crate::nodes::linalg::SpdFactor;
 use crate::prelude::*;
@@ -641,8 +641,11 @@ fn line_terms(
     targets: &[Similarity],
     floor2: &[[f64; 2]],
 ) -> (f64, [f64; 2]) {
-    let j0 = frames.jacobian(t, uv);
-    let jd = frames.jacobian(t, dir);
+    // each corner's UV and direction loaded once
+    let e = frames.edges(t, uv);
+    let de = frames.edges(t, dir);
+    let j0 = frames.jacobian_of_edges(t, e[0], e[1]);
+    let jd = frames.jacobian_of_edges(t, de[0], de[1]);
     let [a, b] = targets[t];
     let l = [[a, -b], [b, a]];
     let (mut g, mut c) = (0.0, 0.0);
@@ -653,9 +656,9 @@ fn line_terms(
         }
     }
     let [margin, hard] = floor2[t];
-    let a2 = frames.signed_area2(t, uv);
+    let a2 = cross2(e[0], e[1]);
     let floor = hard.max(margin.min(0.5 * a2));
-    let lim = triangle_max_step_above(frames, t, uv, dir, 1.0, floor);
+    let lim = max_step_of_edges(e, de, 1.0, floor);
     (lim, [2.0 * frames.area[t] * g, frames.area[t] * c])
 }
 

@@ -2,7 +2,7 @@
 //! solved for several right-hand sides per call.
 
 use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::sparse::linalg::cholesky::supernodal::SupernodalLltRef;
+use faer::sparse::linalg::cholesky::supernodal::{SupernodalLltRef, SymbolicSupernodalCholesky};
 use faer::sparse::linalg::cholesky::{
     factorize_symbolic_cholesky, LltRef, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
 };
@@ -231,42 +231,22 @@ impl SpdFactor {
             }
         }
         let n = sym.nrows();
-        let (begin, end) = (sym.supernode_begin(), sym.supernode_end());
-        let (row_ptr, val_ptr, pattern) = (
-            sym.col_ptr_for_row_idx(),
-            sym.col_ptr_for_val(),
-            sym.row_idx(),
-        );
         let mut col_ptr = Vec::with_capacity(n + 1);
         let mut rows = Vec::with_capacity(values.len());
         let (mut gather, mut dropped) = (Vec::with_capacity(values.len()), Vec::new());
-        col_ptr.push(0);
-        for s in 0..sym.n_supernodes() {
-            let (start, ncols) = (begin[s], end[s] - begin[s]);
-            let below = &pattern[row_ptr[s]..row_ptr[s + 1]];
-            let nrows = ncols + below.len();
-            // column-major `nrows x ncols` block; its top `ncols` rows are the diagonal block
-            for j in 0..ncols {
-                let col = val_ptr[s] + j * nrows;
-                let row_of = |i: usize| {
-                    if i < ncols {
-                        start + i
-                    } else {
-                        below[i - ncols]
-                    }
-                };
-                for i in j..nrows {
-                    // the diagonal first, as faer's sparse triangular solves expect
-                    if i == j || values[col + i] != 0.0 {
-                        rows.push(row_of(i));
-                        gather.push(col + i);
-                    } else {
-                        dropped.push(col + i);
-                    }
-                }
+        for_each_supernodal_entry(sym, 0, |col, row, k| {
+            if row == col {
+                // the diagonal comes first, as faer's sparse triangular solves expect
                 col_ptr.push(rows.len());
             }
-        }
+            if row == col || values[k] != 0.0 {
+                rows.push(row);
+                gather.push(k);
+            } else {
+                dropped.push(k);
+            }
+        });
+        col_ptr.push(rows.len());
         let vals = gather.iter().map(|&k| values[k]).collect();
         // faer checks the pattern (pointers increasing, rows in range)
         let symbolic = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, rows);
@@ -287,31 +267,9 @@ impl SpdFactor {
         let mut x = Mat::<f64>::zeros(s, s);
         match self.symbolic.raw() {
             SymbolicCholeskyRaw::Supernodal(sym) => {
-                let (begin, end) = (sym.supernode_begin(), sym.supernode_end());
-                let (row_ptr, val_ptr, pattern) = (
-                    sym.col_ptr_for_row_idx(),
-                    sym.col_ptr_for_val(),
-                    sym.row_idx(),
-                );
-                for sn in 0..sym.n_supernodes() {
-                    if end[sn] <= first {
-                        continue;
-                    }
-                    let (start, ncols) = (begin[sn], end[sn] - begin[sn]);
-                    let below = &pattern[row_ptr[sn]..row_ptr[sn + 1]];
-                    let nrows = ncols + below.len();
-                    for j in start.max(first) - start..ncols {
-                        let col = val_ptr[sn] + j * nrows;
-                        for i in j..nrows {
-                            let row = if i < ncols {
-                                start + i
-                            } else {
-                                below[i - ncols]
-                            };
-                            x[(row - first, start + j - first)] = self.values[col + i];
-                        }
-                    }
-                }
+                for_each_supernodal_entry(sym, first, |col, row, k| {
+                    x[(row - first, col - first)] = self.values[k];
+                });
             }
             SymbolicCholeskyRaw::Simplicial(sym) => {
                 let (col_ptr, rows) = (sym.col_ptr(), sym.row_idx());
@@ -360,8 +318,17 @@ impl SpdFactor {
         }
     }
 
-    /// `L⁻¹` or `L⁻ᵀ` applied in place (elimination order).
+    /// `L⁻¹` or `L⁻ᵀ` applied in place (elimination order), through the compressed-column
+    /// copy when there is one.
     fn triangular_solve(&self, rhs: MatMut<'_, f64>, transpose: bool) {
+        if let Some(l) = &self.columns {
+            if transpose {
+                solve_lower_triangular_transpose_in_place(l.as_ref(), Conj::No, rhs, Par::Seq);
+            } else {
+                solve_lower_triangular_in_place(l.as_ref(), Conj::No, rhs, Par::Seq);
+            }
+            return;
+        }
         match self.symbolic.raw() {
             SymbolicCholeskyRaw::Supernodal(sym) => {
                 let mut mem = MemBuffer::new(
@@ -389,13 +356,21 @@ impl SpdFactor {
 
     /// Solves `A X = B` in place, every column of `rhs` at once.
     pub fn solve_in_place(&self, mut rhs: MatMut<'_, f64>) {
-        if let (Some(l), Some(perm)) = (&self.columns, self.symbolic.perm()) {
+        if self.columns.is_some() {
             // A = Pᵀ L Lᵀ P: permute, two triangular solves, permute back
-            let mut x = Mat::<f64>::zeros(rhs.nrows(), rhs.ncols());
-            faer::perm::permute_rows(x.as_mut(), rhs.as_ref(), perm);
-            solve_lower_triangular_in_place(l.as_ref(), Conj::No, x.as_mut(), Par::Seq);
-            solve_lower_triangular_transpose_in_place(l.as_ref(), Conj::No, x.as_mut(), Par::Seq);
-            faer::perm::permute_rows(rhs.as_mut(), x.as_ref(), perm.inverse());
+            match self.symbolic.perm() {
+                Some(perm) => {
+                    let mut x = Mat::<f64>::zeros(rhs.nrows(), rhs.ncols());
+                    faer::perm::permute_rows(x.as_mut(), rhs.as_ref(), perm);
+                    self.triangular_solve(x.as_mut(), false);
+                    self.triangular_solve(x.as_mut(), true);
+                    faer::perm::permute_rows(rhs.as_mut(), x.as_ref(), perm.inverse());
+                }
+                None => {
+                    self.triangular_solve(rhs.as_mut(), false);
+                    self.triangular_solve(rhs, true);
+                }
+            }
             return;
         }
         let mut mem = MemBuffer::new(
@@ -408,6 +383,42 @@ impl SpdFactor {
             Par::Seq,
             MemStack::new(&mut mem),
         );
+    }
+}
+
+/// Calls `visit(column, row, index in the values)` for every stored entry of a supernodal
+/// factor's columns `first..`, column by column, the diagonal first in each column. Each
+/// supernode is a column-major `nrows x ncols` block whose top `ncols` rows are its diagonal
+/// block and the rest its `below` pattern.
+fn for_each_supernodal_entry(
+    sym: &SymbolicSupernodalCholesky<usize>,
+    first: usize,
+    mut visit: impl FnMut(usize, usize, usize),
+) {
+    let (begin, end) = (sym.supernode_begin(), sym.supernode_end());
+    let (row_ptr, val_ptr, pattern) = (
+        sym.col_ptr_for_row_idx(),
+        sym.col_ptr_for_val(),
+        sym.row_idx(),
+    );
+    for s in 0..sym.n_supernodes() {
+        if end[s] <= first {
+            continue;
+        }
+        let (start, ncols) = (begin[s], end[s] - begin[s]);
+        let below = &pattern[row_ptr[s]..row_ptr[s + 1]];
+        let nrows = ncols + below.len();
+        for j in first.max(start) - start..ncols {
+            let col = val_ptr[s] + j * nrows;
+            for i in j..nrows {
+                let row = if i < ncols {
+                    start + i
+                } else {
+                    below[i - ncols]
+                };
+                visit(start + j, row, col + i);
+            }
+        }
     }
 }
 

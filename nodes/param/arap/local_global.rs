@@ -310,8 +310,11 @@ pub fn arap_parameterize(
     let mut detail = String::new();
     let mut d = vec![[0.0; 2]; n];
     let mut trial = uv.clone();
-    let mut limits = vec![f64::INFINITY; if opts.injective { m } else { 0 }];
-    let mut terms = vec![[0.0; 2]; if opts.injective { m } else { 0 }];
+    let mut step_limits = StepLimits {
+        limits: vec![f64::INFINITY; floor2.len()],
+        terms: vec![[0.0; 2]; floor2.len()],
+        floor2,
+    };
     let mut touched: Vec<u32> = Vec::new();
     let mut local_solves = 0usize;
     let mut mark = vec![u32::MAX; if opts.injective { n } else { 0 }];
@@ -347,16 +350,7 @@ pub fn arap_parameterize(
         let mut blocked = false;
         let mut iter_refactors = 0;
         if opts.injective {
-            let mut dir = directional(
-                &frames,
-                &uv,
-                &d,
-                &targets,
-                &floor2,
-                &mut limits,
-                &mut terms,
-                None,
-            );
+            let mut dir = step_limits.directional(&frames, &uv, &d, &targets, None);
             // A blocked step is first reshaped locally: the blocking triangles are stiffened
             // and the rings around them re-solved with the stiffened weights, the rest of
             // the global step kept (`local_resolve`); refactoring the whole Laplacian (below)
@@ -367,13 +361,13 @@ pub fn arap_parameterize(
                     if STEP_SAFETY * dir.max_step >= BLOCKED_STEP * dir.best_step {
                         break;
                     }
-                    let changed = reweight(&limits, dir.best_step, &mut weights);
+                    let changed = reweight(&step_limits.limits, dir.best_step, &mut weights);
                     pending += changed;
                     reweighted += changed;
                     let solved = local_resolve(
                         &frames,
                         &weights,
-                        &limits,
+                        &step_limits.limits,
                         dir.best_step,
                         opts.local_rings,
                         &free_index,
@@ -387,32 +381,14 @@ pub fn arap_parameterize(
                     if solved.is_err() {
                         break;
                     }
-                    dir = directional(
-                        &frames,
-                        &uv,
-                        &d,
-                        &targets,
-                        &floor2,
-                        &mut limits,
-                        &mut terms,
-                        Some(&touched),
-                    );
+                    dir = step_limits.directional(&frames, &uv, &d, &targets, Some(&touched));
                     local = true;
                     local_solves += 1;
                 }
                 if local && (dir.slope.is_nan() || dir.slope >= 0.0) {
                     // the local re-solve lost the descent: back to the global direction
                     descent_direction(factor, &gradient, &mut rhs, &free_vertices, &mut d);
-                    dir = directional(
-                        &frames,
-                        &uv,
-                        &d,
-                        &targets,
-                        &floor2,
-                        &mut limits,
-                        &mut terms,
-                        None,
-                    );
+                    dir = step_limits.directional(&frames, &uv, &d, &targets, None);
                 }
             }
             loop {
@@ -425,7 +401,7 @@ pub fn arap_parameterize(
                 if iter_refactors == 0 {
                     blocked_run += 1;
                 }
-                let changed = reweight(&limits, dir.best_step, &mut weights);
+                let changed = reweight(&step_limits.limits, dir.best_step, &mut weights);
                 pending += changed;
                 reweighted += changed;
                 let due = blocked_run >= sched.blocked_run
@@ -445,16 +421,7 @@ pub fn arap_parameterize(
                 (pending, blocked_run) = (0, 0);
                 iter_refactors += 1;
                 descent_direction(factor, &gradient, &mut rhs, &free_vertices, &mut d);
-                dir = directional(
-                    &frames,
-                    &uv,
-                    &d,
-                    &targets,
-                    &floor2,
-                    &mut limits,
-                    &mut terms,
-                    None,
-                );
+                dir = step_limits.directional(&frames, &uv, &d, &targets, None);
             }
             refactors += iter_refactors;
             slope = dir.slope / total_area; // per unit area, like `energy`
@@ -594,41 +561,55 @@ struct Directional {
     squeezed: bool,
 }
 
-/// One parallel pass over the triangles: slope and curvature of the targets' quadratic
-/// along `dir`, and each triangle's orientation limit (written to `limits`): the step at
-/// which its UV area would drop to its floor, `max(hard, min(margin, half the current area))`
-/// with `floor2 = [margin, hard]` (twice the areas). With `changed`, `dir` differs from the
-/// last call only on those triangles: only their terms are recomputed. Sums are taken over
-/// fixed chunks in a fixed order, so the result does not depend on rayon's scheduling.
-#[allow(clippy::too_many_arguments)]
-fn directional(
-    frames: &TriangleFrames,
-    uv: &[[f64; 2]],
-    dir: &[[f64; 2]],
-    targets: &[Similarity],
-    floor2: &[[f64; 2]],
-    limits: &mut [f64],
-    terms: &mut [[f64; 2]],
-    changed: Option<&[u32]>,
-) -> Directional {
-    match changed {
-        Some(list) => {
-            for &t in list {
-                let t = t as usize;
-                (limits[t], terms[t]) = line_terms(frames, t, uv, dir, targets, floor2);
-            }
-        }
-        None => limits
-            .par_chunks_mut(PAR_CHUNK)
-            .zip(terms.par_chunks_mut(PAR_CHUNK))
-            .enumerate()
-            .for_each(|(ci, (lims, ts))| {
-                for (k, (lim, tm)) in lims.iter_mut().zip(ts.iter_mut()).enumerate() {
-                    (*lim, *tm) = line_terms(frames, ci * PAR_CHUNK + k, uv, dir, targets, floor2);
+/// Per-triangle state of the fold-free line search: each triangle's area floors, and its
+/// orientation limit and slope/curvature terms from the last `directional` pass.
+struct StepLimits {
+    /// Twice the UV area of the margin and of the hard floor (see `AREA_MARGIN`).
+    floor2: Vec<[f64; 2]>,
+    /// The step at which the triangle's UV area would reach its floor.
+    limits: Vec<f64>,
+    /// `[2 A <J(uv) - L, J(δ)>, A |J(δ)|²]` (see `line_terms`).
+    terms: Vec<[f64; 2]>,
+}
+
+impl StepLimits {
+    /// One parallel pass over the triangles: slope and curvature of the targets' quadratic
+    /// along `dir`, and each triangle's orientation limit: the step at which its UV area
+    /// would drop to its floor, `max(hard, min(margin, half the current area))`. With
+    /// `changed`, `dir` differs from the last call only on those triangles: only their
+    /// terms are recomputed. Sums are taken over fixed chunks in a fixed order, so the
+    /// result does not depend on rayon's scheduling.
+    fn directional(
+        &mut self,
+        frames: &TriangleFrames,
+        uv: &[[f64; 2]],
+        dir: &[[f64; 2]],
+        targets: &[Similarity],
+        changed: Option<&[u32]>,
+    ) -> Directional {
+        let floor2 = &self.floor2;
+        match changed {
+            Some(list) => {
+                for &t in list {
+                    let t = t as usize;
+                    (self.limits[t], self.terms[t]) =
+                        line_terms(frames, t, uv, dir, targets, floor2);
                 }
-            }),
+            }
+            None => self
+                .limits
+                .par_chunks_mut(PAR_CHUNK)
+                .zip(self.terms.par_chunks_mut(PAR_CHUNK))
+                .enumerate()
+                .for_each(|(ci, (lims, ts))| {
+                    for (k, (lim, tm)) in lims.iter_mut().zip(ts.iter_mut()).enumerate() {
+                        let t = ci * PAR_CHUNK + k;
+                        (*lim, *tm) = line_terms(frames, t, uv, dir, targets, floor2);
+                    }
+                }),
+        }
+        reduce_directional(frames, uv, floor2, &self.limits, &self.terms)
     }
-    reduce_directional(frames, uv, floor2, limits, terms)
 }
 
 /// One triangle's part of `directional`: its orientation limit and its terms of the slope

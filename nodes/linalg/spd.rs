@@ -288,6 +288,16 @@ impl SpdFactor {
         matches!(self.symbolic.raw(), SymbolicCholeskyRaw::Supernodal(_))
     }
 
+    /// For each unknown, the step at which the factorization eliminates it (the inverse of
+    /// the fill-reducing permutation). Eliminating the unknowns of a subgraph in this relative
+    /// order fills no more than the whole factor does on that subgraph.
+    pub fn elimination_position(&self) -> Vec<usize> {
+        match self.symbolic.perm() {
+            Some(perm) => perm.arrays().1.to_vec(),
+            None => (0..self.dim()).collect(),
+        }
+    }
+
     /// Number of unknowns.
     pub fn dim(&self) -> usize {
         self.symbolic.nrows()
@@ -425,6 +435,76 @@ fn for_each_supernodal_entry(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Lower triplets of the 5-point Laplacian (plus a small shift) on the grid points
+    /// `(i, j)` for which `keep` holds, numbered by `index`.
+    fn grid_laplacian(
+        k: usize,
+        keep: impl Fn(usize, usize) -> bool,
+        index: impl Fn(usize, usize) -> usize,
+    ) -> Vec<Triplet<usize, usize, f64>> {
+        let mut t = Vec::new();
+        for i in 0..k {
+            for j in 0..k {
+                if !keep(i, j) {
+                    continue;
+                }
+                t.push(Triplet::new(index(i, j), index(i, j), 4.01));
+                for (a, b) in [(i.wrapping_sub(1), j), (i, j.wrapping_sub(1))] {
+                    if a < k && b < k && keep(a, b) {
+                        let (r, c) = (index(i, j), index(a, b));
+                        t.push(Triplet::new(r.max(c), r.min(c), -1.0));
+                    }
+                }
+            }
+        }
+        t
+    }
+
+    /// A region of a grid numbered in the whole grid's elimination order fills less than in
+    /// row-major (banded) order, and `elimination_position` is the inverse permutation.
+    #[test]
+    fn elimination_position_orders_a_subgraph_with_little_fill() {
+        let k = 40;
+        let whole = SpdFactor::new(
+            k * k,
+            &grid_laplacian(k, |_, _| true, |i, j| i * k + j),
+            Par::Seq,
+        )
+        .unwrap();
+        let pos = whole.elimination_position();
+        let mut seen = vec![false; k * k];
+        for &p in &pos {
+            assert!(!seen[p]);
+            seen[p] = true;
+        }
+        // the 20 x 20 block in the middle, numbered by its rank in `pos` or row-major
+        let inside = |i: usize, j: usize| (10..30).contains(&i) && (10..30).contains(&j);
+        let mut region: Vec<usize> = (0..k * k).filter(|&v| inside(v / k, v % k)).collect();
+        let row_major = |i: usize, j: usize| (i - 10) * 20 + (j - 10);
+        region.sort_by_key(|&v| pos[v]);
+        let mut rank = vec![usize::MAX; k * k];
+        for (r, &v) in region.iter().enumerate() {
+            rank[v] = r;
+        }
+        let by_rank = |i: usize, j: usize| rank[i * k + j];
+        let fill = |index: &dyn Fn(usize, usize) -> usize| {
+            let t = grid_laplacian(k, inside, index);
+            let upper: Vec<_> = t
+                .iter()
+                .map(|e| Triplet::new(e.col, e.row, e.val))
+                .collect();
+            let a = SparseColMat::<usize, f64>::try_new_from_triplets(400, 400, &upper).unwrap();
+            SpdFactor::from_upper_in_order(a, Par::Seq)
+                .unwrap()
+                .factor_nnz()
+        };
+        let (ordered, banded) = (fill(&by_rank), fill(&row_major));
+        assert!(
+            ordered < banded,
+            "{ordered} entries in elimination order, {banded} banded"
+        );
+    }
 
     #[test]
     fn solves_a_path_laplacian_and_refuses_a_singular_one() {

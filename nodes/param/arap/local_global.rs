@@ -13,7 +13,7 @@ use super::injective::{max_step_of_edges, orientation_and_flips};
 use super::{component_of, init_uvs, uv_outputs, StopReason};
 use crate::nodes::linalg::SpdFactor;
 use crate::prelude::*;
-use faer::sparse::Triplet;
+use faer::sparse::{SparseColMat, SymbolicSparseColMat, Triplet};
 use faer::{Mat, Par};
 use rayon::prelude::*;
 use std::time::Instant;
@@ -267,6 +267,9 @@ pub fn arap_parameterize(
     } else {
         None
     };
+    let position = factor
+        .as_ref()
+        .map_or(Vec::new(), SpdFactor::elimination_position);
     let mut weights = vec![1.0; if opts.injective { m } else { 0 }];
     let sched = opts.refactor;
     // per triangle, twice the UV area of the margin and of the hard floor (see AREA_MARGIN)
@@ -371,6 +374,7 @@ pub fn arap_parameterize(
                         dir.best_step,
                         opts.local_rings,
                         &free_index,
+                        &position,
                         &gradient,
                         &adjacency,
                         &mut mark,
@@ -817,7 +821,9 @@ fn vertex_triangles(n: usize, triangles: &[[u32; 3]]) -> (Vec<usize>, Vec<u32>) 
 /// Local stiffened re-solve of a blocked step: on the vertices within `rings` rings of the
 /// triangles that would reach their area floor before `best_step`, replaces `d` by the
 /// minimizer of the global step's model `g·δ + ½ δᵀ Δ_W δ` (stiffened weights `Δ_W`) with `δ`
-/// held at `d` everywhere else, a small Dirichlet problem factored on the spot. The blocking
+/// held at `d` everywhere else, a small Dirichlet problem factored on the spot, its vertices
+/// numbered in the global factor's elimination order (`position`, per free vertex), which
+/// fills no more than the global factor does there and spares computing an ordering. The blocking
 /// triangles then move almost rigidly with their surroundings instead of cutting the step for
 /// the whole mesh, without refactoring the global Laplacian. Returns the number of vertices
 /// re-solved; `touched` receives the triangles whose direction changed. `adjacency` lists each
@@ -831,6 +837,7 @@ fn local_resolve(
     best_step: f64,
     rings: usize,
     free_index: &[u32],
+    position: &[usize],
     gradient: &Mat<f64>,
     adjacency: &(Vec<usize>, Vec<u32>),
     mark: &mut [u32],
@@ -869,6 +876,8 @@ fn local_resolve(
         }
         ring_start = ring_end;
     }
+    // numbered in the global factor's elimination order, a fill-reducing order for the region
+    region.sort_unstable_by_key(|&v| position[free_index[v as usize] as usize]);
     for (k, &v) in region.iter().enumerate() {
         mark[v as usize] = k as u32;
     }
@@ -878,42 +887,62 @@ fn local_resolve(
         if r == 0 {
             return Err("no free vertex to re-solve".to_string());
         }
-        // Δ_W restricted to the region (lower triangle) and -g - Δ_W,RO d_O
-        let mut trip: Vec<Triplet<usize, usize, f64>> = Vec::new();
+        // Δ_W restricted to the region (upper triangle in compressed columns, assembled column
+        // by column in the region's order) and -g - Δ_W,RO d_O
         let mut rhs = Mat::<f64>::zeros(r, 2);
+        let mut col_ptr = Vec::with_capacity(r + 1);
+        let mut rows: Vec<usize> = Vec::with_capacity(5 * r);
+        let mut vals: Vec<f64> = Vec::with_capacity(5 * r);
+        let mut column: Vec<(usize, f64)> = Vec::new();
+        col_ptr.push(0);
         for (k, &v) in region.iter().enumerate() {
             let f = free_index[v as usize] as usize;
-            rhs[(k, 0)] = -gradient[(f, 0)];
-            rhs[(k, 1)] = -gradient[(f, 1)];
+            let (mut r0, mut r1) = (-gradient[(f, 0)], -gradient[(f, 1)]);
+            let mut diag = 0.0;
+            column.clear();
             for &t in &vt[vt_start[v as usize]..vt_start[v as usize + 1]] {
                 if !seen[t as usize] {
                     seen[t as usize] = true;
                     touched.push(t);
                 }
-            }
-        }
-        for &t in touched.iter() {
-            let (t, tri) = (t as usize, tris[t as usize]);
-            for k in 0..3 {
-                let (i, j) = (tri[(k + 1) % 3] as usize, tri[(k + 2) % 3] as usize);
-                let w = frames.cot[t][k] * weights[t];
-                let (ri, rj) = (mark[i], mark[j]);
-                for (ra, b, rb) in [(ri, j, rj), (rj, i, ri)] {
-                    if ra == u32::MAX {
-                        continue;
-                    }
-                    trip.push(Triplet::new(ra as usize, ra as usize, w));
-                    if rb == u32::MAX {
+                let (t, tri) = (t as usize, tris[t as usize]);
+                let c = (0..3).find(|&c| tri[c] == v).unwrap_or(0);
+                // edge (v, tri[c+1]) is opposite corner c+2, edge (v, tri[c+2]) opposite c+1
+                for (u, opposite) in [
+                    (tri[(c + 1) % 3], (c + 2) % 3),
+                    (tri[(c + 2) % 3], (c + 1) % 3),
+                ] {
+                    let w = frames.cot[t][opposite] * weights[t];
+                    diag += w;
+                    let ru = mark[u as usize];
+                    if ru == u32::MAX {
                         // neighbour outside: held at d (zero when pinned)
-                        rhs[(ra as usize, 0)] += w * d[b][0];
-                        rhs[(ra as usize, 1)] += w * d[b][1];
-                    } else if ra > rb {
-                        trip.push(Triplet::new(ra as usize, rb as usize, -w));
+                        r0 += w * d[u as usize][0];
+                        r1 += w * d[u as usize][1];
+                    } else if (ru as usize) < k {
+                        match column.iter_mut().find(|e| e.0 == ru as usize) {
+                            Some(e) => e.1 -= w,
+                            None => column.push((ru as usize, -w)),
+                        }
                     }
                 }
             }
+            rhs[(k, 0)] = r0;
+            rhs[(k, 1)] = r1;
+            column.sort_unstable_by_key(|e| e.0);
+            for &(row, val) in &column {
+                rows.push(row);
+                vals.push(val);
+            }
+            rows.push(k);
+            vals.push(diag);
+            col_ptr.push(rows.len());
         }
-        let f = SpdFactor::new(r, &trip, Par::Seq)?;
+        let upper = SparseColMat::new(
+            SymbolicSparseColMat::new_checked(r, r, col_ptr, None, rows),
+            vals,
+        );
+        let f = SpdFactor::from_upper_in_order(upper, Par::Seq)?;
         f.solve_in_place(rhs.as_mut());
         if !rhs.col_iter().all(|c| c.iter().all(|x| x.is_finite())) {
             return Err("non-finite local solution".to_string());
@@ -1201,6 +1230,7 @@ pub(crate) mod tests {
             limits[b] = 0.1;
         }
         let adjacency = vertex_triangles(n, &frames.triangles);
+        let position = factor.elimination_position();
         let (mut mark, mut seen, mut touched) = (vec![u32::MAX; n], vec![false; m], Vec::new());
         let dmax = d
             .iter()
@@ -1216,6 +1246,7 @@ pub(crate) mod tests {
                 1.0,
                 2,
                 &free_index,
+                &position,
                 &g,
                 &adjacency,
                 &mut mark,

@@ -178,6 +178,20 @@ pub fn arap_parameterize(
     init_uv: &[[f64; 2]],
     opts: &ArapOptions,
 ) -> Result<ArapResult, NodeError> {
+    // The loop runs several short parallel passes per iteration. Run from a thread outside
+    // rayon's pool, each pass is injected into the pool and waited for, a round trip through
+    // the OS per pass; on a pool thread the passes are split in place. camel_b fold-free, 30
+    // iterations: 0.59-0.69 -> 0.40-0.48 ms per iteration (median of 10 runs, 3 alternations).
+    rayon::scope(|_| iterate(positions, triangles, init_uv, opts))
+}
+
+/// `arap_parameterize` on a rayon pool thread.
+fn iterate(
+    positions: &[[f64; 3]],
+    triangles: &[[u32; 3]],
+    init_uv: &[[f64; 2]],
+    opts: &ArapOptions,
+) -> Result<ArapResult, NodeError> {
     let start = Instant::now();
     let n = positions.len();
     if init_uv.len() != n {

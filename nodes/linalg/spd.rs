@@ -27,7 +27,9 @@ pub struct SpdFactor {
     values: Vec<f64>,
     /// The supernodal factor in compressed columns (permuted order, diagonal first in each
     /// column, exact zeros of relaxed supernodes dropped); `None` for a simplicial factor.
-    columns: Option<SparseColMat<usize, f64>>,
+    /// Indexed by `u32`: the solves stream the whole factor for two right-hand sides, and
+    /// 4-byte row indices make each entry 12 bytes instead of 16.
+    columns: Option<SparseColMat<u32, f64>>,
     /// For each entry of `columns`, its index in `values`; and the indices of `values` left
     /// out as zeros. A refactorization whose left-out entries are still zero (the padding of
     /// relaxed supernodes always is) only gathers the values again.
@@ -231,22 +233,27 @@ impl SpdFactor {
             }
         }
         let n = sym.nrows();
-        let mut col_ptr = Vec::with_capacity(n + 1);
-        let mut rows = Vec::with_capacity(values.len());
+        if u32::try_from(values.len()).is_err() {
+            // too large for 4-byte indices: faer's supernodal solve instead
+            self.columns = None;
+            return;
+        }
+        let mut col_ptr: Vec<u32> = Vec::with_capacity(n + 1);
+        let mut rows: Vec<u32> = Vec::with_capacity(values.len());
         let (mut gather, mut dropped) = (Vec::with_capacity(values.len()), Vec::new());
         for_each_supernodal_entry(sym, 0, |col, row, k| {
             if row == col {
                 // the diagonal comes first, as faer's sparse triangular solves expect
-                col_ptr.push(rows.len());
+                col_ptr.push(rows.len() as u32);
             }
             if row == col || values[k] != 0.0 {
-                rows.push(row);
+                rows.push(row as u32);
                 gather.push(k);
             } else {
                 dropped.push(k);
             }
         });
-        col_ptr.push(rows.len());
+        col_ptr.push(rows.len() as u32);
         let vals = gather.iter().map(|&k| values[k]).collect();
         // faer checks the pattern (pointers increasing, rows in range)
         let symbolic = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, rows);

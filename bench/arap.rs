@@ -12,6 +12,12 @@
 //! `ARAP_REFACTOR=PER_ITERATION,BLOCKED_RUN,GROWTH` overrides the fold-free mode's refactor
 //! schedule (`RefactorSchedule`; `3,0,0` refactors on every blocked round, as before the schedule);
 //! `ARAP_LOCAL_RINGS=0` turns off the local stiffened re-solves (`ArapOptions::local_rings`).
+//!
+//! The machine's speed drifts by tens of percent from minute to minute, so each mesh is run
+//! `ARAP_BENCH_RUNS` times (default 5), ours and libigl's in turn within each round, and the
+//! time per iteration reported is each method's median over the rounds; the table also gives
+//! the range of the per-round ratios. Energies, flips and curves come from the first round
+//! (both methods are deterministic).
 
 use cgnodes::nodes::mesh::obj::load_obj;
 use cgnodes::nodes::param::arap::{arap_parameterize, ArapOptions, ArapResult, RefactorSchedule};
@@ -33,6 +39,8 @@ struct Curve {
 struct Outcome {
     setup_ms: f64,
     iter_ms: f64,
+    /// Time per iteration in each round (`ARAP_BENCH_RUNS`), the first being `iter_ms`'s run.
+    samples: Vec<f64>,
     energy: f64,
     flips: usize,
     refactors: Option<(usize, usize)>,
@@ -59,7 +67,7 @@ fn main() {
     std::fs::create_dir_all(&out_dir).expect("create target/bench/arap");
     let mut seen = std::collections::BTreeSet::new();
     let mut table = String::from(
-        "| mesh (faces) | method | setup ms | ms / iteration | ratio to libigl | ARAP E | flips | refactors (local re-solves) |\n|---|---|---|---|---|---|---|---|\n",
+        "| mesh (faces) | method | setup ms | ms / iteration (median) | ratio to libigl (per-round range) | ARAP E | flips | refactors (local re-solves) |\n|---|---|---|---|---|---|---|---|\n",
     );
     let mut chart_curves: Vec<(String, Vec<Curve>)> = Vec::new();
     for path in meshes {
@@ -81,16 +89,17 @@ fn main() {
 
         let mut curves = Vec::new();
         let mut ours = Vec::new();
+        let local_rings = std::env::var("ARAP_LOCAL_RINGS")
+            .ok()
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(ArapOptions::default().local_rings);
         for injective in [false, true] {
             let opts = ArapOptions {
                 iterations,
                 tolerance: 0.0,
                 injective,
                 refactor: schedule(),
-                local_rings: std::env::var("ARAP_LOCAL_RINGS")
-                    .ok()
-                    .and_then(|v| v.parse().ok())
-                    .unwrap_or(ArapOptions::default().local_rings),
+                local_rings,
                 ..Default::default()
             };
             let r = arap_parameterize(&mesh.positions, &tris, &init, &opts).expect("arap");
@@ -156,8 +165,48 @@ fn main() {
                 energy: last["energy"].as_f64().unwrap_or(f64::NAN),
                 flips: last["flips"].as_u64().unwrap_or(0) as usize,
                 refactors: None,
+                samples: Vec::new(),
             }
         });
+        // further rounds, ours and libigl's in turn (see the module docs)
+        let mut igl_outcome = igl_outcome;
+        let runs: usize = std::env::var("ARAP_BENCH_RUNS")
+            .ok()
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(5);
+        for o in ours.iter_mut().map(|(_, o)| o) {
+            o.samples.push(o.iter_ms);
+        }
+        if let Some(g) = igl_outcome.as_mut() {
+            g.samples.push(g.iter_ms);
+        }
+        for _ in 1..runs {
+            for (k, injective) in [false, true].into_iter().enumerate() {
+                let opts = ArapOptions {
+                    iterations,
+                    tolerance: 0.0,
+                    injective,
+                    refactor: schedule(),
+                    local_rings,
+                    ..Default::default()
+                };
+                let r = arap_parameterize(&mesh.positions, &tris, &init, &opts).expect("arap");
+                let t = outcome(&r, 0.0, 0).iter_ms;
+                ours[k].1.samples.push(t);
+            }
+            if let Some(g) = igl_outcome.as_mut() {
+                let rep_prefix = out_dir.join(format!("{name}_libigl_rerun"));
+                if let Some(t) = libigl_iter_ms(root, &path, iterations, &rep_prefix) {
+                    g.samples.push(t);
+                }
+            }
+        }
+        for o in ours.iter_mut().map(|(_, o)| o) {
+            o.iter_ms = median(&o.samples);
+        }
+        if let Some(g) = igl_outcome.as_mut() {
+            g.iter_ms = median(&g.samples);
+        }
         let _ = writeln!(
             table,
             "| {name} ({}) | start: Tutte mean-value | {tutte_ms:.0} | | | {:.4} | {} | |",
@@ -167,7 +216,15 @@ fn main() {
         );
         for (label, o) in &ours {
             let ratio = igl_outcome.as_ref().map_or("n/a".to_string(), |g| {
-                format!("{:.2}", o.iter_ms / g.iter_ms)
+                let per_round: Vec<f64> = o
+                    .samples
+                    .iter()
+                    .zip(&g.samples)
+                    .map(|(a, b)| a / b)
+                    .collect();
+                let lo = per_round.iter().copied().fold(f64::INFINITY, f64::min);
+                let hi = per_round.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+                format!("{:.2} ({lo:.2}-{hi:.2})", o.iter_ms / g.iter_ms)
             });
             let _ = writeln!(
                 table,
@@ -213,7 +270,35 @@ fn outcome(r: &ArapResult, energy: f64, flips: usize) -> Outcome {
         energy,
         flips,
         refactors: None,
+        samples: Vec::new(),
     }
+}
+
+/// The median of the samples.
+fn median(v: &[f64]) -> f64 {
+    let mut v = v.to_vec();
+    v.sort_by(f64::total_cmp);
+    match v.len() {
+        0 => f64::NAN,
+        n if n % 2 == 1 => v[n / 2],
+        n => 0.5 * (v[n / 2 - 1] + v[n / 2]),
+    }
+}
+
+/// Time per iteration of one more libigl run (`None` if the peer failed).
+fn libigl_iter_ms(root: &Path, mesh: &Path, iterations: usize, prefix: &Path) -> Option<f64> {
+    let status = Command::new("python3")
+        .arg(root.join("bench/peers/arap_libigl.py"))
+        .arg(mesh)
+        .arg(iterations.to_string())
+        .arg(prefix)
+        .status();
+    if !matches!(status, Ok(s) if s.success()) {
+        return None;
+    }
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(prefix.with_extension("json")).ok()?).ok()?;
+    json["iteration_ms"].as_f64()
 }
 
 /// The refactor schedule, from `ARAP_REFACTOR` if set.

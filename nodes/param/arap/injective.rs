@@ -41,30 +41,44 @@ pub fn triangle_max_step_above(
 /// direction's `[d1 - d0, d2 - d0]`.
 #[inline]
 pub fn max_step_of_edges(e: [[f64; 2]; 2], de: [[f64; 2]; 2], orient: f64, floor2: f64) -> f64 {
-    let ([a, b], [da, db]) = (e, de);
-    let c0 = orient * cross2(a, b) - floor2;
-    let c1 = orient * (cross2(a, db) + cross2(da, b));
-    let c2 = orient * cross2(da, db);
+    let [c0, c1, c2] = area_coefficients(e, de, orient, floor2);
     smallest_positive_root(c0, c1, c2)
 }
 
+/// `[c0, c1, c2]` with `c0 + c1 t + c2 t²` twice the signed area (times `orient`) minus
+/// `floor2` of the triangle with UV edges `e` moving along edge directions `de` by `t`
+/// (Smith & Schaefer 2015, eq. 5).
+#[inline]
+pub fn area_coefficients(
+    e: [[f64; 2]; 2],
+    de: [[f64; 2]; 2],
+    orient: f64,
+    floor2: f64,
+) -> [f64; 3] {
+    let ([a, b], [da, db]) = (e, de);
+    [
+        orient * cross2(a, b) - floor2,
+        orient * (cross2(a, db) + cross2(da, b)),
+        orient * cross2(da, db),
+    ]
+}
+
 /// Smallest positive root of `c0 + c1 t + c2 t²` (`INFINITY` if none); `0` when `c0 <= 0`.
+///
+/// Without data-dependent branches (a negative discriminant gives NaN roots, which the
+/// `r > 0` selection drops like infinite ones), so that a loop of these vectorizes and
+/// overlaps the square root and divisions of successive calls.
+#[inline]
 pub fn smallest_positive_root(c0: f64, c1: f64, c2: f64) -> f64 {
-    if c0 <= 0.0 {
-        return 0.0;
-    }
     let disc = c1 * c1 - 4.0 * c2 * c0;
-    if disc < 0.0 {
-        return f64::INFINITY;
+    let q = -0.5 * (c1 + disc.sqrt().copysign(c1));
+    let positive = |r: f64| if r > 0.0 { r } else { f64::INFINITY };
+    let best = positive(q / c2).min(positive(c0 / q));
+    if c0 <= 0.0 {
+        0.0
+    } else {
+        best
     }
-    let q = -0.5 * (c1 + c1.signum() * disc.sqrt());
-    let mut best = f64::INFINITY;
-    for r in [q / c2, c0 / q] {
-        if r.is_finite() && r > 0.0 && r < best {
-            best = r;
-        }
-    }
-    best
 }
 
 /// The largest step along `d` that keeps every triangle's orientation `orient`

@@ -9,7 +9,7 @@
 //! keeps every triangle's orientation, then backed off until the energy drops (Armijo).
 
 use super::frames::{cross2, local_step, Similarity, TriangleFrames, PAR_CHUNK};
-use super::injective::{max_step_of_edges, orientation_and_flips};
+use super::injective::{area_coefficients, orientation_and_flips, smallest_positive_root};
 use super::{component_of, init_uvs, uv_outputs, StopReason};
 use crate::nodes::linalg::SpdFactor;
 use crate::prelude::*;
@@ -671,8 +671,8 @@ impl StepLimits {
             Some(list) => {
                 for &t in list {
                     let t = t as usize;
-                    (self.limits[t], self.terms[t]) =
-                        line_terms(frames, t, uv, dir, targets, floor2);
+                    let ([c0, c1, c2], tm) = line_terms(frames, t, uv, dir, targets, floor2);
+                    (self.limits[t], self.terms[t]) = (smallest_positive_root(c0, c1, c2), tm);
                     self.dirty[t / SUM_BLOCK] = true;
                 }
                 for (b, dirty) in self.dirty.iter_mut().enumerate() {
@@ -693,17 +693,27 @@ impl StepLimits {
                 .zip(self.blocks.par_chunks_mut(PAR_CHUNK / SUM_BLOCK))
                 .enumerate()
                 .for_each(|(ci, ((lims, ts), blocks))| {
-                    for (k, (lim, tm)) in lims.iter_mut().zip(ts.iter_mut()).enumerate() {
-                        let t = ci * PAR_CHUNK + k;
-                        (*lim, *tm) = line_terms(frames, t, uv, dir, targets, floor2);
-                    }
-                    for (b, ((blk, l), t)) in blocks
+                    // the roots in a second loop over the block: one triangle's root is a
+                    // chain of a square root and two divisions, which a loop of roots alone
+                    // overlaps across triangles (and vectorizes)
+                    let mut c = [[0.0; SUM_BLOCK]; 3];
+                    for (b, ((blk, l), tm)) in blocks
                         .iter_mut()
-                        .zip(lims.chunks(SUM_BLOCK))
-                        .zip(ts.chunks(SUM_BLOCK))
+                        .zip(lims.chunks_mut(SUM_BLOCK))
+                        .zip(ts.chunks_mut(SUM_BLOCK))
                         .enumerate()
                     {
-                        *blk = BlockSum::of(ci * PAR_CHUNK + b * SUM_BLOCK, l, t);
+                        let first = ci * PAR_CHUNK + b * SUM_BLOCK;
+                        for (k, tmk) in tm.iter_mut().enumerate() {
+                            let coef;
+                            (coef, *tmk) = line_terms(frames, first + k, uv, dir, targets, floor2);
+                            (c[0][k], c[1][k], c[2][k]) = (coef[0], coef[1], coef[2]);
+                        }
+                        let [c0, c1, c2] = &c;
+                        for (lim, ((c0, c1), c2)) in l.iter_mut().zip(c0.iter().zip(c1).zip(c2)) {
+                            *lim = smallest_positive_root(*c0, *c1, *c2);
+                        }
+                        *blk = BlockSum::of(first, l, tm);
                     }
                 }),
         }
@@ -711,8 +721,9 @@ impl StepLimits {
     }
 }
 
-/// One triangle's part of `directional`: its orientation limit and its terms of the slope
-/// and curvature, `[2 A <J(uv) - L, J(δ)>, A |J(δ)|²]`.
+/// One triangle's part of `directional`: the coefficients of twice its UV area above its
+/// floor along the direction (`area_coefficients`; the orientation limit is their smallest
+/// positive root) and its terms of the slope and curvature, `[2 A <J(uv) - L, J(δ)>, A |J(δ)|²]`.
 fn line_terms(
     frames: &TriangleFrames,
     t: usize,
@@ -720,7 +731,7 @@ fn line_terms(
     dir: &[[f64; 2]],
     targets: &[Similarity],
     floor2: &[[f64; 2]],
-) -> (f64, [f64; 2]) {
+) -> ([f64; 3], [f64; 2]) {
     // each corner's UV and direction loaded once
     let e = frames.edges(t, uv);
     let de = frames.edges(t, dir);
@@ -738,8 +749,8 @@ fn line_terms(
     let [margin, hard] = floor2[t];
     let a2 = cross2(e[0], e[1]);
     let floor = hard.max(margin.min(0.5 * a2));
-    let lim = max_step_of_edges(e, de, 1.0, floor);
-    (lim, [2.0 * frames.area[t] * g, frames.area[t] * c])
+    let coef = area_coefficients(e, de, 1.0, floor);
+    (coef, [2.0 * frames.area[t] * g, frames.area[t] * c])
 }
 
 /// Sums of the per-triangle terms (block sums, blocks in order) and the smallest limit.

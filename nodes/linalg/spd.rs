@@ -371,6 +371,15 @@ impl SpdFactor {
         }
     }
 
+    /// Solves `A X = B` with `B` and `X` given in elimination order (row `k` for the unknown
+    /// eliminated `k`-th; see `elimination_position`): the two triangular solves alone. For a
+    /// caller that keeps its vectors in that order, which spares the two permuted copies of
+    /// `solve_in_place`.
+    pub fn solve_in_elimination_order(&self, mut rhs: MatMut<'_, f64>) {
+        self.triangular_solve(rhs.as_mut(), false);
+        self.triangular_solve(rhs, true);
+    }
+
     /// Solves `A X = B` in place, every column of `rhs` at once.
     pub fn solve_in_place(&self, mut rhs: MatMut<'_, f64>) {
         if self.columns.is_some() {

@@ -287,9 +287,28 @@ fn iterate(
     } else {
         None
     };
+    // The gradient, the solves and the local re-solves keep the free vertices in the factor's
+    // elimination order (`row_of[v]`, `u32::MAX` when fixed; `row_vertex[k]` the vertex of row
+    // `k`): the solve then needs no permuted copies (`SpdFactor::solve_in_elimination_order`).
     let position = factor
         .as_ref()
         .map_or(Vec::new(), SpdFactor::elimination_position);
+    let row_of: Vec<u32> = free_index
+        .iter()
+        .map(|&f| {
+            if f == u32::MAX {
+                u32::MAX
+            } else {
+                position[f as usize] as u32
+            }
+        })
+        .collect();
+    let mut row_vertex = vec![0usize; nf];
+    for (v, &r) in row_of.iter().enumerate() {
+        if r != u32::MAX {
+            row_vertex[r as usize] = v;
+        }
+    }
     let mut weights = vec![1.0; if opts.injective { m } else { 0 }];
     let sched = opts.refactor;
     // per triangle, twice the UV area of the margin and of the hard floor (see AREA_MARGIN)
@@ -365,11 +384,11 @@ fn iterate(
             &corner_w,
             &targets,
             &uv,
-            &free_index,
+            &row_of,
             &mut gradient_halves,
             &mut gradient,
         );
-        descent_direction(factor, &gradient, &mut rhs, &free_vertices, &mut d);
+        descent_direction(factor, &gradient, &mut rhs, &row_vertex, &mut d);
 
         // Line search.
         let mut step = 1.0;
@@ -398,8 +417,7 @@ fn iterate(
                         &step_limits.limits,
                         dir.best_step,
                         opts.local_rings,
-                        &free_index,
-                        &position,
+                        &row_of,
                         &gradient,
                         &adjacency,
                         &mut mark,
@@ -419,7 +437,7 @@ fn iterate(
                 }
                 if local && (dir.slope.is_nan() || dir.slope >= 0.0) {
                     // the local re-solve lost the descent: back to the global direction
-                    descent_direction(factor, &gradient, &mut rhs, &free_vertices, &mut d);
+                    descent_direction(factor, &gradient, &mut rhs, &row_vertex, &mut d);
                     dir = step_limits.directional(&frames, &uv, &d, &targets, None);
                 }
             }
@@ -452,7 +470,7 @@ fn iterate(
                     .map_err(singular)?;
                 (pending, blocked_run) = (0, 0);
                 iter_refactors += 1;
-                descent_direction(factor, &gradient, &mut rhs, &free_vertices, &mut d);
+                descent_direction(factor, &gradient, &mut rhs, &row_vertex, &mut d);
                 dir = step_limits.directional(&frames, &uv, &d, &targets, None);
             }
             refactors += iter_refactors;
@@ -783,19 +801,20 @@ fn reduce_directional(
     }
 }
 
-/// `d = -Δ_W⁻¹ g` for the gradient `g` (one row per free vertex; `rhs` is the solve's
-/// scratch), scattered to the free vertices; pinned vertices keep their zero direction.
+/// `d = -Δ_W⁻¹ g` for the gradient `g` (one row per free vertex, in the factor's elimination
+/// order; `rhs` is the solve's scratch), scattered to the free vertices (`row_vertex[k]`: the
+/// vertex of row `k`); pinned vertices keep their zero direction.
 fn descent_direction(
     factor: &SpdFactor,
     gradient: &Mat<f64>,
     rhs: &mut Mat<f64>,
-    free_vertices: &[usize],
+    row_vertex: &[usize],
     d: &mut [[f64; 2]],
 ) {
     rhs.copy_from(gradient);
-    factor.solve_in_place(rhs.as_mut());
-    for (f, &v) in free_vertices.iter().enumerate() {
-        d[v] = [-rhs[(f, 0)], -rhs[(f, 1)]];
+    factor.solve_in_elimination_order(rhs.as_mut());
+    for (k, &v) in row_vertex.iter().enumerate() {
+        d[v] = [-rhs[(k, 0)], -rhs[(k, 1)]];
     }
 }
 
@@ -855,7 +874,7 @@ fn corner_weights(frames: &TriangleFrames) -> Vec<[[f64; 2]; 3]> {
         .collect()
 }
 
-/// `∇E` on the free vertices (row `free_index[v]`), written to `out`: at vertex i,
+/// `∇E` on the free vertices (row `row_of[v]`, `u32::MAX` for a fixed vertex), written to `out`: at vertex i,
 /// `Σ_t Σ_j cot θ_ij ((u_i - u_j) - L_t (x_i - x_j))` (Liu et al. 2008, eq. 6). The two
 /// halves of the triangle list are scattered into the two `halves` buffers (one per vertex,
 /// resized here) on two threads, then summed; the split does not depend on the thread count,
@@ -867,7 +886,7 @@ fn gradient_into(
     corner_w: &[[[f64; 2]; 3]],
     targets: &[Similarity],
     uv: &[[f64; 2]],
-    free_index: &[u32],
+    row_of: &[u32],
     halves: &mut [Vec<[f64; 2]>; 2],
     out: &mut Mat<f64>,
 ) {
@@ -897,7 +916,7 @@ fn gradient_into(
     };
     let [h0, h1] = halves;
     rayon::join(|| scatter(0..m / 2, h0), || scatter(m / 2..m, h1));
-    for (v, &fi) in free_index.iter().enumerate() {
+    for (v, &fi) in row_of.iter().enumerate() {
         if fi != u32::MAX {
             for dim in 0..2 {
                 out[(fi as usize, dim)] = h0[v][dim] + h1[v][dim];
@@ -932,8 +951,9 @@ fn vertex_triangles(n: usize, triangles: &[[u32; 3]]) -> (Vec<usize>, Vec<u32>) 
 /// triangles that would reach their area floor before `best_step`, replaces `d` by the
 /// minimizer of the global step's model `g·δ + ½ δᵀ Δ_W δ` (stiffened weights `Δ_W`) with `δ`
 /// held at `d` everywhere else, a small Dirichlet problem factored on the spot, its vertices
-/// numbered in the global factor's elimination order (`position`, per free vertex), which
-/// fills no more than the global factor does there and spares computing an ordering. The blocking
+/// numbered in the global factor's elimination order (`row_of`: a vertex's row in it, also
+/// its row in `gradient`; `u32::MAX` when fixed), which fills no more than the global factor
+/// does there and spares computing an ordering. The blocking
 /// triangles then move almost rigidly with their surroundings instead of cutting the step for
 /// the whole mesh, without refactoring the global Laplacian. Returns the number of vertices
 /// re-solved; `touched` receives the triangles whose direction changed. `adjacency` lists each
@@ -946,8 +966,7 @@ fn local_resolve(
     limits: &[f64],
     best_step: f64,
     rings: usize,
-    free_index: &[u32],
-    position: &[usize],
+    row_of: &[u32],
     gradient: &Mat<f64>,
     adjacency: &(Vec<usize>, Vec<u32>),
     mark: &mut [u32],
@@ -963,7 +982,7 @@ fn local_resolve(
     for (tri, &lim) in tris.iter().zip(limits) {
         if STEP_SAFETY * lim < best_step {
             for &v in tri {
-                if mark[v as usize] == u32::MAX && free_index[v as usize] != u32::MAX {
+                if mark[v as usize] == u32::MAX && row_of[v as usize] != u32::MAX {
                     mark[v as usize] = 0;
                     region.push(v);
                 }
@@ -977,7 +996,7 @@ fn local_resolve(
             let v = region[k] as usize;
             for &t in &vt[vt_start[v]..vt_start[v + 1]] {
                 for &u in &tris[t as usize] {
-                    if mark[u as usize] == u32::MAX && free_index[u as usize] != u32::MAX {
+                    if mark[u as usize] == u32::MAX && row_of[u as usize] != u32::MAX {
                         mark[u as usize] = ring + 1;
                         region.push(u);
                     }
@@ -987,7 +1006,7 @@ fn local_resolve(
         ring_start = ring_end;
     }
     // numbered in the global factor's elimination order, a fill-reducing order for the region
-    region.sort_unstable_by_key(|&v| position[free_index[v as usize] as usize]);
+    region.sort_unstable_by_key(|&v| row_of[v as usize]);
     for (k, &v) in region.iter().enumerate() {
         mark[v as usize] = k as u32;
     }
@@ -1006,7 +1025,7 @@ fn local_resolve(
         let mut column: Vec<(usize, f64)> = Vec::new();
         col_ptr.push(0);
         for (k, &v) in region.iter().enumerate() {
-            let f = free_index[v as usize] as usize;
+            let f = row_of[v as usize] as usize;
             let (mut r0, mut r1) = (-gradient[(f, 0)], -gradient[(f, 1)]);
             let mut diag = 0.0;
             column.clear();
@@ -1352,6 +1371,22 @@ pub(crate) mod tests {
         }
         let (trip, _) = laplacian_triplets(&frames, &free_index);
         let factor = SpdFactor::new(free_vertices.len(), &trip, Par::Seq).unwrap();
+        // rows in the factor's elimination order, as `iterate` keeps them
+        let position = factor.elimination_position();
+        let row_of: Vec<u32> = free_index
+            .iter()
+            .map(|&f| {
+                if f == u32::MAX {
+                    f
+                } else {
+                    position[f as usize] as u32
+                }
+            })
+            .collect();
+        let mut row_vertex = vec![0; free_vertices.len()];
+        for &v in &free_vertices {
+            row_vertex[row_of[v] as usize] = v;
+        }
         let mut targets = vec![[1.0, 0.0]; m];
         evaluate(&frames, &uv0, None, &mut targets);
         let mut g = Mat::<f64>::zeros(free_vertices.len(), 2);
@@ -1360,13 +1395,26 @@ pub(crate) mod tests {
             &corner_weights(&frames),
             &targets,
             &uv0,
-            &free_index,
+            &row_of,
             &mut [Vec::new(), Vec::new()],
             &mut g,
         );
         let mut rhs = g.clone();
         let mut d = vec![[0.0; 2]; n];
-        descent_direction(&factor, &g, &mut rhs, &free_vertices, &mut d);
+        descent_direction(&factor, &g, &mut rhs, &row_vertex, &mut d);
+        // the same direction as a solve in the free vertices' own order
+        let mut g_free = Mat::<f64>::zeros(free_vertices.len(), 2);
+        for (f, &v) in free_vertices.iter().enumerate() {
+            for c in 0..2 {
+                g_free[(f, c)] = -g[(row_of[v] as usize, c)];
+            }
+        }
+        factor.solve_in_place(g_free.as_mut());
+        for (f, &v) in free_vertices.iter().enumerate() {
+            for c in 0..2 {
+                assert!((g_free[(f, c)] - d[v][c]).abs() <= 1e-12 * (1.0 + d[v][c].abs()));
+            }
+        }
         // four triangles near the middle "block" the step
         let centre = |t: usize| {
             let c = frames.triangles[t].map(|v| p[v as usize]);
@@ -1388,7 +1436,6 @@ pub(crate) mod tests {
             limits[b] = 0.1;
         }
         let adjacency = vertex_triangles(n, &frames.triangles);
-        let position = factor.elimination_position();
         let (mut mark, mut seen, mut touched) = (vec![u32::MAX; n], vec![false; m], Vec::new());
         let dmax = d
             .iter()
@@ -1403,8 +1450,7 @@ pub(crate) mod tests {
                 &limits,
                 1.0,
                 2,
-                &free_index,
-                &position,
+                &row_of,
                 &g,
                 &adjacency,
                 &mut mark,

@@ -93,15 +93,16 @@ fn main() {
             .ok()
             .and_then(|v| v.parse().ok())
             .unwrap_or(ArapOptions::default().local_rings);
+        let options = |injective| ArapOptions {
+            iterations,
+            tolerance: 0.0,
+            injective,
+            refactor: schedule(),
+            local_rings,
+            ..Default::default()
+        };
         for injective in [false, true] {
-            let opts = ArapOptions {
-                iterations,
-                tolerance: 0.0,
-                injective,
-                refactor: schedule(),
-                local_rings,
-                ..Default::default()
-            };
+            let opts = options(injective);
             let r = arap_parameterize(&mesh.positions, &tris, &init, &opts).expect("arap");
             let m = uv_metrics(&mesh.positions, &tris, &r.uv);
             let label = if injective {
@@ -182,14 +183,7 @@ fn main() {
         }
         for _ in 1..runs {
             for (k, injective) in [false, true].into_iter().enumerate() {
-                let opts = ArapOptions {
-                    iterations,
-                    tolerance: 0.0,
-                    injective,
-                    refactor: schedule(),
-                    local_rings,
-                    ..Default::default()
-                };
+                let opts = options(injective);
                 let r = arap_parameterize(&mesh.positions, &tris, &init, &opts).expect("arap");
                 let t = outcome(&r, 0.0, 0).iter_ms;
                 ours[k].1.samples.push(t);

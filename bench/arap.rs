@@ -132,7 +132,7 @@ fn main() {
 
         let prefix = out_dir.join(format!("{name}_libigl"));
         let igl = run_libigl(root, &path, iterations, &prefix, &mesh.positions);
-        let igl_outcome = igl.as_ref().map(|(json, uv)| {
+        let mut igl_outcome = igl.as_ref().map(|(json, uv)| {
             let m = uv_metrics(&mesh.positions, &tris, uv);
             let log = json["log"].as_array().cloned().unwrap_or_default();
             let harmonic_ms = json["harmonic_ms"].as_f64().unwrap_or(0.0);
@@ -170,7 +170,6 @@ fn main() {
             }
         });
         // further rounds, ours and libigl's in turn (see the module docs)
-        let mut igl_outcome = igl_outcome;
         let runs: usize = std::env::var("ARAP_BENCH_RUNS")
             .ok()
             .and_then(|v| v.parse().ok())
@@ -190,9 +189,10 @@ fn main() {
             }
             if let Some(g) = igl_outcome.as_mut() {
                 let rep_prefix = out_dir.join(format!("{name}_libigl_rerun"));
-                if let Some(t) = libigl_iter_ms(root, &path, iterations, &rep_prefix) {
-                    g.samples.push(t);
-                }
+                // a failed rerun records NaN, keeping the rounds aligned (median skips it)
+                let t = run_libigl_script(root, &path, iterations, &rep_prefix)
+                    .and_then(|json| json["iteration_ms"].as_f64());
+                g.samples.push(t.unwrap_or(f64::NAN));
             }
         }
         for o in ours.iter_mut().map(|(_, o)| o) {
@@ -268,9 +268,9 @@ fn outcome(r: &ArapResult, energy: f64, flips: usize) -> Outcome {
     }
 }
 
-/// The median of the samples.
+/// The median of the samples that are not NaN.
 fn median(v: &[f64]) -> f64 {
-    let mut v = v.to_vec();
+    let mut v: Vec<f64> = v.iter().copied().filter(|x| !x.is_nan()).collect();
     v.sort_by(f64::total_cmp);
     match v.len() {
         0 => f64::NAN,
@@ -279,8 +279,14 @@ fn median(v: &[f64]) -> f64 {
     }
 }
 
-/// Time per iteration of one more libigl run (`None` if the peer failed).
-fn libigl_iter_ms(root: &Path, mesh: &Path, iterations: usize, prefix: &Path) -> Option<f64> {
+/// Runs `bench/peers/arap_libigl.py` and reads the JSON it writes at `prefix` (`None` if the
+/// peer failed).
+fn run_libigl_script(
+    root: &Path,
+    mesh: &Path,
+    iterations: usize,
+    prefix: &Path,
+) -> Option<serde_json::Value> {
     let status = Command::new("python3")
         .arg(root.join("bench/peers/arap_libigl.py"))
         .arg(mesh)
@@ -290,9 +296,7 @@ fn libigl_iter_ms(root: &Path, mesh: &Path, iterations: usize, prefix: &Path) ->
     if !matches!(status, Ok(s) if s.success()) {
         return None;
     }
-    let json: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(prefix.with_extension("json")).ok()?).ok()?;
-    json["iteration_ms"].as_f64()
+    serde_json::from_slice(&std::fs::read(prefix.with_extension("json")).ok()?).ok()
 }
 
 /// The refactor schedule, from `ARAP_REFACTOR` if set.
@@ -347,19 +351,10 @@ fn run_libigl(
     prefix: &Path,
     positions: &[[f64; 3]],
 ) -> Option<(serde_json::Value, Vec<[f64; 2]>)> {
-    let script = root.join("bench/peers/arap_libigl.py");
-    let status = Command::new("python3")
-        .arg(&script)
-        .arg(mesh)
-        .arg(iterations.to_string())
-        .arg(prefix)
-        .status();
-    if !matches!(status, Ok(s) if s.success()) {
+    let Some(json) = run_libigl_script(root, mesh, iterations, prefix) else {
         eprintln!("libigl peer failed or missing (pip install libigl)");
         return None;
-    }
-    let json: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(prefix.with_extension("json")).ok()?).ok()?;
+    };
     let f64s = |ext: &str| -> Option<Vec<f64>> {
         let bytes = std::fs::read(prefix.with_extension(ext)).ok()?;
         Some(

@@ -66,8 +66,8 @@ pub fn area_coefficients(
 /// Smallest positive root of `c0 + c1 t + c2 t²` (`INFINITY` if none); `0` when `c0 <= 0`.
 ///
 /// Without data-dependent branches (a negative discriminant gives NaN roots, which the
-/// `r > 0` selection drops like infinite ones), so that a loop of these vectorizes and
-/// overlaps the square root and divisions of successive calls.
+/// `r > 0` selection drops like infinite ones), so that in a loop of these the square root
+/// and divisions of successive calls overlap.
 #[inline]
 pub fn smallest_positive_root(c0: f64, c1: f64, c2: f64) -> f64 {
     let disc = c1 * c1 - 4.0 * c2 * c0;

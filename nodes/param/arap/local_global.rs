@@ -287,28 +287,9 @@ fn iterate(
     } else {
         None
     };
-    // The gradient, the solves and the local re-solves keep the free vertices in the factor's
-    // elimination order (`row_of[v]`, `u32::MAX` when fixed; `row_vertex[k]` the vertex of row
-    // `k`): the solve then needs no permuted copies (`SpdFactor::solve_in_elimination_order`).
-    let position = factor
-        .as_ref()
-        .map_or(Vec::new(), SpdFactor::elimination_position);
-    let row_of: Vec<u32> = free_index
-        .iter()
-        .map(|&f| {
-            if f == u32::MAX {
-                u32::MAX
-            } else {
-                position[f as usize] as u32
-            }
-        })
-        .collect();
-    let mut row_vertex = vec![0usize; nf];
-    for (v, &r) in row_of.iter().enumerate() {
-        if r != u32::MAX {
-            row_vertex[r as usize] = v;
-        }
-    }
+    let (row_of, row_vertex) = factor.as_ref().map_or((Vec::new(), Vec::new()), |f| {
+        elimination_rows(f, &free_index)
+    });
     let mut weights = vec![1.0; if opts.injective { m } else { 0 }];
     let sched = opts.refactor;
     // per triangle, twice the UV area of the margin and of the hard floor (see AREA_MARGIN)
@@ -713,7 +694,7 @@ impl StepLimits {
                 .for_each(|(ci, ((lims, ts), blocks))| {
                     // the roots in a second loop over the block: one triangle's root is a
                     // chain of a square root and two divisions, which a loop of roots alone
-                    // overlaps across triangles (and vectorizes)
+                    // overlaps across triangles
                     let mut c = [[0.0; SUM_BLOCK]; 3];
                     for (b, ((blk, l), tm)) in blocks
                         .iter_mut()
@@ -801,6 +782,31 @@ fn reduce_directional(
     }
 }
 
+/// The gradient, the solves and the local re-solves keep the free vertices in the factor's
+/// elimination order, so that a solve needs no permuted copies
+/// (`SpdFactor::solve_in_elimination_order`). Returns each vertex's row in that order
+/// (`u32::MAX` when fixed, i.e. `free_index[v] == u32::MAX`) and the vertex of each row.
+fn elimination_rows(factor: &SpdFactor, free_index: &[u32]) -> (Vec<u32>, Vec<usize>) {
+    let position = factor.elimination_position();
+    let row_of: Vec<u32> = free_index
+        .iter()
+        .map(|&f| {
+            if f == u32::MAX {
+                f
+            } else {
+                position[f as usize] as u32
+            }
+        })
+        .collect();
+    let mut row_vertex = vec![0usize; position.len()];
+    for (v, &r) in row_of.iter().enumerate() {
+        if r != u32::MAX {
+            row_vertex[r as usize] = v;
+        }
+    }
+    (row_of, row_vertex)
+}
+
 /// `d = -Δ_W⁻¹ g` for the gradient `g` (one row per free vertex, in the factor's elimination
 /// order; `rhs` is the solve's scratch), scattered to the free vertices (`row_vertex[k]`: the
 /// vertex of row `k`); pinned vertices keep their zero direction.
@@ -874,13 +880,14 @@ fn corner_weights(frames: &TriangleFrames) -> Vec<[[f64; 2]; 3]> {
         .collect()
 }
 
-/// `∇E` on the free vertices (row `row_of[v]`, `u32::MAX` for a fixed vertex), written to `out`: at vertex i,
-/// `Σ_t Σ_j cot θ_ij ((u_i - u_j) - L_t (x_i - x_j))` (Liu et al. 2008, eq. 6). The two
-/// halves of the triangle list are scattered into the two `halves` buffers (one per vertex,
-/// resized here) on two threads, then summed; the split does not depend on the thread count,
-/// so neither does the result (camelhead, timed inside the loop: 300 us for the sequential
-/// scatter, 220-330 for the halves on one thread, 170-250 on two). A parallel gather per vertex over its triangles measured
-/// slower (camelhead plain iteration 2.9 -> 3.5 ms), its reads of the UVs being scattered.
+/// `∇E` on the free vertices (row `row_of[v]`, `u32::MAX` for a fixed vertex), written to
+/// `out`: at vertex i, `Σ_t Σ_j cot θ_ij ((u_i - u_j) - L_t (x_i - x_j))` (Liu et al. 2008,
+/// eq. 6). The two halves of the triangle list are scattered into the two `halves` buffers
+/// (one per vertex, resized here) on two threads, then summed; the split does not depend on
+/// the thread count, so neither does the result (camelhead, timed inside the loop: 300 us for
+/// the sequential scatter, 220-330 for the halves on one thread, 170-250 on two). A parallel
+/// gather per vertex over its triangles measured slower (camelhead plain iteration 2.9 -> 3.5
+/// ms), its reads of the UVs being scattered.
 fn gradient_into(
     frames: &TriangleFrames,
     corner_w: &[[[f64; 2]; 3]],
@@ -1372,21 +1379,7 @@ pub(crate) mod tests {
         let (trip, _) = laplacian_triplets(&frames, &free_index);
         let factor = SpdFactor::new(free_vertices.len(), &trip, Par::Seq).unwrap();
         // rows in the factor's elimination order, as `iterate` keeps them
-        let position = factor.elimination_position();
-        let row_of: Vec<u32> = free_index
-            .iter()
-            .map(|&f| {
-                if f == u32::MAX {
-                    f
-                } else {
-                    position[f as usize] as u32
-                }
-            })
-            .collect();
-        let mut row_vertex = vec![0; free_vertices.len()];
-        for &v in &free_vertices {
-            row_vertex[row_of[v] as usize] = v;
-        }
+        let (row_of, row_vertex) = elimination_rows(&factor, &free_index);
         let mut targets = vec![[1.0, 0.0]; m];
         evaluate(&frames, &uv0, None, &mut targets);
         let mut g = Mat::<f64>::zeros(free_vertices.len(), 2);

@@ -885,7 +885,9 @@ fn corner_weights(frames: &TriangleFrames) -> Vec<[[f64; 2]; 3]> {
 /// eq. 6). The two halves of the triangle list are scattered into the two `halves` buffers
 /// (one per vertex, resized here) on two threads, then summed; the split does not depend on
 /// the thread count, so neither does the result (camelhead, timed inside the loop: 300 us for
-/// the sequential scatter, 220-330 for the halves on one thread, 170-250 on two). A parallel
+/// the sequential scatter, 220-330 for the halves on one thread, 170-250 on two; in a later
+/// session's whole runs, 240-250 on two threads against 220-310 on one, no gain measurable
+/// that day, see docs/arap.md). A parallel
 /// gather per vertex over its triangles measured slower (camelhead plain iteration 2.9 -> 3.5
 /// ms), its reads of the UVs being scattered.
 fn gradient_into(

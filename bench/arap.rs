@@ -3,9 +3,9 @@
 //! `cargo bench --bench arap [-- ITERATIONS [MESH.obj ...]]` (default 100 iterations, the
 //! `arap` node's default, on camel_b, camelhead, nefertiti_front and igea_front; the fold-free
 //! mode front-loads its refactorizations, so its time per iteration depends on the run length:
-//! `-- 30` is the shorter run measured in `docs/arap.md`). For each mesh: ours plain and fold-free from the
-//! default Tutte start (mean-value weights, circle), and libigl's `arap_solve` from
-//! `igl.harmonic` with one pinned vertex (`bench/peers/arap_libigl.py`, needs
+//! `-- 30` is the shorter run measured in `docs/arap.md`). For each mesh: ours plain and
+//! fold-free from the default Tutte start (mean-value weights, circle), and libigl's
+//! `arap_solve` from `igl.harmonic` with one pinned vertex (`bench/peers/arap_libigl.py`, needs
 //! `pip install libigl`). Ours are measured with `uv_metrics`, libigl's with the same definition
 //! in numpy (UV area scaled to the 3-D area, flips against the majority); both agree where the
 //! vertex orders can be matched by position. Time per iteration excludes setup

@@ -64,6 +64,7 @@ impl FoldFree {
 
     /// Stiffens the triangles that would flip before `best_step` (`reweight`), counting them
     /// as pending for the factor.
+    #[inline]
     pub fn stiffen(&mut self, limits: &[f64], best_step: f64) {
         let changed = reweight(limits, best_step, &mut self.weights);
         self.pending += changed;
@@ -72,6 +73,7 @@ impl FoldFree {
 
     /// Whether one of the schedule's triggers asks for a refactorization, among `m`
     /// triangles, with the search direction's `dir`.
+    #[inline]
     pub fn refactor_due(&self, sched: &RefactorSchedule, m: usize, dir: &Directional) -> bool {
         self.blocked_run >= sched.blocked_run
             || self.pending as f64 >= sched.growth * m as f64

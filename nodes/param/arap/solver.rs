@@ -90,6 +90,7 @@ struct Accepted {
 /// Everything one run keeps between its steps.
 struct Solver<'a> {
     opts: &'a ArapOptions,
+    /// When the call started (the log's `elapsed_ms`).
     start: Instant,
     frames: TriangleFrames,
     lambda: Option<f64>,
@@ -107,24 +108,35 @@ struct Solver<'a> {
     row_of: Vec<u32>,
     /// The vertex of each row.
     row_vertex: Vec<usize>,
+    /// Right-hand side weights per corner (`corner_weights`).
     corner_w: Vec<[[f64; 2]; 3]>,
+    /// Scratch of the solves.
     rhs: Mat<f64>,
+    /// `∇E` on the free vertices, in elimination order.
     gradient: Mat<f64>,
+    /// Scratch of `gradient_into`, one buffer per half of the triangles.
     gradient_halves: [Vec<[f64; 2]>; 2],
     /// The search direction, per vertex.
     d: Vec<[f64; 2]>,
 
+    /// The current UVs (mirrored when `orient < 0`) and their local step's targets.
     uv: Vec<[f64; 2]>,
     targets: Vec<Similarity>,
+    /// The UVs and targets of the step being tried.
     trial: Vec<[f64; 2]>,
     trial_targets: Vec<Similarity>,
+    /// The energy at `uv`, per unit area.
     energy: f64,
+    /// The fold-free line search's per-triangle state.
     step_limits: StepLimits,
+    /// The fold-free mode's weights, counters and scratch.
     fold: FoldFree,
 
+    /// Iterations started.
     it: usize,
     log: Vec<ArapIteration>,
     stop: StopReason,
+    /// Details of a `NoProgress` stop.
     detail: String,
 }
 

@@ -47,6 +47,18 @@ pub fn norm(a: [f64; 3]) -> f64 {
     dot(a, a).sqrt()
 }
 
+/// `a - b` in the plane.
+#[inline]
+pub fn sub2(a: [f64; 2], b: [f64; 2]) -> [f64; 2] {
+    [a[0] - b[0], a[1] - b[1]]
+}
+
+/// The 2-D cross product `a.x b.y - a.y b.x` (twice the signed area of the triangle `0, a, b`).
+#[inline]
+pub fn cross2(a: [f64; 2], b: [f64; 2]) -> f64 {
+    a[0] * b[1] - a[1] * b[0]
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

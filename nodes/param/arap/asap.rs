@@ -6,8 +6,10 @@
 //! where `(F, G)` is the anti-similarity part of `J` (see `frames::similarity_parts`). Two
 //! vertices are pinned to fix the similarity; the rest comes from one sparse Cholesky solve.
 
+use super::error::ArapError;
 use super::frames::{local_step, similarity_parts, TriangleFrames, PAR_CHUNK};
 use super::injective::orientation_and_flips;
+use super::system::free_rows;
 use super::{component_of, uv_outputs};
 use crate::nodes::linalg::SpdFactor;
 use crate::prelude::*;
@@ -40,29 +42,22 @@ pub fn asap_parameterize(
     positions: &[[f64; 3]],
     triangles: &[[u32; 3]],
     pins: Option<[usize; 2]>,
-) -> Result<AsapResult, NodeError> {
+) -> Result<AsapResult, ArapError> {
     let start = Instant::now();
     let n = positions.len();
     if triangles.is_empty() {
-        return Err(NodeError::invalid("mesh", "mesh has no triangles"));
+        return Err(ArapError::NoTriangles);
     }
-    let frames =
-        TriangleFrames::new(positions, triangles).map_err(|e| NodeError::invalid("mesh", e))?;
+    let frames = TriangleFrames::new(positions, triangles).map_err(ArapError::Mesh)?;
     let (comp, ncomp) = component_of(n, triangles);
     if ncomp != 1 {
-        return Err(NodeError::topology(
-            "mesh",
-            format!("mesh has {ncomp} connected components; ASAP needs one"),
-        ));
+        return Err(ArapError::Components(ncomp));
     }
     let used: Vec<bool> = comp.iter().map(|&c| c != u32::MAX).collect();
     let [a, b] = match pins {
         Some([a, b]) => {
             if a >= n || b >= n || a == b || !used[a] || !used[b] {
-                return Err(NodeError::invalid(
-                    "pins",
-                    "pins must be two different vertices of the mesh's triangles",
-                ));
+                return Err(ArapError::Pins);
             }
             [a, b]
         }
@@ -86,14 +81,8 @@ pub fn asap_parameterize(
     let mut fixed: Vec<bool> = used.iter().map(|u| !u).collect();
     fixed[a] = true;
     fixed[b] = true;
-    let mut free_index = vec![u32::MAX; n];
-    let mut nf = 0usize;
-    for v in 0..n {
-        if !fixed[v] {
-            free_index[v] = nf as u32;
-            nf += 1;
-        }
-    }
+    let (free_index, free_vertices) = free_rows(&fixed);
+    let nf = free_vertices.len();
 
     // Per triangle, the 6x6 block 2A (f fᵀ + g gᵀ) over (x0, x1, x2, y0, y1, y2), with
     // F = f·u and G = g·u. J's rows are (g1·x, g2·x) and (g1·y, g2·y) with
@@ -146,11 +135,7 @@ pub fn asap_parameterize(
         }
     }
     if nf > 0 {
-        let factor = SpdFactor::new(2 * nf, &trip, Par::Seq).map_err(|e| {
-            NodeError::singular(format!(
-                "the ASAP system could not be factored ({e}); the mesh may have nearly degenerate triangles"
-            ))
-        })?;
+        let factor = SpdFactor::new(2 * nf, &trip, Par::Seq).map_err(ArapError::SingularAsap)?;
         factor.solve_in_place(rhs.as_mut());
         for v in 0..n {
             if free_index[v] != u32::MAX {

@@ -6,6 +6,7 @@
 //! edge 0→1 on the x axis, corner 2 above it), so the map from that frame to the UV plane is
 //! linear with Jacobian `J = [u1-u0, u2-u0] · [x1-x0, x2-x0]^-1`.
 
+use crate::types::vec3::{cross, cross2, dot, norm, sub, sub2};
 use rayon::prelude::*;
 
 /// Triangles per rayon task: large enough that small meshes run on one thread and the
@@ -46,19 +47,19 @@ impl TriangleFrames {
                     return Err(format!("triangle {t} refers to a vertex out of range"));
                 }
                 let p = tri.map(|v| positions[v as usize]);
-                let e1 = sub3(p[1], p[0]);
-                let e2 = sub3(p[2], p[0]);
-                let l1 = norm3(e1);
-                let cr = norm3(cross3(e1, e2));
+                let e1 = sub(p[1], p[0]);
+                let e2 = sub(p[2], p[0]);
+                let l1 = norm(e1);
+                let cr = norm(cross(e1, e2));
                 let area = 0.5 * cr;
-                let scale = dot3(e1, e1).max(dot3(e2, e2));
+                let scale = dot(e1, e1).max(dot(e2, e2));
                 if !(area.is_finite() && l1 > 0.0 && cr > 1e-14 * scale) {
                     return Err(format!(
                         "triangle {t} (vertices {}, {}, {}) has zero area; ARAP needs non-degenerate triangles",
                         tri[0], tri[1], tri[2]
                     ));
                 }
-                let x = [[0.0, 0.0], [l1, 0.0], [dot3(e1, e2) / l1, cr / l1]];
+                let x = [[0.0, 0.0], [l1, 0.0], [dot(e1, e2) / l1, cr / l1]];
                 // inverse of [[l1, x2x], [0, x2y]]
                 let inv = [1.0 / l1, -x[2][0] / (l1 * x[2][1]), 1.0 / x[2][1]];
                 let mut cot = [0.0; 3];
@@ -154,7 +155,7 @@ pub fn signed_singular_values(j: &Mat2) -> (f64, f64) {
     (q + r, q - r)
 }
 
-/// `sqrt(a² + b²)`: the plain formula (libm's `hypot` took a tenth of an ARAP iteration),
+/// `sqrt(a² + b²)`: the plain formula (libm's `hypot` is much slower in the hot loops),
 /// falling back to `hypot` when the squares overflow or underflow.
 #[inline]
 pub fn norm2(a: f64, b: f64) -> f64 {
@@ -239,35 +240,6 @@ fn cubic_real_roots(p: f64, r: f64) -> Vec<f64> {
             .map(|k| m * (theta - 2.0 * std::f64::consts::PI * k as f64 / 3.0).cos())
             .collect()
     }
-}
-
-#[inline]
-pub(crate) fn sub3(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-#[inline]
-pub(crate) fn dot3(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-#[inline]
-pub(crate) fn cross3(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-#[inline]
-pub(crate) fn norm3(a: [f64; 3]) -> f64 {
-    dot3(a, a).sqrt()
-}
-#[inline]
-pub(crate) fn sub2(a: [f64; 2], b: [f64; 2]) -> [f64; 2] {
-    [a[0] - b[0], a[1] - b[1]]
-}
-#[inline]
-pub(crate) fn cross2(a: [f64; 2], b: [f64; 2]) -> f64 {
-    a[0] * b[1] - a[1] * b[0]
 }
 
 #[cfg(test)]

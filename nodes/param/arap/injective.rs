@@ -2,7 +2,8 @@
 //! triangle's orientation (Smith & Schaefer 2015, "Bijective Parameterization with Free
 //! Boundaries", §4), and flip counting.
 
-use super::frames::{cross2, TriangleFrames, PAR_CHUNK};
+use super::frames::{TriangleFrames, PAR_CHUNK};
+use crate::types::vec3::cross2;
 use rayon::prelude::*;
 
 /// The smallest positive `t` at which triangle `t`'s signed area, moving as `uv + t·d`,

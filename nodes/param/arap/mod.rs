@@ -1,22 +1,35 @@
 //! ARAP, ASAP and hybrid parameterization (Liu et al. 2008), fast and fold-free.
 //!
 //! - `local_global`: `arap_parameterize`, the local/global iteration for ARAP and the hybrid
-//!   model, with the fold-free line search; nodes `arap` and `arap_hybrid`.
+//!   model, and its local step over all triangles; the loop is in `solver`, its global step
+//!   in `system`, the fold-free line search in `line_search` and `fold_free`, its settings
+//!   and constants in `options`.
+//! - `arap`: nodes `arap` and `arap_hybrid`, and how `ArapError` becomes a `NodeError`.
 //! - `asap`: `asap_parameterize`, one linear solve; node `asap`.
 //! - `frames`: per-triangle isometric frames, Jacobians and closed-form 2x2 decompositions.
 //! - `injective`: the largest orientation-preserving step (Smith & Schaefer 2015) and flips.
+//! - `error`: `ArapError`, why the algorithms refused their input.
 //!
 //! Method, costs and measurements: `docs/arap.md`.
 
+// the node `arap` lives in `arap.rs`, named after the node type like every node file
+#[allow(clippy::module_inception)]
+pub mod arap;
 pub mod asap;
+pub mod error;
+mod fold_free;
 pub mod frames;
 pub mod injective;
+mod line_search;
 pub mod local_global;
+pub mod options;
+mod solver;
+mod system;
 
 pub use asap::{asap_parameterize, AsapResult};
-pub use local_global::{
-    arap_parameterize, ArapIteration, ArapOptions, ArapResult, RefactorSchedule,
-};
+pub use error::ArapError;
+pub use local_global::{arap_parameterize, ArapIteration, ArapResult};
+pub use options::{ArapOptions, RefactorSchedule, LOCAL_RINGS};
 
 use super::tutte::{tutte_parameterize, BoundaryShape, TutteWeights};
 use crate::prelude::*;
@@ -173,6 +186,6 @@ pub fn normalized(uv: &[[f64; 2]]) -> Vec<[f64; 2]> {
 
 /// Registers `arap`, `arap_hybrid` and `asap`.
 pub fn register(r: &mut Registry) {
-    local_global::register(r);
+    arap::register(r);
     asap::register(r);
 }

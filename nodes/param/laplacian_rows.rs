@@ -9,6 +9,7 @@
 //! is being built on the other core.
 
 use super::laplacian::corner_cotangents;
+use super::triangles::corner_row_starts;
 use crate::nodes::linalg::laplace::LaplaceRows;
 use crate::nodes::linalg::nested_dissection::{nested_dissection, Dissection, ND_MIN_ROWS};
 
@@ -65,15 +66,8 @@ impl LaplacianRows {
         triangles: &[[u32; 3]],
         corner_weight: impl Fn(usize, usize) -> f64,
     ) -> LaplacianRows {
-        let mut count = vec![0usize; n + 1];
-        for tri in triangles {
-            for &v in tri {
-                count[v as usize + 1] += 2;
-            }
-        }
-        for i in 0..n {
-            count[i + 1] += count[i];
-        }
+        // two entries (both edges at the corner) per corner
+        let count = corner_row_starts(n, triangles, 2);
         let mut fill = count.clone();
         let mut raw: Vec<(u32, f64)> = vec![(0, 0.0); count[n]];
         for (t, tri) in triangles.iter().enumerate() {

@@ -1,5 +1,6 @@
 //! Triangle lists of meshes: the fan triangulation of polygons the parameterization nodes
-//! work on, and the triangulated regular grid of tests and examples.
+//! work on, the triangulated regular grid of tests and examples, and per-vertex lists of
+//! triangle corners in compressed rows.
 
 use crate::prelude::*;
 
@@ -42,6 +43,37 @@ pub fn grid_triangles(cells_u: usize, cells_v: usize) -> Vec<[u32; 3]> {
     grid_triangles_with(cells_u, cells_v, |i, j| (j * (cells_u + 1) + i) as u32)
 }
 
+/// Row starts of compressed rows with `per_corner` entries for every triangle corner at a
+/// vertex: row `v` is `start[v]..start[v + 1]`, `start[n]` the total. The counting pass of a
+/// counting sort of per-vertex lists (`vertex_triangles`, `LaplacianRows`).
+pub fn corner_row_starts(n: usize, triangles: &[[u32; 3]], per_corner: usize) -> Vec<usize> {
+    let mut start = vec![0usize; n + 1];
+    for tri in triangles {
+        for &v in tri {
+            start[v as usize + 1] += per_corner;
+        }
+    }
+    for v in 0..n {
+        start[v + 1] += start[v];
+    }
+    start
+}
+
+/// The triangles of each of the `n` vertices, in compressed rows (`start`, `triangle`),
+/// each row in increasing triangle order.
+pub fn vertex_triangles(n: usize, triangles: &[[u32; 3]]) -> (Vec<usize>, Vec<u32>) {
+    let start = corner_row_starts(n, triangles, 1);
+    let mut next = start.clone();
+    let mut list = vec![0u32; start[n]];
+    for (t, tri) in triangles.iter().enumerate() {
+        for &v in tri {
+            list[next[v as usize]] = t as u32;
+            next[v as usize] += 1;
+        }
+    }
+    (start, list)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -61,5 +93,8 @@ mod tests {
         .unwrap();
         assert_eq!(fan_triangles(&m), t);
         assert_eq!(m.topology().boundary_loops.len(), 1);
+        let (start, list) = vertex_triangles(6, &t);
+        assert_eq!(start, [0, 2, 5, 6, 7, 10, 12]);
+        assert_eq!(&list[start[4]..start[5]], [0, 1, 3]);
     }
 }

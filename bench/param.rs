@@ -7,7 +7,7 @@
 //! Our time includes building the mesh connectivity (the mesh is rebuilt before every run).
 
 use cgnodes::nodes::mesh::load::{load_mesh, LoadOptions};
-use cgnodes::nodes::param::laplacian::fan_triangles;
+use cgnodes::nodes::param::triangles::fan_triangles;
 use cgnodes::nodes::param::tutte::{tutte, TutteOptions, TutteWeights};
 use cgnodes::nodes::param::uv_metrics::uv_metrics;
 use cgnodes::types::Mesh;

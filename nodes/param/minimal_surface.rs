@@ -6,10 +6,12 @@
 //! course) or cotangent weights taken from the input geometry. The three coordinates share one
 //! sparse Cholesky factorization.
 
-use super::laplacian::{fan_triangles, mean_value_weights, solve_dirichlet_on};
-use super::laplacian_rows::{solve_dirichlet_rows, LaplacianRows};
+use super::laplacian::{fan_triangles, mean_value_weights};
+use super::laplacian_rows::LaplacianRows;
 use super::tutte::parse_weights;
 use super::tutte::TutteWeights;
+use crate::nodes::linalg::laplace::solve_dirichlet;
+use crate::nodes::linalg::laplace_weights::solve_dirichlet_weights;
 use crate::prelude::*;
 
 /// The minimal surface's vertex positions: interior vertices solved, boundary vertices (and
@@ -71,7 +73,7 @@ pub fn minimal_surface(
             )
             .map_err(bad)?;
             let order = rows.fill_reducing_order(&mesh.positions);
-            let x = solve_dirichlet_rows(&rows, &fixed, order.as_ref()).map_err(with_hint)?;
+            let x = solve_dirichlet(rows.laplace(), &fixed, order.as_ref()).map_err(with_hint)?;
             let neg = if weights == TutteWeights::Cotangent {
                 rows.negative_edges()
             } else {
@@ -82,7 +84,7 @@ pub fn minimal_surface(
         TutteWeights::MeanValue => {
             let w = mean_value_weights(&mesh.positions, &tris).map_err(bad)?;
             (
-                solve_dirichlet_on(&w, &fixed, false, None).map_err(with_hint)?,
+                solve_dirichlet_weights(&w, &fixed, false).map_err(with_hint)?,
                 0,
             )
         }
@@ -126,6 +128,7 @@ pub fn register(r: &mut Registry) {
 
 #[cfg(test)]
 mod tests {
+    use super::super::triangles::grid_triangles;
     use super::*;
 
     #[test]
@@ -145,15 +148,7 @@ mod tests {
                 p.push([x, y, x + 2.0 * y + bump]);
             }
         }
-        let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
-        let mut t = Vec::new();
-        for j in 0..n {
-            for i in 0..n {
-                t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-                t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-            }
-        }
-        let m = Mesh::from_triangles(p, &t).unwrap();
+        let m = Mesh::from_triangles(p, &grid_triangles(n, n)).unwrap();
         for w in [TutteWeights::Uniform, TutteWeights::Cotangent] {
             let (x, _) = minimal_surface(&m, w).unwrap();
             for q in &x {

@@ -6,9 +6,9 @@ pub mod boundary_map;
 pub mod laplacian;
 pub mod laplacian_rows;
 pub mod minimal_surface;
-pub mod nested_dissection;
 pub mod render_uv;
 pub mod texture_map;
+pub mod triangles;
 pub mod tutte;
 pub mod uv_metrics;
 

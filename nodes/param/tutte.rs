@@ -15,10 +15,12 @@
 use super::boundary_map::{
     map_boundary, parse_shape, parse_spacing, parse_start, rotate_loop, Spacing,
 };
-use super::laplacian::{fan_triangles, mean_value_weights, solve_dirichlet_on};
-use super::laplacian_rows::{DirichletFactor, LaplacianRows};
-use super::nested_dissection::Dissection;
+use super::laplacian::{fan_triangles, mean_value_weights};
+use super::laplacian_rows::LaplacianRows;
 use super::uv_metrics::uv_metrics;
+use crate::nodes::linalg::laplace::DirichletFactor;
+use crate::nodes::linalg::laplace_weights::solve_dirichlet_weights;
+use crate::nodes::linalg::nested_dissection::Dissection;
 use crate::prelude::*;
 
 pub use super::boundary_map::BoundaryShape;
@@ -150,7 +152,8 @@ pub fn tutte(mesh: &Mesh, opts: &TutteOptions) -> Result<TutteResult, NodeError>
         || check_tutte_topology(mesh, opts.fill_holes),
         || {
             let (rows, order) = symmetric_rows(&mesh.positions, &triangles, opts.weights)?;
-            let factor = DirichletFactor::new(&rows, &rows.boundary_or_unused(), order.as_ref());
+            let factor =
+                DirichletFactor::new(rows.laplace(), &rows.boundary_or_unused(), order.as_ref());
             Ok::<_, String>((rows, factor))
         },
     );
@@ -211,7 +214,7 @@ pub fn tutte(mesh: &Mesh, opts: &TutteOptions) -> Result<TutteResult, NodeError>
     let bad = |m: String| NodeError::invalid("mesh", m);
     let (mut uvs, negative) = if opts.weights == TutteWeights::MeanValue {
         let w = mean_value_weights(&positions, &triangles).map_err(bad)?;
-        (solve_dirichlet_on(&w, &fixed, false, None)?, 0)
+        (solve_dirichlet_weights(&w, &fixed, false)?, 0)
     } else {
         let is_fixed: Vec<bool> = fixed.iter().map(Option::is_some).collect();
         let (rows, factor) = match early {
@@ -219,7 +222,7 @@ pub fn tutte(mesh: &Mesh, opts: &TutteOptions) -> Result<TutteResult, NodeError>
             _ => {
                 let (rows, order) =
                     symmetric_rows(&positions, &triangles, opts.weights).map_err(bad)?;
-                let f = DirichletFactor::new(&rows, &is_fixed, order.as_ref())?;
+                let f = DirichletFactor::new(rows.laplace(), &is_fixed, order.as_ref())?;
                 (rows, f)
             }
         };
@@ -228,7 +231,7 @@ pub fn tutte(mesh: &Mesh, opts: &TutteOptions) -> Result<TutteResult, NodeError>
         } else {
             0
         };
-        (factor.solve(&rows, &fixed)?, negative)
+        (factor.solve(rows.laplace(), &fixed)?, negative)
     };
     uvs.truncate(n);
     Ok(TutteResult {
@@ -355,6 +358,7 @@ pub fn register(r: &mut Registry) {
 
 #[cfg(test)]
 mod tests {
+    use super::super::triangles::grid_triangles_with;
     use super::*;
 
     /// A planar disk: centre, `rings` rings of `k` vertices each (inner rings jittered), the
@@ -374,16 +378,9 @@ mod tests {
             }
         }
         let id = |r: usize, j: usize| (1 + (r - 1) * k + j % k) as u32;
-        let mut t = Vec::new();
-        for j in 0..k {
-            t.push([0, id(1, j), id(1, j + 1)]);
-        }
-        for r in 1..rings {
-            for j in 0..k {
-                t.push([id(r, j), id(r + 1, j), id(r + 1, j + 1)]);
-                t.push([id(r, j), id(r + 1, j + 1), id(r, j + 1)]);
-            }
-        }
+        let mut t: Vec<[u32; 3]> = (0..k).map(|j| [0, id(1, j), id(1, j + 1)]).collect();
+        // ring r to r + 1 is a strip of squares: r along the grid's first axis
+        t.extend(grid_triangles_with(rings - 1, k, |i, j| id(i + 1, j)));
         Mesh::from_triangles(p, &t).unwrap()
     }
 

@@ -4,11 +4,13 @@
 //!
 //! The vertices are split at the median of their widest coordinate; the vertices of one half
 //! that touch the other half form a separator, ordered last; both halves are ordered
-//! recursively first. The factor has more entries than with approximate minimum degree
-//! (nefertiti_front's Tutte system: 908k against faer's AMD's 458k) but the order costs one
-//! `select_nth` per level instead of a degree-update graph elimination (2.5 ms against
-//! 12-19 ms there), and the two top-level halves, having no edge between them, can be
-//! factored on two cores (`TwoDomainFactor`). faer still does all the factorization work.
+//! recursively first. The factor has more entries than with approximate minimum degree, but
+//! the order costs one `select_nth` per level instead of a degree-update graph elimination,
+//! and the two top-level halves, having no edge between them, can be factored on two cores
+//! (`TwoDomainFactor`). faer still does all the factorization work.
+
+/// Below this many unknowns AMD is cheap enough and nested dissection is not used.
+pub const ND_MIN_ROWS: usize = 4000;
 
 /// A nested-dissection elimination order and its top-level split.
 #[derive(Clone, Debug, PartialEq, Eq)]

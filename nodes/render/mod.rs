@@ -1,5 +1,6 @@
 //! Render nodes: the scene description shared by the rasterizer and the tracers (camera,
-//! lights, materials, scene), image input and output, and the rasterizer.
+//! lights, materials, scene) and the rasterizer. (`image_io` re-exports the image file
+//! functions that moved to the image domain.)
 
 pub mod camera;
 pub mod image_io;
@@ -18,7 +19,6 @@ pub fn register(r: &mut Registry) {
     light::register(r);
     material::register(r);
     scene::register(r);
-    image_io::register(r);
     primitive::register(r);
     raster::register(r);
     uv_project::register(r);

@@ -271,7 +271,7 @@ fn declare(b: &mut NodeBuilder) {
     b.doc(
         "Whitted ray tracing: Blinn-Phong with shadow rays, mirror reflection, Fresnel refraction.",
     )
-    .category("render");
+    .category("trace");
     b.add_input::<Scene>("scene");
     b.add_input::<Camera>("camera")
         .optional()

@@ -24,12 +24,12 @@ pub fn directional_light(
     intensity: f64,
 ) -> Result<Light, String> {
     check(&direction, &color, intensity)?;
-    let n = super::camera::norm(direction);
+    let n = crate::types::vec3::norm(direction);
     if n.is_nan() || n <= 1e-12 {
         return Err("direction must not be zero".into());
     }
     Ok(Light::Directional {
-        direction: super::camera::scale(direction, 1.0 / n),
+        direction: crate::types::vec3::scale(direction, 1.0 / n),
         color,
         intensity,
     })

@@ -86,15 +86,7 @@ mod tests {
     use std::collections::BTreeMap;
 
     fn run(inputs: BTreeMap<String, Value>) -> Result<Camera, NodeError> {
-        let mut r = Registry::new();
-        register(&mut r);
-        let decl = r.get("camera").unwrap();
-        let mut state = None;
-        let files = FileEnv::default();
-        let mut ctx = ExecContext::standalone(decl, inputs, &mut state, &files, 0);
-        (decl.exec.as_ref().unwrap())(&mut ctx)?;
-        let outs = ctx.take_outputs();
-        match &outs["camera"] {
+        match &super::super::run_node("camera", inputs)?["camera"] {
             Value::Camera(c) => Ok((**c).clone()),
             _ => panic!("not a camera"),
         }

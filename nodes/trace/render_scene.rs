@@ -9,7 +9,7 @@ use super::sampling::{
     add, dot, length, luminance, max_comp, normalize, scale, sub, uniform_triangle, v3,
     Distribution1D, V3,
 };
-use crate::types::{Camera, Light, Material, MaterialKind, Scene};
+use crate::types::{Camera, Light, LookAt, Material, MaterialKind, Scene};
 
 /// A material reduced to what the tracers evaluate.
 #[derive(Clone, Debug)]
@@ -112,9 +112,8 @@ pub struct LightSample {
 pub struct PinholeCamera {
     /// Eye position.
     pub eye: V3,
-    right: V3,
-    up: V3,
-    fwd: V3,
+    /// The look-at basis (ray generation).
+    basis: LookAt<f32>,
     tan_x: f32,
     tan_y: f32,
     /// Image width.
@@ -153,14 +152,11 @@ impl PinholeCamera {
         if b.right_len < 1e-6 {
             return Err("camera up is parallel to the viewing direction".into());
         }
-        let (eye, right, up, fwd) = (b.eye, b.right, b.up, b.forward);
         let tan_y = c.tan_half_fov() as f32;
         let tan_x = tan_y * c.width as f32 / c.height as f32;
         Ok(PinholeCamera {
-            eye,
-            right,
-            up,
-            fwd,
+            eye: b.eye,
+            basis: b,
             tan_x,
             tan_y,
             width: c.width,
@@ -179,10 +175,7 @@ impl PinholeCamera {
     pub fn ray_dir(&self, x: f32, y: f32) -> V3 {
         let sx = (2.0 * x / self.width as f32 - 1.0) * self.tan_x;
         let sy = (1.0 - 2.0 * y / self.height as f32) * self.tan_y;
-        normalize(add(
-            add(self.fwd, scale(self.right, sx)),
-            scale(self.up, sy),
-        ))
+        self.basis.ray_dir(sx, sy)
     }
 }
 

@@ -144,11 +144,14 @@ impl Camera {
 /// A float type the camera geometry is computed in: f64 (rasterizer) or f32 (tracers).
 pub trait CameraFloat:
     Copy
+    + PartialOrd
     + std::ops::Add<Output = Self>
     + std::ops::Sub<Output = Self>
     + std::ops::Mul<Output = Self>
     + std::ops::Div<Output = Self>
 {
+    /// Zero.
+    const ZERO: Self;
     /// One.
     const ONE: Self;
     /// Rounds an f64 to this type.
@@ -158,6 +161,7 @@ pub trait CameraFloat:
 }
 
 impl CameraFloat for f64 {
+    const ZERO: f64 = 0.0;
     const ONE: f64 = 1.0;
     fn from_f64(x: f64) -> f64 {
         x
@@ -168,6 +172,7 @@ impl CameraFloat for f64 {
 }
 
 impl CameraFloat for f32 {
+    const ZERO: f32 = 0.0;
     const ONE: f32 = 1.0;
     fn from_f64(x: f64) -> f32 {
         x as f32
@@ -201,8 +206,29 @@ impl<T: CameraFloat> LookAt<T> {
         let d = sub3(p, self.eye);
         [dot3(d, self.right), dot3(d, self.up), dot3(d, self.forward)]
     }
+
+    /// Ray generation: the unit direction through the image-plane point `(sx, sy)` at unit
+    /// distance from the eye (x right, y up), `normalize(forward + sx right + sy up)` (left
+    /// as is if it has zero length).
+    #[inline]
+    pub fn ray_dir(&self, sx: T, sy: T) -> [T; 3] {
+        let d = add3(
+            add3(self.forward, scale3(self.right, sx)),
+            scale3(self.up, sy),
+        );
+        let l = len3(d);
+        if l > T::ZERO {
+            scale3(d, T::ONE / l)
+        } else {
+            d
+        }
+    }
 }
 
+#[inline(always)]
+fn add3<T: CameraFloat>(a: [T; 3], b: [T; 3]) -> [T; 3] {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
 #[inline(always)]
 fn sub3<T: CameraFloat>(a: [T; 3], b: [T; 3]) -> [T; 3] {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]

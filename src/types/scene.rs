@@ -356,3 +356,35 @@ impl Scene {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn look_at_agrees_across_precisions_and_rays_go_forward() {
+        let cam = Camera {
+            eye: [1.0, 2.0, 3.0],
+            target: [0.0, 0.5, -1.0],
+            ..Default::default()
+        };
+        let (a, b) = (cam.look_at::<f64>(), cam.look_at::<f32>());
+        for (u, v) in [(a.right, b.right), (a.up, b.up), (a.forward, b.forward)] {
+            for k in 0..3 {
+                assert!((u[k] - v[k] as f64).abs() < 1e-6);
+            }
+        }
+        let d = a.ray_dir(0.0, 0.0);
+        assert!((0..3).all(|k| (d[k] - a.forward[k]).abs() < 1e-15));
+        let v = a.to_view(cam.target);
+        assert!(v[0].abs() < 1e-12 && v[1].abs() < 1e-12 && (v[2] - a.forward_len).abs() < 1e-12);
+        assert!(cam.check().is_ok());
+        let flat = Camera {
+            up: [0.0, 0.0, -1.0],
+            target: [0.0, 0.0, 0.0],
+            eye: [0.0, 0.0, 3.0],
+            ..Default::default()
+        };
+        assert!(flat.frame().is_err());
+    }
+}

@@ -3,6 +3,7 @@
 //! algorithm itself in a plain function that Rust users can call without the runtime.
 
 pub mod basic;
+pub mod image;
 pub mod linalg;
 pub mod mesh;
 pub mod metrics;
@@ -16,6 +17,7 @@ use crate::registry::Registry;
 /// Registers every built-in node.
 pub fn register_all(r: &mut Registry) {
     basic::register(r);
+    image::register(r);
     mesh::register(r);
     metrics::register(r);
     param::register(r);

@@ -70,13 +70,7 @@ pub fn draw(chart: &Chart, path: &Path) -> Result<(), String> {
                 draw_on(chart, &root)?;
                 root.present().map_err(|e| e.to_string())?;
             }
-            let img = image::RgbImage::from_raw(w, h, buf).ok_or("bad chart buffer")?;
-            let mut bytes = Vec::new();
-            img.write_to(
-                &mut std::io::Cursor::new(&mut bytes),
-                image::ImageFormat::Png,
-            )
-            .map_err(|e| e.to_string())?;
+            let bytes = crate::io::encode_png(w, h, 3, buf)?;
             crate::io::write_atomic(path, |wr| wr.write_all(&bytes)).map_err(|e| e.to_string())
         }
         other => Err(format!(

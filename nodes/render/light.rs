@@ -24,12 +24,12 @@ pub fn directional_light(
     intensity: f64,
 ) -> Result<Light, String> {
     check(&direction, &color, intensity)?;
-    let n = super::camera::norm(direction);
+    let n = crate::types::vec3::norm(direction);
     if n.is_nan() || n <= 1e-12 {
         return Err("direction must not be zero".into());
     }
     Ok(Light::Directional {
-        direction: super::camera::scale(direction, 1.0 / n),
+        direction: crate::types::vec3::scale(direction, 1.0 / n),
         color,
         intensity,
     })
@@ -45,20 +45,38 @@ fn check(p: &[f64; 3], color: &[f64; 3], intensity: f64) -> Result<(), String> {
     Ok(())
 }
 
-fn declare_point(b: &mut NodeBuilder) {
-    b.doc("A point light radiating color * intensity (W/sr) in every direction.")
-        .category("render");
-    b.add_input::<[f64; 3]>("position")
-        .default([2.0, 4.0, 3.0])
-        .doc("Light position.");
+/// The sockets both lights have, in order: the vector placing the light (`name`, default,
+/// doc), colour, intensity (default, doc), and the `light` output.
+fn declare_light(
+    b: &mut NodeBuilder,
+    doc: &str,
+    vector: (&str, [f64; 3], &str),
+    intensity: (f64, &str),
+) {
+    b.doc(doc).category("render");
+    b.add_input::<[f64; 3]>(vector.0)
+        .default(vector.1)
+        .doc(vector.2);
     b.add_input::<Color>("color")
         .default(Color([1.0, 1.0, 1.0]))
         .doc("Linear RGB colour.");
     b.add_input::<f64>("intensity")
-        .default(10.0)
+        .default(intensity.0)
         .min(0.0)
-        .doc("Radiant intensity (irradiance at distance d is intensity / d^2).");
+        .doc(intensity.1);
     b.add_output::<Light>("light");
+}
+
+fn declare_point(b: &mut NodeBuilder) {
+    declare_light(
+        b,
+        "A point light radiating color * intensity (W/sr) in every direction.",
+        ("position", [2.0, 4.0, 3.0], "Light position."),
+        (
+            10.0,
+            "Radiant intensity (irradiance at distance d is intensity / d^2).",
+        ),
+    );
 }
 
 fn execute_point(ctx: &mut ExecContext) -> Result<(), NodeError> {
@@ -70,19 +88,16 @@ fn execute_point(ctx: &mut ExecContext) -> Result<(), NodeError> {
 }
 
 fn declare_directional(b: &mut NodeBuilder) {
-    b.doc("A distant light travelling along a direction, with irradiance color * intensity.")
-        .category("render");
-    b.add_input::<[f64; 3]>("direction")
-        .default([-1.0, -2.0, -1.0])
-        .doc("Direction the light travels (from the light towards the scene).");
-    b.add_input::<Color>("color")
-        .default(Color([1.0, 1.0, 1.0]))
-        .doc("Linear RGB colour.");
-    b.add_input::<f64>("intensity")
-        .default(1.0)
-        .min(0.0)
-        .doc("Irradiance on a surface facing the light.");
-    b.add_output::<Light>("light");
+    declare_light(
+        b,
+        "A distant light travelling along a direction, with irradiance color * intensity.",
+        (
+            "direction",
+            [-1.0, -2.0, -1.0],
+            "Direction the light travels (from the light towards the scene).",
+        ),
+        (1.0, "Irradiance on a surface facing the light."),
+    );
 }
 
 fn execute_directional(ctx: &mut ExecContext) -> Result<(), NodeError> {
@@ -109,14 +124,7 @@ mod tests {
     use std::collections::BTreeMap;
 
     fn run(name: &str, inputs: BTreeMap<String, Value>) -> Result<Light, NodeError> {
-        let mut r = Registry::new();
-        register(&mut r);
-        let decl = r.get(name).unwrap();
-        let mut state = None;
-        let files = FileEnv::default();
-        let mut ctx = ExecContext::standalone(decl, inputs, &mut state, &files, 0);
-        (decl.exec.as_ref().unwrap())(&mut ctx)?;
-        match &ctx.take_outputs()["light"] {
+        match &super::super::run_node(name, inputs)?["light"] {
             Value::Light(l) => Ok((**l).clone()),
             _ => panic!("not a light"),
         }

@@ -91,14 +91,7 @@ mod tests {
     use std::collections::BTreeMap;
 
     fn run(inputs: BTreeMap<String, Value>) -> Result<Material, NodeError> {
-        let mut r = Registry::new();
-        register(&mut r);
-        let decl = r.get("material").unwrap();
-        let mut state = None;
-        let files = FileEnv::default();
-        let mut ctx = ExecContext::standalone(decl, inputs, &mut state, &files, 0);
-        (decl.exec.as_ref().unwrap())(&mut ctx)?;
-        match &ctx.take_outputs()["material"] {
+        match &super::super::run_node("material", inputs)?["material"] {
             Value::Material(m) => Ok((**m).clone()),
             _ => panic!("not a material"),
         }

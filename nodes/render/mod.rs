@@ -1,5 +1,6 @@
 //! Render nodes: the scene description shared by the rasterizer and the tracers (camera,
-//! lights, materials, scene), image input and output, and the rasterizer.
+//! lights, materials, scene) and the rasterizer. (`image_io` re-exports the image file
+//! functions that moved to the image domain.)
 
 pub mod camera;
 pub mod image_io;
@@ -18,8 +19,24 @@ pub fn register(r: &mut Registry) {
     light::register(r);
     material::register(r);
     scene::register(r);
-    image_io::register(r);
     primitive::register(r);
     raster::register(r);
     uv_project::register(r);
+}
+
+/// Runs the render node `name` standalone on `inputs` and returns its outputs (for the
+/// unit tests of the node files).
+#[cfg(test)]
+pub(crate) fn run_node(
+    name: &str,
+    inputs: std::collections::BTreeMap<String, crate::types::Value>,
+) -> Result<std::collections::BTreeMap<String, crate::types::Value>, crate::node::NodeError> {
+    let mut r = Registry::new();
+    register(&mut r);
+    let decl = r.get(name).unwrap();
+    let mut state = None;
+    let files = crate::node::FileEnv::default();
+    let mut ctx = crate::node::ExecContext::standalone(decl, inputs, &mut state, &files, 0);
+    (decl.exec.as_ref().unwrap())(&mut ctx)?;
+    Ok(ctx.take_outputs())
 }

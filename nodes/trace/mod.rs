@@ -7,6 +7,8 @@ pub mod path;
 pub mod render_scene;
 pub mod sampling;
 pub mod scene_load;
+pub mod tracer_node;
+pub mod v3;
 pub mod whitted;
 
 use crate::registry::Registry;

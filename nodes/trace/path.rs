@@ -14,8 +14,9 @@
 //! per-pixel average) or Mitsuba's Gaussian (stddev 0.5 px, radius 2 px), whose samples are
 //! splatted into the neighbouring pixels and normalised by the summed filter weights.
 
-use super::render_scene::{PinholeCamera, RenderScene};
+use super::render_scene::{prepare, PinholeCamera, RenderScene};
 use super::sampling::{add, dot, length, max_comp, mul, power_heuristic, scale, sub, Pcg32, V3};
+use super::tracer_node::{progress_reporter, trace_error};
 use crate::prelude::*;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -420,17 +421,13 @@ pub fn render_path(
     s: &PathSettings,
     progress: &(dyn Fn(f64) + Sync),
 ) -> Result<(Image, Image), String> {
-    let cam = camera
-        .or(scene.camera.as_ref())
-        .ok_or("no camera: connect one to `camera` or give the scene one")?;
-    let cam = PinholeCamera::new(cam)?;
-    let sc = RenderScene::new(scene)?;
+    let (sc, cam) = prepare(scene, camera)?;
     Ok(render(&sc, &cam, s, progress))
 }
 
 fn declare(b: &mut NodeBuilder) {
     b.doc("Path traces a scene (NEE + BSDF sampling with MIS, Russian roulette); linear colour and per-pixel variance.")
-        .category("render");
+        .category("trace");
     b.add_input::<Scene>("scene");
     b.add_input::<Camera>("camera")
         .optional()
@@ -517,22 +514,10 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
             }
         },
     };
-    let prog = ctx.progress.clone();
-    let id = ctx.node_id.to_string();
-    let report = move |f: f64| {
-        if let Some(p) = &prog {
-            p(&id, f);
-        }
-    };
+    let report = progress_reporter(ctx);
     let t0 = std::time::Instant::now();
-    let (color, variance) = render_path(&scene, camera.as_deref(), &s, &report).map_err(|e| {
-        let socket = if e.contains("camera") {
-            "camera"
-        } else {
-            "scene"
-        };
-        NodeError::invalid(socket, e)
-    })?;
+    let (color, variance) =
+        render_path(&scene, camera.as_deref(), &s, &report).map_err(trace_error)?;
     let secs = t0.elapsed().as_secs_f64();
     let paths = color.width as f64 * color.height as f64 * s.spp as f64;
     ctx.log(format!(

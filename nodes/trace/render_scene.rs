@@ -6,10 +6,10 @@
 use super::bsdf::Bsdf;
 use super::bvh::{triangle_normal, Bvh, Hit};
 use super::sampling::{
-    add, cross, dot, length, luminance, max_comp, normalize, scale, sub, uniform_triangle, v3,
+    add, dot, length, luminance, max_comp, normalize, scale, sub, uniform_triangle, v3,
     Distribution1D, V3,
 };
-use crate::types::{Camera, Light, Material, MaterialKind, Scene};
+use crate::types::{Camera, Light, LookAt, Material, MaterialKind, Scene};
 
 /// A material reduced to what the tracers evaluate.
 #[derive(Clone, Debug)]
@@ -112,9 +112,8 @@ pub struct LightSample {
 pub struct PinholeCamera {
     /// Eye position.
     pub eye: V3,
-    right: V3,
-    up: V3,
-    fwd: V3,
+    /// The look-at basis (ray generation).
+    basis: LookAt<f32>,
     tan_x: f32,
     tan_y: f32,
     /// Image width.
@@ -145,25 +144,19 @@ impl PinholeCamera {
                 c.fov_deg
             ));
         }
-        let eye = v3(c.eye);
-        let d = sub(v3(c.target), eye);
-        if length(d) == 0.0 {
+        // The look-at basis in f32, with the tracers' own tolerances.
+        let b = c.look_at::<f32>();
+        if b.forward_len == 0.0 {
             return Err("camera target equals eye".into());
         }
-        let fwd = normalize(d);
-        let right = cross(fwd, v3(c.up));
-        if length(right) < 1e-6 {
+        if b.right_len < 1e-6 {
             return Err("camera up is parallel to the viewing direction".into());
         }
-        let right = normalize(right);
-        let up = cross(right, fwd);
-        let tan_y = (0.5 * c.vertical_fov()).tan() as f32;
+        let tan_y = c.tan_half_fov() as f32;
         let tan_x = tan_y * c.width as f32 / c.height as f32;
         Ok(PinholeCamera {
-            eye,
-            right,
-            up,
-            fwd,
+            eye: b.eye,
+            basis: b,
             tan_x,
             tan_y,
             width: c.width,
@@ -182,10 +175,7 @@ impl PinholeCamera {
     pub fn ray_dir(&self, x: f32, y: f32) -> V3 {
         let sx = (2.0 * x / self.width as f32 - 1.0) * self.tan_x;
         let sy = (1.0 - 2.0 * y / self.height as f32) * self.tan_y;
-        normalize(add(
-            add(self.fwd, scale(self.right, sx)),
-            scale(self.up, sy),
-        ))
+        self.basis.ray_dir(sx, sy)
     }
 }
 
@@ -380,4 +370,18 @@ impl RenderScene {
             [0.0; 3]
         }
     }
+}
+
+/// Flattens `scene` and builds the camera from `camera`, or the scene's own camera when
+/// `camera` is `None`: what both tracers do before rendering.
+pub fn prepare(
+    scene: &Scene,
+    camera: Option<&Camera>,
+) -> Result<(RenderScene, PinholeCamera), String> {
+    let cam = camera
+        .or(scene.camera.as_ref())
+        .ok_or("no camera: connect one to `camera` or give the scene one")?;
+    let cam = PinholeCamera::new(cam)?;
+    let sc = RenderScene::new(scene)?;
+    Ok((sc, cam))
 }

@@ -4,8 +4,10 @@
 //! `two_sided_emission`), `illum` 3 or 5 makes a mirror (tinted by `Ks`, else `Kd`),
 //! `illum` 4, 6 or 7 a smooth dielectric with index `Ni` (1.5 if missing), `Ns` sets the
 //! Phong roughness (r = sqrt(2 / (Ns + 2))) and `Ks` the specular weight the Whitted
-//! tracer uses. Textures are not read.
+//! tracer uses. Textures are not read. The OBJ itself is read by the mesh domain's loader
+//! (`load_obj_blocks`), so its errors carry line numbers.
 
+use crate::nodes::mesh::obj::load_obj_blocks;
 use crate::prelude::*;
 use std::path::Path;
 
@@ -49,46 +51,23 @@ pub fn material_from_mtl(m: &tobj::Material, two_sided_emission: bool) -> Materi
 /// Reads `path` (OBJ) and the MTL files it references into a scene without lights or
 /// camera; faces keep their winding (counter-clockwise = front).
 pub fn load_obj_scene(path: &Path, two_sided_emission: bool) -> Result<Scene, String> {
-    let opts = tobj::LoadOptions {
-        triangulate: false,
-        single_index: false,
-        ..Default::default()
-    };
-    let (models, mats) =
-        tobj::load_obj(path, &opts).map_err(|e| format!("{}: {e}", path.display()))?;
-    let mats = mats.map_err(|e| format!("{}: material library: {e}", path.display()))?;
+    let (blocks, mats) = load_obj_blocks(path).map_err(|e| format!("{}: {e}", path.display()))?;
     let mats: Vec<Arc<Material>> = mats
         .iter()
         .map(|m| Arc::new(material_from_mtl(m, two_sided_emission)))
         .collect();
     let mut scene = Scene::default();
-    for m in &models {
-        let mesh = &m.mesh;
-        if mesh.indices.is_empty() {
-            continue;
-        }
-        let positions: Vec<[f64; 3]> = mesh
-            .positions
-            .chunks_exact(3)
-            .map(|p| [p[0], p[1], p[2]])
-            .collect();
-        let counts = if mesh.face_arities.is_empty() {
-            vec![3u32; mesh.indices.len() / 3]
-        } else {
-            mesh.face_arities.clone()
-        };
-        let out = Mesh::new(positions, counts, mesh.indices.clone())
-            .map_err(|e| format!("{}: object '{}': {e}", path.display(), m.name))?;
-        let material = match mesh.material_id {
+    for b in blocks {
+        let material = match b.material {
             Some(i) => Some(
                 mats.get(i)
                     .cloned()
-                    .ok_or_else(|| format!("object '{}' names a missing material", m.name))?,
+                    .ok_or_else(|| format!("object '{}' names a missing material", b.name))?,
             ),
             None => None,
         };
         scene.objects.push(SceneObject {
-            mesh: Arc::new(out),
+            mesh: Arc::new(b.mesh),
             material,
         });
     }
@@ -100,7 +79,7 @@ pub fn load_obj_scene(path: &Path, two_sided_emission: bool) -> Result<Scene, St
 
 fn declare(b: &mut NodeBuilder) {
     b.doc("Reads an OBJ + MTL file (Kd, Ke emission, illum/Ni) into a scene for the tracers.")
-        .category("render");
+        .category("trace");
     b.add_input::<String>("path")
         .file_in()
         .doc("OBJ file, relative to the graph's folder; its mtllib is read too.");

@@ -13,8 +13,9 @@
 //! reflection or refraction.
 
 use super::bsdf::{fresnel_dielectric, reflect, Bsdf};
-use super::render_scene::{PinholeCamera, RenderScene};
+use super::render_scene::{prepare, PinholeCamera, RenderScene};
 use super::sampling::{add, dot, max_comp, mul, normalize, scale, sub, uniform_triangle, v3, V3};
+use super::tracer_node::{progress_reporter, trace_error};
 use crate::prelude::*;
 use rayon::prelude::*;
 use std::f32::consts::FRAC_1_PI;
@@ -259,11 +260,7 @@ pub fn render_whitted(
     s: &WhittedSettings,
     progress: &(dyn Fn(f64) + Sync),
 ) -> Result<Image, String> {
-    let cam = camera
-        .or(scene.camera.as_ref())
-        .ok_or("no camera: connect one to `camera` or give the scene one")?;
-    let cam = PinholeCamera::new(cam)?;
-    let sc = RenderScene::new(scene)?;
+    let (sc, cam) = prepare(scene, camera)?;
     Ok(render(&sc, &cam, s, progress))
 }
 
@@ -271,7 +268,7 @@ fn declare(b: &mut NodeBuilder) {
     b.doc(
         "Whitted ray tracing: Blinn-Phong with shadow rays, mirror reflection, Fresnel refraction.",
     )
-    .category("render");
+    .category("trace");
     b.add_input::<Scene>("scene");
     b.add_input::<Camera>("camera")
         .optional()
@@ -329,21 +326,8 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
         ambient: ambient as f32,
         aa: aa as u32,
     };
-    let prog = ctx.progress.clone();
-    let id = ctx.node_id.to_string();
-    let report = move |f: f64| {
-        if let Some(p) = &prog {
-            p(&id, f);
-        }
-    };
-    let img = render_whitted(&scene, camera.as_deref(), &s, &report).map_err(|e| {
-        let socket = if e.contains("camera") {
-            "camera"
-        } else {
-            "scene"
-        };
-        NodeError::invalid(socket, e)
-    })?;
+    let report = progress_reporter(ctx);
+    let img = render_whitted(&scene, camera.as_deref(), &s, &report).map_err(trace_error)?;
     ctx.set_output("color", img);
     Ok(())
 }
@@ -371,14 +355,12 @@ mod tests {
     fn cam() -> Camera {
         Camera {
             eye: [0.0, 0.0, 5.0],
-            target: [0.0; 3],
-            up: [0.0, 1.0, 0.0],
             fov_deg: 10.0,
             fov_axis: FovAxis::Smaller,
             width: 8,
             height: 8,
-            near: 0.01,
             far: 100.0,
+            ..Default::default()
         }
     }
 

@@ -13,7 +13,9 @@ pub mod vec3;
 
 pub use mesh::{Attribute, AttributeData, Domain, Mesh, MeshError};
 pub use misc::{Curve, Image, Joint, Points, Skeleton, Table};
-pub use scene::{Camera, FovAxis, Light, Material, MaterialKind, Scene, SceneObject};
+pub use scene::{
+    Camera, CameraFloat, FovAxis, Light, LookAt, Material, MaterialKind, Scene, SceneObject,
+};
 pub use topology::Topology;
 pub use value::{Color, FromValue, SocketType, Typed, Value};
 

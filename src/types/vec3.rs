@@ -59,6 +59,39 @@ pub fn cross2(a: [f64; 2], b: [f64; 2]) -> f64 {
     a[0] * b[1] - a[1] * b[0]
 }
 
+/// `a / |a|`, or `None` when `|a|` is not a finite number above 1e-300 (a zero, tiny,
+/// infinite or NaN vector).
+#[inline]
+pub fn normalize(a: [f64; 3]) -> Option<[f64; 3]> {
+    let n = dot(a, a).sqrt();
+    (n > 1e-300 && n.is_finite()).then(|| [a[0] / n, a[1] / n, a[2] / n])
+}
+
+/// `normalize` computed as one division and three products (`a * (1 / |a|)`): cheaper where
+/// many vectors are normalized per sample, and rounded differently from `normalize` in the
+/// last bit, so each caller keeps the form it was tuned with.
+#[inline]
+pub fn normalize_recip(a: [f64; 3]) -> Option<[f64; 3]> {
+    let n = dot(a, a).sqrt();
+    (n > 1e-300 && n.is_finite()).then(|| {
+        let r = 1.0 / n;
+        [a[0] * r, a[1] * r, a[2] * r]
+    })
+}
+
+/// `a / |a|` without a check: callers that know `a` is not zero (a zero vector gives NaN).
+#[inline]
+pub fn unit(a: [f64; 3]) -> [f64; 3] {
+    let n = dot(a, a).sqrt();
+    [a[0] / n, a[1] / n, a[2] / n]
+}
+
+/// `-a`.
+#[inline]
+pub fn neg(a: [f64; 3]) -> [f64; 3] {
+    [-a[0], -a[1], -a[2]]
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -72,5 +105,10 @@ mod tests {
         assert_eq!(norm([3.0, 4.0, 0.0]), 5.0);
         assert_eq!(axpy(a, 2.0, b), add(a, scale(b, 2.0)));
         assert_eq!(sub(add(a, b), b), a);
+        assert_eq!(normalize([0.0, 3.0, 4.0]), Some([0.0, 0.6, 0.8]));
+        assert_eq!(normalize([0.0; 3]), None);
+        assert_eq!(normalize_recip([f64::NAN, 0.0, 0.0]), None);
+        assert_eq!(unit([2.0, 0.0, 0.0]), [1.0, 0.0, 0.0]);
+        assert_eq!(neg(a), [-1.0, -2.0, -3.0]);
     }
 }

@@ -7,7 +7,7 @@
 //! the handedness `w = sign((N x T) . B)` is kept so `B = w N x T`.
 
 use crate::prelude::*;
-use crate::types::vec3::{cross, dot, sub};
+use crate::types::vec3::{cross, dot, normalize, scale, sub};
 use crate::types::Domain;
 use rayon::prelude::*;
 
@@ -30,11 +30,6 @@ pub struct SceneGeometry {
     pub materials: Vec<Arc<Material>>,
     /// Bounding box of all positions.
     pub bounds: ([f64; 3], [f64; 3]),
-}
-
-fn normalize(a: [f64; 3]) -> Option<[f64; 3]> {
-    let n = dot(a, a).sqrt();
-    (n > 1e-300 && n.is_finite()).then(|| [a[0] / n, a[1] / n, a[2] / n])
 }
 
 /// Flattens a scene's meshes to triangles (polygons fan-triangulated). Normals come from
@@ -159,7 +154,7 @@ pub fn scene_geometry(scene: &Scene) -> Result<SceneGeometry, String> {
                         let v = tris[t][k] as usize;
                         let n = corner_normals[t][k];
                         let tt = tv[v];
-                        let ortho = sub(tt, scale3(n, dot(n, tt)));
+                        let ortho = sub(tt, scale(n, dot(n, tt)));
                         match normalize(ortho) {
                             Some(o) => {
                                 let w = if dot(cross(n, o), bv[v]) < 0.0 {
@@ -207,10 +202,6 @@ fn append<T: Clone>(dst: &mut Vec<T>, v: Vec<T>) {
     } else {
         dst.extend_from_slice(&v);
     }
-}
-
-fn scale3(a: [f64; 3], s: f64) -> [f64; 3] {
-    [a[0] * s, a[1] * s, a[2] * s]
 }
 
 fn attr_len_ok(d: Domain, n: usize, nv: usize, nt: usize) -> bool {

@@ -13,13 +13,8 @@
 //! texels away, so `c1 >= 1.5` keeps every lit plane free of acne.
 
 use super::rasterize::{rasterize, setup_triangle};
-use crate::types::vec3::{cross, dot, sub};
+use crate::types::vec3::{cross, dot, sub, unit};
 use rayon::prelude::*;
-
-fn normalize(a: [f64; 3]) -> [f64; 3] {
-    let n = dot(a, a).sqrt();
-    [a[0] / n, a[1] / n, a[2] / n]
-}
 
 /// Bias and filtering settings of a shadow lookup.
 #[derive(Clone, Copy, Debug)]
@@ -76,13 +71,13 @@ pub fn directional_shadow_map(
     bounds: ([f64; 3], [f64; 3]),
     res: u32,
 ) -> ShadowMap {
-    let f = normalize(dir);
+    let f = unit(dir);
     let a = if f[1].abs() > 0.9 {
         [1.0, 0.0, 0.0]
     } else {
         [0.0, 1.0, 0.0]
     };
-    let r = normalize(cross(f, a));
+    let r = unit(cross(f, a));
     let u = cross(r, f);
     let (lo, hi) = bounds;
     let mut x0 = f64::INFINITY;
@@ -340,7 +335,7 @@ mod tests {
     fn slanted_lit_plane_has_no_acne() {
         // A lone ground plane lit at 60 degrees from the normal: every point is lit.
         let tris = quad(0.0, 2.0);
-        let dir = normalize([3f64.sqrt(), -1.0, 0.3]);
+        let dir = unit([3f64.sqrt(), -1.0, 0.3]);
         let l = dir.map(|v| -v);
         let bounds = ([-2.0, 0.0, -2.0], [2.0, 0.0, 2.0]);
         for res in [256, 1024] {
@@ -376,7 +371,7 @@ mod tests {
         tris.push([[1.0, -0.3, -0.3], [1.0, 0.3, 0.3], [1.0, -0.3, 0.3]]);
         let sm = point_shadow_map(&tris, [0.0; 3], 256, 1e-3);
         let lit = |p: [f64; 3], n: [f64; 3]| {
-            let l = normalize(sub([0.0; 3], p));
+            let l = unit(sub([0.0; 3], p));
             sm.visibility(p, n, l, &P)
         };
         assert_eq!(lit([2.0, 0.0, 0.0], [-1.0, 0.0, 0.0]), 0.0);

@@ -1,0 +1,48 @@
+//! The rasterizer's light stage: each light's direction and irradiance prepared once, and
+//! its shadow map rendered (orthographic for directional lights, a cube for point lights).
+
+use super::geometry::SceneGeometry;
+use super::options::RasterOptions;
+use super::shader::LightPrep;
+use super::shadow::{directional_shadow_map, point_shadow_map};
+use crate::prelude::*;
+use crate::types::vec3::{dot, normalize_recip as normalize, sub};
+use rayon::prelude::*;
+
+/// The lights of `scene` with their shadow maps (one light per task); shadow maps only when
+/// the colour pass is `lit` and `opts.shadows` is on.
+pub(super) fn prepare_lights(
+    scene: &Scene,
+    g: &SceneGeometry,
+    opts: &RasterOptions,
+    lit: bool,
+) -> Vec<LightPrep> {
+    let res = opts.shadow_resolution.clamp(16, 8192);
+    let diag = dot(sub(g.bounds.1, g.bounds.0), sub(g.bounds.1, g.bounds.0)).sqrt();
+    scene
+        .lights
+        .par_iter()
+        .map(|l| LightPrep {
+            light: l.clone(),
+            dir: match l {
+                Light::Directional {
+                    direction,
+                    color,
+                    intensity,
+                } => normalize(*direction).map(|d| (d.map(|c| -c), color.map(|c| c * intensity))),
+                Light::Point { .. } => None,
+            },
+            map: (lit && opts.shadows && !g.pos.is_empty()).then(|| match l {
+                Light::Directional { direction, .. } => {
+                    directional_shadow_map(&g.pos, *direction, g.bounds, res)
+                }
+                Light::Point { position, .. } => point_shadow_map(
+                    &g.pos,
+                    *position,
+                    (res / 2).max(16),
+                    (1e-5 * diag).max(1e-9),
+                ),
+            }),
+        })
+        .collect::<Vec<_>>()
+}

@@ -1,0 +1,176 @@
+//! `render_raster`: the node wrapping the rasterizer (`super::render`): reads the settings,
+//! renders only the passes someone reads, and sets them as outputs.
+
+use super::options::{AntiAliasing, Passes, RasterOptions};
+use super::render;
+use super::shadow::ShadowParams;
+use super::texture::Wrap;
+use crate::prelude::*;
+
+fn declare(b: &mut NodeBuilder) {
+    b.doc("Rasterizes a scene: Blinn-Phong with shadow maps, textures and normal maps, plus deferred passes.")
+        .category("render");
+    b.add_input::<Scene>("scene")
+        .doc("Meshes, materials, lights and usually the camera.");
+    b.add_input::<Camera>("camera")
+        .optional()
+        .doc("Camera; overrides the scene's camera.");
+    b.add_input::<String>("antialiasing")
+        .choices(&["msaa", "ssaa"])
+        .doc("msaa shades each triangle once per pixel; ssaa shades every sample.");
+    b.add_input::<i64>("samples")
+        .default(4i64)
+        .range(1.0, 64.0)
+        .doc("Samples per pixel: a square, 1, 4, 9, 16, ...");
+    b.add_input::<bool>("cull_backfaces")
+        .default(false)
+        .doc("Skip triangles seen from behind (clockwise on screen).");
+    b.add_input::<bool>("shadows")
+        .default(true)
+        .doc("Render shadow maps.");
+    b.add_input::<i64>("shadow_resolution")
+        .default(2048i64)
+        .range(256.0, 8192.0)
+        .doc("Shadow map size; point-light cube faces use half of it.");
+    b.add_input::<i64>("pcf_radius")
+        .default(1i64)
+        .range(0.0, 4.0)
+        .doc("Percentage-closer filtering radius r: (2r+1)^2 taps.");
+    b.add_input::<f64>("shadow_bias")
+        .default(1.0)
+        .range(0.0, 100.0)
+        .doc("Constant depth bias, in shadow-map texels.");
+    b.add_input::<f64>("shadow_slope_bias")
+        .default(1.5)
+        .range(0.0, 100.0)
+        .doc("Slope-scaled depth bias, in texels per unit tan(angle) and PCF ring.");
+    b.add_input::<f64>("ambient")
+        .default(0.2)
+        .range(0.0, 10.0)
+        .doc("Ambient term ka*Ia, times the base colour.");
+    b.add_input::<String>("texture_wrap")
+        .choices(&["repeat", "clamp", "mirror"])
+        .doc("What textures do outside UV 0..1.");
+    b.add_input::<bool>("mipmaps")
+        .default(true)
+        .doc("Trilinear filtering through a mipmap pyramid (else bilinear).");
+    b.add_input::<Color>("background")
+        .default(Color([0.05, 0.05, 0.05]))
+        .doc("Colour where nothing is hit.");
+    b.add_output::<Image>("color").doc("Shaded linear colour.");
+    b.add_output::<Image>("depth")
+        .doc("View depth along the viewing direction.");
+    b.add_output::<Image>("normal")
+        .doc("World-space shading normal.");
+    b.add_output::<Image>("position")
+        .doc("World-space position.");
+    b.add_output::<Image>("uv")
+        .doc("Texture coordinates (R, G).");
+    b.add_output::<Image>("base_color")
+        .doc("Base colour (texture times factor).");
+}
+
+fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
+    let scene: Arc<Scene> = ctx.input("scene")?;
+    let cam: Option<Arc<Camera>> = ctx.input_opt("camera")?;
+    let cam = match (cam, &scene.camera) {
+        (Some(c), _) => (*c).clone(),
+        (None, Some(c)) => c.clone(),
+        (None, None) => {
+            return Err(NodeError::invalid(
+                "camera",
+                "the scene has no camera; connect one to 'camera' or to the scene node",
+            ))
+        }
+    };
+    let samples: i64 = ctx.input("samples")?;
+    let sa = (samples.max(1) as f64).sqrt().round() as i64;
+    if sa * sa != samples || !(1..=8).contains(&sa) {
+        return Err(NodeError::invalid(
+            "samples",
+            format!("{samples} is not a square number of samples in 1..=64"),
+        ));
+    }
+    let aa: String = ctx.input("antialiasing")?;
+    let res: i64 = ctx.input("shadow_resolution")?;
+    if !(256..=8192).contains(&res) {
+        return Err(NodeError::invalid(
+            "shadow_resolution",
+            "must lie in 256..=8192",
+        ));
+    }
+    let pcf: i64 = ctx.input("pcf_radius")?;
+    if !(0..=4).contains(&pcf) {
+        return Err(NodeError::invalid("pcf_radius", "must lie in 0..=4"));
+    }
+    let bias: f64 = ctx.input("shadow_bias")?;
+    let slope: f64 = ctx.input("shadow_slope_bias")?;
+    let ambient: f64 = ctx.input("ambient")?;
+    for (n, v) in [
+        ("shadow_bias", bias),
+        ("shadow_slope_bias", slope),
+        ("ambient", ambient),
+    ] {
+        if !(v.is_finite() && v >= 0.0) {
+            return Err(NodeError::invalid(n, "must be finite and not negative"));
+        }
+    }
+    let wrap: String = ctx.input("texture_wrap")?;
+    let bgc: Color = ctx.input("background")?;
+    let opts = RasterOptions {
+        samples_per_axis: sa as u32,
+        aa: if aa == "ssaa" {
+            AntiAliasing::Supersampling
+        } else {
+            AntiAliasing::Multisampling
+        },
+        cull_backfaces: ctx.input("cull_backfaces")?,
+        shadows: ctx.input("shadows")?,
+        shadow_resolution: res as u32,
+        shadow: ShadowParams {
+            pcf_radius: pcf as u32,
+            bias,
+            slope_bias: slope,
+        },
+        ambient,
+        wrap: match wrap.as_str() {
+            "clamp" => Wrap::Clamp,
+            "mirror" => Wrap::Mirror,
+            _ => Wrap::Repeat,
+        },
+        mipmaps: ctx.input("mipmaps")?,
+        background: bgc.0,
+        // Only the passes someone reads are computed (and allocated).
+        passes: Passes {
+            color: ctx.output_wanted("color"),
+            depth: ctx.output_wanted("depth"),
+            normal: ctx.output_wanted("normal"),
+            position: ctx.output_wanted("position"),
+            uv: ctx.output_wanted("uv"),
+            base_color: ctx.output_wanted("base_color"),
+        },
+    };
+    let out = render(&scene, &cam, &opts).map_err(|e| NodeError::invalid("scene", e))?;
+    ctx.log(format!(
+        "{}x{} with {} samples: {} triangles, {} shading evaluations",
+        cam.width, cam.height, samples, out.triangles, out.shaded
+    ));
+    for (name, on, img) in [
+        ("color", opts.passes.color, out.color),
+        ("depth", opts.passes.depth, out.depth),
+        ("normal", opts.passes.normal, out.normal),
+        ("position", opts.passes.position, out.position),
+        ("uv", opts.passes.uv, out.uv),
+        ("base_color", opts.passes.base_color, out.base_color),
+    ] {
+        if on {
+            ctx.set_output(name, img);
+        }
+    }
+    Ok(())
+}
+
+/// Registers `render_raster`.
+pub fn register(r: &mut Registry) {
+    r.add("render_raster", declare, execute);
+}

@@ -1,0 +1,174 @@
+//! BVH construction: top-down binned SAH (Wald 2007), subtrees built in parallel with
+//! rayon, then flattened depth-first with the triangles copied into BVH order.
+
+use super::{Aabb, Bvh, BvhNode};
+use crate::nodes::trace::sampling::V3;
+
+const LEAF_MAX: usize = 4;
+const BINS: usize = 16;
+const PAR_THRESHOLD: usize = 4096;
+
+enum BuildNode {
+    Leaf(Aabb, Vec<u32>),
+    Inner(Aabb, Box<BuildNode>, Box<BuildNode>),
+}
+
+struct PrimInfo {
+    bounds: Aabb,
+    centroid: V3,
+}
+
+fn build_rec(info: &[PrimInfo], mut ids: Vec<u32>) -> BuildNode {
+    let mut bounds = Aabb::EMPTY;
+    let mut cb = Aabb::EMPTY;
+    for &i in &ids {
+        bounds = bounds.union(&info[i as usize].bounds);
+        cb.grow(info[i as usize].centroid);
+    }
+    let n = ids.len();
+    if n <= 1 {
+        return BuildNode::Leaf(bounds, ids);
+    }
+    // Binned SAH over the axis of largest centroid extent and the two others.
+    let mut best = (f32::INFINITY, 0usize, 0usize); // (cost, axis, split bin)
+    for axis in 0..3 {
+        let ext = cb.max[axis] - cb.min[axis];
+        if ext <= 0.0 {
+            continue;
+        }
+        let k = BINS as f32 * (1.0 - 1e-5) / ext;
+        let mut bin_b = [Aabb::EMPTY; BINS];
+        let mut bin_n = [0usize; BINS];
+        for &i in &ids {
+            let p = &info[i as usize];
+            let b = (((p.centroid[axis] - cb.min[axis]) * k) as usize).min(BINS - 1);
+            bin_n[b] += 1;
+            bin_b[b] = bin_b[b].union(&p.bounds);
+        }
+        // Sweep from the right, then from the left (Wald 2007, section 3).
+        let mut right_area = [0.0f32; BINS];
+        let mut right_n = [0usize; BINS];
+        let mut acc = Aabb::EMPTY;
+        let mut cnt = 0;
+        for b in (1..BINS).rev() {
+            acc = acc.union(&bin_b[b]);
+            cnt += bin_n[b];
+            right_area[b] = acc.half_area();
+            right_n[b] = cnt;
+        }
+        let mut acc = Aabb::EMPTY;
+        let mut cnt = 0;
+        for b in 0..BINS - 1 {
+            acc = acc.union(&bin_b[b]);
+            cnt += bin_n[b];
+            if cnt == 0 || right_n[b + 1] == 0 {
+                continue;
+            }
+            let cost = acc.half_area() * cnt as f32 + right_area[b + 1] * right_n[b + 1] as f32;
+            if cost < best.0 {
+                best = (cost, axis, b);
+            }
+        }
+    }
+    let leaf_cost = bounds.half_area() * n as f32;
+    // Traversal cost 1/8 of a triangle test, as in PBRT (Pharr et al., 4th ed., 7.3.2).
+    let split_cost = 0.125 * bounds.half_area() + best.0;
+    if best.0.is_infinite() {
+        // All centroids coincide: a leaf if small, else split the list in half.
+        if n <= LEAF_MAX {
+            return BuildNode::Leaf(bounds, ids);
+        }
+        let right = ids.split_off(n / 2);
+        return join_children(info, bounds, ids, right);
+    }
+    if n <= LEAF_MAX && split_cost >= leaf_cost {
+        return BuildNode::Leaf(bounds, ids);
+    }
+    let (_, axis, split) = best;
+    let ext = cb.max[axis] - cb.min[axis];
+    let k = BINS as f32 * (1.0 - 1e-5) / ext;
+    let (left, right): (Vec<u32>, Vec<u32>) = ids.into_iter().partition(|&i| {
+        let c = info[i as usize].centroid[axis];
+        (((c - cb.min[axis]) * k) as usize).min(BINS - 1) <= split
+    });
+    join_children(info, bounds, left, right)
+}
+
+fn join_children(info: &[PrimInfo], bounds: Aabb, left: Vec<u32>, right: Vec<u32>) -> BuildNode {
+    let (l, r) = if left.len() + right.len() > PAR_THRESHOLD {
+        rayon::join(|| build_rec(info, left), || build_rec(info, right))
+    } else {
+        (build_rec(info, left), build_rec(info, right))
+    };
+    BuildNode::Inner(bounds, Box::new(l), Box::new(r))
+}
+
+impl Bvh {
+    /// Builds the BVH over `tris` (any order; degenerate triangles are kept and never hit).
+    pub fn build(tris: &[[V3; 3]]) -> Bvh {
+        let info: Vec<PrimInfo> = tris
+            .iter()
+            .map(|t| {
+                let mut b = Aabb::EMPTY;
+                for p in t {
+                    b.grow(*p);
+                }
+                // The vertex centroid (not the box centre) tells apart the two halves of
+                // a quad, whose boxes coincide.
+                PrimInfo {
+                    bounds: b,
+                    centroid: [
+                        (t[0][0] + t[1][0] + t[2][0]) / 3.0,
+                        (t[0][1] + t[1][1] + t[2][1]) / 3.0,
+                        (t[0][2] + t[1][2] + t[2][2]) / 3.0,
+                    ],
+                }
+            })
+            .collect();
+        let mut bvh = Bvh::default();
+        if tris.is_empty() {
+            return bvh;
+        }
+        let root = build_rec(&info, (0..tris.len() as u32).collect());
+        bvh.nodes.push(BvhNode {
+            bounds: Aabb::EMPTY,
+            first: 0,
+            count: 0,
+        });
+        bvh.flatten(root, 0, tris);
+        bvh
+    }
+
+    fn flatten(&mut self, n: BuildNode, slot: usize, tris: &[[V3; 3]]) {
+        match n {
+            BuildNode::Leaf(b, ids) => {
+                self.nodes[slot] = BvhNode {
+                    bounds: b,
+                    first: self.tris.len() as u32,
+                    count: ids.len() as u32,
+                };
+                for i in ids {
+                    self.tris.push(tris[i as usize]);
+                    self.prim.push(i);
+                }
+            }
+            BuildNode::Inner(b, l, r) => {
+                let first = self.nodes.len();
+                let empty = BvhNode {
+                    bounds: Aabb::EMPTY,
+                    first: 0,
+                    count: 0,
+                };
+                self.nodes.push(empty);
+                self.nodes.push(empty);
+                self.nodes[slot] = BvhNode {
+                    bounds: b,
+                    first: first as u32,
+                    count: 0,
+                };
+                self.flatten(*l, first, tris);
+                self.flatten(*r, first + 1, tris);
+            }
+        }
+    }
+}

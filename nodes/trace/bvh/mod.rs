@@ -1,0 +1,115 @@
+//! A bounding volume hierarchy over triangles, built top-down with the binned surface area
+//! heuristic (Wald 2007, "On fast Construction of SAH-based Bounding Volume Hierarchies"),
+//! subtrees built in parallel with rayon, and traversed front to back with the watertight
+//! ray-triangle test of Woop, Benthin and Wald 2013 ("Watertight Ray/Triangle
+//! Intersection", JCGT 2(1)).
+//!
+//! Everything is f32: the triangles are copied into BVH order so a leaf's triangles are
+//! contiguous in memory, and traversal allocates nothing.
+
+mod build;
+#[cfg(test)]
+mod tests;
+mod traverse;
+
+pub use traverse::{intersect_triangle, RayPre};
+
+use super::sampling::{cross, sub, V3};
+
+/// An axis-aligned box.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Aabb {
+    /// Lower corner.
+    pub min: V3,
+    /// Upper corner.
+    pub max: V3,
+}
+
+impl Aabb {
+    /// The empty box (grows from nothing).
+    pub const EMPTY: Aabb = Aabb {
+        min: [f32::INFINITY; 3],
+        max: [f32::NEG_INFINITY; 3],
+    };
+
+    /// Grows the box to hold point `p`.
+    #[inline]
+    pub fn grow(&mut self, p: V3) {
+        for ((lo, hi), x) in self.min.iter_mut().zip(self.max.iter_mut()).zip(p) {
+            *lo = lo.min(x);
+            *hi = hi.max(x);
+        }
+    }
+
+    /// The union of two boxes.
+    #[inline]
+    pub fn union(&self, o: &Aabb) -> Aabb {
+        let mut r = *self;
+        for k in 0..3 {
+            r.min[k] = r.min[k].min(o.min[k]);
+            r.max[k] = r.max[k].max(o.max[k]);
+        }
+        r
+    }
+
+    /// Half the surface area (the SAH only needs ratios); 0 for an empty box.
+    #[inline]
+    pub fn half_area(&self) -> f32 {
+        let d = sub(self.max, self.min);
+        if d[0] < 0.0 {
+            return 0.0;
+        }
+        d[0] * d[1] + d[1] * d[2] + d[2] * d[0]
+    }
+}
+
+/// A flattened BVH node: a leaf when `count > 0` (triangles `first..first+count`), otherwise
+/// an interior node whose children are `first` and `first + 1`.
+#[derive(Clone, Copy, Debug)]
+#[repr(C)]
+pub struct BvhNode {
+    /// Bounds of everything below.
+    pub bounds: Aabb,
+    /// First triangle (leaf) or left child (interior).
+    pub first: u32,
+    /// Number of triangles; 0 for interior nodes.
+    pub count: u32,
+}
+
+/// A triangle BVH. `tris` holds the triangles in BVH order; `prim[i]` is the caller's index
+/// of `tris[i]`.
+#[derive(Clone, Debug, Default)]
+pub struct Bvh {
+    /// Nodes, root first.
+    pub nodes: Vec<BvhNode>,
+    /// Triangle corners in BVH order.
+    pub tris: Vec<[V3; 3]>,
+    /// Original index of each triangle in `tris`.
+    pub prim: Vec<u32>,
+}
+
+/// The closest hit along a ray.
+#[derive(Clone, Copy, Debug)]
+pub struct Hit {
+    /// Ray parameter of the hit.
+    pub t: f32,
+    /// Caller's triangle index.
+    pub prim: u32,
+    /// Barycentric weight of the second corner.
+    pub u: f32,
+    /// Barycentric weight of the third corner.
+    pub v: f32,
+}
+
+impl Bvh {
+    /// Bounds of the whole scene.
+    pub fn bounds(&self) -> Aabb {
+        self.nodes.first().map_or(Aabb::EMPTY, |n| n.bounds)
+    }
+}
+
+/// The (unnormalised) geometric normal `(b - a) x (c - a)` of a triangle.
+#[inline]
+pub fn triangle_normal(t: &[V3; 3]) -> V3 {
+    cross(sub(t[1], t[0]), sub(t[2], t[0]))
+}

@@ -1,0 +1,124 @@
+use super::*;
+use crate::nodes::trace::sampling::{normalize, Pcg32};
+
+fn random_tris(n: usize, seed: u64) -> Vec<[V3; 3]> {
+    let mut r = Pcg32::new(seed, 1);
+    (0..n)
+        .map(|_| {
+            let c = [r.next_f32() * 4.0, r.next_f32() * 4.0, r.next_f32() * 4.0];
+            let mut t = [[0.0; 3]; 3];
+            for p in &mut t {
+                for k in 0..3 {
+                    p[k] = c[k] + (r.next_f32() - 0.5) * 0.6;
+                }
+            }
+            t
+        })
+        .collect()
+}
+
+fn brute(tris: &[[V3; 3]], org: V3, dir: V3) -> Option<(f32, u32)> {
+    let r = RayPre::new(org, dir);
+    let mut best = None;
+    let mut tmax = f32::INFINITY;
+    for (i, t) in tris.iter().enumerate() {
+        if let Some((th, _, _)) = intersect_triangle(&r, t, tmax) {
+            tmax = th;
+            best = Some((th, i as u32));
+        }
+    }
+    best
+}
+
+#[test]
+fn bvh_agrees_with_brute_force() {
+    let tris = random_tris(5000, 7);
+    let bvh = Bvh::build(&tris);
+    assert_eq!(bvh.tris.len(), tris.len());
+    let mut r = Pcg32::new(9, 3);
+    let mut hits = 0;
+    for _ in 0..2000 {
+        let org = [r.next_f32() * 6.0 - 1.0, r.next_f32() * 6.0 - 1.0, -2.0];
+        let dir = normalize([r.next_f32() - 0.5, r.next_f32() - 0.5, 1.0]);
+        let a = bvh
+            .intersect(org, dir, f32::INFINITY)
+            .map(|h| (h.t, h.prim));
+        let b = brute(&tris, org, dir);
+        assert_eq!(a.map(|x| x.1), b.map(|x| x.1));
+        if let (Some(a), Some(b)) = (a, b) {
+            assert_eq!(a.0, b.0);
+            hits += 1;
+        }
+        assert_eq!(
+            bvh.occluded(org, dir, f32::INFINITY),
+            b.is_some(),
+            "any-hit disagrees"
+        );
+    }
+    assert!(hits > 500);
+}
+
+#[test]
+fn watertight_on_shared_edges_and_vertices() {
+    // A fan of triangles around the origin; rays aimed exactly at the shared vertex and
+    // along shared edges must hit exactly one or two of them, never slip through.
+    let k = 12;
+    let mut tris = Vec::new();
+    for i in 0..k {
+        let a0 = i as f32 / k as f32 * std::f32::consts::TAU;
+        let a1 = (i + 1) as f32 / k as f32 * std::f32::consts::TAU;
+        tris.push([
+            [0.0, 0.0, 0.0],
+            [a0.cos(), a0.sin(), 0.0],
+            [a1.cos(), a1.sin(), 0.0],
+        ]);
+    }
+    let bvh = Bvh::build(&tris);
+    let mut r = Pcg32::new(5, 5);
+    for i in 0..2000 {
+        // Points on the edges (rays through them) and the centre.
+        let e = i % k;
+        let a0 = e as f32 / k as f32 * std::f32::consts::TAU;
+        let s = if i % 7 == 0 { 0.0 } else { r.next_f32() * 0.9 };
+        let target = [s * a0.cos(), s * a0.sin(), 0.0];
+        let org = [r.next_f32() - 0.5, r.next_f32() - 0.5, 1.0 + r.next_f32()];
+        let dir = normalize(sub(target, org));
+        assert!(
+            bvh.intersect(org, dir, f32::INFINITY).is_some(),
+            "ray {i} slipped through the mesh"
+        );
+    }
+}
+
+#[test]
+fn empty_box_is_the_union_identity() {
+    let b = Aabb {
+        min: [0.0, 1.0, 2.0],
+        max: [1.0, 2.0, 3.0],
+    };
+    assert_eq!(Aabb::EMPTY.union(&b), b);
+    assert_eq!(b.union(&Aabb::EMPTY), b);
+    assert_eq!(Aabb::EMPTY.union(&Aabb::EMPTY).half_area(), 0.0);
+}
+
+#[test]
+fn parallel_build_matches_counts() {
+    let tris = random_tris(20_000, 11);
+    let bvh = Bvh::build(&tris);
+    let mut seen = vec![false; tris.len()];
+    for &p in &bvh.prim {
+        assert!(!seen[p as usize]);
+        seen[p as usize] = true;
+    }
+    assert!(seen.iter().all(|&s| s));
+    // Every leaf's triangles lie inside its box.
+    for n in bvh.nodes.iter().filter(|n| n.count > 0) {
+        for t in &bvh.tris[n.first as usize..(n.first + n.count) as usize] {
+            for p in t {
+                for (k, x) in p.iter().enumerate() {
+                    assert!(*x >= n.bounds.min[k] && *x <= n.bounds.max[k]);
+                }
+            }
+        }
+    }
+}

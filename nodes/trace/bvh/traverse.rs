@@ -1,0 +1,243 @@
+//! BVH traversal: front-to-back closest-hit and any-hit queries with the watertight
+//! ray-triangle test of Woop, Benthin and Wald 2013 and a conservative slab test.
+
+use super::{Aabb, Bvh, Hit};
+use crate::nodes::trace::sampling::{sub, V3};
+
+/// Per-ray constants of the watertight test (Woop et al. 2013, section 3): the dominant
+/// axis `kz`, the permuted axes and the shear that maps the ray to +z.
+#[derive(Clone, Copy, Debug)]
+pub struct RayPre {
+    org: V3,
+    inv: V3,
+    kx: usize,
+    ky: usize,
+    kz: usize,
+    sx: f32,
+    sy: f32,
+    sz: f32,
+}
+
+impl RayPre {
+    /// Precomputes the ray `org + t dir`.
+    #[inline]
+    pub fn new(org: V3, dir: V3) -> RayPre {
+        let a = [dir[0].abs(), dir[1].abs(), dir[2].abs()];
+        let kz = if a[0] > a[1] {
+            if a[0] > a[2] {
+                0
+            } else {
+                2
+            }
+        } else if a[1] > a[2] {
+            1
+        } else {
+            2
+        };
+        let mut kx = (kz + 1) % 3;
+        let mut ky = (kx + 1) % 3;
+        // Swap to preserve the winding of the triangle.
+        if dir[kz] < 0.0 {
+            std::mem::swap(&mut kx, &mut ky);
+        }
+        RayPre {
+            org,
+            inv: [1.0 / dir[0], 1.0 / dir[1], 1.0 / dir[2]],
+            kx,
+            ky,
+            kz,
+            sx: dir[kx] / dir[kz],
+            sy: dir[ky] / dir[kz],
+            sz: 1.0 / dir[kz],
+        }
+    }
+}
+
+/// Watertight ray-triangle intersection (Woop et al. 2013, Listing 1). Returns
+/// `(t, b1, b2)` with `0 < t < tmax`; edges shared by two triangles are never missed.
+#[inline(always)]
+pub fn intersect_triangle(r: &RayPre, tri: &[V3; 3], tmax: f32) -> Option<(f32, f32, f32)> {
+    match (r.kx, r.ky, r.kz) {
+        (1, 2, 0) => tri_test::<1, 2, 0>(r, tri, tmax),
+        (2, 1, 0) => tri_test::<2, 1, 0>(r, tri, tmax),
+        (2, 0, 1) => tri_test::<2, 0, 1>(r, tri, tmax),
+        (0, 2, 1) => tri_test::<0, 2, 1>(r, tri, tmax),
+        (0, 1, 2) => tri_test::<0, 1, 2>(r, tri, tmax),
+        _ => tri_test::<1, 0, 2>(r, tri, tmax),
+    }
+}
+
+/// The test with the axis permutation fixed at compile time (no indexed loads).
+#[inline(always)]
+fn tri_test<const KX: usize, const KY: usize, const KZ: usize>(
+    r: &RayPre,
+    tri: &[V3; 3],
+    tmax: f32,
+) -> Option<(f32, f32, f32)> {
+    let a = sub(tri[0], r.org);
+    let b = sub(tri[1], r.org);
+    let c = sub(tri[2], r.org);
+    // Shear and scale the vertices (eq. 5).
+    let ax = a[KX] - r.sx * a[KZ];
+    let ay = a[KY] - r.sy * a[KZ];
+    let bx = b[KX] - r.sx * b[KZ];
+    let by = b[KY] - r.sy * b[KZ];
+    let cx = c[KX] - r.sx * c[KZ];
+    let cy = c[KY] - r.sy * c[KZ];
+    // Scaled barycentrics (2-D edge functions).
+    let mut u = cx * by - cy * bx;
+    let mut v = ax * cy - ay * cx;
+    let mut w = bx * ay - by * ax;
+    // Fall back to double precision on an edge (section 3.3).
+    if u == 0.0 || v == 0.0 || w == 0.0 {
+        let (ax, ay, bx, by, cx, cy) = (
+            ax as f64, ay as f64, bx as f64, by as f64, cx as f64, cy as f64,
+        );
+        u = (cx * by - cy * bx) as f32;
+        v = (ax * cy - ay * cx) as f32;
+        w = (bx * ay - by * ax) as f32;
+    }
+    if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
+        return None;
+    }
+    let det = u + v + w;
+    if det == 0.0 {
+        return None;
+    }
+    let az = r.sz * a[KZ];
+    let bz = r.sz * b[KZ];
+    let cz = r.sz * c[KZ];
+    let t = u * az + v * bz + w * cz;
+    // Sign-aware depth test without dividing (section 3.4).
+    if det > 0.0 {
+        if t <= 0.0 || t >= tmax * det {
+            return None;
+        }
+    } else if t >= 0.0 || t <= tmax * det {
+        return None;
+    }
+    let rcp = 1.0 / det;
+    Some((t * rcp, v * rcp, w * rcp))
+}
+
+/// Slab test; returns the entry distance when the box is hit before `tmax`.
+#[inline(always)]
+fn intersect_aabb(r: &RayPre, b: &Aabb, tmax: f32) -> Option<f32> {
+    let mut t0 = 0.0f32;
+    let mut t1 = tmax;
+    for k in 0..3 {
+        let ta = (b.min[k] - r.org[k]) * r.inv[k];
+        let tb = (b.max[k] - r.org[k]) * r.inv[k];
+        // Plain comparisons (minss/maxss): a NaN from 0 * inf keeps the previous bound.
+        let (lo, hi) = if ta < tb { (ta, tb) } else { (tb, ta) };
+        t0 = if lo > t0 { lo } else { t0 };
+        t1 = if hi < t1 { hi } else { t1 };
+    }
+    // Widen slightly so round-off in the slab test cannot cull a hit on a box face
+    // (Ize 2013, "Robust BVH Ray Traversal": multiply by 1 + 2 gamma(3)).
+    if t0 <= t1 * 1.000_000_4 {
+        Some(t0)
+    } else {
+        None
+    }
+}
+
+impl Bvh {
+    /// The closest hit of `org + t dir` with `0 < t < tmax`.
+    #[inline]
+    pub fn intersect(&self, org: V3, dir: V3, tmax: f32) -> Option<Hit> {
+        self.traverse::<false>(org, dir, tmax)
+    }
+
+    /// Whether anything blocks `org + t dir` for `0 < t < tmax` (any-hit, for shadow rays).
+    #[inline]
+    pub fn occluded(&self, org: V3, dir: V3, tmax: f32) -> bool {
+        self.traverse::<true>(org, dir, tmax).is_some()
+    }
+
+    #[inline]
+    fn traverse<const ANY: bool>(&self, org: V3, dir: V3, tmax: f32) -> Option<Hit> {
+        if self.nodes.is_empty() {
+            return None;
+        }
+        let r = RayPre::new(org, dir);
+        match (r.kx, r.ky, r.kz) {
+            (1, 2, 0) => self.traverse_k::<ANY, 1, 2, 0>(&r, tmax),
+            (2, 1, 0) => self.traverse_k::<ANY, 2, 1, 0>(&r, tmax),
+            (2, 0, 1) => self.traverse_k::<ANY, 2, 0, 1>(&r, tmax),
+            (0, 2, 1) => self.traverse_k::<ANY, 0, 2, 1>(&r, tmax),
+            (0, 1, 2) => self.traverse_k::<ANY, 0, 1, 2>(&r, tmax),
+            _ => self.traverse_k::<ANY, 1, 0, 2>(&r, tmax),
+        }
+    }
+
+    fn traverse_k<const ANY: bool, const KX: usize, const KY: usize, const KZ: usize>(
+        &self,
+        r: &RayPre,
+        tmax: f32,
+    ) -> Option<Hit> {
+        let r = *r;
+        let mut best: Option<Hit> = None;
+        let mut tmax = tmax;
+        // Stack of (node, entry distance): a popped node is skipped once a closer hit has
+        // been found than its entry distance.
+        let mut stack = [(0u32, 0.0f32); 96];
+        let mut sp = 0usize;
+        let mut node = 0usize;
+        intersect_aabb(&r, &self.nodes[0].bounds, tmax)?;
+        'outer: loop {
+            let n = &self.nodes[node];
+            if n.count > 0 {
+                let s = n.first as usize;
+                for i in s..s + n.count as usize {
+                    if let Some((t, u, v)) = tri_test::<KX, KY, KZ>(&r, &self.tris[i], tmax) {
+                        tmax = t;
+                        best = Some(Hit {
+                            t,
+                            prim: self.prim[i],
+                            u,
+                            v,
+                        });
+                        if ANY {
+                            return best;
+                        }
+                    }
+                }
+            } else {
+                let a = n.first as usize;
+                let ta = intersect_aabb(&r, &self.nodes[a].bounds, tmax);
+                let tb = intersect_aabb(&r, &self.nodes[a + 1].bounds, tmax);
+                match (ta, tb) {
+                    (Some(x), Some(y)) => {
+                        let (near, far, tfar) = if x <= y { (a, a + 1, y) } else { (a + 1, a, x) };
+                        if sp < stack.len() {
+                            stack[sp] = (far as u32, tfar);
+                            sp += 1;
+                        }
+                        node = near;
+                        continue;
+                    }
+                    (Some(_), None) => {
+                        node = a;
+                        continue;
+                    }
+                    (None, Some(_)) => {
+                        node = a + 1;
+                        continue;
+                    }
+                    (None, None) => {}
+                }
+            }
+            while sp > 0 {
+                sp -= 1;
+                let (n, t) = stack[sp];
+                if t <= tmax {
+                    node = n as usize;
+                    continue 'outer;
+                }
+            }
+            break;
+        }
+        best
+    }
+}

@@ -11,6 +11,7 @@ use super::options::{
     ArapOptions, RefactorSchedule, MAX_WEIGHT, MIN_STEP, REWEIGHT_FACTOR, STEP_SAFETY,
 };
 use crate::nodes::linalg::SpdFactor;
+use crate::nodes::param::triangles::vertex_triangles;
 use faer::sparse::{SparseColMat, SymbolicSparseColMat};
 use faer::{Mat, Par};
 
@@ -109,28 +110,6 @@ impl FoldFree {
             d,
         )
     }
-}
-
-/// The triangles of each vertex, in compressed rows (`start`, `triangle`).
-fn vertex_triangles(n: usize, triangles: &[[u32; 3]]) -> (Vec<usize>, Vec<u32>) {
-    let mut start = vec![0usize; n + 1];
-    for tri in triangles {
-        for &v in tri {
-            start[v as usize + 1] += 1;
-        }
-    }
-    for v in 0..n {
-        start[v + 1] += start[v];
-    }
-    let mut next = start.clone();
-    let mut list = vec![0u32; start[n]];
-    for (t, tri) in triangles.iter().enumerate() {
-        for &v in tri {
-            list[next[v as usize]] = t as u32;
-            next[v as usize] += 1;
-        }
-    }
-    (start, list)
 }
 
 /// Local stiffened re-solve of a blocked step: on the vertices within `rings` rings of the

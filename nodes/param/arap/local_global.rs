@@ -130,15 +130,7 @@ pub(crate) mod tests {
                 p.push([x + s * ((i * 7 + j * 3) % 5) as f64 / 5.0, y, 0.0]);
             }
         }
-        let id = |i: usize, j: usize| (j * (k + 1) + i) as u32;
-        let mut t = Vec::new();
-        for j in 0..k {
-            for i in 0..k {
-                t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-                t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-            }
-        }
-        (p, t)
+        (p, crate::nodes::param::triangles::grid_triangles(k, k))
     }
 
     #[test]

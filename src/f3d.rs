@@ -8,7 +8,7 @@
 //! parameters; links become links. Storage and time-gain nodes are removed (the frame
 //! executor keeps simulation state between frames), as are the state sockets they feed.
 
-use crate::graph::{GraphFile, LinkSpec, NodeSpec};
+use crate::graph::format::{GraphFile, LinkSpec, NodeSpec, FORMAT, VERSION};
 use crate::node::NodeDecl;
 use crate::registry::Registry;
 use crate::types::SocketType;
@@ -184,12 +184,6 @@ fn sockets_in_order(v: Option<&serde_json::Value>) -> Vec<i64> {
     s.into_iter().map(|(_, id)| id).collect()
 }
 
-/// Converts a Framework3D saved node tree into a cgnodes graph, using the built-in nodes to
-/// check that every target node exists.
-pub fn import(raw: &serde_json::Value, aliases: &Aliases) -> Result<GraphFile, ImportError> {
-    import_with(raw, aliases, &Registry::builtin())
-}
-
 fn short_name(id_name: &str) -> &str {
     id_name
         .strip_prefix("geom_")
@@ -216,9 +210,10 @@ fn missing_message(missing: &[String]) -> String {
     )
 }
 
-/// Converts with `registry` to check targets (nodes and sockets must exist in it); fails
-/// when a target node is missing, naming each with its Framework3D node id.
-pub fn import_with(
+/// Converts a Framework3D saved node tree into a cgnodes graph. Target nodes and sockets
+/// (built-in or plugin nodes) are checked against `registry`; fails when a target node is
+/// missing, naming each with its Framework3D node id.
+pub fn import(
     raw: &serde_json::Value,
     aliases: &Aliases,
     registry: &Registry,
@@ -504,8 +499,8 @@ fn convert(
         }
     }
     let graph = GraphFile {
-        format: crate::graph::FORMAT.to_string(),
-        version: crate::graph::VERSION,
+        format: FORMAT.to_string(),
+        version: VERSION,
         nodes: out_nodes,
         outputs: None,
         meta: Some(serde_json::json!({

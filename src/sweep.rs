@@ -5,7 +5,8 @@
 
 use crate::chart::{Chart, Series};
 use crate::exec::{Executor, NodeStatus, RunOptions};
-use crate::graph::{self, split_link};
+use crate::f3d::Aliases;
+use crate::graph::{self, apply_sets, parse_frames, split_link};
 use crate::node::FileEnv;
 use crate::registry::Registry;
 use crate::types::Value;
@@ -220,9 +221,10 @@ pub fn run(
     threads: Option<usize>,
 ) -> Result<Vec<SweepRow>, String> {
     let gpath = base.join(&spec.graph);
-    let graph0 = graph::load(&gpath).map_err(|e| e.to_string())?;
+    let graph0 =
+        graph::load_with(&gpath, &Aliases::default(), registry).map_err(|e| e.to_string())?;
     let frames = match &spec.frames {
-        Some(f) => crate::cli::parse_frames(f)?,
+        Some(f) => parse_frames(f)?,
         None => graph0.spec.frames_hint().unwrap_or((0, 0)),
     };
     let tmp = tempfile::tempdir().map_err(|e| e.to_string())?;
@@ -273,7 +275,7 @@ pub fn run(
                 node_ms: BTreeMap::new(),
                 measures: vec![f64::NAN; spec.measure.len()],
             };
-            let valid = crate::cli::apply_sets(&mut g, &sets).and_then(|_| {
+            let valid = apply_sets(&mut g, &sets).and_then(|_| {
                 crate::validate::validate(&g, registry).map_err(|e| e[0].to_string())
             });
             let valid = match valid {

@@ -780,7 +780,8 @@ mod tests {
             r#"{"name": "p", "protocol": 1, "command": ["x"], "nodes": [{"type": "math"}]}"#,
         )
         .unwrap();
-        let mut r = Registry::builtin();
+        let mut r = Registry::new();
+        r.add("math", |_| {}, |_| Ok(()));
         let w = load_all(&mut r, &[(d.path().to_path_buf(), Origin::Cli)]).unwrap();
         assert_eq!(w.len(), 1, "{w:?}");
         assert_eq!(r.get("math").unwrap().source, "builtin");

@@ -259,11 +259,7 @@ pub fn run(
             let mut g = graph0.clone();
             let mut sets = spec.set.clone();
             for (v, x) in spec.vary.iter().zip(combo) {
-                let text = match x {
-                    serde_json::Value::String(s) => s.clone(),
-                    other => other.to_string(),
-                };
-                sets.push(format!("{}={text}", v.param));
+                sets.push(format!("{}={}", v.param, value_text(x)));
             }
             let mut row = SweepRow {
                 values: combo.clone(),
@@ -361,15 +357,8 @@ pub fn run(
     Ok(rows)
 }
 
-fn csv_field(s: &str) -> String {
-    if s.contains([',', '"', '\n']) {
-        format!("\"{}\"", s.replace('"', "\"\""))
-    } else {
-        s.to_string()
-    }
-}
-
-/// CSV text of a sweep's rows.
+/// CSV text of a sweep's rows: the varied values, repeat, status, error, total and per-node
+/// wall times, then the measures (empty when not finite).
 pub fn to_csv(spec: &SweepSpec, rows: &[SweepRow]) -> String {
     let nodes: Vec<String> = rows
         .first()
@@ -379,25 +368,12 @@ pub fn to_csv(spec: &SweepSpec, rows: &[SweepRow]) -> String {
     head.extend(["repeat", "status", "error_kind", "error", "total_ms"].map(String::from));
     head.extend(nodes.iter().map(|n| format!("ms:{n}")));
     head.extend(spec.measure.iter().cloned());
-    let mut s = head
-        .iter()
-        .map(|h| csv_field(h))
-        .collect::<Vec<_>>()
-        .join(",")
-        + "\n";
-    for r in rows {
-        let mut f: Vec<String> = r
-            .values
-            .iter()
-            .map(|v| match v {
-                serde_json::Value::String(s) => csv_field(s),
-                other => csv_field(&other.to_string()),
-            })
-            .collect();
+    let records = rows.iter().map(|r| {
+        let mut f: Vec<String> = r.values.iter().map(value_text).collect();
         f.push(r.repeat.to_string());
         f.push(if r.ok { "ok".into() } else { "failed".into() });
-        f.push(csv_field(&r.error_kind));
-        f.push(csv_field(&r.error));
+        f.push(r.error_kind.clone());
+        f.push(r.error.clone());
         f.push(format!("{:.4}", r.total_ms));
         for n in &nodes {
             f.push(format!("{:.4}", r.node_ms.get(n).copied().unwrap_or(0.0)));
@@ -409,10 +385,17 @@ pub fn to_csv(spec: &SweepSpec, rows: &[SweepRow]) -> String {
                 String::new()
             });
         }
-        s.push_str(&f.join(","));
-        s.push('\n');
+        f
+    });
+    crate::io::csv::to_text(std::iter::once(head).chain(records))
+}
+
+/// A varied value as text: strings as they are, anything else as JSON.
+fn value_text(v: &serde_json::Value) -> String {
+    match v {
+        serde_json::Value::String(s) => s.clone(),
+        other => other.to_string(),
     }
-    s
 }
 
 /// The chart of a sweep: y against x, one series per value of the series parameter.
@@ -465,10 +448,7 @@ pub fn to_chart(spec: &SweepSpec, rows: &[SweepRow]) -> Result<Chart, String> {
         }
         let y = axis(&ys, r)?;
         let label = match sidx {
-            Some(k) => match &r.values[k] {
-                serde_json::Value::String(s) => s.clone(),
-                other => other.to_string(),
-            },
+            Some(k) => value_text(&r.values[k]),
             None => ys.clone(),
         };
         match series.iter_mut().find(|s| s.label == label) {

@@ -3,31 +3,7 @@
 
 use super::{ChartArgs, EXIT_INVALID};
 use crate::chart::{draw, Chart, Series};
-
-/// Splits one CSV line, honouring double quotes.
-fn csv_split(line: &str) -> Vec<String> {
-    let mut out = vec![String::new()];
-    let mut quoted = false;
-    let mut chars = line.chars().peekable();
-    while let Some(c) = chars.next() {
-        match c {
-            '"' if quoted && chars.peek() == Some(&'"') => {
-                chars.next();
-                if let Some(s) = out.last_mut() {
-                    s.push('"');
-                }
-            }
-            '"' => quoted = !quoted,
-            ',' if !quoted => out.push(String::new()),
-            c => {
-                if let Some(s) = out.last_mut() {
-                    s.push(c)
-                }
-            }
-        }
-    }
-    out
-}
+use crate::io::csv::read;
 
 /// `cgnodes chart CSV... --x X --y Y --plot FILE`.
 pub(super) fn cmd(a: &ChartArgs) -> i32 {
@@ -51,26 +27,21 @@ fn chart_from_csv(a: &ChartArgs) -> Result<(), String> {
     };
     for f in &a.csv {
         let text = std::fs::read_to_string(f).map_err(|e| format!("{}: {e}", f.display()))?;
-        let mut lines = text.lines().filter(|l| !l.trim().is_empty());
-        let head = csv_split(
-            lines
-                .next()
-                .ok_or_else(|| format!("{}: empty", f.display()))?,
-        );
+        let csv = read(&text, false, false)
+            .map_err(|e| format!("{}: {e}", f.display()))?
+            .ok_or_else(|| format!("{}: empty", f.display()))?;
         let col = |name: &str| {
-            head.iter()
-                .position(|h| h == name)
+            csv.column(name)
                 .ok_or_else(|| format!("{}: no column '{name}'", f.display()))
         };
         let (ix, iy) = (col(&a.x)?, col(&a.y)?);
         let is = a.series.as_deref().map(col).transpose()?;
-        let status = head.iter().position(|h| h == "status");
+        let status = csv.column("status");
         let file_label = f
             .file_stem()
             .map(|s| s.to_string_lossy().to_string())
             .unwrap_or_default();
-        for line in lines {
-            let row = csv_split(line);
+        for row in &csv.rows {
             let num = |i: usize| row.get(i).and_then(|s| s.trim().parse::<f64>().ok());
             let Some(x) = num(ix) else { continue };
             if status

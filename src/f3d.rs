@@ -232,6 +232,14 @@ pub fn import_lenient(
     convert(raw, aliases, registry, false)
 }
 
+/// The `ID` of a Framework3D socket or node, else its key in the file.
+fn f3d_id(key: &str, v: &serde_json::Value, what: &str) -> Result<i64, ImportError> {
+    v.get("ID")
+        .and_then(|v| v.as_i64())
+        .or_else(|| key.parse().ok())
+        .ok_or_else(|| ImportError(format!("{what} '{key}' has no ID")))
+}
+
 fn convert(
     raw: &serde_json::Value,
     aliases: &Aliases,
@@ -246,11 +254,7 @@ fn convert(
     };
     let mut sockets: BTreeMap<i64, F3dSocket> = BTreeMap::new();
     for (k, s) in obj("sockets_info")? {
-        let id = s
-            .get("ID")
-            .and_then(|v| v.as_i64())
-            .or_else(|| k.parse().ok())
-            .ok_or_else(|| ImportError(format!("socket '{k}' has no ID")))?;
+        let id = f3d_id(k, s, "socket")?;
         let text = |f: &str| s.get(f).and_then(|v| v.as_str()).unwrap_or("").to_string();
         sockets.insert(
             id,
@@ -262,11 +266,7 @@ fn convert(
     }
     let mut nodes: Vec<F3dNode> = Vec::new();
     for (k, n) in obj("nodes_info")? {
-        let id = n
-            .get("ID")
-            .and_then(|v| v.as_i64())
-            .or_else(|| k.parse().ok())
-            .ok_or_else(|| ImportError(format!("node '{k}' has no ID")))?;
+        let id = f3d_id(k, n, "node")?;
         nodes.push(F3dNode {
             id,
             id_name: n

@@ -100,10 +100,7 @@ impl NodeBuilder {
     }
     /// Adds an input socket of a type known only at run time (plugins).
     pub fn add_input_of(&mut self, name: &str, ty: SocketType) -> SocketBuilder<'_> {
-        self.decl.inputs.push(socket(name, ty));
-        SocketBuilder {
-            s: self.decl.inputs.last_mut().expect("just pushed"),
-        }
+        push_socket(&mut self.decl.inputs, name, ty)
     }
     /// Adds an output socket of type `T`.
     pub fn add_output<T: Typed>(&mut self, name: &str) -> SocketBuilder<'_> {
@@ -111,10 +108,7 @@ impl NodeBuilder {
     }
     /// Adds an output socket of a type known only at run time.
     pub fn add_output_of(&mut self, name: &str, ty: SocketType) -> SocketBuilder<'_> {
-        self.decl.outputs.push(socket(name, ty));
-        SocketBuilder {
-            s: self.decl.outputs.last_mut().expect("just pushed"),
-        }
+        push_socket(&mut self.decl.outputs, name, ty)
     }
     /// Keeps state between frames and runs every frame.
     pub fn stateful(&mut self) -> &mut Self {
@@ -141,6 +135,14 @@ impl NodeBuilder {
     pub fn build(mut self, exec: ExecFn) -> NodeDecl {
         self.decl.exec = Some(exec);
         self.decl
+    }
+}
+
+/// Appends a new socket to `list` and returns its builder.
+fn push_socket<'a>(list: &'a mut Vec<SocketDecl>, name: &str, ty: SocketType) -> SocketBuilder<'a> {
+    list.push(socket(name, ty));
+    SocketBuilder {
+        s: list.last_mut().expect("just pushed"),
     }
 }
 

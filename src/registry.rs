@@ -1,5 +1,5 @@
 //! The registry of node types. Built-in nodes register through the same calls a plugin uses;
-//! the registry of every built-in node is assembled in `crate::nodes::builtin_registry`.
+//! the registry of every built-in node is assembled in `nodes::builtin_registry`.
 
 use crate::node::{ExecContext, NodeBuilder, NodeDecl, NodeError};
 use std::collections::BTreeMap;

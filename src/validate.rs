@@ -1,7 +1,7 @@
 //! Validation: checks a graph against the registry before anything runs, reporting every
 //! error together, each naming the file, node id, node type and socket.
 
-use crate::graph::{split_link, Graph};
+use crate::graph::format::{split_link, Graph};
 use crate::node::{FileRole, NodeDecl};
 use crate::registry::{closest, Registry};
 use crate::types::{SocketType, Value};

@@ -2,7 +2,7 @@
 //! (`overrides`: `--set`, `--frames`), and loading files (`load`), which may import a
 //! Framework3D node tree against a registry. See `docs/graph-format.md`.
 //!
-//! Dependency order inside: `format` comes before `crate::f3d` (the importer builds a
+//! Dependency order inside: `format` comes before the `f3d` module (the importer builds a
 //! `GraphFile`), which comes before `load`.
 
 pub mod format;

@@ -3,7 +3,7 @@
 
 use cgnodes::exec::{Executor, RunOptions};
 use cgnodes::node::FileEnv;
-use cgnodes::registry::Registry;
+use cgnodes::nodes::builtin_registry;
 use std::path::Path;
 use std::time::Instant;
 
@@ -37,7 +37,7 @@ fn main() {
         let ids: Vec<String> = (0..n / 10).map(|c| format!("\"c{c}_8\"")).collect();
         format!(r#""outputs": [{}]"#, ids.join(","))
     });
-    let registry = Registry::builtin();
+    let registry = builtin_registry();
     let exec = Executor::new(None, None).unwrap();
     let opts = RunOptions {
         files: FileEnv {

@@ -46,7 +46,7 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
 }
 
 fn main() {
-    let mut registry = Registry::builtin();
+    let mut registry = cgnodes::nodes::builtin_registry();
     registry.add("twist", declare, execute);
     std::process::exit(cgnodes::cli::main_with(registry));
 }

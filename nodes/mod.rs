@@ -14,6 +14,13 @@ pub mod trace;
 
 use crate::registry::Registry;
 
+/// A registry with every built-in node (what `cgnodes` runs with before plugins are added).
+pub fn builtin_registry() -> Registry {
+    let mut r = Registry::new();
+    register_all(&mut r);
+    r
+}
+
 /// Registers every built-in node.
 pub fn register_all(r: &mut Registry) {
     basic::register(r);

@@ -8,7 +8,7 @@
 //! parameters; links become links. Storage and time-gain nodes are removed (the frame
 //! executor keeps simulation state between frames), as are the state sockets they feed.
 
-use crate::graph::{GraphFile, LinkSpec, NodeSpec};
+use crate::graph::format::{GraphFile, LinkSpec, NodeSpec, FORMAT, VERSION};
 use crate::node::NodeDecl;
 use crate::registry::Registry;
 use crate::types::SocketType;
@@ -184,12 +184,6 @@ fn sockets_in_order(v: Option<&serde_json::Value>) -> Vec<i64> {
     s.into_iter().map(|(_, id)| id).collect()
 }
 
-/// Converts a Framework3D saved node tree into a cgnodes graph, using the built-in nodes to
-/// check that every target node exists.
-pub fn import(raw: &serde_json::Value, aliases: &Aliases) -> Result<GraphFile, ImportError> {
-    import_with(raw, aliases, &Registry::builtin())
-}
-
 fn short_name(id_name: &str) -> &str {
     id_name
         .strip_prefix("geom_")
@@ -216,9 +210,10 @@ fn missing_message(missing: &[String]) -> String {
     )
 }
 
-/// Converts with `registry` to check targets (nodes and sockets must exist in it); fails
-/// when a target node is missing, naming each with its Framework3D node id.
-pub fn import_with(
+/// Converts a Framework3D saved node tree into a cgnodes graph. Target nodes and sockets
+/// (built-in or plugin nodes) are checked against `registry`; fails when a target node is
+/// missing, naming each with its Framework3D node id.
+pub fn import(
     raw: &serde_json::Value,
     aliases: &Aliases,
     registry: &Registry,
@@ -237,6 +232,14 @@ pub fn import_lenient(
     convert(raw, aliases, registry, false)
 }
 
+/// The `ID` of a Framework3D socket or node, else its key in the file.
+fn f3d_id(key: &str, v: &serde_json::Value, what: &str) -> Result<i64, ImportError> {
+    v.get("ID")
+        .and_then(|v| v.as_i64())
+        .or_else(|| key.parse().ok())
+        .ok_or_else(|| ImportError(format!("{what} '{key}' has no ID")))
+}
+
 fn convert(
     raw: &serde_json::Value,
     aliases: &Aliases,
@@ -251,11 +254,7 @@ fn convert(
     };
     let mut sockets: BTreeMap<i64, F3dSocket> = BTreeMap::new();
     for (k, s) in obj("sockets_info")? {
-        let id = s
-            .get("ID")
-            .and_then(|v| v.as_i64())
-            .or_else(|| k.parse().ok())
-            .ok_or_else(|| ImportError(format!("socket '{k}' has no ID")))?;
+        let id = f3d_id(k, s, "socket")?;
         let text = |f: &str| s.get(f).and_then(|v| v.as_str()).unwrap_or("").to_string();
         sockets.insert(
             id,
@@ -267,11 +266,7 @@ fn convert(
     }
     let mut nodes: Vec<F3dNode> = Vec::new();
     for (k, n) in obj("nodes_info")? {
-        let id = n
-            .get("ID")
-            .and_then(|v| v.as_i64())
-            .or_else(|| k.parse().ok())
-            .ok_or_else(|| ImportError(format!("node '{k}' has no ID")))?;
+        let id = f3d_id(k, n, "node")?;
         nodes.push(F3dNode {
             id,
             id_name: n
@@ -504,8 +499,8 @@ fn convert(
         }
     }
     let graph = GraphFile {
-        format: crate::graph::FORMAT.to_string(),
-        version: crate::graph::VERSION,
+        format: FORMAT.to_string(),
+        version: VERSION,
         nodes: out_nodes,
         outputs: None,
         meta: Some(serde_json::json!({

@@ -4,6 +4,12 @@
 //! node registry (`validate`), planned over the nodes the requested outputs need, and run
 //! in parallel with caching (`exec`). Built-in nodes live in `nodes`, one file per node or
 //! small family; each node's algorithm is a plain function callable without the runtime.
+//!
+//! Modules depend only on earlier ones, in this order: `io`, `types`, `node`, `registry`,
+//! `plugin` (adds external nodes to a registry), `graph::format`, `f3d` (imports Framework3D
+//! trees against a registry), `graph::load` and `graph::overrides`, `validate`, `cache`,
+//! `exec`, `chart`, `sweep`, `cli`. The built-in nodes (`nodes`) use only `io`, `types`,
+//! `node` and `registry`; `nodes::builtin_registry()` assembles them.
 
 pub mod cache;
 pub mod chart;

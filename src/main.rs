@@ -1,5 +1,3 @@
 fn main() {
-    std::process::exit(cgnodes::cli::main_with(
-        cgnodes::registry::Registry::builtin(),
-    ));
+    std::process::exit(cgnodes::cli::main_with(cgnodes::nodes::builtin_registry()));
 }

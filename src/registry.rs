@@ -1,4 +1,5 @@
-//! The registry of node types. Built-in nodes register through the same calls a plugin uses.
+//! The registry of node types. Built-in nodes register through the same calls a plugin uses;
+//! the registry of every built-in node is assembled in `nodes::builtin_registry`.
 
 use crate::node::{ExecContext, NodeBuilder, NodeDecl, NodeError};
 use std::collections::BTreeMap;
@@ -14,13 +15,6 @@ impl Registry {
     /// An empty registry.
     pub fn new() -> Registry {
         Registry::default()
-    }
-
-    /// A registry with every built-in node.
-    pub fn builtin() -> Registry {
-        let mut r = Registry::new();
-        crate::nodes::register_all(&mut r);
-        r
     }
 
     /// Registers a node from its declaration and execution functions (the usual way).
@@ -66,29 +60,14 @@ impl Registry {
     }
 }
 
-/// The candidate closest to `name` by edit distance, if reasonably close.
+/// The candidate closest to `name` by Levenshtein distance, if reasonably close (within
+/// half the longer name's length, and at least 2).
 pub fn closest<'a>(name: &str, candidates: impl Iterator<Item = &'a str>) -> Option<String> {
     candidates
-        .map(|c| (edit_distance(name, c), c))
+        .map(|c| (strsim::levenshtein(name, c), c))
         .filter(|(d, c)| *d <= (c.len().max(name.len()) / 2).max(2))
         .min()
         .map(|(_, c)| c.to_string())
-}
-
-/// Levenshtein distance.
-fn edit_distance(a: &str, b: &str) -> usize {
-    let a: Vec<char> = a.chars().collect();
-    let b: Vec<char> = b.chars().collect();
-    let mut prev: Vec<usize> = (0..=b.len()).collect();
-    for i in 1..=a.len() {
-        let mut cur = vec![i; b.len() + 1];
-        for j in 1..=b.len() {
-            let sub = prev[j - 1] + usize::from(a[i - 1] != b[j - 1]);
-            cur[j] = sub.min(prev[j] + 1).min(cur[j - 1] + 1);
-        }
-        prev = cur;
-    }
-    prev[b.len()]
 }
 
 #[cfg(test)]

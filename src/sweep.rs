@@ -5,7 +5,8 @@
 
 use crate::chart::{Chart, Series};
 use crate::exec::{Executor, NodeStatus, RunOptions};
-use crate::graph::{self, split_link};
+use crate::f3d::Aliases;
+use crate::graph::{self, apply_sets, parse_frames, split_link};
 use crate::node::FileEnv;
 use crate::registry::Registry;
 use crate::types::Value;
@@ -220,9 +221,10 @@ pub fn run(
     threads: Option<usize>,
 ) -> Result<Vec<SweepRow>, String> {
     let gpath = base.join(&spec.graph);
-    let graph0 = graph::load(&gpath).map_err(|e| e.to_string())?;
+    let graph0 =
+        graph::load_with(&gpath, &Aliases::default(), registry).map_err(|e| e.to_string())?;
     let frames = match &spec.frames {
-        Some(f) => crate::cli::parse_frames(f)?,
+        Some(f) => parse_frames(f)?,
         None => graph0.spec.frames_hint().unwrap_or((0, 0)),
     };
     let tmp = tempfile::tempdir().map_err(|e| e.to_string())?;
@@ -257,11 +259,7 @@ pub fn run(
             let mut g = graph0.clone();
             let mut sets = spec.set.clone();
             for (v, x) in spec.vary.iter().zip(combo) {
-                let text = match x {
-                    serde_json::Value::String(s) => s.clone(),
-                    other => other.to_string(),
-                };
-                sets.push(format!("{}={text}", v.param));
+                sets.push(format!("{}={}", v.param, value_text(x)));
             }
             let mut row = SweepRow {
                 values: combo.clone(),
@@ -273,7 +271,7 @@ pub fn run(
                 node_ms: BTreeMap::new(),
                 measures: vec![f64::NAN; spec.measure.len()],
             };
-            let valid = crate::cli::apply_sets(&mut g, &sets).and_then(|_| {
+            let valid = apply_sets(&mut g, &sets).and_then(|_| {
                 crate::validate::validate(&g, registry).map_err(|e| e[0].to_string())
             });
             let valid = match valid {
@@ -359,15 +357,8 @@ pub fn run(
     Ok(rows)
 }
 
-fn csv_field(s: &str) -> String {
-    if s.contains([',', '"', '\n']) {
-        format!("\"{}\"", s.replace('"', "\"\""))
-    } else {
-        s.to_string()
-    }
-}
-
-/// CSV text of a sweep's rows.
+/// CSV text of a sweep's rows: the varied values, repeat, status, error, total and per-node
+/// wall times, then the measures (empty when not finite).
 pub fn to_csv(spec: &SweepSpec, rows: &[SweepRow]) -> String {
     let nodes: Vec<String> = rows
         .first()
@@ -377,25 +368,12 @@ pub fn to_csv(spec: &SweepSpec, rows: &[SweepRow]) -> String {
     head.extend(["repeat", "status", "error_kind", "error", "total_ms"].map(String::from));
     head.extend(nodes.iter().map(|n| format!("ms:{n}")));
     head.extend(spec.measure.iter().cloned());
-    let mut s = head
-        .iter()
-        .map(|h| csv_field(h))
-        .collect::<Vec<_>>()
-        .join(",")
-        + "\n";
-    for r in rows {
-        let mut f: Vec<String> = r
-            .values
-            .iter()
-            .map(|v| match v {
-                serde_json::Value::String(s) => csv_field(s),
-                other => csv_field(&other.to_string()),
-            })
-            .collect();
+    let records = rows.iter().map(|r| {
+        let mut f: Vec<String> = r.values.iter().map(value_text).collect();
         f.push(r.repeat.to_string());
         f.push(if r.ok { "ok".into() } else { "failed".into() });
-        f.push(csv_field(&r.error_kind));
-        f.push(csv_field(&r.error));
+        f.push(r.error_kind.clone());
+        f.push(r.error.clone());
         f.push(format!("{:.4}", r.total_ms));
         for n in &nodes {
             f.push(format!("{:.4}", r.node_ms.get(n).copied().unwrap_or(0.0)));
@@ -407,10 +385,17 @@ pub fn to_csv(spec: &SweepSpec, rows: &[SweepRow]) -> String {
                 String::new()
             });
         }
-        s.push_str(&f.join(","));
-        s.push('\n');
+        f
+    });
+    crate::io::csv::to_text(std::iter::once(head).chain(records))
+}
+
+/// A varied value as text: strings as they are, anything else as JSON.
+fn value_text(v: &serde_json::Value) -> String {
+    match v {
+        serde_json::Value::String(s) => s.clone(),
+        other => other.to_string(),
     }
-    s
 }
 
 /// The chart of a sweep: y against x, one series per value of the series parameter.
@@ -463,10 +448,7 @@ pub fn to_chart(spec: &SweepSpec, rows: &[SweepRow]) -> Result<Chart, String> {
         }
         let y = axis(&ys, r)?;
         let label = match sidx {
-            Some(k) => match &r.values[k] {
-                serde_json::Value::String(s) => s.clone(),
-                other => other.to_string(),
-            },
+            Some(k) => value_text(&r.values[k]),
             None => ys.clone(),
         };
         match series.iter_mut().find(|s| s.label == label) {

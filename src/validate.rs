@@ -1,7 +1,7 @@
 //! Validation: checks a graph against the registry before anything runs, reporting every
 //! error together, each naming the file, node id, node type and socket.
 
-use crate::graph::{split_link, Graph};
+use crate::graph::format::{split_link, Graph};
 use crate::node::{FileRole, NodeDecl};
 use crate::registry::{closest, Registry};
 use crate::types::{SocketType, Value};
@@ -264,19 +264,9 @@ pub fn validate_with(
                     });
                     continue;
                 }
-                (Some(j), None) => match Value::from_json(&s.ty, j) {
-                    Err(message) => {
-                        errors.push(GraphError::BadParam {
-                            file,
-                            node,
-                            node_type,
-                            socket,
-                            message,
-                        });
-                        continue;
-                    }
-                    Ok(v) => {
-                        if let Err(message) = s.check_literal(&v) {
+                (Some(j), None) => {
+                    match Value::from_json(&s.ty, j).and_then(|v| s.check_literal(&v).map(|()| v)) {
+                        Err(message) => {
                             errors.push(GraphError::BadParam {
                                 file,
                                 node,
@@ -286,29 +276,31 @@ pub fn validate_with(
                             });
                             continue;
                         }
-                        if s.file == FileRole::Input {
-                            if let Value::String(p) = &v {
-                                let path = crate::node::FileEnv {
-                                    graph_dir: graph.dir.clone(),
-                                    asset_dirs: asset_dirs.to_vec(),
-                                    ..Default::default()
-                                }
-                                .input_path(p);
-                                if !p.contains('{') && !path.exists() {
-                                    errors.push(GraphError::MissingFile {
-                                        file,
-                                        node,
-                                        node_type,
-                                        socket,
-                                        path: path.display().to_string(),
-                                    });
-                                    continue;
+                        Ok(v) => {
+                            if s.file == FileRole::Input {
+                                if let Value::String(p) = &v {
+                                    let path = crate::node::FileEnv {
+                                        graph_dir: graph.dir.clone(),
+                                        asset_dirs: asset_dirs.to_vec(),
+                                        ..Default::default()
+                                    }
+                                    .input_path(p);
+                                    if !p.contains('{') && !path.exists() {
+                                        errors.push(GraphError::MissingFile {
+                                            file,
+                                            node,
+                                            node_type,
+                                            socket,
+                                            path: path.display().to_string(),
+                                        });
+                                        continue;
+                                    }
                                 }
                             }
+                            RawSource::Literal(v)
                         }
-                        RawSource::Literal(v)
                     }
-                },
+                }
                 (None, Some(l)) => {
                     let links = l.links();
                     if links.len() != 1 && !matches!(s.ty, SocketType::List(_)) {
@@ -323,30 +315,25 @@ pub fn validate_with(
                     }
                     let mut parsed = Vec::new();
                     for link in links {
+                        let dangling = |reason: String| GraphError::DanglingLink {
+                            file: file.clone(),
+                            node: node.clone(),
+                            node_type: node_type.clone(),
+                            socket: socket.clone(),
+                            link: link.to_string(),
+                            reason,
+                        };
                         let Some((from, out)) = split_link(link) else {
-                            errors.push(GraphError::DanglingLink {
-                                file: file.clone(),
-                                node: node.clone(),
-                                node_type: node_type.clone(),
-                                socket: socket.clone(),
-                                link: link.to_string(),
-                                reason: "which is not of the form \"<node id>.<output socket>\""
-                                    .into(),
-                            });
+                            errors.push(dangling(
+                                "which is not of the form \"<node id>.<output socket>\"".into(),
+                            ));
                             continue;
                         };
                         let Some(up) = spec.nodes.get(from) else {
-                            errors.push(GraphError::DanglingLink {
-                                file: file.clone(),
-                                node: node.clone(),
-                                node_type: node_type.clone(),
-                                socket: socket.clone(),
-                                link: link.to_string(),
-                                reason: format!(
-                                    "but there is no node '{from}'{}",
-                                    hint(&closest(from, spec.nodes.keys().map(String::as_str)))
-                                ),
-                            });
+                            errors.push(dangling(format!(
+                                "but there is no node '{from}'{}",
+                                hint(&closest(from, spec.nodes.keys().map(String::as_str)))
+                            )));
                             continue;
                         };
                         edges.push((from.to_string(), id.clone()));

@@ -2,9 +2,9 @@
 //! graph of the homework's buffer nodes run end to end.
 
 use cgnodes::exec::{Executor, RunOptions};
-use cgnodes::f3d::{import, import_with, Aliases};
+use cgnodes::f3d::{import, Aliases};
 use cgnodes::node::FileEnv;
-use cgnodes::registry::Registry;
+use cgnodes::nodes::builtin_registry;
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
 
@@ -26,7 +26,7 @@ fn blueprint_aliases() -> Aliases {
 #[test]
 fn blueprint_unknown_node_is_named_with_its_id() {
     assert!(cgnodes::f3d::is_f3d(&blueprint()));
-    let e = import(&blueprint(), &Aliases::default())
+    let e = import(&blueprint(), &Aliases::default(), &builtin_registry())
         .unwrap_err()
         .to_string();
     assert!(
@@ -39,7 +39,7 @@ fn blueprint_unknown_node_is_named_with_its_id() {
 /// nodes are in the build, and until then the importer names exactly the missing ones.
 #[test]
 fn blueprint_with_aliases_imports_or_names_missing_nodes() {
-    let reg = Registry::builtin();
+    let reg = builtin_registry();
     let needed = [
         ("geom_min_surf (node 14)", "tutte"),
         ("geom_set_texture (node 68)", "texture_map"),
@@ -50,7 +50,7 @@ fn blueprint_with_aliases_imports_or_names_missing_nodes() {
         .iter()
         .filter(|(_, t)| reg.get(t).is_none())
         .collect();
-    let r = import_with(&blueprint(), &blueprint_aliases(), &reg);
+    let r = import(&blueprint(), &blueprint_aliases(), &reg);
     if missing.is_empty() {
         let g = r.unwrap();
         assert_eq!(g.nodes["min_surf_14"].node_type, "tutte");
@@ -241,9 +241,9 @@ fn buffer_pattern_runs_end_to_end() {
     let gpath = dir.path().join("uv.json");
     std::fs::write(&gpath, serde_json::to_string(&uv_from_xy_tree()).unwrap()).unwrap();
     // `cgnodes run` path: graph::load recognises the tree.
-    let g = cgnodes::graph::load(&gpath).unwrap();
+    let g = cgnodes::graph::load_with(&gpath, &Aliases::default(), &builtin_registry()).unwrap();
     assert_eq!(g.spec.nodes.len(), 7, "{:?}", g.spec.nodes.keys());
-    let reg = Registry::builtin();
+    let reg = builtin_registry();
     let valid = cgnodes::validate::validate_with(&g, &reg, &[root().join("assets/course")])
         .unwrap_or_else(|e| panic!("{e:?}"));
     let out = dir.path().join("out");
@@ -287,7 +287,9 @@ fn bad_trees_give_clear_errors() {
             s["identifier"] = json!("UV");
         }
     }
-    let e = import(&v, &Aliases::default()).unwrap_err().to_string();
+    let e = import(&v, &Aliases::default(), &builtin_registry())
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("geom_mesh_compose") && e.contains("'UV'"), "{e}");
     // storage feeding a real input
     let mut t = Tree::new();
@@ -302,7 +304,7 @@ fn bad_trees_give_clear_errors() {
         &[],
     );
     t.link(st[0], d[0]);
-    let e = import(&t.json(), &Aliases::default())
+    let e = import(&t.json(), &Aliases::default(), &builtin_registry())
         .unwrap_err()
         .to_string();
     assert!(
@@ -311,7 +313,9 @@ fn bad_trees_give_clear_errors() {
     );
     // a malformed alias
     let al: Aliases = serde_json::from_value(json!({"geom_x": {"typ": "a"}})).unwrap();
-    let e = import(&t.json(), &al).unwrap_err().to_string();
+    let e = import(&t.json(), &al, &builtin_registry())
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("alias for 'geom_x'"), "{e}");
 }
 
@@ -331,7 +335,7 @@ fn socket_order_is_numeric_not_textual() {
         json!({"geom_custom": {"type": "value_float", "inputs": {"s10": "value"}}}),
     )
     .unwrap();
-    let g = import(&t.json(), &al).unwrap();
+    let g = import(&t.json(), &al, &builtin_registry()).unwrap();
     let n = g.nodes.values().next().unwrap();
     assert_eq!(n.params["value"], json!(10.0));
     let _ = Path::new(".");

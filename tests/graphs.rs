@@ -2,12 +2,12 @@
 
 use cgnodes::exec::{Executor, RunOptions};
 use cgnodes::node::FileEnv;
-use cgnodes::registry::Registry;
+use cgnodes::nodes::builtin_registry;
 use std::path::Path;
 
 #[test]
 fn every_example_graph_runs() {
-    let registry = Registry::builtin();
+    let registry = builtin_registry();
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("graphs");
     let mut files: Vec<_> = std::fs::read_dir(&dir)
         .unwrap()

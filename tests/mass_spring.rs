@@ -454,7 +454,7 @@ fn run_graph(json: &str, frames: std::ops::RangeInclusive<i64>) -> Vec<cgnodes::
     let gp = dir.path().join("g.json");
     std::fs::write(&gp, json).unwrap();
     let g = cgnodes::graph::load(&gp).unwrap();
-    let valid = cgnodes::validate::validate(&g, &Registry::builtin()).unwrap();
+    let valid = cgnodes::validate::validate(&g, &cgnodes::nodes::builtin_registry()).unwrap();
     let exec = Executor::new(Some(1), None).unwrap();
     let opts = RunOptions {
         files: FileEnv {

@@ -255,7 +255,7 @@ fn run_node(
     inputs: Vec<(&str, cgnodes::types::Value)>,
     out: &Path,
 ) -> Result<std::collections::BTreeMap<String, cgnodes::types::Value>, String> {
-    let r = cgnodes::registry::Registry::builtin();
+    let r = cgnodes::nodes::builtin_registry();
     let decl = r.get(name).unwrap();
     let mut state = None;
     let files = cgnodes::node::FileEnv {

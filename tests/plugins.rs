@@ -20,7 +20,7 @@ fn test_plugins() -> PathBuf {
 
 /// Built-in nodes plus the test plugin and the example plugin.
 fn registry() -> Registry {
-    let mut r = Registry::builtin();
+    let mut r = cgnodes::nodes::builtin_registry();
     for d in [
         test_plugins().join("misbehave"),
         root().join("plugins/laplacian_smooth"),

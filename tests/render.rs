@@ -2,10 +2,10 @@
 //! acne, normal maps, mipmaps, culling, determinism, and one golden image.
 
 use cgnodes::exec::{Executor, NodeStatus, RunOptions, RunReport};
+use cgnodes::nodes::builtin_registry;
 use cgnodes::nodes::render::image_io::{decode_image, encode_image, ColorSpace, ImageFileFormat};
 use cgnodes::nodes::render::primitive::plane_mesh;
 use cgnodes::nodes::render::raster::{render, AntiAliasing, Passes, RasterOptions};
-use cgnodes::registry::Registry;
 use cgnodes::types::*;
 use cgnodes::validate::validate;
 use std::path::Path;
@@ -630,7 +630,7 @@ fn image_of(r: &RunReport, socket: &str) -> Option<Arc<Image>> {
 fn render_node_skips_unwanted_passes_and_the_cache_reruns_for_them() {
     let g = cgnodes::graph::parse(PLANE_GRAPH, Path::new("inline.json"), Path::new("."))
         .expect("parses");
-    let valid = validate(&g, &Registry::builtin()).expect("validates");
+    let valid = validate(&g, &builtin_registry()).expect("validates");
     let exec = Executor::new(None, None).unwrap();
     let reading = |socket: &str| RunOptions {
         targets: Some(Vec::new()),

@@ -19,7 +19,7 @@ fn data(name: &str) -> PathBuf {
 
 fn errors_of(name: &str) -> Vec<GraphError> {
     let g = graph::load(&data(&format!("bad/{name}"))).expect("loads");
-    match validate(&g, &Registry::builtin()) {
+    match validate(&g, &cgnodes::nodes::builtin_registry()) {
         Ok(_) => panic!("{name} should not validate"),
         Err(e) => e,
     }
@@ -41,7 +41,7 @@ fn opts(out: &Path) -> RunOptions {
 
 /// A registry with the built-in nodes plus test nodes that count their executions.
 fn counting_registry(counts: Arc<Mutex<HashMap<String, usize>>>) -> Registry {
-    let mut r = Registry::builtin();
+    let mut r = cgnodes::nodes::builtin_registry();
     let c = counts.clone();
     r.add(
         "count_add",
@@ -166,7 +166,7 @@ fn parameter_outside_its_choices_or_range() {
     );
     assert!(msg.contains("'modulo' is not one of"), "{msg}");
     // A numeric range, on a node declared in this test.
-    let mut r = Registry::builtin();
+    let mut r = cgnodes::nodes::builtin_registry();
     r.add(
         "clamped",
         |b| {
@@ -273,7 +273,7 @@ fn every_error_is_reported_together() {
         "b":{"type":"math","params":{"op":"zzz","q":1}},
         "c":{"type":"print","inputs":{"value":"missing.value"}}}}"#,
     );
-    let e = validate(&g, &Registry::builtin()).unwrap_err();
+    let e = validate(&g, &cgnodes::nodes::builtin_registry()).unwrap_err();
     assert!(e.len() >= 4, "{e:?}");
 }
 
@@ -282,7 +282,7 @@ fn every_error_is_reported_together() {
 #[test]
 fn independent_slow_nodes_overlap_in_time() {
     let spans: Arc<Mutex<Vec<(String, Instant, Instant)>>> = Arc::default();
-    let mut r = Registry::builtin();
+    let mut r = cgnodes::nodes::builtin_registry();
     let s = spans.clone();
     r.add(
         "sleepy",
@@ -444,7 +444,7 @@ fn frames_keep_state_and_run_time_independent_nodes_once() {
 
 #[test]
 fn a_failing_writer_leaves_no_partial_file_and_the_rest_still_runs() {
-    let mut r = Registry::builtin();
+    let mut r = cgnodes::nodes::builtin_registry();
     r.add(
         "bad_writer",
         |b| {
@@ -492,7 +492,7 @@ fn downstream_of_a_failure_is_reported_as_blocked() {
         "m":{"type":"math","inputs":{"a":"d.value"}},
         "w":{"type":"table_write","params":{"path":"m.csv"},"inputs":{"value":"m.value"}}}}"#,
     );
-    let v = valid(&g, &Registry::builtin());
+    let v = valid(&g, &cgnodes::nodes::builtin_registry());
     let out = tempfile::tempdir().unwrap();
     let rep = Executor::new(None, None)
         .unwrap()
@@ -506,7 +506,7 @@ fn downstream_of_a_failure_is_reported_as_blocked() {
 
 #[test]
 fn a_panicking_node_becomes_an_error() {
-    let mut r = Registry::builtin();
+    let mut r = cgnodes::nodes::builtin_registry();
     r.add(
         "explodes",
         |b| {
@@ -535,7 +535,7 @@ fn writes_outside_the_output_directory_are_refused() {
             "v":{{"type":"value_float","params":{{"value":1}}}},
             "w":{{"type":"table_write","params":{{"path":"{path}"}},"inputs":{{"value":"v.value"}}}}}}}}"#
         ));
-        let v = valid(&g, &Registry::builtin());
+        let v = valid(&g, &cgnodes::nodes::builtin_registry());
         let root = tempfile::tempdir().unwrap();
         let out = root.path().join("out");
         let rep = Executor::new(None, None).unwrap().run(&v, &opts(&out), 0);
@@ -558,7 +558,7 @@ fn set_overrides_reach_the_node_and_are_type_checked() {
     )))
     .unwrap();
     cgnodes::cli::apply_sets(&mut g, &["radius.value=3".into()]).unwrap();
-    let v = valid(&g, &Registry::builtin());
+    let v = valid(&g, &cgnodes::nodes::builtin_registry());
     let out = tempfile::tempdir().unwrap();
     let rep = Executor::new(None, None)
         .unwrap()
@@ -575,7 +575,7 @@ fn set_overrides_reach_the_node_and_are_type_checked() {
     )))
     .unwrap();
     cgnodes::cli::apply_sets(&mut g, &["radius.value=big".into()]).unwrap();
-    let e = validate(&g, &Registry::builtin()).unwrap_err();
+    let e = validate(&g, &cgnodes::nodes::builtin_registry()).unwrap_err();
     assert!(
         e[0].to_string()
             .contains("node 'radius' (value_float): input 'value'"),
@@ -686,7 +686,7 @@ fn the_committed_schema_matches_the_code() {
 /// A registry with `pair`, a node with outputs `a` and `b` that computes only the wanted
 /// ones and records, per run, which it computed.
 fn pair_registry(log: Arc<Mutex<Vec<Vec<&'static str>>>>) -> Registry {
-    let mut r = Registry::builtin();
+    let mut r = cgnodes::nodes::builtin_registry();
     r.add(
         "pair",
         |b| {

@@ -13,7 +13,7 @@ const GRAPH: &str = r#"{"format":"cgnodes-graph","version":1,"nodes":{
   "w":{"type":"table_write","params":{"path":"e.csv"},"inputs":{"value":"err.value"}}}}"#;
 
 fn registry(count: Arc<Mutex<HashMap<String, usize>>>) -> Registry {
-    let mut r = Registry::builtin();
+    let mut r = cgnodes::nodes::builtin_registry();
     r.add(
         "slow_source",
         |b| {
@@ -225,7 +225,13 @@ fn a_sweep_over_frames_counts_metric_failures_only_at_the_last_frame() {
         frames: Some("0..2".into()),
         ..Default::default()
     };
-    let rows = run_and_write(&spec, dir.path(), &Registry::builtin(), Some(1)).unwrap();
+    let rows = run_and_write(
+        &spec,
+        dir.path(),
+        &cgnodes::nodes::builtin_registry(),
+        Some(1),
+    )
+    .unwrap();
     assert_eq!(rows.len(), 2);
     assert!(rows[0].ok, "{}", rows[0].error);
     assert!(rows[0].measures[0].is_finite());

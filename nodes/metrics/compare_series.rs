@@ -6,26 +6,17 @@
 use crate::prelude::*;
 use std::path::Path;
 
-/// Reads two named numeric columns from CSV text with a header row.
+/// Reads two named numeric columns from CSV text with a header row (blank lines and lines
+/// starting with `#` are skipped, fields trimmed).
 pub fn read_csv_columns(text: &str, x: &str, y: &str) -> Result<Vec<(f64, f64)>, String> {
-    let mut lines = text
-        .lines()
-        .filter(|l| !l.trim().is_empty() && !l.starts_with('#'));
-    let head: Vec<&str> = lines
-        .next()
-        .ok_or("empty CSV")?
-        .split(',')
-        .map(str::trim)
-        .collect();
+    let csv = crate::io::csv::read(text, true, true)?.ok_or("empty CSV")?;
     let col = |name: &str| {
-        head.iter()
-            .position(|h| *h == name)
-            .ok_or_else(|| format!("no column '{name}' (columns: {})", head.join(", ")))
+        csv.column(name)
+            .ok_or_else(|| format!("no column '{name}' (columns: {})", csv.header.join(", ")))
     };
     let (ix, iy) = (col(x)?, col(y)?);
     let mut out = Vec::new();
-    for (k, l) in lines.enumerate() {
-        let f: Vec<&str> = l.split(',').map(str::trim).collect();
+    for (k, f) in csv.rows.iter().enumerate() {
         let num = |i: usize| -> Result<f64, String> {
             f.get(i)
                 .and_then(|s| s.parse::<f64>().ok())

@@ -164,44 +164,37 @@ impl NpyArray {
         (0..self.len()).map(|i| conv(self.elem(i))).collect()
     }
 
-    /// An `f64` array of `shape` from C-order values.
-    pub fn from_f64(shape: &[usize], values: &[f64]) -> NpyArray {
-        let mut data = Vec::with_capacity(values.len() * 8);
-        for v in values {
-            data.extend_from_slice(&v.to_le_bytes());
+    /// An array of `shape` and `dtype` from the little-endian bytes of its C-order values.
+    fn pack<const N: usize>(
+        shape: &[usize],
+        dtype: DType,
+        values: impl ExactSizeIterator<Item = [u8; N]>,
+    ) -> NpyArray {
+        let mut data = Vec::with_capacity(values.len() * N);
+        for b in values {
+            data.extend_from_slice(&b);
         }
         NpyArray {
             shape: shape.to_vec(),
-            dtype: DType::F64,
+            dtype,
             data,
         }
     }
 
+    /// An `f64` array of `shape` from C-order values.
+    pub fn from_f64(shape: &[usize], values: &[f64]) -> NpyArray {
+        NpyArray::pack(shape, DType::F64, values.iter().map(|v| v.to_le_bytes()))
+    }
+
     /// An `f32` array of `shape` from C-order values.
     pub fn from_f32(shape: &[usize], values: &[f32]) -> NpyArray {
-        let mut data = Vec::with_capacity(values.len() * 4);
-        for v in values {
-            data.extend_from_slice(&v.to_le_bytes());
-        }
-        NpyArray {
-            shape: shape.to_vec(),
-            dtype: DType::F32,
-            data,
-        }
+        NpyArray::pack(shape, DType::F32, values.iter().map(|v| v.to_le_bytes()))
     }
 
     /// An `int32` array of `shape` from C-order values (mesh indices; NumPy indexes with it
     /// directly).
     pub fn from_i32(shape: &[usize], values: &[i32]) -> NpyArray {
-        let mut data = Vec::with_capacity(values.len() * 4);
-        for v in values {
-            data.extend_from_slice(&v.to_le_bytes());
-        }
-        NpyArray {
-            shape: shape.to_vec(),
-            dtype: DType::I32,
-            data,
-        }
+        NpyArray::pack(shape, DType::I32, values.iter().map(|v| v.to_le_bytes()))
     }
 
     /// The file bytes (format version 1.0, header padded to 64 bytes as NumPy does).

@@ -102,25 +102,17 @@ impl Table {
         self.columns.iter().map(|(_, c)| c.len()).max().unwrap_or(0)
     }
 
-    /// CSV text with a header row.
+    /// CSV text with a header row (RFC 4180 quoting); a shorter column leaves its cells
+    /// empty.
     pub fn to_csv(&self) -> String {
-        let mut s = self
-            .columns
-            .iter()
-            .map(|(n, _)| n.as_str())
-            .collect::<Vec<_>>()
-            .join(",");
-        s.push('\n');
-        for r in 0..self.num_rows() {
-            let row: Vec<String> = self
-                .columns
+        let header: Vec<String> = self.columns.iter().map(|(n, _)| n.clone()).collect();
+        let rows = (0..self.num_rows()).map(|r| {
+            self.columns
                 .iter()
                 .map(|(_, c)| c.get(r).map(|v| format!("{v}")).unwrap_or_default())
-                .collect();
-            s.push_str(&row.join(","));
-            s.push('\n');
-        }
-        s
+                .collect::<Vec<String>>()
+        });
+        crate::io::csv::to_text(std::iter::once(header).chain(rows))
     }
 }
 

@@ -1,4 +1,6 @@
-//! File helpers shared by writer nodes.
+//! File helpers shared by the runtime and the writer nodes: atomic writes, and CSV (`csv`).
+
+pub mod csv;
 
 use std::io::{BufWriter, Write};
 use std::path::Path;

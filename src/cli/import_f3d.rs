@@ -1,0 +1,42 @@
+//! `cgnodes import-f3d`: converts a Framework3D saved node tree into a cgnodes graph file.
+
+use super::EXIT_INVALID;
+use crate::f3d::{import_lenient, Aliases};
+use crate::registry::Registry;
+use std::path::Path;
+
+/// `cgnodes import-f3d INPUT -o OUTPUT [--f3d-aliases FILE]`. Nodes missing from
+/// `registry` (built-in and plugin nodes) are reported but do not stop the conversion.
+pub(super) fn cmd(registry: &Registry, input: &Path, output: &Path, aliases: Option<&Path>) -> i32 {
+    let read_json = |p: &Path| -> Result<serde_json::Value, String> {
+        let t = std::fs::read_to_string(p).map_err(|e| format!("{}: {e}", p.display()))?;
+        serde_json::from_str(&t).map_err(|e| format!("{}: {e}", p.display()))
+    };
+    let result = (|| -> Result<(), String> {
+        let raw = read_json(input)?;
+        let al = match aliases {
+            Some(a) => serde_json::from_value(read_json(a)?)
+                .map_err(|e| format!("{}: {e}", a.display()))?,
+            None => Aliases::default(),
+        };
+        let (g, missing) =
+            import_lenient(&raw, &al, registry).map_err(|e| format!("{}: {e}", input.display()))?;
+        if !missing.is_empty() {
+            eprintln!(
+                "warning: {}: the graph was converted, but it will not run until these exist: {}",
+                input.display(),
+                missing.join(", ")
+            );
+        }
+        let text = serde_json::to_string_pretty(&g).map_err(|e| e.to_string())?;
+        crate::io::write_atomic(output, |w| w.write_all(text.as_bytes()))
+            .map_err(|e| format!("{}: {e}", output.display()))
+    })();
+    match result {
+        Ok(()) => 0,
+        Err(e) => {
+            eprintln!("error: {e}");
+            EXIT_INVALID
+        }
+    }
+}

@@ -1,0 +1,249 @@
+//! The `cgnodes` command line: the clap definitions and the dispatch to one module per
+//! subcommand. `main_with(registry)` lets a crate that adds its own nodes build a complete
+//! `cgnodes` binary in a few lines.
+//!
+//! Exit codes: 0 success; 1 some node failed (the others still ran); 2 bad command line;
+//! 3 the graph could not be loaded or did not validate.
+
+mod chart;
+mod describe;
+mod dot;
+mod import_f3d;
+mod nodes;
+mod run;
+mod schema;
+mod sweep;
+mod validate;
+
+use crate::registry::Registry;
+use clap::{Parser, Subcommand};
+use std::path::PathBuf;
+
+pub use crate::graph::{apply_sets, parse_frames};
+pub use describe::describe;
+pub use run::profile_json;
+pub use validate::{load_valid, load_valid_with, read_aliases};
+
+/// Exit code: a node failed.
+pub const EXIT_NODE_FAILED: i32 = 1;
+/// Exit code: bad command line.
+pub const EXIT_USAGE: i32 = 2;
+/// Exit code: the graph could not be loaded or is invalid.
+pub const EXIT_INVALID: i32 = 3;
+
+#[derive(Parser)]
+#[command(
+    name = "cgnodes",
+    version,
+    about = "Run computer-graphics node graphs from JSON files."
+)]
+struct Cli {
+    #[command(subcommand)]
+    cmd: Cmd,
+    /// A plugin folder, or a folder of plugin folders, whose nodes are added (repeatable;
+    /// also searched: CGNODES_PLUGIN_PATH and ~/.config/cgnodes/plugins).
+    #[arg(long = "plugins", value_name = "DIR", global = true)]
+    plugins: Vec<PathBuf>,
+}
+
+#[derive(Subcommand)]
+enum Cmd {
+    /// Validate and run a graph.
+    Run(RunArgs),
+    /// Check a graph without running it.
+    Validate {
+        /// Graph file.
+        graph: PathBuf,
+        /// Set an input literal: NODE.SOCKET=VALUE (repeatable).
+        #[arg(long = "set", value_name = "NODE.SOCKET=VALUE")]
+        set: Vec<String>,
+    },
+    /// List every node type with its sockets.
+    Nodes {
+        /// Print the declarations as JSON.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Show one node type.
+    Describe {
+        /// Node type.
+        node_type: String,
+    },
+    /// Print the JSON Schema of the graph format.
+    Schema,
+    /// Print a graph as Graphviz dot.
+    Dot {
+        /// Graph file.
+        graph: PathBuf,
+    },
+    /// Run a graph for every combination of parameter values; write a CSV and a chart.
+    Sweep(SweepArgs),
+    /// Chart columns of one or more CSV files (for example a sweep beside a peer's results).
+    Chart(ChartArgs),
+    /// Convert a Framework3D saved node tree to a cgnodes graph.
+    ImportF3d {
+        /// Framework3D JSON file.
+        input: PathBuf,
+        /// Output graph file.
+        #[arg(short = 'o', long = "output")]
+        output: PathBuf,
+        /// JSON file mapping custom Framework3D node names onto cgnodes nodes.
+        #[arg(long = "f3d-aliases")]
+        aliases: Option<PathBuf>,
+    },
+}
+
+#[derive(clap::Args)]
+struct ChartArgs {
+    /// CSV files with a header row.
+    #[arg(required = true)]
+    csv: Vec<PathBuf>,
+    /// Column for the x axis.
+    #[arg(long)]
+    x: String,
+    /// Column for the y axis.
+    #[arg(long)]
+    y: String,
+    /// Column whose values name the series (default: one series per file, named after it).
+    #[arg(long)]
+    series: Option<String>,
+    /// Chart to write (.svg or .png).
+    #[arg(long)]
+    plot: PathBuf,
+    /// Chart title.
+    #[arg(long, default_value = "")]
+    title: String,
+    /// Logarithmic x axis.
+    #[arg(long)]
+    log_x: bool,
+    /// Logarithmic y axis.
+    #[arg(long)]
+    log_y: bool,
+}
+
+#[derive(clap::Args)]
+struct SweepArgs {
+    /// A graph file, or a sweep file (JSON with a "graph" field; see docs/sweep.md).
+    target: PathBuf,
+    /// Values to try: NODE.PARAM=v1,v2,... (repeatable; every combination runs).
+    #[arg(long = "vary", value_name = "NODE.PARAM=V1,V2,...")]
+    vary: Vec<String>,
+    /// Fixed override for every run: NODE.SOCKET=VALUE (repeatable).
+    #[arg(long = "set", value_name = "NODE.SOCKET=VALUE")]
+    set: Vec<String>,
+    /// Runs per combination.
+    #[arg(long)]
+    repeat: Option<usize>,
+    /// Output to record: NODE.SOCKET, or NODE.SOCKET:COLUMN[:last|mean|max|min|sum] for a table.
+    #[arg(long = "measure", value_name = "NODE.SOCKET[:COLUMN[:SUMMARY]]")]
+    measure: Vec<String>,
+    /// CSV file to write.
+    #[arg(long)]
+    csv: Option<PathBuf>,
+    /// Chart to write (.svg or .png).
+    #[arg(long)]
+    plot: Option<PathBuf>,
+    /// X axis: time, time:NODE, a measure or a varied parameter.
+    #[arg(long)]
+    x: Option<String>,
+    /// Y axis: a measure (default: the first).
+    #[arg(long)]
+    y: Option<String>,
+    /// Varied parameter whose values name the series.
+    #[arg(long)]
+    series: Option<String>,
+    /// Logarithmic x axis.
+    #[arg(long)]
+    log_x: bool,
+    /// Logarithmic y axis.
+    #[arg(long)]
+    log_y: bool,
+    /// Chart title.
+    #[arg(long)]
+    title: Option<String>,
+    /// Frame range A..B per run.
+    #[arg(long)]
+    frames: Option<String>,
+    /// Output directory for the graph's writers (default: a temporary folder).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Worker threads.
+    #[arg(long)]
+    threads: Option<usize>,
+}
+
+#[derive(clap::Args)]
+struct RunArgs {
+    /// Graph file (cgnodes JSON or a Framework3D saved node tree).
+    graph: PathBuf,
+    /// Output directory; writer nodes write under it.
+    #[arg(long, default_value = "out")]
+    out: PathBuf,
+    /// Set an input literal: NODE.SOCKET=VALUE (repeatable).
+    #[arg(long = "set", value_name = "NODE.SOCKET=VALUE")]
+    set: Vec<String>,
+    /// Evaluate these nodes instead of the graph's outputs (repeatable).
+    #[arg(long = "target", value_name = "NODE")]
+    target: Vec<String>,
+    /// Frame range A..B (inclusive); the graph runs once per frame.
+    #[arg(long)]
+    frames: Option<String>,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Content-addressed result cache folder.
+    #[arg(long)]
+    cache: Option<PathBuf>,
+    /// Further folders searched for input files.
+    #[arg(long = "assets")]
+    assets: Vec<PathBuf>,
+    /// Let writers use absolute paths and '..'.
+    #[arg(long)]
+    allow_write_anywhere: bool,
+    /// Print per-node wall time, cache hits and memory.
+    #[arg(long)]
+    profile: bool,
+    /// Write the profile as JSON.
+    #[arg(long = "profile-json")]
+    profile_json: Option<PathBuf>,
+    /// Print only errors.
+    #[arg(long, short)]
+    quiet: bool,
+    /// JSON file mapping custom Framework3D node names onto cgnodes nodes.
+    #[arg(long = "f3d-aliases")]
+    f3d_aliases: Option<PathBuf>,
+}
+
+/// Runs the command line with `registry` (`nodes::builtin_registry()` plus anything a crate
+/// adds). Returns the process exit code.
+pub fn main_with(registry: Registry) -> i32 {
+    let cli = match Cli::try_parse() {
+        Ok(c) => c,
+        Err(e) => {
+            let _ = e.print();
+            return if e.use_stderr() { EXIT_USAGE } else { 0 };
+        }
+    };
+    let registry = match crate::plugin::cli_registry(registry, &cli.plugins) {
+        Ok(r) => r,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return EXIT_USAGE;
+        }
+    };
+    match cli.cmd {
+        Cmd::Run(args) => run::cmd(&registry, args),
+        Cmd::Validate { graph, set } => validate::cmd(&registry, &graph, &set),
+        Cmd::Nodes { json } => nodes::cmd(&registry, json),
+        Cmd::Describe { node_type } => describe::cmd(&registry, &node_type),
+        Cmd::Schema => schema::cmd(),
+        Cmd::Dot { graph } => dot::cmd(&registry, &graph),
+        Cmd::Sweep(args) => sweep::cmd(&registry, args),
+        Cmd::Chart(args) => chart::cmd(&args),
+        Cmd::ImportF3d {
+            input,
+            output,
+            aliases,
+        } => import_f3d::cmd(&registry, &input, &output, aliases.as_deref()),
+    }
+}

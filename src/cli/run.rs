@@ -1,0 +1,205 @@
+//! `cgnodes run`: validates a graph and runs it over a frame range, with progress bars,
+//! a run report per frame, and an optional profile (`--profile`, `--profile-json`).
+
+use super::validate::{load_valid_with, read_aliases};
+use super::{RunArgs, EXIT_NODE_FAILED, EXIT_USAGE};
+use crate::exec::{Executor, NodeStatus, RunOptions, RunReport};
+use crate::graph::{self, parse_frames};
+use crate::node::{FileEnv, ProgressFn};
+use crate::registry::Registry;
+use std::io::IsTerminal;
+use std::sync::Arc;
+
+/// `cgnodes run GRAPH ...`: runs the graph once per frame; exit code 1 when a node failed.
+pub(super) fn cmd(registry: &Registry, args: RunArgs) -> i32 {
+    let aliases = match args.f3d_aliases.as_deref().map(read_aliases).transpose() {
+        Ok(a) => a.unwrap_or_default(),
+        Err(e) => {
+            eprintln!("error: {e}");
+            return EXIT_USAGE;
+        }
+    };
+    let graph = match load_valid_with(registry, &args.graph, &args.set, &aliases, &args.assets) {
+        Ok(g) => g,
+        Err(c) => return c,
+    };
+    for t in &args.target {
+        if !graph.index.contains_key(t) {
+            eprintln!(
+                "error: --target '{t}' is not a node of {}",
+                args.graph.display()
+            );
+            return EXIT_USAGE;
+        }
+    }
+    let hint = graph::load_with(&args.graph, &aliases, registry)
+        .ok()
+        .and_then(|g| g.spec.frames_hint());
+    let (f0, f1) = match args.frames.as_deref().map(parse_frames).transpose() {
+        Ok(r) => r.or(hint).unwrap_or((0, 0)),
+        Err(e) => {
+            eprintln!("error: {e}");
+            return EXIT_USAGE;
+        }
+    };
+    let exec = match Executor::new(args.threads, args.cache.as_deref()) {
+        Ok(e) => e,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return EXIT_USAGE;
+        }
+    };
+    let show_progress =
+        !args.quiet && std::io::stderr().is_terminal() && std::env::var_os("CI").is_none();
+    let bars = show_progress.then(indicatif::MultiProgress::new);
+    let progress: Option<ProgressFn> = bars.as_ref().map(|mp| {
+        let mp = mp.clone();
+        let map: Arc<std::sync::Mutex<std::collections::HashMap<String, indicatif::ProgressBar>>> =
+            Arc::default();
+        Arc::new(move |node: &str, f: f64| {
+            let mut m = map.lock().unwrap_or_else(|p| p.into_inner());
+            let bar = m.entry(node.to_string()).or_insert_with(|| {
+                let b = mp.add(indicatif::ProgressBar::new(1000));
+                if let Ok(st) = indicatif::ProgressStyle::with_template(
+                    "{prefix:>16} {bar:30} {percent:>3}% {elapsed}",
+                ) {
+                    b.set_style(st);
+                }
+                b.set_prefix(node.to_string());
+                b
+            });
+            bar.set_position((f * 1000.0) as u64);
+            if f >= 1.0 {
+                bar.finish_and_clear();
+            }
+        }) as ProgressFn
+    });
+    let opts = RunOptions {
+        targets: (!args.target.is_empty()).then(|| args.target.clone()),
+        files: FileEnv {
+            graph_dir: graph.dir.clone(),
+            asset_dirs: args.assets.clone(),
+            out_dir: args.out.clone(),
+            allow_write_anywhere: args.allow_write_anywhere,
+        },
+        progress,
+        measure_memory: args.profile || args.profile_json.is_some(),
+        recompute: Vec::new(),
+        // The command line reads no outputs after the run: writers are the targets.
+        read_outputs: Vec::new(),
+        all_outputs: false,
+    };
+    let mut code = 0;
+    let mut profile = Vec::new();
+    for frame in f0..=f1 {
+        let report = exec.run(&graph, &opts, frame);
+        if !args.quiet {
+            print_report(&report, f1 > f0);
+        }
+        for e in report.errors() {
+            eprintln!("error: {e}");
+        }
+        if args.profile {
+            print_profile(&report);
+        }
+        if !report.ok() {
+            code = EXIT_NODE_FAILED;
+        }
+        profile.push(profile_json(&report));
+    }
+    if let Some(p) = &args.profile_json {
+        let text = serde_json::to_string_pretty(&profile).unwrap_or_default();
+        if let Err(e) = crate::io::write_atomic(p, |w| w.write_all(text.as_bytes())) {
+            eprintln!("error: {}: {e}", p.display());
+            code = code.max(EXIT_NODE_FAILED);
+        }
+    }
+    code
+}
+
+fn print_report(r: &RunReport, frames: bool) {
+    let prefix = if frames {
+        format!("[frame {}] ", r.frame)
+    } else {
+        String::new()
+    };
+    for n in &r.nodes {
+        for l in &n.logs {
+            eprintln!("{prefix}{}: {l}", n.id);
+        }
+        for w in &n.written {
+            if matches!(n.status, NodeStatus::Ran) {
+                eprintln!("{prefix}wrote {}", w.display());
+            }
+        }
+    }
+    let count = |f: fn(&NodeStatus) -> bool| r.nodes.iter().filter(|n| f(&n.status)).count();
+    let skipped: Vec<&str> = r
+        .nodes
+        .iter()
+        .filter(|n| matches!(n.status, NodeStatus::Skipped))
+        .map(|n| n.id.as_str())
+        .collect();
+    eprintln!(
+        "{prefix}ran {}, cached {}, failed {}, blocked {}, skipped {}{} in {:.1} ms",
+        count(|s| matches!(s, NodeStatus::Ran)),
+        count(|s| matches!(s, NodeStatus::Cached)),
+        count(|s| matches!(s, NodeStatus::Failed(_))),
+        count(|s| matches!(s, NodeStatus::Blocked { .. })),
+        skipped.len(),
+        if skipped.is_empty() || skipped.len() > 10 {
+            String::new()
+        } else {
+            format!(" ({})", skipped.join(", "))
+        },
+        r.total_ms
+    );
+}
+
+fn print_profile(r: &RunReport) {
+    eprintln!(
+        "{:<20} {:<20} {:>10} {:>8} {:>10}",
+        "node", "type", "ms", "status", "rss MiB"
+    );
+    for n in &r.nodes {
+        let st = match &n.status {
+            NodeStatus::Ran => "ran",
+            NodeStatus::Cached => "cached",
+            NodeStatus::Skipped => continue,
+            NodeStatus::Failed(_) => "failed",
+            NodeStatus::Blocked { .. } => "blocked",
+        };
+        eprintln!(
+            "{:<20} {:<20} {:>10.2} {:>8} {:>10.1}",
+            n.id,
+            n.node_type,
+            n.ms,
+            st,
+            n.rss_kib as f64 / 1024.0
+        );
+    }
+    eprintln!(
+        "total {:.2} ms, peak memory {:.1} MiB",
+        r.total_ms,
+        r.peak_rss_kib as f64 / 1024.0
+    );
+}
+
+/// The profile of a run as JSON: per-node wall time, status and memory.
+pub fn profile_json(r: &RunReport) -> serde_json::Value {
+    let nodes: Vec<_> = r
+        .nodes
+        .iter()
+        .map(|n| {
+            let st = match &n.status {
+                NodeStatus::Ran => "ran",
+                NodeStatus::Cached => "cached",
+                NodeStatus::Skipped => "skipped",
+                NodeStatus::Failed(_) => "failed",
+                NodeStatus::Blocked { .. } => "blocked",
+            };
+            serde_json::json!({"id": n.id, "type": n.node_type, "status": st, "ms": n.ms, "rss_kib": n.rss_kib})
+        })
+        .collect();
+    serde_json::json!({"frame": r.frame, "total_ms": r.total_ms, "peak_rss_kib": r.peak_rss_kib, "nodes": nodes})
+}

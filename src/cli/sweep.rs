@@ -1,0 +1,84 @@
+//! `cgnodes sweep`: reads a sweep file or a graph, applies the command line's options, runs
+//! the sweep and writes its CSV and chart (the CSV goes to stdout when no file is named).
+
+use super::{SweepArgs, EXIT_INVALID, EXIT_USAGE};
+use crate::registry::Registry;
+use crate::sweep::{parse_vary, run_and_write, to_csv, SweepSpec};
+use std::path::{Path, PathBuf};
+
+/// `cgnodes sweep TARGET ...`: the command line's options override the sweep file's.
+pub(super) fn cmd(registry: &Registry, a: SweepArgs) -> i32 {
+    let raw: Option<serde_json::Value> = std::fs::read_to_string(&a.target)
+        .ok()
+        .and_then(|t| serde_json::from_str(&t).ok());
+    let is_sweep_file = raw
+        .as_ref()
+        .is_some_and(|r| r.get("graph").is_some() && r.get("nodes").is_none());
+    let (mut spec, base) = if is_sweep_file {
+        match serde_json::from_value::<SweepSpec>(raw.unwrap_or_default()) {
+            Ok(s) => (
+                s,
+                a.target.parent().map(Path::to_path_buf).unwrap_or_default(),
+            ),
+            Err(e) => {
+                eprintln!("error: {}: {e}", a.target.display());
+                return EXIT_INVALID;
+            }
+        }
+    } else {
+        (
+            SweepSpec {
+                graph: a.target.clone(),
+                repeat: 1,
+                ..Default::default()
+            },
+            PathBuf::from("."),
+        )
+    };
+    for v in &a.vary {
+        match parse_vary(v) {
+            Ok(v) => spec.vary.push(v),
+            Err(e) => {
+                eprintln!("error: {e}");
+                return EXIT_USAGE;
+            }
+        }
+    }
+    spec.set.extend(a.set);
+    spec.measure.extend(a.measure);
+    if let Some(r) = a.repeat {
+        spec.repeat = r;
+    }
+    // Paths given on the command line are relative to the current folder.
+    let here = |p: PathBuf| {
+        if is_sweep_file && p.is_relative() {
+            std::env::current_dir().unwrap_or_default().join(p)
+        } else {
+            p
+        }
+    };
+    spec.csv = a.csv.map(here).or(spec.csv);
+    spec.plot = a.plot.map(here).or(spec.plot);
+    spec.out = a.out.map(here).or(spec.out);
+    spec.x = a.x.or(spec.x);
+    spec.y = a.y.or(spec.y);
+    spec.series = a.series.or(spec.series);
+    spec.title = a.title.or(spec.title);
+    spec.frames = a.frames.or(spec.frames);
+    spec.log_x |= a.log_x;
+    spec.log_y |= a.log_y;
+    match run_and_write(&spec, &base, registry, a.threads) {
+        Ok(rows) => {
+            let failed = rows.iter().filter(|r| !r.ok).count();
+            eprintln!("{} runs, {} failed", rows.len(), failed);
+            if spec.csv.is_none() {
+                print!("{}", to_csv(&spec, &rows));
+            }
+            0
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            EXIT_INVALID
+        }
+    }
+}

@@ -1,0 +1,68 @@
+//! `cgnodes validate`, and the loading every graph command shares: read the graph (a
+//! Framework3D tree is imported against the registry), apply `--set`, validate, and print
+//! every error with the exit code to return.
+
+use super::{EXIT_INVALID, EXIT_USAGE};
+use crate::f3d::Aliases;
+use crate::graph::{self, apply_sets};
+use crate::registry::Registry;
+use crate::validate::{validate_with, GraphError, ValidGraph};
+use std::path::{Path, PathBuf};
+
+/// `cgnodes validate GRAPH [--set ...]`.
+pub(super) fn cmd(registry: &Registry, graph: &Path, set: &[String]) -> i32 {
+    match load_valid(registry, graph, set) {
+        Ok(g) => {
+            println!("{}: ok ({} nodes)", graph.display(), g.nodes.len());
+            0
+        }
+        Err(code) => code,
+    }
+}
+
+/// Loads, applies overrides and validates, printing errors; `Err` is the exit code.
+pub fn load_valid(registry: &Registry, path: &Path, sets: &[String]) -> Result<ValidGraph, i32> {
+    load_valid_with(registry, path, sets, &Aliases::default(), &[])
+}
+
+/// Reads Framework3D aliases (`--f3d-aliases FILE`).
+pub fn read_aliases(p: &Path) -> Result<Aliases, String> {
+    let t = std::fs::read_to_string(p).map_err(|e| format!("{}: {e}", p.display()))?;
+    serde_json::from_str(&t).map_err(|e| format!("{}: {e}", p.display()))
+}
+
+/// Like `load_valid`, with aliases for custom Framework3D node names.
+pub fn load_valid_with(
+    registry: &Registry,
+    path: &Path,
+    sets: &[String],
+    aliases: &Aliases,
+    assets: &[PathBuf],
+) -> Result<ValidGraph, i32> {
+    let mut g = match graph::load_with(path, aliases, registry) {
+        Ok(g) => g,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return Err(EXIT_INVALID);
+        }
+    };
+    if let Err(e) = apply_sets(&mut g, sets) {
+        eprintln!("error: {e}");
+        return Err(EXIT_USAGE);
+    }
+    validate_with(&g, registry, assets).map_err(|errs| {
+        print_graph_errors(&errs);
+        EXIT_INVALID
+    })
+}
+
+fn print_graph_errors(errs: &[GraphError]) {
+    for e in errs {
+        eprintln!("error: {e}");
+    }
+    eprintln!(
+        "{} error{} found; nothing was run",
+        errs.len(),
+        if errs.len() == 1 { "" } else { "s" }
+    );
+}

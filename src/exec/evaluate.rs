@@ -1,0 +1,238 @@
+//! Running one node: blocks it when an upstream node failed, serves it from the caches when
+//! its key is unchanged, else gathers its inputs, runs it (catching panics), checks its
+//! outputs against the declaration and stores the result.
+
+use super::{Executor, NodeReport, NodeStatus, Shared};
+use crate::cache::{Entry, Key};
+use crate::node::{ErrorKind, ExecContext, NodeError};
+use crate::types::{SocketType, Value};
+use crate::validate::InputSource;
+use std::collections::BTreeMap;
+use std::sync::Arc;
+
+impl Executor {
+    /// Gathers inputs, consults the caches, runs the node and checks its outputs.
+    pub(super) fn evaluate(
+        &self,
+        sh: &Shared,
+        i: usize,
+        report: &mut NodeReport,
+    ) -> Result<Arc<BTreeMap<String, Value>>, String> {
+        let node = &sh.graph.nodes[i];
+        let decl = &node.decl;
+        // Upstream failures block this node.
+        for &d in &node.deps {
+            if let Some(Err(failed)) = sh.slots[d]
+                .lock()
+                .unwrap_or_else(|p| p.into_inner())
+                .as_ref()
+            {
+                report.status = NodeStatus::Blocked { by: failed.clone() };
+                return Err(failed.clone());
+            }
+        }
+        let key = sh.keys[i];
+        let wanted = sh.wanted[i].as_ref();
+        // A cached entry that skipped an output wanted now is kept, to merge with the rerun.
+        let mut older = None;
+        if !decl.stateful && !sh.fresh[i] {
+            if let Some(e) = self.lookup(&key) {
+                if e.serves(wanted) {
+                    report.status = NodeStatus::Cached;
+                    report.written = e.written.clone();
+                    return Ok(e.outputs);
+                }
+                older = Some(e);
+            }
+        }
+        let fail = |report: &mut NodeReport, e: NodeError| {
+            report.status = NodeStatus::Failed(e);
+            Err(node.id.clone())
+        };
+        // Inputs.
+        let mut inputs = BTreeMap::new();
+        for (name, src) in &node.inputs {
+            let Some(sdecl) = decl.input(name) else {
+                continue;
+            };
+            let v = match src {
+                InputSource::Literal(v) | InputSource::Default(v) => v.clone(),
+                InputSource::Unset => continue,
+                InputSource::Links(links) => {
+                    let mut vals = Vec::new();
+                    for (j, out) in links {
+                        let slot = sh.slots[*j].lock().unwrap_or_else(|p| p.into_inner());
+                        let v = slot
+                            .as_ref()
+                            .and_then(|r| r.as_ref().ok())
+                            .and_then(|o| o.get(out))
+                            .cloned();
+                        match v {
+                            Some(v) => vals.push(v),
+                            None => {
+                                let e = NodeError::new(
+                                    ErrorKind::Internal,
+                                    format!(
+                                        "'{}' produced no output '{out}'",
+                                        sh.graph.nodes[*j].id
+                                    ),
+                                )
+                                .at(name);
+                                return fail(report, e);
+                            }
+                        }
+                    }
+                    if let SocketType::List(_) = sdecl.ty {
+                        let mut flat = Vec::new();
+                        for v in vals {
+                            match v {
+                                Value::List(items) => flat.extend(items.iter().cloned()),
+                                other => flat.push(other),
+                            }
+                        }
+                        Value::List(Arc::new(flat))
+                    } else {
+                        vals.pop().unwrap_or(Value::Bool(false))
+                    }
+                }
+            };
+            match v.convert_to(&sdecl.ty) {
+                Some(v) => {
+                    inputs.insert(name.clone(), v);
+                }
+                None => {
+                    let e = NodeError::invalid(
+                        name,
+                        format!("cannot convert {} to {}", v.socket_type(), sdecl.ty),
+                    );
+                    return fail(report, e);
+                }
+            }
+        }
+        // State (taken out while the node runs, put back after).
+        let mut state = if decl.stateful {
+            self.states
+                .lock()
+                .unwrap_or_else(|p| p.into_inner())
+                .remove(&node.id)
+        } else {
+            None
+        };
+        let Some(exec) = decl.exec.clone() else {
+            return fail(
+                report,
+                NodeError::new(ErrorKind::Internal, "node has no implementation"),
+            );
+        };
+        let mut ctx = ExecContext {
+            node_id: &node.id,
+            decl,
+            inputs,
+            outputs: BTreeMap::new(),
+            frame: sh.frame,
+            state: &mut state,
+            files: &sh.opts.files,
+            logs: Vec::new(),
+            written: Vec::new(),
+            progress: sh.opts.progress.clone(),
+            wanted: wanted.cloned(),
+        };
+        let res = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| exec(&mut ctx)));
+        let outputs = std::mem::take(&mut ctx.outputs);
+        report.logs = std::mem::take(&mut ctx.logs);
+        report.written = std::mem::take(&mut ctx.written);
+        drop(ctx);
+        if decl.stateful {
+            if let Some(s) = state {
+                self.states
+                    .lock()
+                    .unwrap_or_else(|p| p.into_inner())
+                    .insert(node.id.clone(), s);
+            }
+        }
+        match res {
+            Ok(Ok(())) => {}
+            Ok(Err(e)) => return fail(report, e),
+            Err(panic) => {
+                let msg = panic
+                    .downcast_ref::<String>()
+                    .cloned()
+                    .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
+                    .unwrap_or_default();
+                return fail(
+                    report,
+                    NodeError::new(ErrorKind::Internal, format!("the node panicked: {msg}")),
+                );
+            }
+        }
+        let is_wanted = |name: &str| wanted.is_none_or(|w| w.contains(name));
+        let mut skipped = Vec::new();
+        for o in &decl.outputs {
+            match outputs.get(&o.name) {
+                None if !is_wanted(&o.name) => skipped.push(o.name.clone()),
+                None if o.optional => {}
+                None => {
+                    return fail(
+                        report,
+                        NodeError::new(
+                            ErrorKind::Internal,
+                            format!("produced no output '{}'", o.name),
+                        ),
+                    )
+                }
+                Some(v)
+                    if !o.ty.accepts(&v.socket_type())
+                        && !matches!(v, Value::List(l) if l.is_empty()) =>
+                {
+                    let e = NodeError::new(
+                        ErrorKind::Internal,
+                        format!(
+                            "output '{}' should be {} but is {}",
+                            o.name,
+                            o.ty,
+                            v.socket_type()
+                        ),
+                    );
+                    return fail(report, e);
+                }
+                _ => {}
+            }
+        }
+        let mut e = Entry {
+            outputs: Arc::new(outputs),
+            written: report.written.clone(),
+            skipped,
+        };
+        if let Some(older) = &older {
+            e = e.merged_with(older);
+        }
+        let outputs = e.outputs.clone();
+        if !decl.stateful {
+            if let Some(d) = &self.disk {
+                d.put(&key, &e);
+            }
+            self.memory
+                .lock()
+                .unwrap_or_else(|p| p.into_inner())
+                .put(key, e);
+        }
+        Ok(outputs)
+    }
+
+    fn lookup(&self, key: &Key) -> Option<Entry> {
+        let hit = self
+            .memory
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .get(key);
+        let hit = hit.or_else(|| {
+            let e = self.disk.as_ref()?.get(key)?;
+            self.memory
+                .lock()
+                .unwrap_or_else(|p| p.into_inner())
+                .put(*key, e.clone());
+            Some(e)
+        });
+        hit.filter(|e| e.files_present())
+    }
+}

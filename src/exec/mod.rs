@@ -1,0 +1,208 @@
+//! The scheduler: runs the nodes that the requested outputs need, in parallel where branches
+//! are independent, serving unchanged nodes from the caches and keeping simulation state
+//! between frames.
+
+mod evaluate;
+mod plan;
+mod report;
+
+pub use plan::cache_keys;
+pub use report::{NodeReport, NodeStatus, RunReport};
+
+use crate::cache::{DiskCache, Key, MemoryCache};
+use crate::node::{FileEnv, ProgressFn};
+use crate::types::Value;
+use crate::validate::ValidGraph;
+use report::read_status_kib;
+use std::any::Any;
+use std::collections::{BTreeMap, BTreeSet, HashMap};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::Instant;
+
+/// How a run is done.
+#[derive(Clone, Default)]
+pub struct RunOptions {
+    /// Node ids to evaluate instead of the graph's `outputs` (`--target`).
+    pub targets: Option<Vec<String>>,
+    /// Where files are read and written.
+    pub files: FileEnv,
+    /// Progress callback for long nodes.
+    pub progress: Option<ProgressFn>,
+    /// Record resident memory after each node (for `--profile`; costs a /proc read per node).
+    pub measure_memory: bool,
+    /// Node ids that must run even when cached, with everything downstream of them
+    /// (`cgnodes sweep --repeat` times real executions this way).
+    pub recompute: Vec<String>,
+    /// Outputs the caller reads from the report after the run, as `NODE.SOCKET` (or `NODE`
+    /// for all of a node's outputs). Their nodes run as if they were targets, and these
+    /// outputs are computed even when nothing in the graph reads them: nodes may skip the
+    /// outputs no one wants (`ExecContext::output_wanted`).
+    pub read_outputs: Vec<String>,
+    /// Every node that runs computes all its outputs, wanted or not.
+    pub all_outputs: bool,
+}
+
+/// Runs graphs. Holds the caches, the simulation state of stateful nodes (by node id) and the
+/// thread pool, so repeated runs (frames, sweeps) reuse what did not change.
+pub struct Executor {
+    pool: rayon::ThreadPool,
+    memory: Mutex<MemoryCache>,
+    disk: Option<DiskCache>,
+    states: Mutex<HashMap<String, Box<dyn Any + Send>>>,
+}
+
+type Slot = Mutex<Option<Result<Arc<BTreeMap<String, Value>>, String>>>;
+
+impl Executor {
+    /// An executor with `threads` worker threads (all cores when `None`) and an optional
+    /// disk cache.
+    pub fn new(
+        threads: Option<usize>,
+        cache_dir: Option<&std::path::Path>,
+    ) -> Result<Executor, String> {
+        let mut b = rayon::ThreadPoolBuilder::new();
+        if let Some(n) = threads {
+            b = b.num_threads(n.max(1));
+        }
+        let pool = b
+            .build()
+            .map_err(|e| format!("cannot start threads: {e}"))?;
+        let disk = match cache_dir {
+            Some(d) => {
+                Some(DiskCache::open(d).map_err(|e| format!("cache folder {}: {e}", d.display()))?)
+            }
+            None => None,
+        };
+        Ok(Executor {
+            pool,
+            memory: Mutex::new(MemoryCache::default()),
+            disk,
+            states: Mutex::new(HashMap::new()),
+        })
+    }
+
+    /// Drops the state of every stateful node (simulations restart).
+    pub fn reset_states(&self) {
+        self.states
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .clear();
+    }
+
+    /// Runs `graph` for one frame.
+    pub fn run(&self, graph: &ValidGraph, opts: &RunOptions, frame: i64) -> RunReport {
+        let start = Instant::now();
+        self.memory
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .next_generation();
+        let n = graph.nodes.len();
+        let (need, wanted) = plan::wanted_outputs(graph, opts);
+        let keys = plan::cache_keys(graph, &need, &opts.files, frame);
+        let mut fresh = vec![false; n];
+        for (i, node) in graph.nodes.iter().enumerate() {
+            fresh[i] = opts.recompute.contains(&node.id) || node.deps.iter().any(|&d| fresh[d]);
+        }
+        let slots: Vec<Slot> = (0..n).map(|_| Mutex::new(None)).collect();
+        let reports: Vec<Mutex<Option<NodeReport>>> = (0..n).map(|_| Mutex::new(None)).collect();
+        // Dependents and pending counts over the needed subgraph.
+        let mut dependents: Vec<Vec<usize>> = vec![Vec::new(); n];
+        let pending: Vec<AtomicUsize> = (0..n).map(|_| AtomicUsize::new(0)).collect();
+        for (i, node) in graph.nodes.iter().enumerate() {
+            if !need[i] {
+                continue;
+            }
+            pending[i].store(node.deps.len(), Ordering::Relaxed);
+            for &d in &node.deps {
+                dependents[d].push(i);
+            }
+        }
+        let shared = Shared {
+            graph,
+            opts,
+            frame,
+            keys: &keys,
+            fresh: &fresh,
+            wanted: &wanted,
+            slots: &slots,
+            reports: &reports,
+            dependents: &dependents,
+            pending: &pending,
+        };
+        self.pool.install(|| {
+            rayon::scope(|s| {
+                for (i, node) in graph.nodes.iter().enumerate() {
+                    if need[i] && node.deps.is_empty() {
+                        let sh = &shared;
+                        s.spawn(move |s| self.run_node(s, sh, i));
+                    }
+                }
+            })
+        });
+        let mut nodes = Vec::with_capacity(n);
+        let mut outputs = HashMap::new();
+        for (i, node) in graph.nodes.iter().enumerate() {
+            let r = reports[i].lock().unwrap_or_else(|p| p.into_inner()).take();
+            nodes.push(r.unwrap_or_else(|| NodeReport {
+                id: node.id.clone(),
+                node_type: node.decl.type_name.clone(),
+                status: NodeStatus::Skipped,
+                ms: 0.0,
+                rss_kib: 0,
+                logs: Vec::new(),
+                written: Vec::new(),
+            }));
+            if let Some(Ok(o)) = slots[i].lock().unwrap_or_else(|p| p.into_inner()).take() {
+                outputs.insert(node.id.clone(), o);
+            }
+        }
+        RunReport {
+            file: graph.file.clone(),
+            frame,
+            nodes,
+            outputs,
+            total_ms: start.elapsed().as_secs_f64() * 1e3,
+            peak_rss_kib: read_status_kib("VmHWM:"),
+        }
+    }
+
+    fn run_node<'s>(&'s self, scope: &rayon::Scope<'s>, sh: &'s Shared<'s>, i: usize) {
+        let node = &sh.graph.nodes[i];
+        let t0 = Instant::now();
+        let mut report = NodeReport {
+            id: node.id.clone(),
+            node_type: node.decl.type_name.clone(),
+            status: NodeStatus::Ran,
+            ms: 0.0,
+            rss_kib: 0,
+            logs: Vec::new(),
+            written: Vec::new(),
+        };
+        let result = self.evaluate(sh, i, &mut report);
+        report.ms = t0.elapsed().as_secs_f64() * 1e3;
+        if sh.opts.measure_memory {
+            report.rss_kib = read_status_kib("VmRSS:");
+        }
+        *sh.slots[i].lock().unwrap_or_else(|p| p.into_inner()) = Some(result);
+        *sh.reports[i].lock().unwrap_or_else(|p| p.into_inner()) = Some(report);
+        for &d in &sh.dependents[i] {
+            if sh.pending[d].fetch_sub(1, Ordering::AcqRel) == 1 {
+                scope.spawn(move |s| self.run_node(s, sh, d));
+            }
+        }
+    }
+}
+
+struct Shared<'a> {
+    graph: &'a ValidGraph,
+    opts: &'a RunOptions,
+    frame: i64,
+    keys: &'a [Key],
+    fresh: &'a [bool],
+    wanted: &'a [Option<BTreeSet<String>>],
+    slots: &'a [Slot],
+    reports: &'a [Mutex<Option<NodeReport>>],
+    dependents: &'a [Vec<usize>],
+    pending: &'a [AtomicUsize],
+}

@@ -1,0 +1,130 @@
+//! Planning a run: which nodes the requested outputs need, which outputs each must produce,
+//! and every needed node's cache key (type, literals, input file stamps, upstream keys,
+//! frame for time-dependent nodes, output folder for writers).
+
+use super::RunOptions;
+use crate::cache::Key;
+use crate::node::{FileEnv, FileRole};
+use crate::types::Value;
+use crate::validate::{InputSource, ValidGraph};
+use std::collections::BTreeSet;
+
+/// The nodes a run needs and the outputs each must produce: `None` = all of them (targets,
+/// and outputs the caller reads whole); else the sockets linked by needed nodes or read by
+/// name.
+pub(super) fn wanted_outputs(
+    graph: &ValidGraph,
+    opts: &RunOptions,
+) -> (Vec<bool>, Vec<Option<BTreeSet<String>>>) {
+    let targets: Vec<usize> = match &opts.targets {
+        Some(t) => t
+            .iter()
+            .filter_map(|id| graph.index.get(id).copied())
+            .collect(),
+        None => graph.targets.clone(),
+    };
+    let n = graph.nodes.len();
+    let mut wanted: Vec<Option<BTreeSet<String>>> = vec![Some(BTreeSet::new()); n];
+    let mut roots = targets.clone();
+    for &t in &targets {
+        wanted[t] = None;
+    }
+    for r in &opts.read_outputs {
+        let (id, socket) = match r.split_once('.') {
+            Some((id, socket)) => (id, Some(socket)),
+            None => (r.as_str(), None),
+        };
+        let Some(&i) = graph.index.get(id) else {
+            continue;
+        };
+        roots.push(i);
+        match (socket, &mut wanted[i]) {
+            (None, w) => *w = None,
+            (Some(sock), Some(w)) => {
+                w.insert(sock.to_string());
+            }
+            (Some(_), None) => {}
+        }
+    }
+    let need = graph.needed(&roots);
+    for (j, node) in graph.nodes.iter().enumerate() {
+        if !need[j] {
+            continue;
+        }
+        for (_, src) in &node.inputs {
+            if let InputSource::Links(links) = src {
+                for (j, out) in links {
+                    if let Some(w) = &mut wanted[*j] {
+                        w.insert(out.clone());
+                    }
+                }
+            }
+        }
+    }
+    if opts.all_outputs {
+        wanted.iter_mut().for_each(|w| *w = None);
+    }
+    (need, wanted)
+}
+
+/// Computes every needed node's cache key in topological order.
+pub fn cache_keys(graph: &ValidGraph, need: &[bool], files: &FileEnv, frame: i64) -> Vec<Key> {
+    let mut keys = vec![[0u8; 32]; graph.nodes.len()];
+    for (i, node) in graph.nodes.iter().enumerate() {
+        if !need[i] {
+            continue;
+        }
+        let d = &node.decl;
+        let mut h = blake3::Hasher::new();
+        h.update(b"cgnodes-key-1\0");
+        h.update(d.type_name.as_bytes());
+        h.update(b"\0");
+        h.update(d.source.as_bytes());
+        h.update(b"\0");
+        for (name, src) in &node.inputs {
+            h.update(name.as_bytes());
+            h.update(b"=");
+            match src {
+                InputSource::Literal(v) | InputSource::Default(v) => {
+                    let j = v.to_json().map(|j| j.to_string()).unwrap_or_default();
+                    h.update(j.as_bytes());
+                    let role = d.input(name).map(|s| s.file).unwrap_or_default();
+                    if let (FileRole::Input, Value::String(p)) = (role, v) {
+                        let path = files.input_path(p);
+                        h.update(path.to_string_lossy().as_bytes());
+                        if let Ok(m) = std::fs::metadata(&path) {
+                            h.update(&m.len().to_le_bytes());
+                            if let Ok(t) = m.modified().and_then(|t| {
+                                t.duration_since(std::time::UNIX_EPOCH)
+                                    .map_err(std::io::Error::other)
+                            }) {
+                                h.update(&t.as_nanos().to_le_bytes());
+                            }
+                        }
+                    }
+                }
+                InputSource::Links(ls) => {
+                    for (j, out) in ls {
+                        h.update(&keys[*j]);
+                        h.update(out.as_bytes());
+                        h.update(b";");
+                    }
+                }
+                InputSource::Unset => {
+                    h.update(b"<unset>");
+                }
+            }
+            h.update(b"\0");
+        }
+        if d.time_dependent || d.stateful {
+            h.update(b"frame");
+            h.update(&frame.to_le_bytes());
+        }
+        if d.sink || d.inputs.iter().any(|s| s.file == FileRole::Output) {
+            h.update(files.out_dir.to_string_lossy().as_bytes());
+            h.update(&[u8::from(files.allow_write_anywhere)]);
+        }
+        keys[i] = *h.finalize().as_bytes();
+    }
+    keys
+}

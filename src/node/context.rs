@@ -1,0 +1,207 @@
+//! `ExecContext`: everything a node sees while it runs (inputs, outputs, frame, state
+//! between frames, file environment, log and progress).
+
+use super::{ErrorKind, FileEnv, NodeDecl, NodeError};
+use crate::types::{FromValue, Value};
+use std::any::Any;
+use std::collections::{BTreeMap, BTreeSet};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// Reports a node's progress (fraction in 0..=1).
+pub type ProgressFn = Arc<dyn Fn(&str, f64) + Send + Sync>;
+
+/// Everything a node sees while it runs: its inputs, its outputs, the frame, its state
+/// between frames, and the file environment.
+pub struct ExecContext<'a> {
+    /// The node's id in the graph.
+    pub node_id: &'a str,
+    /// The node's declaration.
+    pub decl: &'a NodeDecl,
+    pub(crate) inputs: BTreeMap<String, Value>,
+    pub(crate) outputs: BTreeMap<String, Value>,
+    pub(crate) frame: i64,
+    pub(crate) state: &'a mut Option<Box<dyn Any + Send>>,
+    pub(crate) files: &'a FileEnv,
+    pub(crate) logs: Vec<String>,
+    pub(crate) written: Vec<PathBuf>,
+    pub(crate) progress: Option<ProgressFn>,
+    /// The outputs someone will read; `None` = all of them.
+    pub(crate) wanted: Option<BTreeSet<String>>,
+}
+
+impl<'a> ExecContext<'a> {
+    /// A context for running a node directly, outside a graph (tests, Rust users).
+    pub fn standalone(
+        decl: &'a NodeDecl,
+        inputs: BTreeMap<String, Value>,
+        state: &'a mut Option<Box<dyn Any + Send>>,
+        files: &'a FileEnv,
+        frame: i64,
+    ) -> ExecContext<'a> {
+        let mut all = BTreeMap::new();
+        for s in &decl.inputs {
+            if let Some(v) = inputs.get(&s.name).cloned().or_else(|| s.default_value()) {
+                all.insert(s.name.clone(), v.convert_to(&s.ty).unwrap_or(v));
+            }
+        }
+        ExecContext {
+            node_id: "standalone",
+            decl,
+            inputs: all,
+            outputs: BTreeMap::new(),
+            frame,
+            state,
+            files,
+            logs: Vec::new(),
+            written: Vec::new(),
+            progress: None,
+            wanted: None,
+        }
+    }
+
+    /// Limits the outputs this context reports as wanted to `names` (standalone use; by
+    /// default every output is wanted).
+    pub fn want_only(&mut self, names: &[&str]) {
+        self.wanted = Some(names.iter().map(|n| n.to_string()).collect());
+    }
+
+    /// Whether anyone will read output `name`: it is linked to a node that runs, the user
+    /// asked for it (the node is a target, or `RunOptions::read_outputs` names it), or the
+    /// caller wants every output. A node may skip computing an output that is not wanted
+    /// (and not set it); nodes that never ask compute everything, which is always correct.
+    /// The cache records skipped outputs, so a later run that wants one reruns the node.
+    pub fn output_wanted(&self, name: &str) -> bool {
+        match &self.wanted {
+            None => true,
+            Some(w) => w.contains(name),
+        }
+    }
+
+    /// Reads input `name` as `T`. Fails when the input is unset or of another type.
+    pub fn input<T: FromValue>(&self, name: &str) -> Result<T, NodeError> {
+        self.input_opt(name)?
+            .ok_or_else(|| NodeError::invalid(name, "no value given"))
+    }
+
+    /// Reads an optional input: `None` when unconnected with no default.
+    pub fn input_opt<T: FromValue>(&self, name: &str) -> Result<Option<T>, NodeError> {
+        match self.inputs.get(name) {
+            None => Ok(None),
+            Some(v) => T::from_value(v).map(Some).ok_or_else(|| {
+                NodeError::new(
+                    ErrorKind::Internal,
+                    format!(
+                        "input '{name}' holds a {} which the node cannot read",
+                        v.socket_type()
+                    ),
+                )
+                .at(name)
+            }),
+        }
+    }
+
+    /// The raw value on input `name`.
+    pub fn input_value(&self, name: &str) -> Option<&Value> {
+        self.inputs.get(name)
+    }
+
+    /// Sets output `name`.
+    pub fn set_output(&mut self, name: &str, v: impl Into<Value>) {
+        self.outputs.insert(name.to_string(), v.into());
+    }
+
+    /// The outputs set so far.
+    pub fn outputs(&self) -> &BTreeMap<String, Value> {
+        &self.outputs
+    }
+
+    /// Takes the outputs (for standalone use).
+    pub fn take_outputs(&mut self) -> BTreeMap<String, Value> {
+        std::mem::take(&mut self.outputs)
+    }
+
+    /// The current frame (0 when the graph is not run over frames).
+    pub fn frame(&self) -> i64 {
+        self.frame
+    }
+
+    /// This node's state between frames, created with `Default` on first use.
+    /// Returns an error if the stored state has another type.
+    pub fn state<T: Default + Send + 'static>(&mut self) -> Result<&mut T, NodeError> {
+        if self.state.as_ref().is_some_and(|s| !s.is::<T>()) || self.state.is_none() {
+            *self.state = Some(Box::new(T::default()));
+        }
+        self.state
+            .as_mut()
+            .and_then(|s| s.downcast_mut::<T>())
+            .ok_or_else(|| NodeError::new(ErrorKind::Internal, "state has another type"))
+    }
+
+    /// Drops this node's state (a simulation restarts on its next frame).
+    pub fn reset_state(&mut self) {
+        *self.state = None;
+    }
+
+    /// Resolves an input file path against the graph's folder and the asset folders.
+    pub fn input_path(&self, p: &str) -> PathBuf {
+        self.files.input_path(p)
+    }
+
+    /// Resolves an output path under the output directory (with `{frame}` substituted);
+    /// `socket` names the socket the path came from, for the error.
+    pub fn output_path(&self, socket: &str, p: &str) -> Result<PathBuf, NodeError> {
+        self.files
+            .output_path(p, self.frame)
+            .map_err(|e| NodeError::invalid(socket, e))
+    }
+
+    /// Writes a file atomically (temporary file in the same folder, then rename).
+    pub fn write_file(&mut self, path: &Path, bytes: &[u8]) -> Result<(), NodeError> {
+        self.write_with(path, |w| w.write_all(bytes))
+    }
+
+    /// Writes a file atomically through a writer; on error nothing is left behind.
+    pub fn write_with(
+        &mut self,
+        path: &Path,
+        f: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
+    ) -> Result<(), NodeError> {
+        crate::io::write_atomic(path, f).map_err(|e| NodeError::io(path, e))?;
+        self.written.push(path.to_path_buf());
+        Ok(())
+    }
+
+    /// Records a file written by other means (already atomically), so the cache knows it.
+    pub fn record_written(&mut self, path: &Path) {
+        self.written.push(path.to_path_buf());
+    }
+
+    /// The files written so far.
+    pub fn written(&self) -> &[PathBuf] {
+        &self.written
+    }
+
+    /// Adds a line to the run log.
+    pub fn log(&mut self, msg: impl Into<String>) {
+        self.logs.push(msg.into());
+    }
+
+    /// The log lines so far.
+    pub fn logs(&self) -> &[String] {
+        &self.logs
+    }
+
+    /// Reports progress, 0 to 1.
+    pub fn progress(&self, fraction: f64) {
+        if let Some(p) = &self.progress {
+            p(self.node_id, fraction.clamp(0.0, 1.0));
+        }
+    }
+
+    /// The file environment.
+    pub fn files(&self) -> &FileEnv {
+        self.files
+    }
+}

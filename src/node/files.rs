@@ -1,0 +1,142 @@
+//! Where a run reads and writes files: input paths resolve against the graph's folder and
+//! the asset folders; output paths stay under the output directory unless allowed, with
+//! `{frame}` patterns substituted.
+
+use std::path::{Path, PathBuf};
+
+/// Where a run reads and writes files.
+#[derive(Clone, Debug)]
+pub struct FileEnv {
+    /// Folder of the graph file: relative input paths resolve here.
+    pub graph_dir: PathBuf,
+    /// Further folders searched for input files (`--assets`).
+    pub asset_dirs: Vec<PathBuf>,
+    /// Output directory: writer nodes write under it.
+    pub out_dir: PathBuf,
+    /// Lets writers use absolute paths and `..` (off by default).
+    pub allow_write_anywhere: bool,
+}
+
+impl Default for FileEnv {
+    fn default() -> Self {
+        FileEnv {
+            graph_dir: ".".into(),
+            asset_dirs: Vec::new(),
+            out_dir: "out".into(),
+            allow_write_anywhere: false,
+        }
+    }
+}
+
+impl FileEnv {
+    /// Resolves an input path: absolute as is, else against the graph's folder, then the
+    /// asset folders; the first that exists wins (the graph's folder when none does).
+    pub fn input_path(&self, p: &str) -> PathBuf {
+        let path = Path::new(p);
+        if path.is_absolute() {
+            return path.to_path_buf();
+        }
+        let first = self.graph_dir.join(path);
+        if first.exists() {
+            return first;
+        }
+        for d in &self.asset_dirs {
+            let c = d.join(path);
+            if c.exists() {
+                return c;
+            }
+        }
+        first
+    }
+
+    /// Resolves an output path under the output directory, substituting `{frame}` and
+    /// `{frame:04}`; refuses absolute paths and `..` unless writes anywhere are allowed.
+    pub fn output_path(&self, p: &str, frame: i64) -> Result<PathBuf, String> {
+        let p = substitute_frame(p, frame)?;
+        let path = Path::new(&p);
+        if !self.allow_write_anywhere {
+            if path.is_absolute() {
+                return Err(format!(
+                    "'{p}' is absolute; outputs go under the output directory (use --allow-write-anywhere to permit this)"
+                ));
+            }
+            if path.components().any(|c| {
+                !matches!(
+                    c,
+                    std::path::Component::Normal(_) | std::path::Component::CurDir
+                )
+            }) {
+                return Err(format!(
+                    "'{p}' leaves the output directory; outputs go under it (use --allow-write-anywhere to permit this)"
+                ));
+            }
+        }
+        if p.is_empty() {
+            return Err("empty output path".into());
+        }
+        Ok(if path.is_absolute() {
+            path.to_path_buf()
+        } else {
+            self.out_dir.join(path)
+        })
+    }
+}
+
+/// Replaces `{frame}` and `{frame:0N}` in a path.
+pub fn substitute_frame(p: &str, frame: i64) -> Result<String, String> {
+    let mut out = String::new();
+    let mut rest = p;
+    while let Some(i) = rest.find("{frame") {
+        out.push_str(&rest[..i]);
+        let tail = &rest[i..];
+        let end = tail
+            .find('}')
+            .ok_or_else(|| format!("unclosed '{{' in '{p}'"))?;
+        let spec = &tail[6..end];
+        if spec.is_empty() {
+            out.push_str(&frame.to_string());
+        } else if let Some(w) = spec.strip_prefix(":0").or_else(|| spec.strip_prefix(':')) {
+            let w: usize = w
+                .parse()
+                .map_err(|_| format!("bad frame format '{{frame{spec}}}' in '{p}'"))?;
+            out.push_str(&format!("{frame:0w$}"));
+        } else {
+            return Err(format!("bad frame format '{{frame{spec}}}' in '{p}'"));
+        }
+        rest = &tail[end + 1..];
+    }
+    out.push_str(rest);
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn frame_patterns() {
+        assert_eq!(substitute_frame("a_{frame}.obj", 7).unwrap(), "a_7.obj");
+        assert_eq!(
+            substitute_frame("a_{frame:04}.obj", 7).unwrap(),
+            "a_0007.obj"
+        );
+        assert!(substitute_frame("a_{frame:x}.obj", 7).is_err());
+    }
+
+    #[test]
+    fn output_paths_stay_inside() {
+        let env = FileEnv::default();
+        assert!(env.output_path("../x.obj", 0).is_err());
+        assert!(env.output_path("/tmp/x.obj", 0).is_err());
+        assert!(env.output_path("a/../../x.obj", 0).is_err());
+        assert_eq!(
+            env.output_path("sub/x.obj", 0).unwrap(),
+            Path::new("out/sub/x.obj")
+        );
+        let any = FileEnv {
+            allow_write_anywhere: true,
+            ..FileEnv::default()
+        };
+        assert!(any.output_path("/tmp/x.obj", 0).is_ok());
+    }
+}

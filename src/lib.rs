@@ -30,7 +30,9 @@ pub mod nodes;
 
 /// Everything a node file needs.
 pub mod prelude {
-    pub use crate::node::{ErrorKind, ExecContext, FileEnv, NodeBuilder, NodeDecl, NodeError};
+    pub use crate::node::{
+        Choice, ErrorKind, ExecContext, FileEnv, NodeBuilder, NodeDecl, NodeError,
+    };
     pub use crate::registry::Registry;
     pub use crate::types::*;
     pub use std::sync::Arc;

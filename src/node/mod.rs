@@ -24,12 +24,14 @@
 //! ```
 
 mod builder;
+mod choice;
 mod context;
 mod decl;
 mod error;
 mod files;
 
 pub use builder::{NodeBuilder, SocketBuilder};
+pub use choice::{parse_choice, Choice};
 pub use context::{ExecContext, ProgressFn};
 pub use decl::{ExecFn, FileRole, NodeDecl, SocketDecl};
 pub use error::{ErrorKind, NodeError};

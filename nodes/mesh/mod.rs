@@ -1,9 +1,12 @@
-//! Mesh nodes: loading, saving, inspecting and triangulating meshes.
+//! Mesh nodes: loading, saving, inspecting and triangulating meshes, and primitive meshes
+//! (`mesh_plane`, `mesh_grid`).
 
 pub mod buffer;
 pub mod compose;
 pub mod info;
 pub mod load;
+pub mod mesh_grid;
+pub mod mesh_plane;
 pub mod obj;
 pub mod off;
 pub mod ply;
@@ -21,4 +24,6 @@ pub fn register(r: &mut Registry) {
     triangulate::register(r);
     compose::register(r);
     buffer::register(r);
+    mesh_plane::register(r);
+    mesh_grid::register(r);
 }

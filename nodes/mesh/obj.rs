@@ -86,30 +86,127 @@ pub fn find_bad_obj_line(text: &str) -> Option<(usize, String)> {
     None
 }
 
-/// Reads an OBJ file with tobj: positions, polygon faces, and UVs and normals per corner.
-/// `group` picks one `o`/`g` block by name; empty merges them all. tobj renumbers vertices
-/// per block, so when merging, vertices of different blocks at bit-identical positions are
-/// welded back together (OBJ blocks share one vertex list).
-pub fn load_obj(path: &Path, group: &str) -> Result<Mesh, String> {
+/// The first malformed line of the OBJ file at `path`, if it can be read and has one.
+fn locate_bad_line(path: &Path) -> Option<(usize, String)> {
+    std::fs::read_to_string(path)
+        .ok()
+        .and_then(|t| find_bad_obj_line(&t))
+}
+
+/// The tobj materials of an OBJ file, or why its material library could not be read.
+pub type ObjMaterials = Result<Vec<tobj::Material>, tobj::LoadError>;
+
+/// Runs tobj on `path` (polygons kept, separate position/UV/normal indices); a failure
+/// names the first bad line when `find_bad_obj_line` finds one, else is tobj's message.
+fn read_tobj(path: &Path) -> Result<(Vec<tobj::Model>, ObjMaterials), String> {
     let opts = tobj::LoadOptions {
         triangulate: false,
         single_index: false,
         ..Default::default()
     };
-    let locate = || {
-        std::fs::read_to_string(path)
-            .ok()
-            .and_then(|t| find_bad_obj_line(&t))
-    };
-    let (models, _) = match tobj::load_obj(path, &opts) {
-        Ok(r) => r,
-        Err(e) => {
-            return Err(match locate() {
-                Some((ln, msg)) => format!("line {ln}: {msg}"),
-                None => format!("{e}"),
+    tobj::load_obj(path, &opts).map_err(|e| match locate_bad_line(path) {
+        Some((ln, msg)) => format!("line {ln}: {msg}"),
+        None => format!("{e}"),
+    })
+}
+
+/// Corner counts of a tobj mesh's faces (all 3 when tobj gives no arities).
+fn face_counts(mesh: &tobj::Mesh) -> Vec<u32> {
+    if mesh.face_arities.is_empty() {
+        vec![3u32; mesh.indices.len() / 3]
+    } else {
+        mesh.face_arities.clone()
+    }
+}
+
+/// Per-corner UVs of a tobj mesh, when every corner has one.
+fn corner_uvs(mesh: &tobj::Mesh) -> Option<Vec<[f64; 2]>> {
+    (mesh.texcoord_indices.len() == mesh.indices.len() && !mesh.texcoords.is_empty()).then(|| {
+        mesh.texcoord_indices
+            .iter()
+            .map(|&t| {
+                [
+                    mesh.texcoords[2 * t as usize],
+                    mesh.texcoords[2 * t as usize + 1],
+                ]
             })
+            .collect()
+    })
+}
+
+/// Per-corner normals of a tobj mesh, when every corner has one.
+fn corner_normals(mesh: &tobj::Mesh) -> Option<Vec<[f64; 3]>> {
+    (mesh.normal_indices.len() == mesh.indices.len() && !mesh.normals.is_empty()).then(|| {
+        mesh.normal_indices
+            .iter()
+            .map(|&t| {
+                let t = 3 * t as usize;
+                [mesh.normals[t], mesh.normals[t + 1], mesh.normals[t + 2]]
+            })
+            .collect()
+    })
+}
+
+/// One `o`/`g` block of an OBJ file with faces, as its own mesh.
+#[derive(Clone, Debug)]
+pub struct ObjObject {
+    /// The block's name.
+    pub name: String,
+    /// Its vertices (numbered per block by tobj), polygon faces, and per-corner UVs and
+    /// normals when every corner has them.
+    pub mesh: Mesh,
+    /// Index into the file's materials (`usemtl`), if any.
+    pub material_id: Option<usize>,
+}
+
+/// Reads an OBJ file with tobj into one mesh per `o`/`g` block that has faces (blocks are not
+/// merged or welded), plus the materials of its MTL libraries, for scene loaders that keep
+/// objects and materials apart. Errors name the first bad line when there is one, like
+/// `load_obj`; a block whose mesh is invalid otherwise gives `object '<name>': <error>`.
+pub fn load_obj_objects(path: &Path) -> Result<(Vec<ObjObject>, ObjMaterials), String> {
+    let (models, materials) = read_tobj(path)?;
+    let mut objects = Vec::new();
+    for m in models {
+        let mesh = &m.mesh;
+        if mesh.indices.is_empty() {
+            continue;
         }
-    };
+        let positions: Vec<[f64; 3]> = mesh
+            .positions
+            .chunks_exact(3)
+            .map(|p| [p[0], p[1], p[2]])
+            .collect();
+        let mut out =
+            Mesh::new(positions, face_counts(mesh), mesh.indices.clone()).map_err(|e| {
+                match locate_bad_line(path) {
+                    Some((ln, msg)) => format!("line {ln}: {msg}"),
+                    None => format!("object '{}': {e}", m.name),
+                }
+            })?;
+        out.uvs = corner_uvs(mesh).map(|values| Attribute {
+            domain: Domain::Corner,
+            values,
+        });
+        out.normals = corner_normals(mesh).map(|values| Attribute {
+            domain: Domain::Corner,
+            values,
+        });
+        objects.push(ObjObject {
+            name: m.name.clone(),
+            mesh: out,
+            material_id: mesh.material_id,
+        });
+    }
+    Ok((objects, materials))
+}
+
+/// Reads an OBJ file with tobj: positions, polygon faces, and UVs and normals per corner.
+/// `group` picks one `o`/`g` block by name; empty merges them all. tobj renumbers vertices
+/// per block, so when merging, vertices of different blocks at bit-identical positions are
+/// welded back together (OBJ blocks share one vertex list).
+pub fn load_obj(path: &Path, group: &str) -> Result<Mesh, String> {
+    let (models, _) = read_tobj(path)?;
+    let locate = || locate_bad_line(path);
     let models: Vec<&tobj::Model> = if group.is_empty() {
         models.iter().collect()
     } else {
@@ -148,29 +245,15 @@ pub fn load_obj(path: &Path, group: &str) -> Result<Mesh, String> {
             };
             map.push(id);
         }
-        if mesh.face_arities.is_empty() {
-            counts.extend(std::iter::repeat_n(3u32, mesh.indices.len() / 3));
-        } else {
-            counts.extend(&mesh.face_arities);
-        }
+        counts.extend(face_counts(mesh));
         idx.extend(mesh.indices.iter().map(|&i| map[i as usize]));
-        if mesh.texcoord_indices.len() == mesh.indices.len() && !mesh.texcoords.is_empty() {
-            uvs.extend(mesh.texcoord_indices.iter().map(|&t| {
-                [
-                    mesh.texcoords[2 * t as usize],
-                    mesh.texcoords[2 * t as usize + 1],
-                ]
-            }));
-        } else {
-            has_uv = false;
+        match corner_uvs(mesh) {
+            Some(v) => uvs.extend(v),
+            None => has_uv = false,
         }
-        if mesh.normal_indices.len() == mesh.indices.len() && !mesh.normals.is_empty() {
-            normals.extend(mesh.normal_indices.iter().map(|&t| {
-                let t = 3 * t as usize;
-                [mesh.normals[t], mesh.normals[t + 1], mesh.normals[t + 2]]
-            }));
-        } else {
-            has_n = false;
+        match corner_normals(mesh) {
+            Some(v) => normals.extend(v),
+            None => has_n = false,
         }
     }
     let mut mesh = Mesh::new(positions, counts, idx).map_err(|e| match locate() {
@@ -357,5 +440,18 @@ mod tests {
         let (ln, msg) = find_bad_obj_line(t).unwrap();
         assert_eq!(ln, 5);
         assert!(msg.contains("degenerate"), "{msg}");
+    }
+
+    #[test]
+    fn objects_keep_their_materials() {
+        let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/cornell/cornell_box.obj");
+        let (objects, mats) = load_obj_objects(&p).unwrap();
+        let mats = mats.unwrap();
+        assert!(!objects.is_empty() && !mats.is_empty());
+        for o in &objects {
+            assert!(o.mesh.num_faces() > 0, "{}", o.name);
+            assert!(o.material_id.is_some_and(|i| i < mats.len()), "{}", o.name);
+        }
+        assert!(load_obj_objects(Path::new("/nonexistent/x.obj")).is_err());
     }
 }

@@ -375,6 +375,52 @@ pub fn read_ply(bytes: &[u8]) -> Result<Mesh, String> {
     Ok(mesh)
 }
 
+/// The first lines of every PLY file written here: magic, format (ASCII or binary little
+/// endian) and one comment line.
+fn write_preamble(w: &mut dyn Write, binary: bool, comment: &str) -> std::io::Result<()> {
+    let fmt = if binary {
+        "binary_little_endian"
+    } else {
+        "ascii"
+    };
+    writeln!(w, "ply\nformat {fmt} 1.0\ncomment {comment}")
+}
+
+/// One `float` column of a PLY point cloud: its value at each point.
+pub type PlyColumn<'a> = Box<dyn Fn(usize) -> f64 + 'a>;
+
+/// Writes a PLY point cloud of `n` points, a `vertex` element only, with one single-precision
+/// `float` property per column (`props[k]` names `columns[k]`), ASCII or binary little endian.
+/// For particle frames (ParaView, Blender, Houdini read them); meshes use `write_ply`.
+pub fn write_ply_points(
+    w: &mut dyn Write,
+    comment: &str,
+    n: usize,
+    props: &[String],
+    columns: &[PlyColumn<'_>],
+    binary: bool,
+) -> std::io::Result<()> {
+    write_preamble(w, binary, comment)?;
+    writeln!(w, "element vertex {n}")?;
+    for p in props {
+        writeln!(w, "property float {p}")?;
+    }
+    writeln!(w, "end_header")?;
+    let mut buf = Vec::with_capacity(n * columns.len() * 4);
+    for i in 0..n {
+        if binary {
+            for c in columns {
+                buf.extend_from_slice(&(c(i) as f32).to_le_bytes());
+            }
+        } else {
+            let line: Vec<String> = columns.iter().map(|c| format!("{}", c(i) as f32)).collect();
+            buf.extend_from_slice(line.join(" ").as_bytes());
+            buf.push(b'\n');
+        }
+    }
+    w.write_all(&buf)
+}
+
 /// Writes a PLY file: ASCII, or binary little endian with double-precision vertices.
 /// Per-vertex normals, UVs and colours become vertex properties; per-corner UVs a face
 /// `texcoord` list.
@@ -383,17 +429,7 @@ pub fn write_ply(mesh: &Mesh, binary: bool, w: &mut dyn Write) -> std::io::Resul
     let vuv = mesh.uvs.as_ref().filter(|a| a.domain == Domain::Vertex);
     let cuv = mesh.uvs.as_ref().filter(|a| a.domain == Domain::Corner);
     let vc = mesh.colors.as_ref().filter(|a| a.domain == Domain::Vertex);
-    writeln!(w, "ply")?;
-    writeln!(
-        w,
-        "format {} 1.0",
-        if binary {
-            "binary_little_endian"
-        } else {
-            "ascii"
-        }
-    )?;
-    writeln!(w, "comment written by cgnodes")?;
+    write_preamble(w, binary, "written by cgnodes")?;
     writeln!(w, "element vertex {}", mesh.num_vertices())?;
     let mut names: Vec<&str> = vec!["x", "y", "z"];
     if vn.is_some() {

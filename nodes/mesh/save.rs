@@ -4,31 +4,20 @@
 use crate::prelude::*;
 use std::path::Path;
 
-/// Encodes a linear RGBA image as an 8-bit sRGB PNG (IEC 61966-2-1 transfer function).
+/// Encodes a linear RGBA image as an 8-bit sRGB PNG (IEC 61966-2-1 transfer function) with
+/// `image_save`'s encoder; a `+inf` colour channel stays white here (the encoder writes it
+/// as 0), as texture files written by `mesh_save` always had.
 pub fn png_bytes(img: &Image) -> Result<Vec<u8>, String> {
-    let enc = |x: f32| -> u8 {
-        let x = x.clamp(0.0, 1.0);
-        let s = if x <= 0.003_130_8 {
-            12.92 * x
-        } else {
-            1.055 * x.powf(1.0 / 2.4) - 0.055
-        };
-        (s * 255.0 + 0.5) as u8
-    };
-    let mut buf = image::RgbaImage::new(img.width, img.height);
-    for (i, p) in buf.pixels_mut().enumerate() {
-        let c = img.pixels[i];
-        *p = image::Rgba([
-            enc(c[0]),
-            enc(c[1]),
-            enc(c[2]),
-            (c[3].clamp(0.0, 1.0) * 255.0 + 0.5) as u8,
-        ]);
+    use crate::nodes::render::image_io::{encode_image, ImageFileFormat};
+    let mut img = img.clone();
+    for p in &mut img.pixels {
+        for c in &mut p[..3] {
+            if *c == f32::INFINITY {
+                *c = 1.0;
+            }
+        }
     }
-    let mut out = std::io::Cursor::new(Vec::new());
-    buf.write_to(&mut out, image::ImageFormat::Png)
-        .map_err(|e| e.to_string())?;
-    Ok(out.into_inner())
+    encode_image(&img, ImageFileFormat::Png, 0.0, 0.0)
 }
 
 fn declare(b: &mut NodeBuilder) {
@@ -105,4 +94,52 @@ fn save_obj(ctx: &mut ExecContext, mesh: &Mesh, path: &Path) -> Result<(), NodeE
 /// Registers `mesh_save`.
 pub fn register(r: &mut Registry) {
     r.add("mesh_save", declare, execute);
+}
+
+#[cfg(test)]
+mod tests {
+    /// The encoding `png_bytes` had before it used `encode_image`, as a reference.
+    fn reference_png(img: &super::Image) -> Vec<u8> {
+        let enc = |x: f32| -> u8 {
+            let x = x.clamp(0.0, 1.0);
+            let s = if x <= 0.003_130_8 {
+                12.92 * x
+            } else {
+                1.055 * x.powf(1.0 / 2.4) - 0.055
+            };
+            (s * 255.0 + 0.5) as u8
+        };
+        let mut buf = image::RgbaImage::new(img.width, img.height);
+        for (i, p) in buf.pixels_mut().enumerate() {
+            let c = img.pixels[i];
+            *p = image::Rgba([
+                enc(c[0]),
+                enc(c[1]),
+                enc(c[2]),
+                (c[3].clamp(0.0, 1.0) * 255.0 + 0.5) as u8,
+            ]);
+        }
+        let mut out = std::io::Cursor::new(Vec::new());
+        buf.write_to(&mut out, image::ImageFormat::Png).unwrap();
+        out.into_inner()
+    }
+
+    #[test]
+    fn png_bytes_match_the_former_encoding() {
+        let special = [0.0, -0.0, 1.0, 0.5, 0.002, 2.0, -1.0, f32::NAN];
+        let special = special
+            .into_iter()
+            .chain([f32::INFINITY, f32::NEG_INFINITY]);
+        let mut pixels: Vec<[f32; 4]> = special.map(|v| [v, v, v, v]).collect();
+        pixels.extend((0..1014).map(|i| {
+            let x = i as f32 / 1013.0;
+            [x, 1.0 - x, x * x, 0.5 + 0.5 * x]
+        }));
+        let img = super::Image {
+            width: 32,
+            height: 32,
+            pixels,
+        };
+        assert_eq!(super::png_bytes(&img).unwrap(), reference_png(&img));
+    }
 }

@@ -6,7 +6,8 @@ pub mod camera;
 pub mod image_io;
 pub mod light;
 pub mod material;
-pub mod primitive;
+/// Moved to `nodes::mesh::mesh_plane`; kept under the old path for its importers.
+pub use crate::nodes::mesh::mesh_plane as primitive;
 pub mod raster;
 pub mod scene;
 pub mod uv_project;
@@ -19,7 +20,6 @@ pub fn register(r: &mut Registry) {
     light::register(r);
     material::register(r);
     scene::register(r);
-    primitive::register(r);
     raster::register(r);
     uv_project::register(r);
 }

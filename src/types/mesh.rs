@@ -303,18 +303,13 @@ impl Mesh {
         let mut idx = Vec::new();
         let mut corner_src = Vec::new(); // source corner of each new corner
         let mut face_src = Vec::new();
-        let starts = self.face_starts();
-        for (f, &n) in self.face_counts.iter().enumerate() {
-            let s = starts[f] as usize;
-            let n = n as usize;
-            for k in 1..n - 1 {
-                counts.push(3);
-                for c in [s, s + k, s + k + 1] {
-                    idx.push(self.face_indices[c]);
-                    corner_src.push(c);
-                }
-                face_src.push(f);
+        for (f, corners) in super::topology::fan_corners(&self.face_counts) {
+            counts.push(3);
+            for c in corners {
+                idx.push(self.face_indices[c]);
+                corner_src.push(c);
             }
+            face_src.push(f);
         }
         let remap = |d: Domain| -> Option<&Vec<usize>> {
             match d {

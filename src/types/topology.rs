@@ -152,8 +152,8 @@ impl Topology {
         }
         // One-rings.
         let (neighbor_start, neighbors) =
-            csr(nv, edges.iter().flat_map(|&[a, b]| [(a, b), (b, a)]));
-        let (vface_start, vfaces) = csr(nv, (0..nc).map(|c| (idx[c], corner_face[c])));
+            compressed_rows(nv, edges.iter().flat_map(|&[a, b]| [(a, b), (b, a)]));
+        let (vface_start, vfaces) = compressed_rows(nv, (0..nc).map(|c| (idx[c], corner_face[c])));
         // Boundary half-edges: corners whose edge has a single face.
         let boundary_out = |c: usize| edge_faces[corner_edge[c] as usize][1] == NONE;
         let mut out_start = vec![0u32; nv + 1];
@@ -362,8 +362,58 @@ impl Topology {
     }
 }
 
-/// Compressed rows from (row, value) pairs.
-fn csr(n: usize, pairs: impl Iterator<Item = (u32, u32)> + Clone) -> (Vec<u32>, Vec<u32>) {
+/// The fan triangulation of polygon faces given by their corner counts: for a face `f` whose
+/// corners are `s..s + n`, the triangles `(s, s + k, s + k + 1)` for `k` in `1..n - 1`, as
+/// `(f, [corner; 3])` in face order. Corners index the mesh's `face_indices`, so per-corner
+/// and per-face data can follow the triangles. Exact for convex polygons; see
+/// `nodes::mesh::triangulate` for ear clipping of non-convex ones.
+pub fn fan_corners(face_counts: &[u32]) -> impl Iterator<Item = (usize, [usize; 3])> + '_ {
+    face_counts
+        .iter()
+        .scan(0usize, |start, &n| {
+            let s = *start;
+            *start += n as usize;
+            Some((s, n as usize))
+        })
+        .enumerate()
+        .flat_map(|(f, (s, n))| (1..n.saturating_sub(1)).map(move |k| (f, [s, s + k, s + k + 1])))
+}
+
+impl Mesh {
+    /// The faces as triangles: the faces themselves for a triangle mesh, otherwise every
+    /// polygon split into a fan from its first corner (`fan_corners`). Unlike
+    /// `triangulated()`, only the vertex indices, without copying the mesh's data.
+    pub fn fan_triangles(&self) -> Vec<[u32; 3]> {
+        if let Some(t) = self.triangles() {
+            return t;
+        }
+        let idx = self.face_indices();
+        fan_corners(self.face_counts())
+            .map(|(_, c)| [idx[c[0]], idx[c[1]], idx[c[2]]])
+            .collect()
+    }
+}
+
+impl Topology {
+    /// The triangles around each of `n` vertices in compressed rows (`start`, `triangle`):
+    /// vertex `v`'s triangles are `triangle[start[v]..start[v + 1]]`, in increasing order.
+    /// For triangle lists that are not a mesh's faces (e.g. after fan triangulation).
+    pub fn vertex_triangles(n: usize, triangles: &[[u32; 3]]) -> (Vec<usize>, Vec<u32>) {
+        let pairs = triangles
+            .iter()
+            .enumerate()
+            .flat_map(|(t, tri)| tri.iter().map(move |&v| (v, t as u32)));
+        let (start, list) = compressed_rows(n, pairs);
+        (start.into_iter().map(|s| s as usize).collect(), list)
+    }
+}
+
+/// Compressed rows from (row, value) pairs: row `r` holds its values, in pair order, at
+/// `values[start[r]..start[r + 1]]` (a counting sort by row).
+fn compressed_rows(
+    n: usize,
+    pairs: impl Iterator<Item = (u32, u32)> + Clone,
+) -> (Vec<u32>, Vec<u32>) {
     let mut start = vec![0u32; n + 1];
     for (r, _) in pairs.clone() {
         start[r as usize + 1] += 1;
@@ -471,5 +521,28 @@ mod tests {
         let p1 = vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
         let one = Mesh::from_triangles(p1, &tet(1, 2, 3)).unwrap();
         assert!(one.topology().is_manifold());
+    }
+
+    #[test]
+    fn fans_and_vertex_triangles() {
+        let p = vec![[0.0; 3]; 6];
+        // a pentagon and a triangle
+        let m = Mesh::new(p, vec![5, 3], vec![0, 1, 2, 3, 4, 0, 4, 5]).unwrap();
+        let fans: Vec<_> = fan_corners(m.face_counts()).collect();
+        assert_eq!(
+            fans,
+            vec![
+                (0, [0, 1, 2]),
+                (0, [0, 2, 3]),
+                (0, [0, 3, 4]),
+                (1, [5, 6, 7])
+            ]
+        );
+        let t = m.fan_triangles();
+        assert_eq!(t, vec![[0, 1, 2], [0, 2, 3], [0, 3, 4], [0, 4, 5]]);
+        let (start, list) = Topology::vertex_triangles(6, &t);
+        assert_eq!(start, vec![0, 4, 5, 7, 9, 11, 12]);
+        assert_eq!(&list[..4], &[0, 1, 2, 3]);
+        assert_eq!(&list[start[4]..start[5]], &[2, 3]);
     }
 }

@@ -11,7 +11,8 @@
 // vertex; index loops read closer to the formulas than zipped iterators.
 #![allow(clippy::needless_range_loop)]
 
-pub mod grid;
+/// Moved to `nodes::mesh::mesh_grid`; kept under the old path for its importers.
+pub use crate::nodes::mesh::mesh_grid as grid;
 pub mod implicit;
 pub mod projective;
 pub mod semi_implicit;
@@ -767,10 +768,9 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     Ok(())
 }
 
-/// Registers `mass_spring` and `mesh_grid`.
+/// Registers `mass_spring`.
 pub fn register(r: &mut Registry) {
     r.add("mass_spring", declare, execute);
-    grid::register(r);
 }
 
 #[cfg(test)]

@@ -9,7 +9,7 @@ use std::io::Write;
 pub fn write_ply(points: &Points, binary: bool, w: &mut dyn Write) -> std::io::Result<()> {
     let n = points.positions.len();
     let mut props: Vec<String> = vec!["x".into(), "y".into(), "z".into()];
-    let mut cols: Vec<Box<dyn Fn(usize) -> f64 + '_>> = vec![
+    let mut cols: Vec<crate::nodes::mesh::ply::PlyColumn<'_>> = vec![
         Box::new(|i| points.positions[i][0]),
         Box::new(|i| points.positions[i][1]),
         Box::new(|i| points.positions[i][2]),
@@ -28,30 +28,7 @@ pub fn write_ply(points: &Points, binary: bool, w: &mut dyn Write) -> std::io::R
             }
         }
     }
-    let fmt = if binary {
-        "binary_little_endian"
-    } else {
-        "ascii"
-    };
-    writeln!(w, "ply\nformat {fmt} 1.0\ncomment cgnodes points_save")?;
-    writeln!(w, "element vertex {n}")?;
-    for p in &props {
-        writeln!(w, "property float {p}")?;
-    }
-    writeln!(w, "end_header")?;
-    let mut buf = Vec::with_capacity(n * cols.len() * 4);
-    for i in 0..n {
-        if binary {
-            for c in &cols {
-                buf.extend_from_slice(&(c(i) as f32).to_le_bytes());
-            }
-        } else {
-            let line: Vec<String> = cols.iter().map(|c| format!("{}", c(i) as f32)).collect();
-            buf.extend_from_slice(line.join(" ").as_bytes());
-            buf.push(b'\n');
-        }
-    }
-    w.write_all(&buf)
+    crate::nodes::mesh::ply::write_ply_points(w, "cgnodes points_save", n, &props, &cols, binary)
 }
 
 fn clean(name: &str) -> String {

@@ -121,9 +121,9 @@ mod tests {
         assert_eq!(m.bounds(), ([-1.0, 1.0, -1.0], [1.0, 1.0, 1.0]));
         for t in m.triangles().unwrap() {
             let p = |k: usize| m.positions[t[k] as usize];
-            let e1 = super::super::camera::sub(p(1), p(0));
-            let e2 = super::super::camera::sub(p(2), p(0));
-            let n = super::super::camera::cross(e1, e2);
+            let e1 = crate::types::vec3::sub(p(1), p(0));
+            let e2 = crate::types::vec3::sub(p(2), p(0));
+            let n = crate::types::vec3::cross(e1, e2);
             assert!(n[1] > 0.0 && n[0].abs() < 1e-12 && n[2].abs() < 1e-12);
         }
         let mut z = m.clone();

@@ -344,21 +344,28 @@ fn implicit_reuses_its_symbolic_factorization() {
 /// A 10x10-cell course-like grid hanging from its top corners (xy plane, gravity along -z).
 fn hanging(method: Method, h: f64) -> (Simulator, Vec<usize>) {
     let mesh = grid_mesh(10, 10, [2.0, 2.0], "xy", [0.0; 3], true).unwrap();
-    let fixed = cgnodes::nodes::sim::mass_spring::select_vertices(&mesh, "top_corners", 2).unwrap();
+    let fixed =
+        cgnodes::nodes::mesh::vertex_select::select_vertices(&mesh, "top_corners", 2).unwrap();
     assert_eq!(fixed, vec![120, 110]);
-    let n = mesh.num_vertices();
-    let mut f = vec![false; n];
+    let mut f = vec![false; mesh.num_vertices()];
     for &i in &fixed {
         f[i] = true;
     }
+    (course_cloth(&mesh, f, method, h), fixed)
+}
+
+/// The course's cloth on `mesh`: default springs with k = 1000, total mass 1, gravity along
+/// -z, damping 0.995, the given fixed vertices.
+fn course_cloth(mesh: &Mesh, fixed: Vec<bool>, method: Method, h: f64) -> Simulator {
+    let n = mesh.num_vertices();
     let model = Model {
-        springs: springs_from_mesh(&mesh, 1000.0, SpringKinds::default()),
+        springs: springs_from_mesh(mesh, 1000.0, SpringKinds::default()),
         mass: vec![1.0 / n as f64; n],
-        fixed: f,
+        fixed,
         gravity: [0.0, 0.0, -9.8],
         damping: 0.995,
     };
-    let sim = Simulator::new(
+    Simulator::new(
         model,
         mesh.positions.clone(),
         None,
@@ -366,8 +373,7 @@ fn hanging(method: Method, h: f64) -> (Simulator, Vec<usize>) {
         h,
         SolverOptions::default(),
     )
-    .unwrap();
-    (sim, fixed)
+    .unwrap()
 }
 
 #[test]
@@ -408,23 +414,7 @@ fn no_vertex_ends_inside_the_sphere() {
         (Method::Projective, 0.01, 80),
     ] {
         let mesh = grid_mesh(10, 10, [1.6, 1.6], "xy", [0.0; 3], true).unwrap();
-        let n = mesh.num_vertices();
-        let model = Model {
-            springs: springs_from_mesh(&mesh, 1000.0, SpringKinds::default()),
-            mass: vec![1.0 / n as f64; n],
-            fixed: vec![false; n],
-            gravity: [0.0, 0.0, -9.8],
-            damping: 0.995,
-        };
-        let mut sim = Simulator::new(
-            model,
-            mesh.positions.clone(),
-            None,
-            method,
-            h,
-            SolverOptions::default(),
-        )
-        .unwrap();
+        let mut sim = course_cloth(&mesh, vec![false; mesh.num_vertices()], method, h);
         let mut dmin = f64::INFINITY;
         for _ in 0..steps {
             sim.step(Some(&sphere)).unwrap();

@@ -23,6 +23,23 @@ use faer::sparse::linalg::cholesky::{
 use faer::sparse::{Argsort, Pair, SparseColMat, SymbolicSparseColMat};
 use faer::{Conj, Mat, Par, Side};
 
+/// Why a Newton step failed.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum NewtonError {
+    /// The objective's gradient has a NaN or infinite entry (the state blew up).
+    #[error("the gradient is not finite")]
+    NonFiniteGradient,
+    /// The Newton direction has a NaN or infinite entry.
+    #[error("the Newton step is not finite")]
+    NonFiniteStep,
+    /// The sparse Cholesky factorization of the Hessian failed (faer's reason).
+    #[error("the Hessian is not positive definite: {0}")]
+    NotPositiveDefinite(String),
+    /// The Hessian's values did not fit its sparsity pattern (faer's reason).
+    #[error("Hessian assembly: {0}")]
+    Assembly(String),
+}
+
 /// Newton options.
 #[derive(Clone, Copy, Debug)]
 pub struct NewtonOptions {
@@ -71,14 +88,7 @@ impl Implicit {
     /// Builds the reduced pattern `S^T H S` and its symbolic factorization.
     pub fn new(m: &Model, opts: NewtonOptions) -> Result<Implicit, String> {
         let n = m.num_vertices();
-        let mut free = vec![None; n];
-        let mut n_free = 0usize;
-        for i in 0..n {
-            if !m.fixed[i] {
-                free[i] = Some(n_free as u32);
-                n_free += 1;
-            }
-        }
+        let (free, n_free) = m.free_indices();
         let mut idx: Vec<Pair<usize, usize>> = Vec::new();
         // Diagonal 3x3 blocks, lower triangle (row >= col).
         for v in 0..n_free {
@@ -171,17 +181,9 @@ impl Implicit {
         st: &mut State,
         h: f64,
         sp: Option<&Sphere>,
-    ) -> Result<usize, String> {
+    ) -> Result<usize, NewtonError> {
         let n = m.num_vertices();
-        let y: Vec<[f64; 3]> = (0..n)
-            .map(|i| {
-                if m.fixed[i] {
-                    st.x[i]
-                } else {
-                    axpy(axpy(st.x[i], h, st.v[i]), h * h, m.gravity)
-                }
-            })
-            .collect();
+        let y = m.inertial_positions(st, h);
         // Initial guess: the inertial position y.
         let mut x: Vec<[f64; 3]> = y.clone();
         let ih2 = 1.0 / (h * h);
@@ -209,7 +211,7 @@ impl Implicit {
                 }
             }
             if !gmax.is_finite() {
-                return Err("the gradient is not finite".into());
+                return Err(NewtonError::NonFiniteGradient);
             }
             if gmax == 0.0 {
                 break;
@@ -267,7 +269,7 @@ impl Implicit {
                 }
             }
             let a = SparseColMat::new_from_argsort(self.pattern.clone(), &self.argsort, &self.vals)
-                .map_err(|e| format!("Hessian assembly: {e:?}"))?;
+                .map_err(|e| NewtonError::Assembly(format!("{e:?}")))?;
             self.symbolic
                 .factorize_numeric_llt::<f64>(
                     &mut self.l_values,
@@ -278,7 +280,7 @@ impl Implicit {
                     MemStack::new(&mut self.scratch),
                     Default::default(),
                 )
-                .map_err(|e| format!("the Hessian is not positive definite: {e:?}"))?;
+                .map_err(|e| NewtonError::NotPositiveDefinite(format!("{e:?}")))?;
             self.numeric_count += 1;
             iters += 1;
             let mut dx = rhs.clone();
@@ -296,7 +298,7 @@ impl Implicit {
                 step_max = step_max.max(dx[(r, 0)].abs());
             }
             if !step_max.is_finite() {
-                return Err("the Newton step is not finite".into());
+                return Err(NewtonError::NonFiniteStep);
             }
             // Backtracking line search (Armijo, c = 1e-4; Nocedal & Wright, Alg. 3.1).
             let mut alpha = 1.0;

@@ -238,9 +238,7 @@ impl Simulator {
                                 reason: e.to_string(),
                             }
                         }
-                        NewtonError::NotPositiveDefinite(_) | NewtonError::Assembly(_) => {
-                            SimError::Solver(e.to_string())
-                        }
+                        NewtonError::NotPositiveDefinite(_) => SimError::Solver(e.to_string()),
                     })?
             }
             Solver::Projective(s) => s.step(&self.model, &mut self.state, sphere),

@@ -7,7 +7,10 @@
 //! through `bench/peers/sph_splishsplash.py` with the Python in `SPH_PEER_PYTHON` (default
 //! `python3`; needs `pip install pysplishsplash`); it is skipped if that fails.
 
-use cgnodes::nodes::sim::sph::{dam_break, Solver};
+#[path = "../tests/support/sph_dam_break.rs"]
+mod dam_break;
+
+use cgnodes::nodes::sim::sph::Solver;
 use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant;
@@ -120,10 +123,7 @@ fn svg(runs: &[Run]) -> String {
 
 fn main() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let exp = dam_break::parse_martin_moyce(
-        &std::fs::read_to_string(root.join("tests/data/sph/martin_moyce_front.csv")).unwrap(),
-    )
-    .unwrap();
+    let exp = dam_break::martin_moyce_front();
     let radii: Vec<f64> = std::env::var("SPH_RADII")
         .unwrap_or_else(|_| "0.01,0.005".into())
         .split(',')

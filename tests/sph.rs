@@ -3,15 +3,13 @@
 //! (`tests/data/sph/martin_moyce_front.csv`, copied from the course reference data:
 //! Martin & Moyce 1952, Phil. Trans. R. Soc. A 244:312-324, Table 2 surge-front means).
 
-use cgnodes::nodes::sim::sph::{dam_break, Boundary, Fluid, Solver, SphParams};
+#[path = "support/sph_dam_break.rs"]
+mod dam_break;
+
+use cgnodes::nodes::sim::sph::{Boundary, Fluid, Solver, SphParams};
 
 fn martin_moyce() -> Vec<(f64, f64)> {
-    let text = std::fs::read_to_string(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/tests/data/sph/martin_moyce_front.csv"
-    ))
-    .unwrap();
-    let exp = dam_break::parse_martin_moyce(&text).unwrap();
+    let exp = dam_break::martin_moyce_front();
     assert_eq!(exp.len(), 25);
     exp
 }
@@ -79,7 +77,7 @@ fn fluid_at_rest_stays_at_rest() {
             worst = worst.max(f.density_error().0);
         }
         let vmax = f.max_speed();
-        let vavg = f.v.iter().map(|v| v[0].hypot(v[1])).sum::<f64>() / f.len() as f64;
+        let vavg = f.velocities.iter().map(|v| v[0].hypot(v[1])).sum::<f64>() / f.len() as f64;
         eprintln!(
             "{solver:?}: max density error {worst:.4}, final speeds max {vmax:.4} avg {vavg:.4} m/s after {} steps",
             f.steps
@@ -113,7 +111,7 @@ fn hydrostatic_pressure_is_linear_in_depth() {
         for _ in 0..samples {
             f.advance(0.01).unwrap();
             top += f.height() / samples as f64;
-            for (x, p) in f.x.iter().zip(&f.p) {
+            for (x, p) in f.positions.iter().zip(&f.pressures) {
                 if x[0] > 0.1 && x[0] < 0.9 {
                     let l = ((x[1] / s) as usize).min(nl - 1);
                     sum[l] += p;
@@ -173,7 +171,7 @@ fn momentum_is_conserved_without_walls() {
             let hi = if dim == 2 { [0.5, 0.5, 0.0] } else { [0.4; 3] };
             let mut f = Fluid::block(prm, [0.0; 3], hi, None).unwrap();
             // Squeeze the block so pressure acts, and give it a swirling velocity field.
-            for (x, v) in f.x.iter_mut().zip(f.v.iter_mut()) {
+            for (x, v) in f.positions.iter_mut().zip(f.velocities.iter_mut()) {
                 for c in x.iter_mut().take(dim) {
                     *c *= 0.9;
                 }
@@ -217,11 +215,14 @@ fn momentum_is_conserved_without_walls() {
 fn dfsph_fine_dam_break_start_stays_calm() {
     for solver in [Solver::Dfsph, Solver::Wcsph] {
         let mut f = dam_break::setup(solver, 0.5, 0.0035, 1e-4).unwrap();
-        let y0: Vec<f64> = f.x.iter().map(|p| p[1]).collect();
+        let y0: Vec<f64> = f.positions.iter().map(|p| p[1]).collect();
         f.advance(0.07).unwrap();
         let released: f64 = f.params.gravity.abs()
             * f.mass
-            * y0.iter().zip(&f.x).map(|(a, p)| a - p[1]).sum::<f64>();
+            * y0.iter()
+                .zip(&f.positions)
+                .map(|(a, p)| a - p[1])
+                .sum::<f64>();
         let ke = f.kinetic_energy();
         eprintln!(
             "{solver:?}: kinetic {ke:.4} J, potential released {released:.4} J, {} steps, {} iterations",

@@ -13,6 +13,7 @@ pub mod ply;
 pub mod save;
 pub mod triangulate;
 pub mod usda;
+pub mod vertex_select;
 
 use crate::registry::Registry;
 

@@ -5,10 +5,6 @@
 
 use crate::prelude::*;
 
-/// Vector helpers re-exported for `primitive.rs`'s tests (which import them from here).
-#[cfg(test)]
-pub(crate) use crate::types::vec3::{cross, sub};
-
 fn declare(b: &mut NodeBuilder) {
     b.doc("A look-at pinhole camera.").category("render");
     b.add_input::<[f64; 3]>("eye")

@@ -16,12 +16,23 @@ use super::springs::{
     add_collider_forces, axpy, collider_energy, dot, norm, spring_energy, spring_forces,
     spring_hessian_psd, sub, Incidence, Model, Sphere, State,
 };
-use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::sparse::linalg::cholesky::{
-    factorize_symbolic_cholesky, LltRef, SymbolicCholesky, SymmetricOrdering,
-};
-use faer::sparse::{Argsort, Pair, SparseColMat, SymbolicSparseColMat};
-use faer::{Conj, Mat, Par, Side};
+use crate::nodes::linalg::SpdFactor;
+use faer::sparse::Triplet;
+use faer::{Mat, Par};
+
+/// Why a Newton step failed.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum NewtonError {
+    /// The objective's gradient has a NaN or infinite entry (the state blew up).
+    #[error("the gradient is not finite")]
+    NonFiniteGradient,
+    /// The Newton direction has a NaN or infinite entry.
+    #[error("the Newton step is not finite")]
+    NonFiniteStep,
+    /// The sparse Cholesky factorization of the Hessian failed (`SpdFactor`'s reason).
+    #[error("the Hessian is not positive definite: {0}")]
+    NotPositiveDefinite(String),
+}
 
 /// Newton options.
 #[derive(Clone, Copy, Debug)]
@@ -46,13 +57,11 @@ pub struct Implicit {
     /// Index of each vertex among the free ones (`None` when fixed).
     free: Vec<Option<u32>>,
     n_free: usize,
-    pattern: SymbolicSparseColMat<usize>,
-    argsort: Argsort<usize>,
-    symbolic: SymbolicCholesky<usize>,
-    /// Values of the Cholesky factor (overwritten by each numeric factorization).
-    l_values: Vec<f64>,
-    /// Scratch memory for factorization and solve, kept between steps.
-    scratch: MemBuffer,
+    /// The lower-triangle entries `(row, col)` of the reduced Hessian, in the order of `vals`.
+    pattern: Vec<(usize, usize)>,
+    /// The sparse Cholesky factor: analysed and factored at the first Newton step, then
+    /// refactored with the same symbolic analysis (AMD ordering) at every later one.
+    factor: Option<SpdFactor>,
     par: Par,
     /// Value slot of each spring's off-diagonal block (both ends free).
     spring_slot: Vec<Option<usize>>,
@@ -61,7 +70,8 @@ pub struct Implicit {
     f: Vec<[f64; 3]>,
     /// Newton options.
     pub opts: NewtonOptions,
-    /// How many symbolic factorizations were computed (1 for the life of the solver).
+    /// How many symbolic factorizations were computed (0 before the first Newton step, then
+    /// 1 for the life of the solver).
     pub symbolic_count: usize,
     /// How many numeric factorizations (= Newton steps) were computed.
     pub numeric_count: usize,
@@ -71,20 +81,13 @@ impl Implicit {
     /// Builds the reduced pattern `S^T H S` and its symbolic factorization.
     pub fn new(m: &Model, opts: NewtonOptions) -> Result<Implicit, String> {
         let n = m.num_vertices();
-        let mut free = vec![None; n];
-        let mut n_free = 0usize;
-        for i in 0..n {
-            if !m.fixed[i] {
-                free[i] = Some(n_free as u32);
-                n_free += 1;
-            }
-        }
-        let mut idx: Vec<Pair<usize, usize>> = Vec::new();
+        let (free, n_free) = m.free_indices();
+        let mut idx: Vec<(usize, usize)> = Vec::new();
         // Diagonal 3x3 blocks, lower triangle (row >= col).
         for v in 0..n_free {
             for a in 0..3 {
                 for b in 0..=a {
-                    idx.push(Pair::new(3 * v + a, 3 * v + b));
+                    idx.push((3 * v + a, 3 * v + b));
                 }
             }
         }
@@ -98,47 +101,30 @@ impl Implicit {
                 spring_slot[s] = Some(idx.len());
                 for a in 0..3 {
                     for b in 0..3 {
-                        idx.push(Pair::new(3 * p + a, 3 * q + b));
+                        idx.push((3 * p + a, 3 * q + b));
                     }
                 }
             }
         }
         let nd = 3 * n_free;
-        let (pattern, argsort) = SymbolicSparseColMat::try_new_from_indices(nd, nd, &idx)
-            .map_err(|e| format!("sparse pattern: {e:?}"))?;
-        let symbolic = factorize_symbolic_cholesky(
-            pattern.as_ref(),
-            Side::Lower,
-            SymmetricOrdering::Amd,
-            Default::default(),
-        )
-        .map_err(|e| format!("symbolic Cholesky: {e:?}"))?;
         // Small systems factor faster on one thread (and nodes already run in parallel).
         let par = if nd >= 60_000 {
             Par::rayon(0)
         } else {
             Par::Seq
         };
-        let req = symbolic
-            .factorize_numeric_llt_scratch::<f64>(par, Default::default())
-            .or(symbolic.solve_in_place_scratch::<f64>(1, par));
-        let scratch = MemBuffer::try_new(req).map_err(|e| format!("scratch memory: {e:?}"))?;
-        let l_values = vec![0.0; symbolic.len_val()];
         Ok(Implicit {
             free,
             n_free,
-            pattern,
-            argsort,
-            symbolic,
-            l_values,
-            scratch,
+            vals: vec![0.0; idx.len()],
+            pattern: idx,
+            factor: None,
             par,
             spring_slot,
-            vals: vec![0.0; idx.len()],
             inc: Incidence::new(&m.springs, n),
             f: vec![[0.0; 3]; n],
             opts,
-            symbolic_count: 1,
+            symbolic_count: 0,
             numeric_count: 0,
         })
     }
@@ -171,17 +157,9 @@ impl Implicit {
         st: &mut State,
         h: f64,
         sp: Option<&Sphere>,
-    ) -> Result<usize, String> {
+    ) -> Result<usize, NewtonError> {
         let n = m.num_vertices();
-        let y: Vec<[f64; 3]> = (0..n)
-            .map(|i| {
-                if m.fixed[i] {
-                    st.x[i]
-                } else {
-                    axpy(axpy(st.x[i], h, st.v[i]), h * h, m.gravity)
-                }
-            })
-            .collect();
+        let y = m.inertial_positions(st, h);
         // Initial guess: the inertial position y.
         let mut x: Vec<[f64; 3]> = y.clone();
         let ih2 = 1.0 / (h * h);
@@ -209,7 +187,7 @@ impl Implicit {
                 }
             }
             if !gmax.is_finite() {
-                return Err("the gradient is not finite".into());
+                return Err(NewtonError::NonFiniteGradient);
             }
             if gmax == 0.0 {
                 break;
@@ -266,28 +244,28 @@ impl Implicit {
                     }
                 }
             }
-            let a = SparseColMat::new_from_argsort(self.pattern.clone(), &self.argsort, &self.vals)
-                .map_err(|e| format!("Hessian assembly: {e:?}"))?;
-            self.symbolic
-                .factorize_numeric_llt::<f64>(
-                    &mut self.l_values,
-                    a.as_ref(),
-                    Side::Lower,
-                    Default::default(),
-                    self.par,
-                    MemStack::new(&mut self.scratch),
-                    Default::default(),
-                )
-                .map_err(|e| format!("the Hessian is not positive definite: {e:?}"))?;
+            let vals = &self.vals;
+            let factor = match &mut self.factor {
+                Some(f) => {
+                    f.refactor_with(vals.len(), |k| vals[k], self.par)
+                        .map_err(NewtonError::NotPositiveDefinite)?;
+                    f
+                }
+                None => {
+                    let lower: Vec<Triplet<usize, usize, f64>> = (self.pattern.iter())
+                        .zip(vals)
+                        .map(|(&(r, c), &v)| Triplet::new(r, c, v))
+                        .collect();
+                    let f = SpdFactor::new(nd, &lower, self.par)
+                        .map_err(NewtonError::NotPositiveDefinite)?;
+                    self.symbolic_count += 1;
+                    self.factor.insert(f)
+                }
+            };
             self.numeric_count += 1;
             iters += 1;
             let mut dx = rhs.clone();
-            LltRef::new(&self.symbolic, &self.l_values).solve_in_place_with_conj(
-                Conj::No,
-                dx.as_mut(),
-                self.par,
-                MemStack::new(&mut self.scratch),
-            );
+            factor.solve_in_place(dx.as_mut());
             // Directional derivative grad . dx = -rhs . dx.
             let mut slope = 0.0;
             let mut step_max = 0.0f64;
@@ -296,7 +274,7 @@ impl Implicit {
                 step_max = step_max.max(dx[(r, 0)].abs());
             }
             if !step_max.is_finite() {
-                return Err("the Newton step is not finite".into());
+                return Err(NewtonError::NonFiniteStep);
             }
             // Backtracking line search (Armijo, c = 1e-4; Nocedal & Wright, Alg. 3.1).
             let mut alpha = 1.0;

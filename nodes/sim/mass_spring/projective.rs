@@ -34,14 +34,7 @@ impl Projective {
     /// Factors `M/h^2 + L` over the free vertices.
     pub fn new(m: &Model, h: f64, iterations: usize) -> Result<Projective, String> {
         let n = m.num_vertices();
-        let mut free = vec![None; n];
-        let mut n_free = 0usize;
-        for i in 0..n {
-            if !m.fixed[i] {
-                free[i] = Some(n_free as u32);
-                n_free += 1;
-            }
-        }
+        let (free, n_free) = m.free_indices();
         let mut t = Vec::new();
         for i in 0..n {
             if let Some(p) = free[i] {
@@ -88,15 +81,7 @@ impl Projective {
         let h = self.h;
         let n = m.num_vertices();
         let ih2 = 1.0 / (h * h);
-        let y: Vec<[f64; 3]> = (0..n)
-            .map(|i| {
-                if m.fixed[i] {
-                    st.x[i]
-                } else {
-                    axpy(axpy(st.x[i], h, st.v[i]), h * h, m.gravity)
-                }
-            })
-            .collect();
+        let y = m.inertial_positions(st, h);
         let mut x = y.clone();
         // Constant part of the right-hand side: M y / h^2.
         let mut b0 = Mat::<f64>::zeros(self.n_free, 3);

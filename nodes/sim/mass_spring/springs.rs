@@ -164,6 +164,35 @@ impl Model {
         self.mass.len()
     }
 
+    /// The index of each vertex among the free (not fixed) ones, `None` when fixed, and the
+    /// number of free vertices: the unknowns of the implicit solvers' reduced systems.
+    pub fn free_indices(&self) -> (Vec<Option<u32>>, usize) {
+        let n = self.num_vertices();
+        let mut free = vec![None; n];
+        let mut n_free = 0usize;
+        for i in 0..n {
+            if !self.fixed[i] {
+                free[i] = Some(n_free as u32);
+                n_free += 1;
+            }
+        }
+        (free, n_free)
+    }
+
+    /// The inertial positions `y = x + h v + h^2 g` of backward Euler's objective (fixed
+    /// vertices stay where they are).
+    pub fn inertial_positions(&self, st: &State, h: f64) -> Vec<[f64; 3]> {
+        (0..self.num_vertices())
+            .map(|i| {
+                if self.fixed[i] {
+                    st.x[i]
+                } else {
+                    axpy(axpy(st.x[i], h, st.v[i]), h * h, self.gravity)
+                }
+            })
+            .collect()
+    }
+
     /// Checks sizes and values; `Err` says what is wrong.
     pub fn check(&self) -> Result<(), String> {
         let n = self.mass.len();

@@ -14,26 +14,28 @@
 //! `1/alpha_i = g'_i . g_i + V^2 sum_j |grad W_ij|^2`,
 //! `g_i = sum_j V grad W_ij + sum_b V_b grad W_ib`, `g'_i = sum_j V grad W_ij + 2 sum_b V_b grad W_ib`.
 
-use super::fluid::{axpy, dot, Fluid, StepStats};
+use super::pressure_solver::PressureSolver;
+use super::state::{Fluid, StepStats};
+use crate::types::vec3::{axpy, dot, sub};
 use rayon::prelude::*;
 
 /// `alpha_i` (see the module doc); 0 for particles without neighbours.
 fn factors(f: &Fluid, vol: f64) -> Vec<f64> {
-    let bvol = &f.bvol;
+    let bvol = &f.boundary_volumes;
     let tiny = 1e-6 / (f.kernel.h * f.kernel.h);
-    f.nbf
+    f.fluid_neighbours
         .par_iter()
-        .zip(f.nbb.par_iter())
+        .zip(f.boundary_neighbours.par_iter())
         .map(|(nf, nb)| {
             let mut gf = [0.0; 3];
             let mut gb = [0.0; 3];
             let mut sq = 0.0;
             for n in nf {
-                axpy(vol, n.g, &mut gf);
-                sq += dot(n.g, n.g);
+                gf = axpy(gf, vol, n.grad_w);
+                sq += dot(n.grad_w, n.grad_w);
             }
             for n in nb {
-                axpy(bvol[n.j as usize], n.g, &mut gb);
+                gb = axpy(gb, bvol[n.index as usize], n.grad_w);
             }
             let g = [gf[0] + gb[0], gf[1] + gb[1], gf[2] + gb[2]];
             let g2 = [g[0] + gb[0], g[1] + gb[1], g[2] + gb[2]];
@@ -49,20 +51,19 @@ fn factors(f: &Fluid, vol: f64) -> Vec<f64> {
 
 /// `D rho^_i / Dt = sum_j V (v_i - v_j) . grad W_ij + sum_b V_b v_i . grad W_ib`.
 fn density_rate(f: &Fluid, vol: f64) -> Vec<f64> {
-    let (v, bvol) = (&f.v, &f.bvol);
-    f.nbf
+    let (v, bvol) = (&f.velocities, &f.boundary_volumes);
+    f.fluid_neighbours
         .par_iter()
-        .zip(f.nbb.par_iter())
+        .zip(f.boundary_neighbours.par_iter())
         .enumerate()
         .map(|(i, (nf, nb))| {
             let mut s = 0.0;
             for n in nf {
-                let j = n.j as usize;
-                let vij = [v[i][0] - v[j][0], v[i][1] - v[j][1], v[i][2] - v[j][2]];
-                s += vol * dot(vij, n.g);
+                let vij = sub(v[i], v[n.index as usize]);
+                s += vol * dot(vij, n.grad_w);
             }
             for n in nb {
-                s += bvol[n.j as usize] * dot(v[i], n.g);
+                s += bvol[n.index as usize] * dot(v[i], n.grad_w);
             }
             s
         })
@@ -71,18 +72,46 @@ fn density_rate(f: &Fluid, vol: f64) -> Vec<f64> {
 
 /// `v_i -= dt (sum_j V (kappa_i + kappa_j) grad W_ij + sum_b V_b 2 kappa_i grad W_ib)`.
 fn apply_kappa(f: &mut Fluid, kappa: &[f64], vol: f64, dt: f64) {
-    let (nbf, nbb, bvol) = (&f.nbf, &f.nbb, &f.bvol);
-    f.v.par_iter_mut().enumerate().for_each(|(i, v)| {
+    let (nbf, nbb, bvol) = (
+        &f.fluid_neighbours,
+        &f.boundary_neighbours,
+        &f.boundary_volumes,
+    );
+    f.velocities.par_iter_mut().enumerate().for_each(|(i, v)| {
         let ki = kappa[i];
         for n in &nbf[i] {
-            axpy(-dt * vol * (ki + kappa[n.j as usize]), n.g, v);
+            *v = axpy(*v, -dt * vol * (ki + kappa[n.index as usize]), n.grad_w);
         }
         if ki != 0.0 {
             for n in &nbb[i] {
-                axpy(-dt * bvol[n.j as usize] * 2.0 * ki, n.g, v);
+                *v = axpy(*v, -dt * bvol[n.index as usize] * 2.0 * ki, n.grad_w);
             }
         }
     });
+}
+
+/// The mean of `values` over `n` particles (0 for none).
+fn average(values: &[f64], n: usize) -> f64 {
+    values.iter().sum::<f64>() / n.max(1) as f64
+}
+
+/// One Jacobi iteration: the stiffness values `kappa_i = residual_i alpha_i / scale` applied
+/// to the velocities (`apply_kappa`); returns them.
+fn jacobi_update(
+    f: &mut Fluid,
+    residual: &[f64],
+    alpha: &[f64],
+    scale: f64,
+    vol: f64,
+    dt: f64,
+) -> Vec<f64> {
+    let kappa: Vec<f64> = residual
+        .par_iter()
+        .zip(alpha.par_iter())
+        .map(|(r, a)| r * a / scale)
+        .collect();
+    apply_kappa(f, &kappa, vol, dt);
+    kappa
 }
 
 /// The constant-density solver: Jacobi iterations until the average predicted compression
@@ -97,21 +126,15 @@ fn solve_density(f: &mut Fluid, alpha: &[f64], vol: f64, dt: f64) -> (usize, Vec
         let rate = density_rate(f, vol);
         let rho0 = f.params.rest_density;
         let err: Vec<f64> = f
-            .rho
+            .densities
             .par_iter()
             .zip(rate.par_iter())
             .map(|(r, d)| (r / rho0 + dt * d - 1.0).max(0.0))
             .collect();
-        let avg = err.iter().sum::<f64>() / n.max(1) as f64;
-        if it >= 2 && avg <= eta {
+        if it >= 2 && average(&err, n) <= eta {
             break;
         }
-        let kappa: Vec<f64> = err
-            .par_iter()
-            .zip(alpha.par_iter())
-            .map(|(e, a)| e * a / (dt * dt))
-            .collect();
-        apply_kappa(f, &kappa, vol, dt);
+        let kappa = jacobi_update(f, &err, alpha, dt * dt, vol, dt);
         total.iter_mut().zip(&kappa).for_each(|(t, k)| *t += k);
         it += 1;
     }
@@ -129,7 +152,7 @@ fn solve_divergence(f: &mut Fluid, alpha: &[f64], vol: f64, dt: f64) -> usize {
     let mut it = 0;
     while it < f.params.max_iterations {
         let rate = density_rate(f, vol);
-        let (nbf, nbb) = (&f.nbf, &f.nbb);
+        let (nbf, nbb) = (&f.fluid_neighbours, &f.boundary_neighbours);
         let rate: Vec<f64> = rate
             .par_iter()
             .enumerate()
@@ -141,51 +164,49 @@ fn solve_divergence(f: &mut Fluid, alpha: &[f64], vol: f64, dt: f64) -> usize {
                 }
             })
             .collect();
-        let avg = rate.iter().sum::<f64>() / n.max(1) as f64;
-        if it >= 1 && avg <= eta {
+        if it >= 1 && average(&rate, n) <= eta {
             break;
         }
-        let kappa: Vec<f64> = rate
-            .par_iter()
-            .zip(alpha.par_iter())
-            .map(|(d, a)| d * a / dt)
-            .collect();
-        apply_kappa(f, &kappa, vol, dt);
+        jacobi_update(f, &rate, alpha, dt, vol, dt);
         it += 1;
     }
     it
 }
 
-/// One DFSPH step of size `dt` (Bender & Koschier 2017 Alg. 1, in the order
-/// SPlisHSPlasH uses: neighbours, densities and factors at the current positions, the
-/// divergence solve, non-pressure forces, the density solve, then positions).
-pub fn step(f: &mut Fluid, dt: f64) -> Result<StepStats, String> {
-    f.find_neighbours()?;
-    f.compute_densities();
-    let vol = f.mass / f.params.rest_density;
-    let alpha = factors(f, vol);
-    let cap = f.params.max_iterations;
-    let mut iterations = 0;
-    let mut capped = 0;
-    if f.params.divergence {
-        let it = solve_divergence(f, &alpha, vol, dt);
+/// The DFSPH solver (stateless: tolerances and iteration limits are in `SphParams`).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Dfsph;
+
+impl PressureSolver for Dfsph {
+    /// One DFSPH step of size `dt` (Bender & Koschier 2017 Alg. 1, in the order
+    /// SPlisHSPlasH uses: neighbours, densities and factors at the current positions, the
+    /// divergence solve, non-pressure forces, the density solve, then positions).
+    fn step(&self, f: &mut Fluid, dt: f64) -> Result<StepStats, String> {
+        f.find_neighbours()?;
+        f.compute_densities();
+        let vol = f.mass / f.params.rest_density;
+        let alpha = factors(f, vol);
+        let cap = f.params.max_iterations;
+        let mut iterations = 0;
+        let mut capped = 0;
+        if f.params.divergence {
+            let it = solve_divergence(f, &alpha, vol, dt);
+            iterations += it;
+            capped += usize::from(it >= cap);
+        }
+        let acc = f.non_pressure_accelerations();
+        f.accelerate(&acc, dt);
+        let (it, kappa) = solve_density(f, &alpha, vol, dt);
         iterations += it;
         capped += usize::from(it >= cap);
+        // The pressure output is the density solver's (as in SPlisHSPlasH); see docs/sph.md.
+        let rho0 = f.params.rest_density;
+        f.pressures = kappa
+            .par_iter()
+            .zip(f.densities.par_iter())
+            .map(|(k, r)| k * r * r / rho0)
+            .collect();
+        f.advect(dt);
+        Ok(StepStats { iterations, capped })
     }
-    let acc = f.non_pressure_accelerations();
-    f.v.par_iter_mut().zip(acc.par_iter()).for_each(|(v, a)| {
-        axpy(dt, *a, v);
-    });
-    let (it, kappa) = solve_density(f, &alpha, vol, dt);
-    iterations += it;
-    capped += usize::from(it >= cap);
-    // The pressure output is the density solver's (as in SPlisHSPlasH); see docs/sph.md.
-    let rho0 = f.params.rest_density;
-    f.p = kappa
-        .par_iter()
-        .zip(f.rho.par_iter())
-        .map(|(k, r)| k * r * r / rho0)
-        .collect();
-    f.advect(dt);
-    Ok(StepStats { iterations, capped })
 }

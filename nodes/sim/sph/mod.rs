@@ -1,18 +1,31 @@
 //! SPH fluids (the course's ninth assignment): the `sph_fluid` node with WCSPH and DFSPH
 //! solvers, Akinci boundary particles and a uniform-grid neighbour search, and
 //! `points_save` to write particles as PLY. See `docs/sph.md`.
+//!
+//! Layers, each depending only on those before it: the kernel, the neighbour grid and the
+//! boundary sampling; the fluid's state (`state`); the neighbour lists, density summation,
+//! non-pressure forces and measurements over that state; the pressure solvers behind one
+//! interface (`pressure_solver`: `wcsph`, `dfsph`); time stepping (`time_step`); the nodes.
 
 pub mod boundary;
-pub mod dam_break;
+pub mod density;
 pub mod dfsph;
-pub mod fluid;
-pub mod grid;
+pub mod diagnostics;
 pub mod kernel;
+pub mod neighbour_grid;
+pub mod neighbours;
+pub mod non_pressure;
 pub mod points_save;
+pub mod pressure_solver;
 pub mod sph_fluid;
+pub mod state;
+pub mod time_step;
 pub mod wcsph;
 
-pub use fluid::{Boundary, Fluid, Solver, SphParams};
+pub use dfsph::Dfsph;
+pub use pressure_solver::PressureSolver;
+pub use state::{Boundary, Fluid, Neighbour, Solver, SphParams, StepStats};
+pub use wcsph::Wcsph;
 
 use crate::registry::Registry;
 

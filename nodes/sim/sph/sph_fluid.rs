@@ -4,27 +4,25 @@
 //! history in Martin & Moyce's dimensionless units. The state restarts on the first frame,
 //! when the frame goes backwards, or when any parameter changes.
 
-use super::fluid::{Boundary, Fluid, Solver, SphParams};
+use super::state::{Boundary, Fluid, Solver, SphParams};
 use crate::prelude::*;
+use crate::types::vec3::dot;
 
 /// The particles as `Points` with `velocity`, `density`, `pressure`, `speed` and `color`.
 pub fn to_points(f: &Fluid, vref: f64) -> Points {
     let mut pts = Points {
         dim: f.params.dim as u8,
-        positions: f.x.clone(),
+        positions: f.positions.clone(),
         ..Default::default()
     };
-    let speed: Vec<f64> =
-        f.v.iter()
-            .map(|v| super::fluid::dot(*v, *v).sqrt())
-            .collect();
+    let speed: Vec<f64> = f.velocities.iter().map(|v| dot(*v, *v).sqrt()).collect();
     pts.vectors.insert(
         "color".into(),
         speed.iter().map(|s| speed_color(s / vref)).collect(),
     );
-    pts.vectors.insert("velocity".into(), f.v.clone());
-    pts.scalars.insert("density".into(), f.rho.clone());
-    pts.scalars.insert("pressure".into(), f.p.clone());
+    pts.vectors.insert("velocity".into(), f.velocities.clone());
+    pts.scalars.insert("density".into(), f.densities.clone());
+    pts.scalars.insert("pressure".into(), f.pressures.clone());
     pts.scalars.insert("speed".into(), speed);
     pts
 }
@@ -61,13 +59,13 @@ pub fn splat(f: &Fluid, width: u32, vref: f64) -> Image {
     let mut img = Image::new(width, height, [0.02, 0.02, 0.03, 1.0]);
     let mut order: Vec<usize> = (0..f.len()).collect();
     if p.dim == 3 {
-        order.sort_by(|&a, &b| f.x[b][1].total_cmp(&f.x[a][1]));
+        order.sort_by(|&a, &b| f.positions[b][1].total_cmp(&f.positions[a][1]));
     }
     let rad = (p.particle_radius * scale).max(0.75);
     for i in order {
-        let cx = (f.x[i][0] - x0) * scale;
-        let cy = (y1 - f.x[i][up]) * scale;
-        let c = speed_color(super::fluid::dot(f.v[i], f.v[i]).sqrt() / vref);
+        let cx = (f.positions[i][0] - x0) * scale;
+        let cy = (y1 - f.positions[i][up]) * scale;
+        let c = speed_color(dot(f.velocities[i], f.velocities[i]).sqrt() / vref);
         let px = [c[0] as f32, c[1] as f32, c[2] as f32, 1.0];
         let (lx, hx) = ((cx - rad).floor().max(0.0), (cx + rad).ceil());
         let (ly, hy) = ((cy - rad).floor().max(0.0), (cy + rad).ceil());

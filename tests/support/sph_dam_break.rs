@@ -1,37 +1,22 @@
-//! The Martin & Moyce (1952) dam break in 2-D, as used by the tests, the benchmark and
-//! `graphs/dam_break_2d.json`: a column `a` wide and `2a` high (n^2 = 2) against the left
-//! wall of a tank `4a` long, and the comparison of the surge front with the experiment in
-//! its dimensionless units `Z = z / a`, `T = n t sqrt(g / a)`.
+//! The Martin & Moyce (1952) dam break in 2-D, shared by `tests/sph.rs` and `bench/sph.rs`
+//! (included with `#[path]`; `graphs/dam_break_2d.json` builds the same case from nodes): a
+//! column `a` wide and `2a` high (n^2 = 2) against the left wall of a tank `4a` long, and the
+//! comparison of the surge front with the experiment in its dimensionless units `Z = z / a`,
+//! `T = n t sqrt(g / a)`.
 
-use super::fluid::{Boundary, Fluid, Solver, SphParams};
+use cgnodes::nodes::metrics::compare_series::read_csv_columns;
+use cgnodes::nodes::sim::sph::{Boundary, Fluid, Solver, SphParams};
 
-/// Parses the `front`, `n2 = 2` rows of `martin_moyce_front.csv` into `(T, Z)` pairs.
-pub fn parse_martin_moyce(text: &str) -> Result<Vec<(f64, f64)>, String> {
-    let mut header: Vec<&str> = Vec::new();
-    let mut out = Vec::new();
-    for line in text
-        .lines()
-        .filter(|l| !l.starts_with('#') && !l.trim().is_empty())
-    {
-        let cells: Vec<&str> = line.split(',').collect();
-        if header.is_empty() {
-            header = cells;
-            continue;
-        }
-        let col = |n: &str| -> Result<&str, String> {
-            let i = header
-                .iter()
-                .position(|h| *h == n)
-                .ok_or(format!("no column {n}"))?;
-            cells.get(i).copied().ok_or(format!("short row: {line}"))
-        };
-        if col("quantity")? == "front" && col("n2")? == "2" {
-            let t = col("T_or_tau")?.parse::<f64>().map_err(|e| e.to_string())?;
-            let z = col("Z_or_H")?.parse::<f64>().map_err(|e| e.to_string())?;
-            out.push((t, z));
-        }
-    }
-    Ok(out)
+/// The experiment's surge front `(T, Z)` for the `a x 2a` column (n^2 = 2):
+/// `tests/data/sph/martin_moyce_front.csv` holds only that series (its `quantity` is `front`
+/// and its `n2` is 2 on every row).
+pub fn martin_moyce_front() -> Vec<(f64, f64)> {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/data/sph/martin_moyce_front.csv"
+    );
+    let text = std::fs::read_to_string(path).unwrap();
+    read_csv_columns(&text, "T_or_tau", "Z_or_H").unwrap()
 }
 
 /// The dam-break fluid: column `a x 2a` in a tank `4a x 2.5a`, particle radius `r`.

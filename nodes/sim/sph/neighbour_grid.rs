@@ -10,7 +10,7 @@ pub const MAX_CELLS: usize = 1 << 27;
 
 /// Particle indices bucketed by uniform grid cell.
 #[derive(Clone, Debug, Default)]
-pub struct Grid {
+pub struct NeighbourGrid {
     /// Cell edge length (the support radius).
     pub cell: f64,
     origin: [f64; 3],
@@ -21,12 +21,12 @@ pub struct Grid {
     pub sorted: Vec<u32>,
 }
 
-impl Grid {
+impl NeighbourGrid {
     /// Buckets `points` (all finite) into cells of edge `cell`. `Err` if the points spread
     /// over more than `MAX_CELLS` cells.
-    pub fn build(points: &[[f64; 3]], cell: f64) -> Result<Grid, String> {
+    pub fn build(points: &[[f64; 3]], cell: f64) -> Result<NeighbourGrid, String> {
         if points.is_empty() {
-            return Ok(Grid {
+            return Ok(NeighbourGrid {
                 cell,
                 ..Default::default()
             });
@@ -65,7 +65,7 @@ impl Grid {
                  use a smaller box or larger particles"
             ));
         }
-        let mut g = Grid {
+        let mut g = NeighbourGrid {
             cell,
             origin: lo,
             dims,
@@ -155,7 +155,7 @@ mod tests {
             pts.push([rnd(), rnd() * 0.5, rnd() * 0.3]);
         }
         let h = 0.12;
-        let g = Grid::build(&pts, h).unwrap();
+        let g = NeighbourGrid::build(&pts, h).unwrap();
         for (i, p) in pts.iter().enumerate() {
             let mut a = Vec::new();
             g.for_each_candidate(p, |j| {

@@ -1,0 +1,378 @@
+//! The `mass_spring` node: cloth from a mesh (springs along edges, polygon diagonals and
+//! optional bending lines), fixed vertices by selection, an optional sphere collider that
+//! may move along keyframes, stepped frame by frame. The simulator is kept in the node's
+//! state between frames and restarts when the mesh or any parameter changes.
+
+use super::implicit::NewtonOptions;
+use super::keyframes::{keyframed_center, parse_keyframes};
+use super::simulator::{Method, SetupError, SimError, Simulator, SolverOptions};
+use super::springs::{springs_from_mesh, Model, Sphere, SpringKinds};
+use crate::nodes::mesh::vertex_select::select_vertices;
+use crate::prelude::*;
+use std::hash::{Hash, Hasher};
+
+/// The node's state between frames.
+#[derive(Default)]
+struct NodeState {
+    sim: Option<Simulator>,
+    key: u64,
+    frame: i64,
+    start_frame: i64,
+}
+
+/// Columns of the `log` table.
+pub const LOG_COLUMNS: [&str; 8] = [
+    "frame",
+    "step",
+    "time",
+    "kinetic",
+    "potential",
+    "total",
+    "max_strain",
+    "iterations",
+];
+
+fn declare(b: &mut NodeBuilder) {
+    b.doc("Cloth as a mass-spring system: semi-implicit, implicit (Newton) or projective (Liu 2013) time steps, fixed vertices, sphere collider.")
+        .category("sim");
+    b.stateful();
+    b.add_input::<Mesh>("mesh")
+        .doc("Rest shape (e.g. the course's grid40x40.usda).");
+    b.add_input::<String>("integrator")
+        .choices(&["implicit", "semi_implicit", "projective"]);
+    b.add_input::<f64>("stiffness")
+        .default(1000.0)
+        .range(0.0, 1e9);
+    b.add_input::<f64>("h")
+        .default(0.01)
+        .range(1e-7, 0.5)
+        .doc("Time step (s).");
+    b.add_input::<i64>("substeps")
+        .default(1i64)
+        .range(1.0, 100000.0)
+        .doc("Steps per frame.");
+    b.add_input::<f64>("damping")
+        .default(0.995)
+        .range(1e-6, 1.0)
+        .doc("Velocity factor per 0.01 s (per step at the course's h = 0.01; 1 = undamped).");
+    b.add_input::<f64>("gravity").default(-9.8).range(-1e4, 1e4);
+    b.add_input::<String>("gravity_axis")
+        .choices(&["z", "y", "x"]);
+    b.add_input::<f64>("mass")
+        .default(1.0)
+        .min(1e-12)
+        .doc("Total mass, spread equally over the vertices (as in the course).");
+    b.add_input::<bool>("shear")
+        .default(true)
+        .doc("Springs across polygon diagonals (quads).");
+    b.add_input::<bool>("bending")
+        .default(false)
+        .doc("Skip-one springs along straight mesh lines.");
+    b.add_input::<String>("fixed").default("").doc(
+        "Fixed vertices: indices \"0,39\", top_corners, top_edge, corners, attr:NAME, or empty.",
+    );
+    b.add_input::<Vec<i64>>("fixed_indices")
+        .optional()
+        .doc("More fixed vertex indices.");
+    b.add_input::<bool>("sphere")
+        .default(false)
+        .doc("Enable the sphere collider.");
+    b.add_input::<[f64; 3]>("sphere_center")
+        .default([0.0, 0.0, -1.0]);
+    b.add_input::<f64>("sphere_radius")
+        .default(0.4)
+        .range(0.0, 1e6);
+    b.add_input::<f64>("penalty_k")
+        .default(10000.0)
+        .range(0.0, 1e12);
+    b.add_input::<f64>("collision_scale")
+        .default(1.1)
+        .range(1.0, 10.0)
+        .doc("Contact starts at this factor times the radius (course: 1.1).");
+    b.add_input::<String>("sphere_keyframes")
+        .default("")
+        .doc("Moving sphere: \"frame:x,y,z; frame:x,y,z\" (overrides sphere_center).");
+    b.add_input::<i64>("newton_iters")
+        .default(20i64)
+        .range(1.0, 1000.0);
+    b.add_input::<f64>("newton_tol")
+        .default(1e-7)
+        .range(0.0, 1.0)
+        .doc("Newton stops when no vertex moves more than this.");
+    b.add_input::<i64>("pd_iters")
+        .default(10i64)
+        .range(1.0, 10000.0)
+        .doc("Local/global iterations per step (projective).");
+    b.add_input::<f64>("blowup_factor")
+        .default(100.0)
+        .range(1.0, 1e12)
+        .doc("Energy growth (times the model's energy scale) reported as unstable.");
+    b.add_output::<Mesh>("mesh");
+    b.add_output::<Table>("log");
+}
+
+struct Params {
+    method: Method,
+    h: f64,
+    substeps: usize,
+    sphere: Option<Sphere>,
+    keys: Vec<(f64, [f64; 3])>,
+}
+
+/// Reads the parameters; builds the simulator (springs, factorizations) only when `with_sim`.
+fn build(
+    ctx: &ExecContext,
+    mesh: &Mesh,
+    with_sim: bool,
+) -> Result<(Option<Simulator>, Params), NodeError> {
+    let method = Method::parse(&ctx.input::<String>("integrator")?)
+        .ok_or_else(|| NodeError::invalid("integrator", "unknown integrator"))?;
+    let k: f64 = ctx.input("stiffness")?;
+    let h: f64 = ctx.input("h")?;
+    let substeps: i64 = ctx.input("substeps")?;
+    let damping: f64 = ctx.input("damping")?;
+    let g: f64 = ctx.input("gravity")?;
+    let axis = match ctx.input::<String>("gravity_axis")?.as_str() {
+        "x" => 0,
+        "y" => 1,
+        _ => 2,
+    };
+    let mass: f64 = ctx.input("mass")?;
+    for (name, v) in [
+        ("stiffness", k),
+        ("h", h),
+        ("damping", damping),
+        ("gravity", g),
+        ("mass", mass),
+    ] {
+        if !v.is_finite() {
+            return Err(NodeError::invalid(name, "must be finite"));
+        }
+    }
+    if h <= 0.0 {
+        return Err(NodeError::invalid("h", "must be positive"));
+    }
+    if mass <= 0.0 {
+        return Err(NodeError::invalid("mass", "must be positive"));
+    }
+    if !(damping > 0.0 && damping <= 1.0) {
+        return Err(NodeError::invalid("damping", "must be in (0, 1]"));
+    }
+    let n = mesh.num_vertices();
+    if n == 0 {
+        return Err(NodeError::topology("mesh", "the mesh has no vertices"));
+    }
+    let kinds = SpringKinds {
+        shear: ctx.input("shear")?,
+        bending: ctx.input("bending")?,
+        bending_scale: 1.0,
+    };
+    let springs = springs_from_mesh(mesh, k, kinds);
+    let mut fixed = vec![false; n];
+    let sel: String = ctx.input("fixed")?;
+    for i in select_vertices(mesh, &sel, axis).map_err(|e| NodeError::invalid("fixed", e))? {
+        fixed[i] = true;
+    }
+    if let Some(list) = ctx.input_opt::<Vec<i64>>("fixed_indices")? {
+        for i in list {
+            if i < 0 || i as usize >= n {
+                return Err(NodeError::invalid(
+                    "fixed_indices",
+                    format!("vertex index {i} is outside 0..{n}"),
+                ));
+            }
+            fixed[i as usize] = true;
+        }
+    }
+    let mut gravity = [0.0; 3];
+    gravity[axis] = g;
+    let model = Model {
+        springs,
+        mass: vec![mass / n as f64; n],
+        fixed,
+        gravity,
+        // The course applies `damping` once per step of h = 0.01; scaling it to the step keeps
+        // the same decay per second whatever h and substeps are.
+        damping: damping.powf(h / 0.01),
+    };
+    let sphere = if ctx.input::<bool>("sphere")? {
+        let r: f64 = ctx.input("sphere_radius")?;
+        let kp: f64 = ctx.input("penalty_k")?;
+        let s: f64 = ctx.input("collision_scale")?;
+        let c: [f64; 3] = ctx.input("sphere_center")?;
+        if !(r.is_finite() && kp.is_finite() && s.is_finite() && c.iter().all(|x| x.is_finite())) {
+            return Err(NodeError::invalid(
+                "sphere_radius",
+                "sphere parameters must be finite",
+            ));
+        }
+        Some(Sphere {
+            center: c,
+            radius: r,
+            k: kp,
+            scale: s,
+        })
+    } else {
+        None
+    };
+    let keys = parse_keyframes(&ctx.input::<String>("sphere_keyframes")?)
+        .map_err(|e| NodeError::invalid("sphere_keyframes", e))?;
+    let opts = SolverOptions {
+        newton: NewtonOptions {
+            max_iters: ctx.input::<i64>("newton_iters")?.max(1) as usize,
+            tol: ctx.input("newton_tol")?,
+        },
+        pd_iterations: ctx.input::<i64>("pd_iters")?.max(1) as usize,
+        blowup_factor: ctx.input("blowup_factor")?,
+    };
+    let sim = if with_sim {
+        Some(
+            Simulator::new(model, mesh.positions.clone(), None, method, h, opts).map_err(|e| {
+                match e {
+                    SetupError::NotPositiveDefinite(m) => NodeError::singular(m),
+                    SetupError::Invalid(m) => NodeError::invalid("mesh", m),
+                }
+            })?,
+        )
+    } else {
+        None
+    };
+    Ok((
+        sim,
+        Params {
+            method,
+            h,
+            substeps: substeps.max(1) as usize,
+            sphere,
+            keys,
+        },
+    ))
+}
+
+/// A hash of the mesh and every parameter: when it changes, the simulation restarts.
+fn input_key(ctx: &ExecContext, mesh: &Mesh) -> u64 {
+    let mut h = std::collections::hash_map::DefaultHasher::new();
+    for p in &mesh.positions {
+        for c in p {
+            c.to_bits().hash(&mut h);
+        }
+    }
+    mesh.face_counts().hash(&mut h);
+    mesh.face_indices().hash(&mut h);
+    for s in &ctx.decl.inputs {
+        if s.name != "mesh" {
+            s.name.hash(&mut h);
+            if let Some(v) = ctx.input_value(&s.name) {
+                v.to_json().map(|j| j.to_string()).hash(&mut h);
+            }
+        }
+    }
+    h.finish()
+}
+
+fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
+    let mesh: Arc<Mesh> = ctx.input("mesh")?;
+    let key = input_key(ctx, &mesh);
+    let frame = ctx.frame();
+    let restart = {
+        let st = ctx.state::<NodeState>()?;
+        st.sim.is_none() || st.key != key || frame <= st.frame
+    };
+    let (sim0, params) = build(ctx, &mesh, restart)?;
+    let st = ctx.state::<NodeState>()?;
+    let mut log = Table::with_columns(&LOG_COLUMNS);
+    if let Some(sim0) = sim0 {
+        // First frame (or new input): the rest state, no steps.
+        let e = sim0.energy(params.sphere.as_ref());
+        log.push_row(&[
+            frame as f64,
+            0.0,
+            0.0,
+            e.kinetic,
+            e.potential,
+            e.total(),
+            e.max_strain,
+            0.0,
+        ]);
+        st.sim = Some(sim0);
+        st.key = key;
+        st.frame = frame;
+        st.start_frame = frame;
+    }
+    let start = st.start_frame;
+    let frames = (frame - st.frame).max(0) as usize;
+    let last = st.frame;
+    let result = {
+        let sim = st.sim.as_mut().expect("set above");
+        let mut err = None;
+        'outer: for df in 0..frames {
+            let f = last + df as i64; // frame being advanced from
+            for s in 0..params.substeps {
+                let frac = (f - start) as f64 + (s + 1) as f64 / params.substeps as f64;
+                let sphere = params.sphere.map(|mut sp| {
+                    if let Some(c) = keyframed_center(&params.keys, start as f64 + frac) {
+                        sp.center = c;
+                    }
+                    sp
+                });
+                match sim.step(sphere.as_ref()) {
+                    Ok(l) => log.push_row(&[
+                        (f + 1) as f64,
+                        sim.steps as f64,
+                        sim.steps as f64 * params.h,
+                        l.energy.kinetic,
+                        l.energy.potential,
+                        l.energy.total(),
+                        l.energy.max_strain,
+                        l.iterations as f64,
+                    ]),
+                    Err(e) => {
+                        err = Some(match e {
+                            SimError::Unstable { reason, .. } => NodeError::unstable(format!(
+                                "{:?} integrator blew up at frame {} step {} (h = {}): {reason}; use a smaller h, more substeps, or the implicit integrator",
+                                params.method, f + 1, s + 1, params.h
+                            )),
+                            SimError::Solver(m) => NodeError::singular(format!(
+                                "frame {} step {}: {m}",
+                                f + 1,
+                                s + 1
+                            )),
+                        });
+                        break 'outer;
+                    }
+                }
+            }
+        }
+        match err {
+            Some(e) => Err(e),
+            None => Ok(sim.state.clone()),
+        }
+    };
+    let state = match result {
+        Ok(s) => s,
+        Err(e) => {
+            ctx.reset_state();
+            return Err(e);
+        }
+    };
+    st.frame = frame;
+    let mut out = (*mesh).clone();
+    out.positions = state.x;
+    out.attributes.insert(
+        "velocity".into(),
+        AttributeData::Vec3(Attribute {
+            domain: Domain::Vertex,
+            values: state.v,
+        }),
+    );
+    log.meta
+        .insert("integrator".into(), format!("{:?}", params.method));
+    ctx.set_output("mesh", out);
+    ctx.set_output("log", log);
+    Ok(())
+}
+
+/// Registers `mass_spring`.
+pub fn register(r: &mut Registry) {
+    r.add("mass_spring", declare, execute);
+}

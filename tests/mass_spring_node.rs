@@ -1,0 +1,137 @@
+//! The `mass_spring` node in graphs run by the executor: state kept across frames, blow-ups
+//! reported with frame and step, and bad fixed-vertex selections rejected as input errors.
+//! The simulator itself is checked in `tests/mass_spring.rs`.
+
+#[path = "support/hanging_cloth.rs"]
+mod hanging_cloth;
+
+use cgnodes::exec::{Executor, RunOptions};
+use cgnodes::node::{ErrorKind, FileEnv};
+use cgnodes::nodes::sim::mass_spring::grid::grid_mesh;
+use cgnodes::nodes::sim::mass_spring::Method;
+use cgnodes::registry::Registry;
+use cgnodes::types::{Mesh, Value};
+use hanging_cloth::hanging;
+
+fn run_graph(json: &str, frames: std::ops::RangeInclusive<i64>) -> Vec<cgnodes::exec::RunReport> {
+    let dir = tempfile::tempdir().unwrap();
+    let gp = dir.path().join("g.json");
+    std::fs::write(&gp, json).unwrap();
+    let g = cgnodes::graph::load(&gp).unwrap();
+    let valid = cgnodes::validate::validate(&g, &cgnodes::nodes::builtin_registry()).unwrap();
+    let exec = Executor::new(Some(1), None).unwrap();
+    let opts = RunOptions {
+        files: FileEnv {
+            graph_dir: valid.dir.clone(),
+            out_dir: dir.path().join("out"),
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    frames.map(|f| exec.run(&valid, &opts, f)).collect()
+}
+
+const GRAPH: &str = r#"{
+  "format": "cgnodes-graph", "version": 1,
+  "nodes": {
+    "grid": {"type": "mesh_grid", "params": {"cells_u": 10, "cells_v": 10}},
+    "sim": {"type": "mass_spring", "inputs": {"mesh": "grid.mesh"},
+            "params": {"integrator": "INTEGRATOR", "h": H, "substeps": SUB, "fixed": "top_corners"}},
+    "save": {"type": "mesh_save", "inputs": {"mesh": "sim.mesh"}, "params": {"path": "cloth_{frame:04}.obj"}}
+  }
+}"#;
+
+fn graph(integrator: &str, h: f64, substeps: i64) -> String {
+    GRAPH
+        .replace("INTEGRATOR", integrator)
+        .replace("H", &h.to_string())
+        .replace("SUB", &substeps.to_string())
+}
+
+fn output_mesh(r: &cgnodes::exec::RunReport) -> std::sync::Arc<Mesh> {
+    match r.output("sim", "mesh") {
+        Some(Value::Mesh(m)) => m.clone(),
+        other => panic!("no mesh: {other:?} {:?}", r.errors()),
+    }
+}
+
+#[test]
+fn executor_keeps_state_across_frames() {
+    let reports = run_graph(&graph("implicit", 0.01, 2), 1..=5);
+    for r in &reports {
+        assert!(r.ok(), "{:?}", r.errors());
+    }
+    // Frame 1 is the rest state; frames 2..5 each advance 2 steps of 0.01.
+    let (mut sim, _) = hanging(Method::Implicit, 0.01);
+    assert_eq!(output_mesh(&reports[0]).positions, sim.state.x);
+    for (f, r) in reports.iter().enumerate().skip(1) {
+        for _ in 0..2 {
+            sim.step(None).unwrap();
+        }
+        let m = output_mesh(r);
+        let err = m
+            .positions
+            .iter()
+            .zip(&sim.state.x)
+            .flat_map(|(a, b)| (0..3).map(move |c| (a[c] - b[c]).abs()))
+            .fold(0.0, f64::max);
+        assert!(
+            err < 1e-9,
+            "frame {}: differs from a direct run by {err}",
+            f + 1
+        );
+        match r.output("sim", "log") {
+            Some(Value::Table(t)) => {
+                assert_eq!(t.num_rows(), 2);
+                assert_eq!(
+                    t.column("step").unwrap(),
+                    &[(2 * f - 1) as f64, (2 * f) as f64]
+                );
+            }
+            other => panic!("no log: {other:?}"),
+        }
+    }
+    // The cloth has moved by the last frame.
+    assert_ne!(
+        output_mesh(&reports[4]).positions,
+        output_mesh(&reports[0]).positions
+    );
+}
+
+#[test]
+fn explicit_blow_up_is_reported_with_frame_and_step() {
+    // The course default h = 0.01 is far beyond semi-implicit's limit on a 10x10 grid.
+    let reports = run_graph(&graph("semi_implicit", 0.01, 10), 1..=4);
+    let err = reports
+        .iter()
+        .flat_map(|r| r.nodes.iter())
+        .find_map(|n| match &n.status {
+            cgnodes::exec::NodeStatus::Failed(e) => Some(e.clone()),
+            _ => None,
+        })
+        .expect("semi-implicit at h = 0.01 must fail");
+    assert_eq!(err.kind, ErrorKind::Unstable);
+    assert!(
+        err.message.contains("frame") && err.message.contains("step"),
+        "{}",
+        err.message
+    );
+}
+
+#[test]
+fn bad_fixed_selection_is_an_input_error() {
+    let mut r = Registry::new();
+    cgnodes::nodes::sim::mass_spring::register(&mut r);
+    let decl = r.get("mass_spring").unwrap();
+    let mesh = grid_mesh(3, 3, [1.0, 1.0], "xy", [0.0; 3], true).unwrap();
+    for sel in ["999", "left_ear", "attr:missing"] {
+        let mut inputs = std::collections::BTreeMap::new();
+        inputs.insert("mesh".to_string(), Value::from(mesh.clone()));
+        inputs.insert("fixed".to_string(), Value::from(sel));
+        let mut state = None;
+        let files = FileEnv::default();
+        let mut ctx = cgnodes::node::ExecContext::standalone(decl, inputs, &mut state, &files, 0);
+        let e = (decl.exec.as_ref().unwrap())(&mut ctx).unwrap_err();
+        assert_eq!(e.kind, ErrorKind::InvalidInput, "{sel}: {e}");
+    }
+}

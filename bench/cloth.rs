@@ -10,7 +10,7 @@
 //! `semi_implicit` (the same symplectic Euler as Warp's), and for `implicit` (one backward Euler
 //! step per frame, h = 1/60) Newton steps per second and ms/frame; `projective` likewise.
 
-use cgnodes::nodes::sim::mass_spring::grid::grid_mesh;
+use cgnodes::nodes::mesh::mesh_grid::grid_mesh;
 use cgnodes::nodes::sim::mass_spring::{
     springs_from_mesh, Method, Model, Simulator, SolverOptions, SpringKinds,
 };

@@ -9,7 +9,7 @@
 //! every output, computes), and 4x supersampling for comparison.
 
 use cgnodes::nodes::mesh::load::{load_mesh, LoadOptions};
-use cgnodes::nodes::render::primitive::plane_mesh;
+use cgnodes::nodes::mesh::mesh_plane::plane_mesh;
 use cgnodes::nodes::render::raster::{render, AntiAliasing, Passes, RasterOptions};
 use cgnodes::types::*;
 use std::sync::Arc;

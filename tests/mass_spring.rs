@@ -3,7 +3,7 @@
 //! limit 2/omega_max on an 8x8 grid, implicit stability far beyond it, fixed vertices, the
 //! sphere collider, and degenerate models (the node in graphs: `tests/mass_spring_node.rs`).
 
-use cgnodes::nodes::sim::mass_spring::grid::grid_mesh;
+use cgnodes::nodes::mesh::mesh_grid::grid_mesh;
 use cgnodes::nodes::sim::mass_spring::{
     springs_from_mesh, Method, Model, SimError, Simulator, SolverOptions, Sphere, SpringKinds,
     Springs,

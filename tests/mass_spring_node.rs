@@ -7,7 +7,7 @@ mod hanging_cloth;
 
 use cgnodes::exec::{Executor, RunOptions};
 use cgnodes::node::{ErrorKind, FileEnv};
-use cgnodes::nodes::sim::mass_spring::grid::grid_mesh;
+use cgnodes::nodes::mesh::mesh_grid::grid_mesh;
 use cgnodes::nodes::sim::mass_spring::Method;
 use cgnodes::registry::Registry;
 use cgnodes::types::{Mesh, Value};

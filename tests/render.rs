@@ -3,8 +3,9 @@
 
 use cgnodes::exec::{Executor, NodeStatus, RunOptions, RunReport};
 use cgnodes::nodes::builtin_registry;
-use cgnodes::nodes::render::image_io::{decode_image, encode_image, ColorSpace, ImageFileFormat};
-use cgnodes::nodes::render::primitive::plane_mesh;
+use cgnodes::nodes::image::image_load::{decode_image, ColorSpace};
+use cgnodes::nodes::image::image_save::{encode_image, ImageFileFormat};
+use cgnodes::nodes::mesh::mesh_plane::plane_mesh;
 use cgnodes::nodes::render::raster::{render, AntiAliasing, Passes, RasterOptions};
 use cgnodes::types::*;
 use cgnodes::validate::validate;

@@ -366,64 +366,6 @@ pub fn mtl_name(mat: &Material) -> String {
     }
 }
 
-/// One `o`/`g` block of an OBJ file as read by `load_obj_blocks`.
-pub struct ObjBlock {
-    /// The block's name.
-    pub name: String,
-    /// Its positions and polygon faces (no UVs or normals; vertices renumbered per block).
-    pub mesh: Mesh,
-    /// Index of its material in the file's MTL materials.
-    pub material: Option<usize>,
-}
-
-/// Reads an OBJ file with tobj as one mesh per `o`/`g` block (blocks without faces are
-/// skipped), with the MTL materials its `mtllib` lines name: what a scene loader needs.
-/// Errors carry the line number where `find_bad_obj_line` finds one, as in `load_obj`.
-pub fn load_obj_blocks(path: &Path) -> Result<(Vec<ObjBlock>, Vec<tobj::Material>), String> {
-    let opts = tobj::LoadOptions {
-        triangulate: false,
-        single_index: false,
-        ..Default::default()
-    };
-    let locate = || {
-        std::fs::read_to_string(path)
-            .ok()
-            .and_then(|t| find_bad_obj_line(&t))
-    };
-    let (models, mats) = tobj::load_obj(path, &opts).map_err(|e| match locate() {
-        Some((ln, msg)) => format!("line {ln}: {msg}"),
-        None => format!("{e}"),
-    })?;
-    let mats = mats.map_err(|e| format!("material library: {e}"))?;
-    let mut blocks = Vec::new();
-    for m in models {
-        let mesh = m.mesh;
-        if mesh.indices.is_empty() {
-            continue;
-        }
-        let positions: Vec<[f64; 3]> = mesh
-            .positions
-            .chunks_exact(3)
-            .map(|p| [p[0], p[1], p[2]])
-            .collect();
-        let counts = if mesh.face_arities.is_empty() {
-            vec![3u32; mesh.indices.len() / 3]
-        } else {
-            mesh.face_arities
-        };
-        let out = Mesh::new(positions, counts, mesh.indices).map_err(|e| match locate() {
-            Some((ln, msg)) => format!("line {ln}: {msg}"),
-            None => format!("object '{}': {e}", m.name),
-        })?;
-        blocks.push(ObjBlock {
-            name: m.name,
-            mesh: out,
-            material: mesh.material_id,
-        });
-    }
-    Ok((blocks, mats))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -8,7 +8,7 @@ use std::path::Path;
 /// `image_save`'s encoder; a `+inf` colour channel stays white here (the encoder writes it
 /// as 0), as texture files written by `mesh_save` always had.
 pub fn png_bytes(img: &Image) -> Result<Vec<u8>, String> {
-    use crate::nodes::render::image_io::{encode_image, ImageFileFormat};
+    use crate::nodes::image::image_save::{encode_image, ImageFileFormat};
     let mut img = img.clone();
     for p in &mut img.pixels {
         for c in &mut p[..3] {

@@ -1,8 +1,6 @@
 //! Metric nodes: accuracy against a reference, for charts of accuracy against time.
 
 pub mod compare_series;
-/// Moved to the image domain; re-exported so the old path keeps working.
-pub use crate::nodes::image::image_compare;
 
 use crate::registry::Registry;
 

@@ -4,18 +4,10 @@
 
 use crate::prelude::*;
 
-/// Splits every polygon into a fan of triangles from its first corner.
+/// Splits every polygon into a fan of triangles from its first corner (`Mesh::fan_triangles`,
+/// named here for the parameterization code that calls it on every mesh).
 pub fn fan_triangles(mesh: &Mesh) -> Vec<[u32; 3]> {
-    if let Some(t) = mesh.triangles() {
-        return t;
-    }
-    let mut out = Vec::new();
-    for f in mesh.faces() {
-        for k in 1..f.len() - 1 {
-            out.push([f[0], f[k], f[k + 1]]);
-        }
-    }
-    out
+    mesh.fan_triangles()
 }
 
 /// The triangles of a grid of `cells_u x cells_v` squares, each split along its
@@ -45,7 +37,7 @@ pub fn grid_triangles(cells_u: usize, cells_v: usize) -> Vec<[u32; 3]> {
 
 /// Row starts of compressed rows with `per_corner` entries for every triangle corner at a
 /// vertex: row `v` is `start[v]..start[v + 1]`, `start[n]` the total. The counting pass of a
-/// counting sort of per-vertex lists (`vertex_triangles`, `LaplacianRows`).
+/// counting sort of per-vertex lists with several entries per corner (`LaplacianRows`).
 pub fn corner_row_starts(n: usize, triangles: &[[u32; 3]], per_corner: usize) -> Vec<usize> {
     let mut start = vec![0usize; n + 1];
     for tri in triangles {
@@ -57,21 +49,6 @@ pub fn corner_row_starts(n: usize, triangles: &[[u32; 3]], per_corner: usize) ->
         start[v + 1] += start[v];
     }
     start
-}
-
-/// The triangles of each of the `n` vertices, in compressed rows (`start`, `triangle`),
-/// each row in increasing triangle order.
-pub fn vertex_triangles(n: usize, triangles: &[[u32; 3]]) -> (Vec<usize>, Vec<u32>) {
-    let start = corner_row_starts(n, triangles, 1);
-    let mut next = start.clone();
-    let mut list = vec![0u32; start[n]];
-    for (t, tri) in triangles.iter().enumerate() {
-        for &v in tri {
-            list[next[v as usize]] = t as u32;
-            next[v as usize] += 1;
-        }
-    }
-    (start, list)
 }
 
 #[cfg(test)]
@@ -93,7 +70,7 @@ mod tests {
         .unwrap();
         assert_eq!(fan_triangles(&m), t);
         assert_eq!(m.topology().boundary_loops.len(), 1);
-        let (start, list) = vertex_triangles(6, &t);
+        let (start, list) = crate::types::Topology::vertex_triangles(6, &t);
         assert_eq!(start, [0, 2, 5, 6, 7, 10, 12]);
         assert_eq!(&list[start[4]..start[5]], [0, 1, 3]);
     }

@@ -1,13 +1,9 @@
 //! Render nodes: the scene description shared by the rasterizer and the tracers (camera,
-//! lights, materials, scene) and the rasterizer. (`image_io` re-exports the image file
-//! functions that moved to the image domain.)
+//! lights, materials, scene) and the rasterizer.
 
 pub mod camera;
-pub mod image_io;
 pub mod light;
 pub mod material;
-/// Moved to `nodes::mesh::mesh_plane`; kept under the old path for its importers.
-pub use crate::nodes::mesh::mesh_plane as primitive;
 pub mod raster;
 pub mod scene;
 pub mod uv_project;

@@ -5,9 +5,9 @@
 //! `illum` 4, 6 or 7 a smooth dielectric with index `Ni` (1.5 if missing), `Ns` sets the
 //! Phong roughness (r = sqrt(2 / (Ns + 2))) and `Ks` the specular weight the Whitted
 //! tracer uses. Textures are not read. The OBJ itself is read by the mesh domain's loader
-//! (`load_obj_blocks`), so its errors carry line numbers.
+//! (`load_obj_objects`), so its errors carry line numbers.
 
-use crate::nodes::mesh::obj::load_obj_blocks;
+use crate::nodes::mesh::obj::load_obj_objects;
 use crate::prelude::*;
 use std::path::Path;
 
@@ -51,14 +51,15 @@ pub fn material_from_mtl(m: &tobj::Material, two_sided_emission: bool) -> Materi
 /// Reads `path` (OBJ) and the MTL files it references into a scene without lights or
 /// camera; faces keep their winding (counter-clockwise = front).
 pub fn load_obj_scene(path: &Path, two_sided_emission: bool) -> Result<Scene, String> {
-    let (blocks, mats) = load_obj_blocks(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let (blocks, mats) = load_obj_objects(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let mats = mats.map_err(|e| format!("{}: material library: {e}", path.display()))?;
     let mats: Vec<Arc<Material>> = mats
         .iter()
         .map(|m| Arc::new(material_from_mtl(m, two_sided_emission)))
         .collect();
     let mut scene = Scene::default();
     for b in blocks {
-        let material = match b.material {
+        let material = match b.material_id {
             Some(i) => Some(
                 mats.get(i)
                     .cloned()
@@ -66,8 +67,12 @@ pub fn load_obj_scene(path: &Path, two_sided_emission: bool) -> Result<Scene, St
             ),
             None => None,
         };
+        // The tracers shade with geometric normals and take no UVs from the file (yet).
+        let mut mesh = b.mesh;
+        mesh.uvs = None;
+        mesh.normals = None;
         scene.objects.push(SceneObject {
-            mesh: Arc::new(b.mesh),
+            mesh: Arc::new(mesh),
             material,
         });
     }

@@ -1,7 +1,7 @@
 //! The course's hanging cloth, shared by `tests/mass_spring.rs` and
 //! `tests/mass_spring_node.rs` (included with `#[path]`).
 
-use cgnodes::nodes::sim::mass_spring::grid::grid_mesh;
+use cgnodes::nodes::mesh::mesh_grid::grid_mesh;
 use cgnodes::nodes::sim::mass_spring::{
     springs_from_mesh, Method, Model, Simulator, SolverOptions, SpringKinds,
 };

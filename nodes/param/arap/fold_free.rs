@@ -11,7 +11,6 @@ use super::options::{
     ArapOptions, RefactorSchedule, MAX_WEIGHT, MIN_STEP, REWEIGHT_FACTOR, STEP_SAFETY,
 };
 use crate::nodes::linalg::SpdFactor;
-use crate::nodes::param::triangles::vertex_triangles;
 use faer::sparse::{SparseColMat, SymbolicSparseColMat};
 use faer::{Mat, Par};
 
@@ -56,7 +55,7 @@ impl FoldFree {
             mark: vec![u32::MAX; if opts.injective { n } else { 0 }],
             seen: vec![false; if opts.injective { m } else { 0 }],
             adjacency: if opts.injective && opts.local_rings > 0 {
-                vertex_triangles(n, &frames.triangles)
+                crate::types::Topology::vertex_triangles(n, &frames.triangles)
             } else {
                 (Vec::new(), Vec::new())
             },
@@ -351,7 +350,7 @@ mod tests {
         for &b in &blocked {
             limits[b] = 0.1;
         }
-        let adjacency = vertex_triangles(n, &frames.triangles);
+        let adjacency = crate::types::Topology::vertex_triangles(n, &frames.triangles);
         let (mut mark, mut seen, mut touched) = (vec![u32::MAX; n], vec![false; m], Vec::new());
         let dmax = d
             .iter()

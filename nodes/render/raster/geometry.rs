@@ -220,7 +220,7 @@ mod tests {
     fn plane_tangents_follow_u_and_materials_resolve() {
         // The plane's u runs along +x and v along -z, normal +y: T = +x, B = -z, and
         // (N x T) = y x x = -z, so the handedness is +1.
-        let m = crate::nodes::render::primitive::plane_mesh(2.0, [0.0; 3], 2, 1.0);
+        let m = crate::nodes::mesh::mesh_plane::plane_mesh(2.0, [0.0; 3], 2, 1.0);
         let red = Arc::new(Material {
             base_color: [1.0, 0.0, 0.0],
             ..Default::default()

@@ -12,8 +12,6 @@
 // vertex; index loops read closer to the formulas than zipped iterators.
 #![allow(clippy::needless_range_loop)]
 
-/// Moved to `nodes::mesh::mesh_grid`; kept under the old path for its importers.
-pub use crate::nodes::mesh::mesh_grid as grid;
 pub mod implicit;
 pub mod keyframes;
 // The node lives in a file named after its node type, which is also this domain's name.

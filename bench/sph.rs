@@ -7,7 +7,7 @@
 //! through `bench/peers/sph_splishsplash.py` with the Python in `SPH_PEER_PYTHON` (default
 //! `python3`; needs `pip install pysplishsplash`); it is skipped if that fails.
 
-#[path = "../tests/support/sph_dam_break.rs"]
+#[path = "../tests/it/support/sph_dam_break.rs"]
 mod dam_break;
 
 use cgnodes::nodes::sim::sph::Solver;

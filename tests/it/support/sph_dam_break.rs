@@ -1,4 +1,4 @@
-//! The Martin & Moyce (1952) dam break in 2-D, shared by `tests/sph.rs` and `bench/sph.rs`
+//! The Martin & Moyce (1952) dam break in 2-D, shared by `tests/it/sph.rs` and `bench/sph.rs`
 //! (included with `#[path]`; `graphs/dam_break_2d.json` builds the same case from nodes): a
 //! column `a` wide and `2a` high (n^2 = 2) against the left wall of a tank `4a` long, and the
 //! comparison of the surge front with the experiment in its dimensionless units `Z = z / a`,

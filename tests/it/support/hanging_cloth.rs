@@ -1,5 +1,4 @@
-//! The course's hanging cloth, shared by `tests/mass_spring.rs` and
-//! `tests/mass_spring_node.rs` (included with `#[path]`).
+//! The course's hanging cloth, shared by `tests/it/mass_spring.rs` and `tests/it/mass_spring_node.rs`.
 
 use cgnodes::nodes::mesh::mesh_grid::grid_mesh;
 use cgnodes::nodes::sim::mass_spring::{

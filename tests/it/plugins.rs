@@ -1,8 +1,8 @@
 //! Plugins: the Rust example crate, the example Python plugin against a direct computation,
 //! misbehaving plugins whose failures stay contained, and graphs that try to name a command.
 
-use cgnodes::exec::{Executor, NodeStatus, RunOptions, RunReport};
-use cgnodes::node::{ErrorKind, FileEnv, NodeError};
+use cgnodes::exec::{NodeStatus, RunReport};
+use cgnodes::node::{ErrorKind, NodeError};
 use cgnodes::plugin;
 use cgnodes::registry::Registry;
 use cgnodes::types::{Attribute, Domain, Image, Mesh, Points, Table, Value};
@@ -10,9 +10,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
+use crate::common::root;
 
 fn test_plugins() -> PathBuf {
     root().join("tests/data/plugins")
@@ -52,26 +50,7 @@ fn run(
     out: &Path,
     frames: std::ops::RangeInclusive<i64>,
 ) -> Vec<RunReport> {
-    let g = cgnodes::graph::parse(text, Path::new("test.json"), dir).unwrap();
-    let valid = cgnodes::validate::validate(&g, &registry()).unwrap_or_else(|e| {
-        panic!(
-            "{}",
-            e.iter()
-                .map(|e| e.to_string())
-                .collect::<Vec<_>>()
-                .join("\n")
-        )
-    });
-    let exec = Executor::new(Some(2), None).unwrap();
-    let opts = RunOptions {
-        files: FileEnv {
-            graph_dir: dir.to_path_buf(),
-            out_dir: out.to_path_buf(),
-            ..Default::default()
-        },
-        ..Default::default()
-    };
-    frames.map(|f| exec.run(&valid, &opts, f)).collect()
+    crate::common::run_graph(text, &registry(), dir, out, 2, frames)
 }
 
 fn failure(r: &RunReport, id: &str) -> NodeError {
@@ -309,7 +288,7 @@ fn a_crashing_plugin_fails_its_node_only() {
         "show2": {"type": "print", "inputs": {"value": "after.value"}}
     }}"#;
     let out = tempfile::tempdir().unwrap();
-    let r = run(text, &root(), out.path(), 0..=0).remove(0);
+    let r = run(text, root(), out.path(), 0..=0).remove(0);
     let e = failure(&r, "crash");
     assert_eq!(e.kind, ErrorKind::Plugin);
     assert!(e.message.contains("exited with status 1"), "{}", e.message);
@@ -354,7 +333,7 @@ fn a_hanging_plugin_is_killed_at_its_timeout() {
         pidfile.to_str().unwrap()
     );
     let t0 = std::time::Instant::now();
-    let r = run(&text, &root(), tmp.path(), 0..=0).remove(0);
+    let r = run(&text, root(), tmp.path(), 0..=0).remove(0);
     // The plugin sleeps for an hour; the run ends because the process was killed. (The
     // limit leaves a loaded CI machine time to start Python and print its first line.)
     assert!(t0.elapsed().as_secs() < 600);
@@ -444,7 +423,7 @@ fn stateful_plugins_keep_state_and_file_outputs_land_in_the_output_folder() {
         "show_w": {"type": "print", "inputs": {"value": "w.bytes"}}
     }}"#;
     let out = tempfile::tempdir().unwrap();
-    let reports = run(text, &root(), out.path(), 0..=2);
+    let reports = run(text, root(), out.path(), 0..=2);
     for (k, r) in reports.iter().enumerate() {
         assert!(r.ok(), "{:?}", r.errors());
         assert!(matches!(r.output("count", "count"), Some(Value::Int(c)) if *c == k as i64 + 1));

@@ -3,8 +3,7 @@
 //! (`tests/data/sph/martin_moyce_front.csv`, copied from the course reference data:
 //! Martin & Moyce 1952, Phil. Trans. R. Soc. A 244:312-324, Table 2 surge-front means).
 
-#[path = "support/sph_dam_break.rs"]
-mod dam_break;
+use crate::support::sph_dam_break as dam_break;
 
 use cgnodes::nodes::sim::sph::{Boundary, Fluid, Solver, SphParams};
 

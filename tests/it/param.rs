@@ -13,9 +13,7 @@ use cgnodes::types::Mesh;
 use std::path::Path;
 
 fn asset(name: &str) -> Mesh {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("assets/meshes")
-        .join(name);
+    let p = crate::common::asset("assets/meshes").join(name);
     load_mesh(&p, &LoadOptions::default()).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
 }
 

@@ -2,10 +2,8 @@
 //! reported with frame and step, and bad fixed-vertex selections rejected as input errors.
 //! The simulator itself is checked in `tests/mass_spring.rs`.
 
-#[path = "support/hanging_cloth.rs"]
-mod hanging_cloth;
+use crate::support::hanging_cloth;
 
-use cgnodes::exec::{Executor, RunOptions};
 use cgnodes::node::{ErrorKind, FileEnv};
 use cgnodes::nodes::mesh::mesh_grid::grid_mesh;
 use cgnodes::nodes::sim::mass_spring::Method;
@@ -15,20 +13,8 @@ use hanging_cloth::hanging;
 
 fn run_graph(json: &str, frames: std::ops::RangeInclusive<i64>) -> Vec<cgnodes::exec::RunReport> {
     let dir = tempfile::tempdir().unwrap();
-    let gp = dir.path().join("g.json");
-    std::fs::write(&gp, json).unwrap();
-    let g = cgnodes::graph::load(&gp).unwrap();
-    let valid = cgnodes::validate::validate(&g, &cgnodes::nodes::builtin_registry()).unwrap();
-    let exec = Executor::new(Some(1), None).unwrap();
-    let opts = RunOptions {
-        files: FileEnv {
-            graph_dir: valid.dir.clone(),
-            out_dir: dir.path().join("out"),
-            ..Default::default()
-        },
-        ..Default::default()
-    };
-    frames.map(|f| exec.run(&valid, &opts, f)).collect()
+    let r = cgnodes::nodes::builtin_registry();
+    crate::common::run_graph(json, &r, dir.path(), &dir.path().join("out"), 1, frames)
 }
 
 const GRAPH: &str = r#"{

@@ -12,8 +12,7 @@ use cgnodes::types::Mesh;
 use std::collections::BTreeSet;
 use std::path::Path;
 
-#[path = "support/hanging_cloth.rs"]
-mod hanging_cloth;
+use crate::support::hanging_cloth;
 use hanging_cloth::{course_cloth, hanging};
 
 fn reference() -> serde_json::Value {

@@ -10,7 +10,7 @@ use std::path::Path;
 use std::sync::Arc;
 
 fn load(name: &str) -> Arc<Mesh> {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join(name);
+    let p = crate::common::asset(name);
     Arc::new(load_obj(&p, "").unwrap()).triangulated()
 }
 

@@ -6,9 +6,7 @@ use cgnodes::nodes::mesh::{obj, ply, usda};
 use cgnodes::types::{Attribute, Domain, Mesh};
 use std::path::{Path, PathBuf};
 
-fn asset(p: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join(p)
-}
+use crate::common::asset;
 
 fn opts() -> LoadOptions {
     LoadOptions {

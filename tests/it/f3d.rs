@@ -6,11 +6,9 @@ use cgnodes::f3d::{import, Aliases};
 use cgnodes::node::FileEnv;
 use cgnodes::nodes::builtin_registry;
 use serde_json::{json, Value};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
+use crate::common::root;
 
 fn blueprint() -> Value {
     let t =

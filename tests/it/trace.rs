@@ -4,12 +4,9 @@
 use cgnodes::nodes::trace::path::{render_path, Filter, PathSettings, Strategy};
 use cgnodes::nodes::trace::scene_load::load_obj_scene;
 use cgnodes::types::{Camera, FovAxis, Image, Material, MaterialKind, Mesh, Scene, SceneObject};
-use std::path::Path;
 use std::sync::Arc;
 
-fn root() -> &'static Path {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-}
+use crate::common::root;
 
 /// A UV sphere; `inward` flips the winding so the normals face the centre.
 fn sphere(c: [f64; 3], r: f64, n: usize, inward: bool) -> Mesh {

@@ -1,0 +1,49 @@
+//! Helpers every test module uses: where the project's files are, and running a graph.
+
+use cgnodes::exec::{Executor, RunOptions, RunReport};
+use cgnodes::node::FileEnv;
+use cgnodes::registry::Registry;
+use std::ops::RangeInclusive;
+use std::path::{Path, PathBuf};
+
+/// The project root (assets, graphs, tests/data are below it).
+pub fn root() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// A path below the project root.
+pub fn asset(rel: &str) -> PathBuf {
+    root().join(rel)
+}
+
+/// Parses graph `text` as if it were a file in `dir`, validates it against `registry` (a
+/// failure panics with every error), and runs `frames` on `threads` threads, writing to `out`.
+pub fn run_graph(
+    text: &str,
+    registry: &Registry,
+    dir: &Path,
+    out: &Path,
+    threads: usize,
+    frames: RangeInclusive<i64>,
+) -> Vec<RunReport> {
+    let g = cgnodes::graph::parse(text, &dir.join("test.json"), dir).unwrap();
+    let valid = cgnodes::validate::validate(&g, registry).unwrap_or_else(|e| {
+        panic!(
+            "{}",
+            e.iter()
+                .map(|e| e.to_string())
+                .collect::<Vec<_>>()
+                .join("\n")
+        )
+    });
+    let exec = Executor::new(Some(threads), None).unwrap();
+    let opts = RunOptions {
+        files: FileEnv {
+            graph_dir: dir.to_path_buf(),
+            out_dir: out.to_path_buf(),
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    frames.map(|f| exec.run(&valid, &opts, f)).collect()
+}

@@ -1,0 +1,20 @@
+//! The integration tests, one binary (`cargo test --release --test it`): one module per
+//! domain or runtime part, sharing the helpers in `common` and `support`. A single binary
+//! links once, where one binary per file linked the whole crate a dozen times.
+
+mod common;
+mod support;
+
+mod arap;
+mod f3d;
+mod graphs;
+mod mass_spring;
+mod mass_spring_node;
+mod mesh;
+mod param;
+mod plugins;
+mod render;
+mod runtime;
+mod sph;
+mod sweep;
+mod trace;

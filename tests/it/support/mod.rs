@@ -1,0 +1,4 @@
+//! Test harnesses shared by several test modules (and, for the dam break, by `bench/sph.rs`).
+
+pub mod hanging_cloth;
+pub mod sph_dam_break;

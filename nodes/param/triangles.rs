@@ -10,30 +10,8 @@ pub fn fan_triangles(mesh: &Mesh) -> Vec<[u32; 3]> {
     mesh.fan_triangles()
 }
 
-/// The triangles of a grid of `cells_u x cells_v` squares, each split along its
-/// `(i, j)-(i+1, j+1)` diagonal, counter-clockwise when `i` runs along x and `j` along y.
-/// Vertex `(i, j)` is `id(i, j)` for `i` in `0..=cells_u`, `j` in `0..=cells_v` (row by row:
-/// `grid_triangles`); the squares come row by row.
-pub fn grid_triangles_with(
-    cells_u: usize,
-    cells_v: usize,
-    id: impl Fn(usize, usize) -> u32,
-) -> Vec<[u32; 3]> {
-    let mut t = Vec::with_capacity(2 * cells_u * cells_v);
-    for j in 0..cells_v {
-        for i in 0..cells_u {
-            t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-            t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-        }
-    }
-    t
-}
-
-/// `grid_triangles_with` for the vertices numbered row by row, `(i, j)` at
-/// `j (cells_u + 1) + i` (the numbering of the `mesh_grid` node).
-pub fn grid_triangles(cells_u: usize, cells_v: usize) -> Vec<[u32; 3]> {
-    grid_triangles_with(cells_u, cells_v, |i, j| (j * (cells_u + 1) + i) as u32)
-}
+/// The triangulated regular grid (`Topology`'s neighbour in `src/types`), named here too.
+pub use crate::types::{grid_triangles, grid_triangles_with};
 
 /// Row starts of compressed rows with `per_corner` entries for every triangle corner at a
 /// vertex: row `v` is `start[v]..start[v + 1]`, `start[n]` the total. The counting pass of a

@@ -16,7 +16,7 @@ pub use misc::{Curve, Image, Joint, Points, Skeleton, Table};
 pub use scene::{
     Camera, CameraFloat, FovAxis, Light, LookAt, Material, MaterialKind, Scene, SceneObject,
 };
-pub use topology::Topology;
+pub use topology::{grid_triangles, grid_triangles_with, Topology};
 pub use value::{Color, FromValue, SocketType, Typed, Value};
 
 /// The `Any` socket type marker (`b.add_input::<value_any::Any>("value")`).

@@ -408,6 +408,31 @@ impl Topology {
     }
 }
 
+/// The triangles of a grid of `cells_u x cells_v` squares, each split along its
+/// `(i, j)-(i+1, j+1)` diagonal, counter-clockwise when `i` runs along x and `j` along y.
+/// Vertex `(i, j)` is `id(i, j)` for `i` in `0..=cells_u`, `j` in `0..=cells_v` (row by row:
+/// `grid_triangles`); the squares come row by row.
+pub fn grid_triangles_with(
+    cells_u: usize,
+    cells_v: usize,
+    id: impl Fn(usize, usize) -> u32,
+) -> Vec<[u32; 3]> {
+    let mut t = Vec::with_capacity(2 * cells_u * cells_v);
+    for j in 0..cells_v {
+        for i in 0..cells_u {
+            t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+            t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+        }
+    }
+    t
+}
+
+/// `grid_triangles_with` for the vertices numbered row by row, `(i, j)` at
+/// `j (cells_u + 1) + i` (the numbering of the `mesh_grid` node).
+pub fn grid_triangles(cells_u: usize, cells_v: usize) -> Vec<[u32; 3]> {
+    grid_triangles_with(cells_u, cells_v, |i, j| (j * (cells_u + 1) + i) as u32)
+}
+
 /// Compressed rows from (row, value) pairs: row `r` holds its values, in pair order, at
 /// `values[start[r]..start[r + 1]]` (a counting sort by row).
 fn compressed_rows(
@@ -441,14 +466,7 @@ mod tests {
                 p.push([i as f64, j as f64, 0.0]);
             }
         }
-        let mut t = Vec::new();
-        let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
-        for j in 0..n {
-            for i in 0..n {
-                t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-                t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-            }
-        }
+        let t = grid_triangles(n, n);
         Mesh::from_triangles(p, &t).unwrap()
     }
 

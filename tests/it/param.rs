@@ -87,14 +87,7 @@ fn grid(n: usize, z: impl Fn(f64, f64) -> f64) -> Mesh {
             p.push([x, y, z(x, y)]);
         }
     }
-    let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
-    let mut t = Vec::new();
-    for j in 0..n {
-        for i in 0..n {
-            t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-            t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-        }
-    }
+    let t = cgnodes::types::grid_triangles(n, n);
     Mesh::from_triangles(p, &t).unwrap()
 }
 

@@ -30,8 +30,7 @@ pub fn apply(op: &str, a: f64, b: f64) -> Result<f64, String> {
 }
 
 fn declare(b: &mut NodeBuilder) {
-    b.doc("Adds, subtracts, multiplies, divides, raises to a power, or takes min or max of two numbers.")
-        .category("basic");
+    b.doc("Adds, subtracts, multiplies, divides, raises to a power, or takes min or max of two numbers.");
     b.add_input::<f64>("a").default(0.0);
     b.add_input::<f64>("b").default(0.0);
     b.add_input::<String>("op")

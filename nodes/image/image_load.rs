@@ -69,8 +69,7 @@ pub fn decode_image(bytes: &[u8], space: ColorSpace) -> Result<Image, String> {
 }
 
 fn declare(b: &mut NodeBuilder) {
-    b.doc("Reads an image (PNG, JPEG, EXR, HDR) as linear RGBA.")
-        .category("render");
+    b.doc("Reads an image (PNG, JPEG, EXR, HDR) as linear RGBA.");
     b.add_input::<String>("path")
         .file_in()
         .doc("Image file, relative to the graph's folder.");

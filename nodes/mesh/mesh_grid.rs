@@ -51,8 +51,7 @@ pub fn grid_mesh(
 }
 
 fn declare(b: &mut NodeBuilder) {
-    b.doc("A flat rectangular grid mesh (cloth), like the course's gridNxN.usda.")
-        .category("mesh");
+    b.doc("A flat rectangular grid mesh (cloth), like the course's gridNxN.usda.");
     b.add_input::<i64>("cells_u")
         .default(10i64)
         .range(1.0, 4096.0)

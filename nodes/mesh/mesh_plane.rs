@@ -60,8 +60,7 @@ pub fn y_up_to_z_up(m: &mut Mesh, center: [f64; 3]) {
 }
 
 fn declare(b: &mut NodeBuilder) {
-    b.doc("A flat square plane facing +Y with planar UVs (a ground plane).")
-        .category("render");
+    b.doc("A flat square plane facing +Y with planar UVs (a ground plane).");
     b.add_input::<f64>("size")
         .default(4.0)
         .min(1e-9)

@@ -107,8 +107,7 @@ pub fn compare_series(
 }
 
 fn declare(b: &mut NodeBuilder) {
-    b.doc("RMS relative error of a simulated series against a reference CSV (optionally time-anchored).")
-        .category("metrics");
+    b.doc("RMS relative error of a simulated series against a reference CSV (optionally time-anchored).");
     b.add_input::<Table>("series")
         .doc("The simulated series, with the columns named below.");
     b.add_input::<String>("reference")

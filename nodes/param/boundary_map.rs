@@ -173,8 +173,7 @@ pub(crate) fn parse_start(v: i64) -> Option<u32> {
 }
 
 fn declare(b: &mut NodeBuilder) {
-    b.doc("Places a disk mesh's boundary loop on a circle or square in [0,1]^2 (positions of boundary vertices become (u, v, 0); UVs set on them).")
-        .category("param");
+    b.doc("Places a disk mesh's boundary loop on a circle or square in [0,1]^2 (positions of boundary vertices become (u, v, 0); UVs set on them).");
     b.add_input::<Mesh>("mesh");
     b.add_input::<String>("shape")
         .choices(&["circle", "square"]);

@@ -93,8 +93,7 @@ pub fn minimal_surface(
 }
 
 fn declare(b: &mut NodeBuilder) {
-    b.doc("Minimal surface: interior vertices from the Laplace equation, boundary fixed at its own positions.")
-        .category("param");
+    b.doc("Minimal surface: interior vertices from the Laplace equation, boundary fixed at its own positions.");
     b.add_input::<Mesh>("mesh");
     b.add_input::<String>("weights")
         .choices(&["uniform", "cotangent"])

@@ -290,8 +290,7 @@ pub(crate) fn parse_holes(s: &str) -> Result<bool, NodeError> {
 }
 
 fn declare(b: &mut NodeBuilder) {
-    b.doc("Tutte's embedding: boundary on a circle or square, interior as convex combinations of neighbours (uniform, cotangent or mean-value weights).")
-        .category("param");
+    b.doc("Tutte's embedding: boundary on a circle or square, interior as convex combinations of neighbours (uniform, cotangent or mean-value weights).");
     b.add_input::<Mesh>("mesh");
     b.add_input::<String>("weights")
         .choices(&["uniform", "cotangent", "mean_value"])

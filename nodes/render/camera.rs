@@ -6,7 +6,7 @@
 use crate::prelude::*;
 
 fn declare(b: &mut NodeBuilder) {
-    b.doc("A look-at pinhole camera.").category("render");
+    b.doc("A look-at pinhole camera.");
     b.add_input::<[f64; 3]>("eye")
         .default([0.0, 0.0, 3.0])
         .doc("Camera position.");

@@ -4,8 +4,7 @@
 use crate::prelude::*;
 
 fn declare(b: &mut NodeBuilder) {
-    b.doc("A surface material: base colour or texture, metallic, roughness, normal map, emission.")
-        .category("render");
+    b.doc("A surface material: base colour or texture, metallic, roughness, normal map, emission.");
     b.add_input::<String>("kind")
         .choices(&["diffuse", "mirror", "dielectric", "conductor"])
         .doc("Scattering model for the tracers.");

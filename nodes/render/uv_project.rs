@@ -26,8 +26,7 @@ pub fn planar_uvs(mesh: &Mesh, axis: usize, scale: f64) -> Vec<[f64; 2]> {
 }
 
 fn declare(b: &mut NodeBuilder) {
-    b.doc("Planar UVs: projects the mesh along an axis onto its bounding box.")
-        .category("render");
+    b.doc("Planar UVs: projects the mesh along an axis onto its bounding box.");
     b.add_input::<Mesh>("mesh");
     b.add_input::<String>("axis")
         .choices(&["z", "x", "y"])

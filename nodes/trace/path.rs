@@ -426,8 +426,7 @@ pub fn render_path(
 }
 
 fn declare(b: &mut NodeBuilder) {
-    b.doc("Path traces a scene (NEE + BSDF sampling with MIS, Russian roulette); linear colour and per-pixel variance.")
-        .category("trace");
+    b.doc("Path traces a scene (NEE + BSDF sampling with MIS, Russian roulette); linear colour and per-pixel variance.");
     b.add_input::<Scene>("scene");
     b.add_input::<Camera>("camera")
         .optional()

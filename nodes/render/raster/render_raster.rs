@@ -8,8 +8,7 @@ use super::texture::Wrap;
 use crate::prelude::*;
 
 fn declare(b: &mut NodeBuilder) {
-    b.doc("Rasterizes a scene: Blinn-Phong with shadow maps, textures and normal maps, plus deferred passes.")
-        .category("render");
+    b.doc("Rasterizes a scene: Blinn-Phong with shadow maps, textures and normal maps, plus deferred passes.");
     b.add_input::<Scene>("scene")
         .doc("Meshes, materials, lights and usually the camera.");
     b.add_input::<Camera>("camera")

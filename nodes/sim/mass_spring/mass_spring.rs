@@ -33,8 +33,7 @@ pub const LOG_COLUMNS: [&str; 8] = [
 ];
 
 fn declare(b: &mut NodeBuilder) {
-    b.doc("Cloth as a mass-spring system: semi-implicit, implicit (Newton) or projective (Liu 2013) time steps, fixed vertices, sphere collider.")
-        .category("sim");
+    b.doc("Cloth as a mass-spring system: semi-implicit, implicit (Newton) or projective (Liu 2013) time steps, fixed vertices, sphere collider.");
     b.stateful();
     b.add_input::<Mesh>("mesh")
         .doc("Rest shape (e.g. the course's grid40x40.usda).");

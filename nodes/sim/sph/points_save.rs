@@ -38,8 +38,7 @@ fn clean(name: &str) -> String {
 }
 
 fn declare(b: &mut NodeBuilder) {
-    b.doc("Writes particles as a PLY point cloud with their attributes.")
-        .category("sim");
+    b.doc("Writes particles as a PLY point cloud with their attributes.");
     b.sink();
     b.add_input::<Points>("points");
     b.add_input::<String>("path")

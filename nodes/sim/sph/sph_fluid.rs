@@ -121,8 +121,7 @@ impl SphState {
 }
 
 fn declare(b: &mut NodeBuilder) {
-    b.doc("SPH fluid (WCSPH or DFSPH) in a box; advances one frame per execution.")
-        .category("sim");
+    b.doc("SPH fluid (WCSPH or DFSPH) in a box; advances one frame per execution.");
     b.stateful();
     b.add_input::<i64>("dimension")
         .default(3i64)

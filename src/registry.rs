@@ -9,12 +9,22 @@ use std::sync::Arc;
 #[derive(Clone, Default)]
 pub struct Registry {
     nodes: BTreeMap<String, Arc<NodeDecl>>,
+    /// Category given to nodes added through `add` (set by `with_category`).
+    category: Option<String>,
 }
 
 impl Registry {
     /// An empty registry.
     pub fn new() -> Registry {
         Registry::default()
+    }
+
+    /// Runs `register` with `category` as the category of every node it adds through `add`
+    /// (a domain sets it once, from its folder name; a node's `declare` may still override it).
+    pub fn with_category(&mut self, category: &str, register: impl FnOnce(&mut Registry)) {
+        let outer = self.category.replace(category.to_string());
+        register(self);
+        self.category = outer;
     }
 
     /// Registers a node from its declaration and execution functions (the usual way).
@@ -25,6 +35,9 @@ impl Registry {
         execute: impl Fn(&mut ExecContext) -> Result<(), NodeError> + Send + Sync + 'static,
     ) {
         let mut b = NodeBuilder::new(type_name);
+        if let Some(c) = &self.category {
+            b.category(c);
+        }
         declare(&mut b);
         self.add_decl(b.build(Arc::new(execute)));
     }
@@ -72,6 +85,27 @@ pub fn closest<'a>(name: &str, candidates: impl Iterator<Item = &'a str>) -> Opt
 
 #[cfg(test)]
 mod tests {
+    use super::Registry;
+
+    #[test]
+    fn with_category_sets_the_category_of_nodes_added_inside() {
+        let mut r = Registry::new();
+        r.with_category("param", |r| {
+            r.add("a", |_| {}, |_| Ok(()));
+            r.add(
+                "b",
+                |b| {
+                    b.category("other");
+                },
+                |_| Ok(()),
+            );
+        });
+        r.add("c", |_| {}, |_| Ok(()));
+        assert_eq!(r.get("a").unwrap().category, "param");
+        assert_eq!(r.get("b").unwrap().category, "other");
+        assert_eq!(r.get("c").unwrap().category, "");
+    }
+
     #[test]
     fn suggests_close_names() {
         let names = ["mesh_load", "mesh_save", "tutte"];

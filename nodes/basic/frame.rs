@@ -3,8 +3,7 @@
 use crate::prelude::*;
 
 fn declare(b: &mut NodeBuilder) {
-    b.doc("The current frame number (0 unless the graph is run with --frames).")
-        .category("basic");
+    b.doc("The current frame number (0 unless the graph is run with --frames).");
     b.time_dependent();
     b.add_output::<i64>("frame");
     b.add_output::<f64>("time")

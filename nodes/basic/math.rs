@@ -3,48 +3,82 @@
 use crate::prelude::*;
 
 /// The operations `math` offers.
-pub const OPS: &[&str] = &["add", "sub", "mul", "div", "pow", "min", "max"];
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MathOp {
+    /// `a + b`.
+    Add,
+    /// `a - b`.
+    Sub,
+    /// `a * b`.
+    Mul,
+    /// `a / b`.
+    Div,
+    /// `a` to the power `b`.
+    Pow,
+    /// The smaller of `a` and `b`.
+    Min,
+    /// The larger of `a` and `b`.
+    Max,
+}
+
+impl Choice for MathOp {
+    const CHOICES: &'static [(&'static str, Self)] = &[
+        ("add", MathOp::Add),
+        ("sub", MathOp::Sub),
+        ("mul", MathOp::Mul),
+        ("div", MathOp::Div),
+        ("pow", MathOp::Pow),
+        ("min", MathOp::Min),
+        ("max", MathOp::Max),
+    ];
+}
+
+impl MathOp {
+    /// The operation's socket name (`add`, `pow`, ...).
+    pub fn name(self) -> &'static str {
+        Self::CHOICES
+            .iter()
+            .find(|(_, op)| *op == self)
+            .map_or("?", |(n, _)| n)
+    }
+}
 
 /// Applies `op` to `a` and `b`. Division by zero and non-finite results are errors.
-pub fn apply(op: &str, a: f64, b: f64) -> Result<f64, String> {
+pub fn apply(op: MathOp, a: f64, b: f64) -> Result<f64, String> {
     let r = match op {
-        "add" => a + b,
-        "sub" => a - b,
-        "mul" => a * b,
-        "div" => {
+        MathOp::Add => a + b,
+        MathOp::Sub => a - b,
+        MathOp::Mul => a * b,
+        MathOp::Div => {
             if b == 0.0 {
                 return Err(format!("division of {a} by zero"));
             }
             a / b
         }
-        "pow" => a.powf(b),
-        "min" => a.min(b),
-        "max" => a.max(b),
-        other => return Err(format!("unknown operation '{other}'")),
+        MathOp::Pow => a.powf(b),
+        MathOp::Min => a.min(b),
+        MathOp::Max => a.max(b),
     };
     if r.is_finite() {
         Ok(r)
     } else {
-        Err(format!("{op}({a}, {b}) is not a finite number"))
+        Err(format!("{}({a}, {b}) is not a finite number", op.name()))
     }
 }
 
 fn declare(b: &mut NodeBuilder) {
-    b.doc("Adds, subtracts, multiplies, divides, raises to a power, or takes min or max of two numbers.")
-        .category("basic");
+    b.doc("Adds, subtracts, multiplies, divides, raises to a power, or takes min or max of two numbers.");
     b.add_input::<f64>("a").default(0.0);
     b.add_input::<f64>("b").default(0.0);
-    b.add_input::<String>("op")
-        .choices(OPS)
-        .doc("The operation.");
+    b.add_choice::<MathOp>("op").doc("The operation.");
     b.add_output::<f64>("value");
 }
 
 fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let a: f64 = ctx.input("a")?;
     let b: f64 = ctx.input("b")?;
-    let op: String = ctx.input("op")?;
-    let v = apply(&op, a, b).map_err(|e| NodeError::invalid("b", e))?;
+    let op = ctx.choice::<MathOp>("op")?;
+    let v = apply(op, a, b).map_err(|e| NodeError::invalid("b", e))?;
     ctx.set_output("value", v);
     Ok(())
 }
@@ -56,14 +90,15 @@ pub fn register(r: &mut Registry) {
 
 #[cfg(test)]
 mod tests {
-    use super::apply;
+    use super::{apply, MathOp};
 
     #[test]
     fn operations() {
-        assert_eq!(apply("add", 2.0, 3.0), Ok(5.0));
-        assert_eq!(apply("pow", 2.0, 10.0), Ok(1024.0));
-        assert_eq!(apply("max", -1.0, 3.0), Ok(3.0));
-        assert!(apply("div", 1.0, 0.0).is_err());
-        assert!(apply("pow", -1.0, 0.5).is_err());
+        assert_eq!(apply(MathOp::Add, 2.0, 3.0), Ok(5.0));
+        assert_eq!(apply(MathOp::Pow, 2.0, 10.0), Ok(1024.0));
+        assert_eq!(apply(MathOp::Max, -1.0, 3.0), Ok(3.0));
+        assert!(apply(MathOp::Div, 1.0, 0.0).is_err());
+        let e = apply(MathOp::Pow, -1.0, 0.5).unwrap_err();
+        assert!(e.starts_with("pow(-1, 0.5)"), "{e}");
     }
 }

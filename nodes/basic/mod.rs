@@ -10,9 +10,11 @@ use crate::registry::Registry;
 
 /// Registers the basic nodes.
 pub fn register(r: &mut Registry) {
-    value::register(r);
-    math::register(r);
-    frame::register(r);
-    print::register(r);
-    table_write::register(r);
+    r.with_category("basic", |r| {
+        value::register(r);
+        math::register(r);
+        frame::register(r);
+        print::register(r);
+        table_write::register(r);
+    });
 }

@@ -3,8 +3,7 @@
 use crate::prelude::*;
 
 fn declare(b: &mut NodeBuilder) {
-    b.doc("Prints a value: a number, a string, or a summary of a mesh, image or table.")
-        .category("basic");
+    b.doc("Prints a value: a number, a string, or a summary of a mesh, image or table.");
     b.sink();
     b.add_input::<crate::types::value_any::Any>("value");
     b.add_input::<String>("label")

@@ -3,8 +3,7 @@
 use crate::prelude::*;
 
 fn declare(b: &mut NodeBuilder) {
-    b.doc("Writes a scalar or a Table to CSV or JSON (chosen by the extension).")
-        .category("basic");
+    b.doc("Writes a scalar or a Table to CSV or JSON (chosen by the extension).");
     b.sink();
     b.add_input::<crate::types::value_any::Any>("value")
         .doc("A number, a list of numbers, or a Table.");

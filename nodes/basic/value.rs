@@ -8,7 +8,7 @@ fn constant<T: Typed + Into<Value> + 'static>(r: &mut Registry, name: &str, defa
     r.add(
         name,
         move |b| {
-            b.doc(&doc).category("basic");
+            b.doc(&doc);
             b.add_input::<T>("value")
                 .default(default)
                 .doc("The constant.");

@@ -57,8 +57,7 @@ pub fn image_rmse(
 }
 
 fn declare(b: &mut NodeBuilder) {
-    b.doc("RMSE and PSNR of an image against a reference (optionally inside a mask).")
-        .category("metrics");
+    b.doc("RMSE and PSNR of an image against a reference (optionally inside a mask).");
     b.add_input::<Image>("image");
     b.add_input::<Image>("reference");
     b.add_input::<Image>("mask")

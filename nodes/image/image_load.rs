@@ -17,6 +17,11 @@ pub enum ColorSpace {
     Raw,
 }
 
+impl Choice for ColorSpace {
+    const CHOICES: &'static [(&'static str, Self)] =
+        &[("srgb", ColorSpace::Srgb), ("raw", ColorSpace::Raw)];
+}
+
 /// Decodes image file bytes to a linear RGBA image (see the module doc for the rules).
 pub fn decode_image(bytes: &[u8], space: ColorSpace) -> Result<Image, String> {
     let dynimg = image::ImageReader::new(Cursor::new(bytes))
@@ -69,27 +74,20 @@ pub fn decode_image(bytes: &[u8], space: ColorSpace) -> Result<Image, String> {
 }
 
 fn declare(b: &mut NodeBuilder) {
-    b.doc("Reads an image (PNG, JPEG, EXR, HDR) as linear RGBA.")
-        .category("render");
+    b.doc("Reads an image (PNG, JPEG, EXR, HDR) as linear RGBA.");
     b.add_input::<String>("path")
         .file_in()
         .doc("Image file, relative to the graph's folder.");
-    b.add_input::<String>("color_space")
-        .choices(&["srgb", "raw"])
+    b.add_choice::<ColorSpace>("color_space")
         .doc("8/16-bit files: srgb decodes colour to linear; raw keeps data (normal maps).");
     b.add_output::<Image>("image");
 }
 
 fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let p: String = ctx.input("path")?;
-    let space: String = ctx.input("color_space")?;
+    let space = ctx.choice::<ColorSpace>("color_space")?;
     let path = ctx.input_path(&p);
     let bytes = std::fs::read(&path).map_err(|e| NodeError::io(&path, e).at("path"))?;
-    let space = if space == "raw" {
-        ColorSpace::Raw
-    } else {
-        ColorSpace::Srgb
-    };
     let img = decode_image(&bytes, space).map_err(|e| NodeError::io(&path, e).at("path"))?;
     ctx.set_output("image", img);
     Ok(())

@@ -97,8 +97,7 @@ pub fn encode_image(
 }
 
 fn declare(b: &mut NodeBuilder) {
-    b.doc("Writes an image: .png 8-bit sRGB, .exr and .hdr linear float (by extension).")
-        .category("render");
+    b.doc("Writes an image: .png 8-bit sRGB, .exr and .hdr linear float (by extension).");
     b.sink();
     b.add_input::<Image>("image");
     b.add_input::<String>("path")

@@ -10,7 +10,9 @@ use crate::registry::Registry;
 
 /// Registers the image nodes.
 pub fn register(r: &mut Registry) {
-    image_load::register(r);
-    image_save::register(r);
-    image_compare::register(r);
+    r.with_category("image", |r| {
+        image_load::register(r);
+        image_save::register(r);
+        image_compare::register(r);
+    });
 }

@@ -28,8 +28,7 @@ where
     r.add(
         name,
         |b| {
-            b.doc("Splits a list of vectors into one list per coordinate (Framework3D's buffer decompose).")
-                .category("mesh");
+            b.doc("Splits a list of vectors into one list per coordinate (Framework3D's buffer decompose).");
             b.add_input::<Vec<[f64; N]>>("buffer");
             for a in &AXES[..N] {
                 b.add_output::<Vec<f64>>(a);
@@ -54,8 +53,7 @@ where
     r.add(
         name,
         |b| {
-            b.doc("Zips coordinate lists into a list of vectors (Framework3D's buffer compose).")
-                .category("mesh");
+            b.doc("Zips coordinate lists into a list of vectors (Framework3D's buffer compose).");
             for a in &AXES[..N] {
                 b.add_input::<Vec<f64>>(a);
             }

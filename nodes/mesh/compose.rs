@@ -91,8 +91,7 @@ pub fn compose(b: &MeshBuffers) -> Result<Mesh, String> {
 }
 
 fn declare_decompose(b: &mut NodeBuilder) {
-    b.doc("Splits a mesh into vertex, face, normal and texcoord buffers (Framework3D's Mesh Decompose).")
-        .category("mesh");
+    b.doc("Splits a mesh into vertex, face, normal and texcoord buffers (Framework3D's Mesh Decompose).");
     b.add_input::<Mesh>("mesh");
     b.add_output::<Vec<[f64; 3]>>("vertices");
     b.add_output::<Vec<i64>>("face_counts");
@@ -113,8 +112,7 @@ fn execute_decompose(ctx: &mut ExecContext) -> Result<(), NodeError> {
 }
 
 fn declare_compose(b: &mut NodeBuilder) {
-    b.doc("Builds a mesh from vertex, face, normal and texcoord buffers (Framework3D's Mesh Compose).")
-        .category("mesh");
+    b.doc("Builds a mesh from vertex, face, normal and texcoord buffers (Framework3D's Mesh Compose).");
     b.add_input::<Vec<[f64; 3]>>("vertices");
     b.add_input::<Vec<i64>>("face_counts");
     b.add_input::<Vec<i64>>("face_indices");

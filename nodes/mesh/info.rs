@@ -110,8 +110,7 @@ pub fn mesh_info(mesh: &Mesh) -> Table {
 }
 
 fn declare(b: &mut NodeBuilder) {
-    b.doc("Counts, bounding box, boundary loops, components, genus and manifoldness of a mesh.")
-        .category("mesh");
+    b.doc("Counts, bounding box, boundary loops, components, genus and manifoldness of a mesh.");
     b.add_input::<Mesh>("mesh");
     b.add_output::<Table>("table");
 }

@@ -50,8 +50,7 @@ pub fn load_mesh(path: &Path, opts: &LoadOptions) -> Result<Mesh, String> {
 }
 
 fn declare(b: &mut NodeBuilder) {
-    b.doc("Reads a mesh from OBJ, USDA, PLY or OFF (by extension).")
-        .category("mesh");
+    b.doc("Reads a mesh from OBJ, USDA, PLY or OFF (by extension).");
     b.add_input::<String>("path")
         .file_in()
         .doc("Mesh file, relative to the graph's folder (or an --assets folder).");

@@ -3,9 +3,38 @@
 
 use crate::prelude::*;
 
+/// The coordinate plane a grid lies in (the `plane` socket).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GridPlane {
+    /// u along x, v along y.
+    Xy,
+    /// u along x, v along z.
+    Xz,
+    /// u along y, v along z.
+    Yz,
+}
+
+impl GridPlane {
+    /// The coordinate indices of the u and v axes.
+    pub fn axes(self) -> (usize, usize) {
+        match self {
+            GridPlane::Xy => (0, 1),
+            GridPlane::Xz => (0, 2),
+            GridPlane::Yz => (1, 2),
+        }
+    }
+}
+
+impl Choice for GridPlane {
+    const CHOICES: &'static [(&'static str, Self)] = &[
+        ("xy", GridPlane::Xy),
+        ("xz", GridPlane::Xz),
+        ("yz", GridPlane::Yz),
+    ];
+}
+
 /// A grid of `cells_u x cells_v` cells spanning `size` in the plane `plane` ("xy", "xz" or
-/// "yz"), centred at `center`. Vertex `(i, j)` (i along u) has index `j * (cells_u + 1) + i`.
-/// Quads are split along the `(i, j)-(i+1, j+1)` diagonal when `triangles` is set.
+/// "yz"), centred at `center`: `grid_mesh_in` with the plane given by name.
 pub fn grid_mesh(
     cells_u: usize,
     cells_v: usize,
@@ -14,15 +43,26 @@ pub fn grid_mesh(
     center: [f64; 3],
     triangles: bool,
 ) -> Result<Mesh, String> {
+    let p = GridPlane::from_name(plane)
+        .ok_or_else(|| format!("unknown plane '{plane}' (xy, xz or yz)"))?;
+    grid_mesh_in(cells_u, cells_v, size, p, center, triangles)
+}
+
+/// A grid of `cells_u x cells_v` cells spanning `size` in `plane`, centred at `center`.
+/// Vertex `(i, j)` (i along u) has index `j * (cells_u + 1) + i`. Quads are split along the
+/// `(i, j)-(i+1, j+1)` diagonal when `triangles` is set.
+pub fn grid_mesh_in(
+    cells_u: usize,
+    cells_v: usize,
+    size: [f64; 2],
+    plane: GridPlane,
+    center: [f64; 3],
+    triangles: bool,
+) -> Result<Mesh, String> {
     if cells_u == 0 || cells_v == 0 {
         return Err("a grid needs at least one cell along each side".into());
     }
-    let (au, av) = match plane {
-        "xy" => (0, 1),
-        "xz" => (0, 2),
-        "yz" => (1, 2),
-        other => return Err(format!("unknown plane '{other}' (xy, xz or yz)")),
-    };
+    let (au, av) = plane.axes();
     let (nu, nv) = (cells_u + 1, cells_v + 1);
     let mut pos = Vec::with_capacity(nu * nv);
     for j in 0..nv {
@@ -51,8 +91,7 @@ pub fn grid_mesh(
 }
 
 fn declare(b: &mut NodeBuilder) {
-    b.doc("A flat rectangular grid mesh (cloth), like the course's gridNxN.usda.")
-        .category("mesh");
+    b.doc("A flat rectangular grid mesh (cloth), like the course's gridNxN.usda.");
     b.add_input::<i64>("cells_u")
         .default(10i64)
         .range(1.0, 4096.0)
@@ -64,7 +103,7 @@ fn declare(b: &mut NodeBuilder) {
     b.add_input::<[f64; 2]>("size")
         .default([2.0, 2.0])
         .doc("Extent along the two axes.");
-    b.add_input::<String>("plane").choices(&["xy", "xz", "yz"]);
+    b.add_choice::<GridPlane>("plane");
     b.add_input::<[f64; 3]>("center").default([0.0, 0.0, 0.0]);
     b.add_input::<bool>("triangles")
         .default(true)
@@ -79,14 +118,14 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     if size.iter().any(|s| !(s.is_finite() && *s > 0.0)) {
         return Err(NodeError::invalid("size", "both extents must be positive"));
     }
-    let plane: String = ctx.input("plane")?;
+    let plane = ctx.choice::<GridPlane>("plane")?;
     let center: [f64; 3] = ctx.input("center")?;
     let tri: bool = ctx.input("triangles")?;
-    let m = grid_mesh(
+    let m = grid_mesh_in(
         cu.max(1) as usize,
         cv.max(1) as usize,
         size,
-        &plane,
+        plane,
         center,
         tri,
     )

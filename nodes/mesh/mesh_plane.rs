@@ -59,9 +59,21 @@ pub fn y_up_to_z_up(m: &mut Mesh, center: [f64; 3]) {
     }
 }
 
+/// The axis a plane faces (the `up` socket).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Up {
+    /// Y up: the plane is the XZ plane.
+    Y,
+    /// Z up: the plane is the XY plane.
+    Z,
+}
+
+impl Choice for Up {
+    const CHOICES: &'static [(&'static str, Self)] = &[("y", Up::Y), ("z", Up::Z)];
+}
+
 fn declare(b: &mut NodeBuilder) {
-    b.doc("A flat square plane facing +Y with planar UVs (a ground plane).")
-        .category("render");
+    b.doc("A flat square plane facing +Y with planar UVs (a ground plane).");
     b.add_input::<f64>("size")
         .default(4.0)
         .min(1e-9)
@@ -76,8 +88,7 @@ fn declare(b: &mut NodeBuilder) {
     b.add_input::<f64>("uv_scale")
         .default(1.0)
         .doc("UVs run from 0 to uv_scale (texture repeats).");
-    b.add_input::<String>("up")
-        .choices(&["y", "z"])
+    b.add_choice::<Up>("up")
         .doc("Axis the plane faces (y: XZ plane; z: XY plane, for Z-up scenes).");
     b.add_output::<Mesh>("mesh");
 }
@@ -96,9 +107,9 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     if !uv_scale.is_finite() || center.iter().any(|c| !c.is_finite()) {
         return Err(NodeError::invalid("center", "values must be finite"));
     }
-    let up: String = ctx.input("up")?;
+    let up = ctx.choice::<Up>("up")?;
     let mut m = plane_mesh(size, center, n as usize, uv_scale);
-    if up == "z" {
+    if up == Up::Z {
         y_up_to_z_up(&mut m, center);
     }
     ctx.set_output("mesh", m);

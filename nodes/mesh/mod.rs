@@ -19,12 +19,14 @@ use crate::registry::Registry;
 
 /// Registers the mesh nodes.
 pub fn register(r: &mut Registry) {
-    load::register(r);
-    save::register(r);
-    info::register(r);
-    triangulate::register(r);
-    compose::register(r);
-    buffer::register(r);
-    mesh_plane::register(r);
-    mesh_grid::register(r);
+    r.with_category("mesh", |r| {
+        load::register(r);
+        save::register(r);
+        info::register(r);
+        triangulate::register(r);
+        compose::register(r);
+        buffer::register(r);
+        mesh_plane::register(r);
+        mesh_grid::register(r);
+    });
 }

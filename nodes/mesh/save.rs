@@ -21,8 +21,7 @@ pub fn png_bytes(img: &Image) -> Result<Vec<u8>, String> {
 }
 
 fn declare(b: &mut NodeBuilder) {
-    b.doc("Writes a mesh as OBJ (+MTL, texture), PLY, USDA or OFF under the output directory.")
-        .category("mesh");
+    b.doc("Writes a mesh as OBJ (+MTL, texture), PLY, USDA or OFF under the output directory.");
     b.sink();
     b.add_input::<Mesh>("mesh");
     b.add_input::<String>("path")

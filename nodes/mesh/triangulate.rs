@@ -143,8 +143,7 @@ pub fn triangulate(mesh: &Mesh) -> (Mesh, usize) {
 }
 
 fn declare(b: &mut NodeBuilder) {
-    b.doc("Splits polygon faces into triangles (ear clipping; per-corner data follow).")
-        .category("mesh");
+    b.doc("Splits polygon faces into triangles (ear clipping; per-corner data follow).");
     b.add_input::<Mesh>("mesh");
     b.add_output::<Mesh>("mesh");
 }

@@ -106,9 +106,21 @@ pub fn compare_series(
     Ok((rms, rows))
 }
 
+/// The axis the error is measured along (the `error_in` socket).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum ErrorIn {
+    /// The arrival x of each reference y.
+    X,
+    /// The y at each reference x.
+    Y,
+}
+
+impl Choice for ErrorIn {
+    const CHOICES: &'static [(&'static str, Self)] = &[("x", ErrorIn::X), ("y", ErrorIn::Y)];
+}
+
 fn declare(b: &mut NodeBuilder) {
-    b.doc("RMS relative error of a simulated series against a reference CSV (optionally time-anchored).")
-        .category("metrics");
+    b.doc("RMS relative error of a simulated series against a reference CSV (optionally time-anchored).");
     b.add_input::<Table>("series")
         .doc("The simulated series, with the columns named below.");
     b.add_input::<String>("reference")
@@ -116,8 +128,7 @@ fn declare(b: &mut NodeBuilder) {
         .doc("Reference CSV with a header row.");
     b.add_input::<String>("x_column").default("T");
     b.add_input::<String>("y_column").default("Z");
-    b.add_input::<String>("error_in")
-        .choices(&["x", "y"])
+    b.add_choice::<ErrorIn>("error_in")
         .doc("x: error in the arrival x of each reference y.");
     b.add_input::<f64>("anchor_x")
         .optional()
@@ -162,7 +173,7 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
             ))
         }
     };
-    let error_in_x = ctx.input::<String>("error_in")? == "x";
+    let error_in_x = ctx.choice::<ErrorIn>("error_in")? == ErrorIn::X;
     let min_y: f64 = ctx.input("min_y")?;
     let (rms, rows) = compare_series(&sim, &reference, error_in_x, anchor, min_y)
         .map_err(|e| NodeError::invalid("series", e))?;

@@ -6,5 +6,7 @@ use crate::registry::Registry;
 
 /// Registers the metric nodes.
 pub fn register(r: &mut Registry) {
-    compare_series::register(r);
+    r.with_category("metrics", |r| {
+        compare_series::register(r);
+    });
 }

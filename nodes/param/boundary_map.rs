@@ -20,6 +20,11 @@ pub enum BoundaryShape {
     Square,
 }
 
+impl Choice for BoundaryShape {
+    const CHOICES: &'static [(&'static str, Self)] =
+        &[("circle", Self::Circle), ("square", Self::Square)];
+}
+
 /// How boundary vertices are spaced along the shape.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Spacing {
@@ -27,6 +32,11 @@ pub enum Spacing {
     ArcLength,
     /// Equally, by vertex count.
     Uniform,
+}
+
+impl Choice for Spacing {
+    const CHOICES: &'static [(&'static str, Self)] =
+        &[("arc_length", Self::ArcLength), ("uniform", Self::Uniform)];
 }
 
 /// UVs of the vertices of `boundary` (in loop order, first vertex at the start point), placed on
@@ -149,37 +159,15 @@ pub fn rotate_loop(lp: &[u32], start: Option<u32>) -> Result<Vec<u32>, NodeError
     Ok(lp)
 }
 
-pub(crate) fn parse_shape(s: &str) -> Result<BoundaryShape, NodeError> {
-    match s {
-        "circle" => Ok(BoundaryShape::Circle),
-        "square" => Ok(BoundaryShape::Square),
-        o => Err(NodeError::invalid("shape", format!("unknown shape '{o}'"))),
-    }
-}
-
-pub(crate) fn parse_spacing(s: &str) -> Result<Spacing, NodeError> {
-    match s {
-        "arc_length" => Ok(Spacing::ArcLength),
-        "uniform" => Ok(Spacing::Uniform),
-        o => Err(NodeError::invalid(
-            "spacing",
-            format!("unknown spacing '{o}'"),
-        )),
-    }
-}
-
 pub(crate) fn parse_start(v: i64) -> Option<u32> {
     (v >= 0).then_some(v as u32)
 }
 
 fn declare(b: &mut NodeBuilder) {
-    b.doc("Places a disk mesh's boundary loop on a circle or square in [0,1]^2 (positions of boundary vertices become (u, v, 0); UVs set on them).")
-        .category("param");
+    b.doc("Places a disk mesh's boundary loop on a circle or square in [0,1]^2 (positions of boundary vertices become (u, v, 0); UVs set on them).");
     b.add_input::<Mesh>("mesh");
-    b.add_input::<String>("shape")
-        .choices(&["circle", "square"]);
-    b.add_input::<String>("spacing")
-        .choices(&["arc_length", "uniform"])
+    b.add_choice::<BoundaryShape>("shape");
+    b.add_choice::<Spacing>("spacing")
         .doc("arc_length: by fraction of the loop's length; uniform: by vertex count.");
     b.add_input::<i64>("start_vertex")
         .default(-1i64)
@@ -189,8 +177,8 @@ fn declare(b: &mut NodeBuilder) {
 
 fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let mesh: Arc<Mesh> = ctx.input("mesh")?;
-    let shape = parse_shape(&ctx.input::<String>("shape")?)?;
-    let spacing = parse_spacing(&ctx.input::<String>("spacing")?)?;
+    let shape = ctx.choice::<BoundaryShape>("shape")?;
+    let spacing = ctx.choice::<Spacing>("spacing")?;
     let start = parse_start(ctx.input("start_vertex")?);
     let lp = boundary_loop(&mesh, start)?;
     let uv = map_boundary(&mesh.positions, &lp, shape, spacing)

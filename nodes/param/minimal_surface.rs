@@ -8,7 +8,6 @@
 
 use super::laplacian::{fan_triangles, mean_value_weights};
 use super::laplacian_rows::LaplacianRows;
-use super::tutte::parse_weights;
 use super::tutte::TutteWeights;
 use crate::nodes::linalg::laplace::solve_dirichlet;
 use crate::nodes::linalg::laplace_weights::solve_dirichlet_weights;
@@ -92,24 +91,30 @@ pub fn minimal_surface(
     Ok((x, neg))
 }
 
+/// The weights the `weights` socket of `minimal_surface` accepts (Tutte's without mean value).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct SurfaceWeights(TutteWeights);
+
+impl Choice for SurfaceWeights {
+    const CHOICES: &'static [(&'static str, Self)] = &[
+        ("uniform", SurfaceWeights(TutteWeights::Uniform)),
+        ("cotangent", SurfaceWeights(TutteWeights::Cotangent)),
+    ];
+}
+
 fn declare(b: &mut NodeBuilder) {
-    b.doc("Minimal surface: interior vertices from the Laplace equation, boundary fixed at its own positions.")
-        .category("param");
+    b.doc("Minimal surface: interior vertices from the Laplace equation, boundary fixed at its own positions.");
     b.add_input::<Mesh>("mesh");
-    b.add_input::<String>("weights")
-        .choices(&["uniform", "cotangent"])
+    b.add_choice::<SurfaceWeights>("weights")
         .doc("uniform (membrane) or cotangent weights of the input geometry.");
     b.add_output::<Mesh>("mesh");
 }
 
 fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let mesh: Arc<Mesh> = ctx.input("mesh")?;
-    let w = ctx.input::<String>("weights")?;
-    if w == "mean_value" {
-        return Err(NodeError::invalid("weights", "use uniform or cotangent"));
-    }
-    let (x, neg) = minimal_surface(&mesh, parse_weights(&w)?)?;
-    if w == "cotangent" {
+    let SurfaceWeights(w) = ctx.choice::<SurfaceWeights>("weights")?;
+    let (x, neg) = minimal_surface(&mesh, w)?;
+    if w == TutteWeights::Cotangent {
         ctx.log(format!(
             "{neg} edges with negative cotangent weight (obtuse triangles)"
         ));

@@ -16,11 +16,13 @@ use crate::registry::Registry;
 
 /// Registers the param nodes.
 pub fn register(r: &mut Registry) {
-    boundary_map::register(r);
-    minimal_surface::register(r);
-    render_uv::register(r);
-    texture_map::register(r);
-    tutte::register(r);
-    uv_metrics::register(r);
-    arap::register(r);
+    r.with_category("param", |r| {
+        boundary_map::register(r);
+        minimal_surface::register(r);
+        render_uv::register(r);
+        texture_map::register(r);
+        tutte::register(r);
+        uv_metrics::register(r);
+        arap::register(r);
+    });
 }

@@ -128,8 +128,7 @@ pub fn render_uv_layout(
 }
 
 fn declare(b: &mut NodeBuilder) {
-    b.doc("Draws a mesh's UV layout as a wireframe over its texture, flipped triangles in red.")
-        .category("param");
+    b.doc("Draws a mesh's UV layout as a wireframe over its texture, flipped triangles in red.");
     b.add_input::<Mesh>("mesh");
     b.add_input::<i64>("size")
         .default(512i64)

@@ -22,8 +22,7 @@ pub fn checkerboard(size: u32, squares: u32) -> Image {
 }
 
 fn declare(b: &mut NodeBuilder) {
-    b.doc("Attaches a texture (default: a generated checkerboard) to a mesh with UVs as its material.")
-        .category("param");
+    b.doc("Attaches a texture (default: a generated checkerboard) to a mesh with UVs as its material.");
     b.add_input::<Mesh>("mesh");
     b.add_input::<Image>("image")
         .optional()

@@ -12,9 +12,7 @@
 //! loop by a fan of triangles, the resulting disk is mapped, and the virtual vertices are
 //! dropped, which keeps the no-fold guarantee for the real triangles.
 
-use super::boundary_map::{
-    map_boundary, parse_shape, parse_spacing, parse_start, rotate_loop, Spacing,
-};
+use super::boundary_map::{map_boundary, parse_start, rotate_loop, Spacing};
 use super::laplacian::{fan_triangles, mean_value_weights};
 use super::laplacian_rows::LaplacianRows;
 use super::uv_metrics::uv_metrics;
@@ -34,6 +32,28 @@ pub enum TutteWeights {
     Cotangent,
     /// Floater's mean-value weights (Floater 2003): positive and shape-preserving.
     MeanValue,
+}
+
+impl Choice for TutteWeights {
+    const CHOICES: &'static [(&'static str, Self)] = &[
+        ("uniform", Self::Uniform),
+        ("cotangent", Self::Cotangent),
+        ("mean_value", Self::MeanValue),
+    ];
+}
+
+/// What `tutte` does with a mesh of several boundary loops (the `holes` socket).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Holes {
+    /// Refuse it: Tutte's embedding needs a disk.
+    Error,
+    /// Close every loop but the longest with a virtual fan vertex first.
+    Fill,
+}
+
+impl Choice for Holes {
+    const CHOICES: &'static [(&'static str, Self)] =
+        &[("error", Self::Error), ("fill", Self::Fill)];
 }
 
 /// Everything `tutte` can be told.
@@ -266,43 +286,16 @@ pub fn flatten(mesh: &Mesh, uvs: &[[f64; 2]]) -> Mesh {
     flat
 }
 
-pub(crate) fn parse_weights(s: &str) -> Result<TutteWeights, NodeError> {
-    match s {
-        "uniform" => Ok(TutteWeights::Uniform),
-        "cotangent" => Ok(TutteWeights::Cotangent),
-        "mean_value" => Ok(TutteWeights::MeanValue),
-        o => Err(NodeError::invalid(
-            "weights",
-            format!("unknown weights '{o}'"),
-        )),
-    }
-}
-
-pub(crate) fn parse_holes(s: &str) -> Result<bool, NodeError> {
-    match s {
-        "error" => Ok(false),
-        "fill" => Ok(true),
-        o => Err(NodeError::invalid(
-            "holes",
-            format!("unknown holes mode '{o}'"),
-        )),
-    }
-}
-
 fn declare(b: &mut NodeBuilder) {
-    b.doc("Tutte's embedding: boundary on a circle or square, interior as convex combinations of neighbours (uniform, cotangent or mean-value weights).")
-        .category("param");
+    b.doc("Tutte's embedding: boundary on a circle or square, interior as convex combinations of neighbours (uniform, cotangent or mean-value weights).");
     b.add_input::<Mesh>("mesh");
-    b.add_input::<String>("weights")
-        .choices(&["uniform", "cotangent", "mean_value"])
-        .doc("uniform (Tutte), cotangent (harmonic; may fold on obtuse meshes), mean_value (Floater).");
-    b.add_input::<String>("boundary")
-        .choices(&["circle", "square"]);
-    b.add_input::<String>("spacing")
-        .choices(&["arc_length", "uniform"])
+    b.add_choice::<TutteWeights>("weights").doc(
+        "uniform (Tutte), cotangent (harmonic; may fold on obtuse meshes), mean_value (Floater).",
+    );
+    b.add_choice::<BoundaryShape>("boundary");
+    b.add_choice::<Spacing>("spacing")
         .doc("Boundary vertex spacing.");
-    b.add_input::<String>("holes")
-        .choices(&["error", "fill"])
+    b.add_choice::<Holes>("holes")
         .doc("fill: close all boundary loops but the longest with virtual fan vertices first.");
     b.add_input::<i64>("start_vertex")
         .default(-1i64)
@@ -316,10 +309,10 @@ fn declare(b: &mut NodeBuilder) {
 fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let mesh: Arc<Mesh> = ctx.input("mesh")?;
     let opts = TutteOptions {
-        weights: parse_weights(&ctx.input::<String>("weights")?)?,
-        boundary: parse_shape(&ctx.input::<String>("boundary")?).map_err(|e| e.at("boundary"))?,
-        spacing: parse_spacing(&ctx.input::<String>("spacing")?)?,
-        fill_holes: parse_holes(&ctx.input::<String>("holes")?)?,
+        weights: ctx.choice::<TutteWeights>("weights")?,
+        boundary: ctx.choice::<BoundaryShape>("boundary")?,
+        spacing: ctx.choice::<Spacing>("spacing")?,
+        fill_holes: ctx.choice::<Holes>("holes")? == Holes::Fill,
         start_vertex: parse_start(ctx.input("start_vertex")?),
     };
     let r = tutte(&mesh, &opts)?;

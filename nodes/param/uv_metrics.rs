@@ -195,8 +195,7 @@ pub fn distortion_color(x: f64, hi: f64) -> [f64; 3] {
 }
 
 fn declare(b: &mut NodeBuilder) {
-    b.doc("Distortion of a mesh's UVs: flipped triangles, angle and area distortion, ARAP and symmetric Dirichlet energies.")
-        .category("param");
+    b.doc("Distortion of a mesh's UVs: flipped triangles, angle and area distortion, ARAP and symmetric Dirichlet energies.");
     b.add_input::<Mesh>("mesh")
         .doc("A mesh with per-vertex UVs (polygons are fan-triangulated).");
     b.add_output::<Table>("table").doc("One row of metrics.");

@@ -5,8 +5,15 @@
 
 use crate::prelude::*;
 
+impl Choice for FovAxis {
+    const CHOICES: &'static [(&'static str, Self)] = &[
+        ("vertical", FovAxis::Vertical),
+        ("smaller", FovAxis::Smaller),
+    ];
+}
+
 fn declare(b: &mut NodeBuilder) {
-    b.doc("A look-at pinhole camera.").category("render");
+    b.doc("A look-at pinhole camera.");
     b.add_input::<[f64; 3]>("eye")
         .default([0.0, 0.0, 3.0])
         .doc("Camera position.");
@@ -20,8 +27,7 @@ fn declare(b: &mut NodeBuilder) {
         .default(45.0)
         .range(0.001, 179.9)
         .doc("Field of view in degrees along fov_axis.");
-    b.add_input::<String>("fov_axis")
-        .choices(&["vertical", "smaller"])
+    b.add_choice::<FovAxis>("fov_axis")
         .doc("Image axis the field of view spans.");
     b.add_input::<i64>("width")
         .default(512i64)
@@ -42,7 +48,7 @@ fn declare(b: &mut NodeBuilder) {
 }
 
 fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
-    let axis: String = ctx.input("fov_axis")?;
+    let fov_axis = ctx.choice::<FovAxis>("fov_axis")?;
     let w: i64 = ctx.input("width")?;
     let h: i64 = ctx.input("height")?;
     if !(1..=16384).contains(&w) {
@@ -56,11 +62,7 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
         target: ctx.input("target")?,
         up: ctx.input("up")?,
         fov_deg: ctx.input("fov")?,
-        fov_axis: if axis == "smaller" {
-            FovAxis::Smaller
-        } else {
-            FovAxis::Vertical
-        },
+        fov_axis,
         width: w as u32,
         height: h as u32,
         near: ctx.input("near")?,

@@ -53,7 +53,7 @@ fn declare_light(
     vector: (&str, [f64; 3], &str),
     intensity: (f64, &str),
 ) {
-    b.doc(doc).category("render");
+    b.doc(doc);
     b.add_input::<[f64; 3]>(vector.0)
         .default(vector.1)
         .doc(vector.2);

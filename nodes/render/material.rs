@@ -3,11 +3,28 @@
 
 use crate::prelude::*;
 
+/// The scattering model named by the `kind` socket (`MaterialKind` without its parameters,
+/// which come from the `ior` and `roughness` sockets).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Kind {
+    Diffuse,
+    Mirror,
+    Dielectric,
+    Conductor,
+}
+
+impl Choice for Kind {
+    const CHOICES: &'static [(&'static str, Self)] = &[
+        ("diffuse", Kind::Diffuse),
+        ("mirror", Kind::Mirror),
+        ("dielectric", Kind::Dielectric),
+        ("conductor", Kind::Conductor),
+    ];
+}
+
 fn declare(b: &mut NodeBuilder) {
-    b.doc("A surface material: base colour or texture, metallic, roughness, normal map, emission.")
-        .category("render");
-    b.add_input::<String>("kind")
-        .choices(&["diffuse", "mirror", "dielectric", "conductor"])
+    b.doc("A surface material: base colour or texture, metallic, roughness, normal map, emission.");
+    b.add_choice::<Kind>("kind")
         .doc("Scattering model for the tracers.");
     b.add_input::<Color>("base_color")
         .default(Color([0.8, 0.8, 0.8]))
@@ -40,7 +57,7 @@ fn declare(b: &mut NodeBuilder) {
 }
 
 fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
-    let kind: String = ctx.input("kind")?;
+    let kind = ctx.choice::<Kind>("kind")?;
     let base: Color = ctx.input("base_color")?;
     let emission: Color = ctx.input("emission")?;
     let metallic: f64 = ctx.input("metallic")?;
@@ -59,11 +76,11 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
             return Err(NodeError::invalid(name, "must be finite and not negative"));
         }
     }
-    let kind = match kind.as_str() {
-        "mirror" => MaterialKind::Mirror,
-        "dielectric" => MaterialKind::Dielectric { ior },
-        "conductor" => MaterialKind::Conductor { roughness },
-        _ => MaterialKind::Diffuse,
+    let kind = match kind {
+        Kind::Diffuse => MaterialKind::Diffuse,
+        Kind::Mirror => MaterialKind::Mirror,
+        Kind::Dielectric => MaterialKind::Dielectric { ior },
+        Kind::Conductor => MaterialKind::Conductor { roughness },
     };
     let m = Material {
         name: ctx.node_id.to_string(),

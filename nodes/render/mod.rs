@@ -12,12 +12,14 @@ use crate::registry::Registry;
 
 /// Registers the render nodes.
 pub fn register(r: &mut Registry) {
-    camera::register(r);
-    light::register(r);
-    material::register(r);
-    scene::register(r);
-    raster::register(r);
-    uv_project::register(r);
+    r.with_category("render", |r| {
+        camera::register(r);
+        light::register(r);
+        material::register(r);
+        scene::register(r);
+        raster::register(r);
+        uv_project::register(r);
+    });
 }
 
 /// Runs the render node `name` standalone on `inputs` and returns its outputs (for the

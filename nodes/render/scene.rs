@@ -28,8 +28,7 @@ pub fn build_scene(
 }
 
 fn declare(b: &mut NodeBuilder) {
-    b.doc("Gathers meshes with materials, lights and a camera into a scene.")
-        .category("render");
+    b.doc("Gathers meshes with materials, lights and a camera into a scene.");
     b.add_input::<Vec<Mesh>>("meshes")
         .optional()
         .doc("Meshes (several links allowed).");

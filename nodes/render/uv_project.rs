@@ -25,12 +25,22 @@ pub fn planar_uvs(mesh: &Mesh, axis: usize, scale: f64) -> Vec<[f64; 2]> {
         .collect()
 }
 
+/// The projection axis of the `axis` socket, as a coordinate index for `planar_uvs`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct ProjectionAxis(usize);
+
+impl Choice for ProjectionAxis {
+    const CHOICES: &'static [(&'static str, Self)] = &[
+        ("z", ProjectionAxis(2)),
+        ("x", ProjectionAxis(0)),
+        ("y", ProjectionAxis(1)),
+    ];
+}
+
 fn declare(b: &mut NodeBuilder) {
-    b.doc("Planar UVs: projects the mesh along an axis onto its bounding box.")
-        .category("render");
+    b.doc("Planar UVs: projects the mesh along an axis onto its bounding box.");
     b.add_input::<Mesh>("mesh");
-    b.add_input::<String>("axis")
-        .choices(&["z", "x", "y"])
+    b.add_choice::<ProjectionAxis>("axis")
         .doc("Projection direction.");
     b.add_input::<f64>("scale")
         .default(1.0)
@@ -40,16 +50,11 @@ fn declare(b: &mut NodeBuilder) {
 
 fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let mesh: Arc<Mesh> = ctx.input("mesh")?;
-    let axis: String = ctx.input("axis")?;
+    let ProjectionAxis(ax) = ctx.choice::<ProjectionAxis>("axis")?;
     let scale: f64 = ctx.input("scale")?;
     if !scale.is_finite() {
         return Err(NodeError::invalid("scale", "must be finite"));
     }
-    let ax = match axis.as_str() {
-        "x" => 0,
-        "y" => 1,
-        _ => 2,
-    };
     let mut m = (*mesh).clone();
     m.uvs = Some(Attribute {
         domain: Domain::Vertex,

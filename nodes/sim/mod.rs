@@ -7,6 +7,8 @@ use crate::registry::Registry;
 
 /// Registers the simulation nodes.
 pub fn register(r: &mut Registry) {
-    mass_spring::register(r);
-    sph::register(r);
+    r.with_category("sim", |r| {
+        mass_spring::register(r);
+        sph::register(r);
+    });
 }

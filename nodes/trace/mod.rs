@@ -15,7 +15,9 @@ use crate::registry::Registry;
 
 /// Registers the trace nodes.
 pub fn register(r: &mut Registry) {
-    path::register(r);
-    scene_load::register(r);
-    whitted::register(r);
+    r.with_category("trace", |r| {
+        path::register(r);
+        scene_load::register(r);
+        whitted::register(r);
+    });
 }

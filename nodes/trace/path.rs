@@ -43,6 +43,19 @@ pub enum Filter {
     Gaussian,
 }
 
+impl Choice for Strategy {
+    const CHOICES: &'static [(&'static str, Self)] = &[
+        ("mis", Strategy::Mis),
+        ("nee", Strategy::Nee),
+        ("bsdf", Strategy::Bsdf),
+    ];
+}
+
+impl Choice for Filter {
+    const CHOICES: &'static [(&'static str, Self)] =
+        &[("gaussian", Filter::Gaussian), ("box", Filter::Box)];
+}
+
 /// Path tracer settings.
 #[derive(Clone, Debug)]
 pub struct PathSettings {
@@ -426,8 +439,7 @@ pub fn render_path(
 }
 
 fn declare(b: &mut NodeBuilder) {
-    b.doc("Path traces a scene (NEE + BSDF sampling with MIS, Russian roulette); linear colour and per-pixel variance.")
-        .category("trace");
+    b.doc("Path traces a scene (NEE + BSDF sampling with MIS, Russian roulette); linear colour and per-pixel variance.");
     b.add_input::<Scene>("scene");
     b.add_input::<Camera>("camera")
         .optional()
@@ -445,11 +457,9 @@ fn declare(b: &mut NodeBuilder) {
         .range(1.0, 1e4)
         .doc("Bounces before Russian roulette starts.");
     b.add_input::<i64>("seed").default(0i64).doc("Random seed.");
-    b.add_input::<String>("filter")
-        .choices(&["gaussian", "box"])
+    b.add_choice::<Filter>("filter")
         .doc("Reconstruction filter: Mitsuba's gaussian (stddev 0.5 px, radius 2 px) or a one-pixel box.");
-    b.add_input::<String>("strategy")
-        .choices(&["mis", "nee", "bsdf"])
+    b.add_choice::<Strategy>("strategy")
         .doc("Emitter + BSDF sampling with the power heuristic, or either alone.");
     b.add_output::<Image>("color").doc("Linear radiance.");
     b.add_output::<Image>("variance")
@@ -463,8 +473,8 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let max_depth: i64 = ctx.input("max_depth")?;
     let rr_depth: i64 = ctx.input("rr_depth")?;
     let seed: i64 = ctx.input("seed")?;
-    let filter: String = ctx.input("filter")?;
-    let strategy: String = ctx.input("strategy")?;
+    let filter = ctx.choice::<Filter>("filter")?;
+    let strategy = ctx.choice::<Strategy>("strategy")?;
     if !(1..=1_000_000).contains(&spp) {
         return Err(NodeError::invalid(
             "spp",
@@ -492,27 +502,8 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
         },
         rr_depth: rr_depth.min(u32::MAX as i64) as u32,
         seed: seed as u64,
-        filter: match filter.as_str() {
-            "box" => Filter::Box,
-            "gaussian" => Filter::Gaussian,
-            f => {
-                return Err(NodeError::invalid(
-                    "filter",
-                    format!("unknown filter '{f}'"),
-                ))
-            }
-        },
-        strategy: match strategy.as_str() {
-            "mis" => Strategy::Mis,
-            "nee" => Strategy::Nee,
-            "bsdf" => Strategy::Bsdf,
-            f => {
-                return Err(NodeError::invalid(
-                    "strategy",
-                    format!("unknown strategy '{f}'"),
-                ))
-            }
-        },
+        filter,
+        strategy,
     };
     let report = progress_reporter(ctx);
     let t0 = std::time::Instant::now();

@@ -267,8 +267,7 @@ pub fn render_whitted(
 fn declare(b: &mut NodeBuilder) {
     b.doc(
         "Whitted ray tracing: Blinn-Phong with shadow rays, mirror reflection, Fresnel refraction.",
-    )
-    .category("trace");
+    );
     b.add_input::<Scene>("scene");
     b.add_input::<Camera>("camera")
         .optional()

@@ -64,14 +64,12 @@ fn declare_common(b: &mut NodeBuilder) {
 }
 
 fn declare_arap(b: &mut NodeBuilder) {
-    b.doc("ARAP parameterization (Liu et al. 2008 local/global), fold-free by default.")
-        .category("param");
+    b.doc("ARAP parameterization (Liu et al. 2008 local/global), fold-free by default.");
     declare_common(b);
 }
 
 fn declare_hybrid(b: &mut NodeBuilder) {
-    b.doc("Hybrid ARAP/ASAP parameterization (Liu et al. 2008 §4.3): lambda blends similarity (0) and rotation (large).")
-        .category("param");
+    b.doc("Hybrid ARAP/ASAP parameterization (Liu et al. 2008 §4.3): lambda blends similarity (0) and rotation (large).");
     declare_common(b);
     b.add_input::<f64>("lambda")
         .default(1.0)

@@ -176,8 +176,7 @@ fn dist2(a: [f64; 3], b: [f64; 3]) -> f64 {
 }
 
 fn declare(b: &mut NodeBuilder) {
-    b.doc("ASAP parameterization (Liu et al. 2008): similarity per triangle, one linear solve.")
-        .category("param");
+    b.doc("ASAP parameterization (Liu et al. 2008): similarity per triangle, one linear solve.");
     b.add_input::<Mesh>("mesh")
         .doc("Connected mesh to flatten (triangulated if needed).");
     b.add_input::<bool>("normalize")

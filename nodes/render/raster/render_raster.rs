@@ -7,16 +7,29 @@ use super::shadow::ShadowParams;
 use super::texture::Wrap;
 use crate::prelude::*;
 
+impl Choice for AntiAliasing {
+    const CHOICES: &'static [(&'static str, Self)] = &[
+        ("msaa", AntiAliasing::Multisampling),
+        ("ssaa", AntiAliasing::Supersampling),
+    ];
+}
+
+impl Choice for Wrap {
+    const CHOICES: &'static [(&'static str, Self)] = &[
+        ("repeat", Wrap::Repeat),
+        ("clamp", Wrap::Clamp),
+        ("mirror", Wrap::Mirror),
+    ];
+}
+
 fn declare(b: &mut NodeBuilder) {
-    b.doc("Rasterizes a scene: Blinn-Phong with shadow maps, textures and normal maps, plus deferred passes.")
-        .category("render");
+    b.doc("Rasterizes a scene: Blinn-Phong with shadow maps, textures and normal maps, plus deferred passes.");
     b.add_input::<Scene>("scene")
         .doc("Meshes, materials, lights and usually the camera.");
     b.add_input::<Camera>("camera")
         .optional()
         .doc("Camera; overrides the scene's camera.");
-    b.add_input::<String>("antialiasing")
-        .choices(&["msaa", "ssaa"])
+    b.add_choice::<AntiAliasing>("antialiasing")
         .doc("msaa shades each triangle once per pixel; ssaa shades every sample.");
     b.add_input::<i64>("samples")
         .default(4i64)
@@ -48,8 +61,7 @@ fn declare(b: &mut NodeBuilder) {
         .default(0.2)
         .range(0.0, 10.0)
         .doc("Ambient term ka*Ia, times the base colour.");
-    b.add_input::<String>("texture_wrap")
-        .choices(&["repeat", "clamp", "mirror"])
+    b.add_choice::<Wrap>("texture_wrap")
         .doc("What textures do outside UV 0..1.");
     b.add_input::<bool>("mipmaps")
         .default(true)
@@ -91,7 +103,7 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
             format!("{samples} is not a square number of samples in 1..=64"),
         ));
     }
-    let aa: String = ctx.input("antialiasing")?;
+    let aa = ctx.choice::<AntiAliasing>("antialiasing")?;
     let res: i64 = ctx.input("shadow_resolution")?;
     if !(256..=8192).contains(&res) {
         return Err(NodeError::invalid(
@@ -115,15 +127,11 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
             return Err(NodeError::invalid(n, "must be finite and not negative"));
         }
     }
-    let wrap: String = ctx.input("texture_wrap")?;
+    let wrap = ctx.choice::<Wrap>("texture_wrap")?;
     let bgc: Color = ctx.input("background")?;
     let opts = RasterOptions {
         samples_per_axis: sa as u32,
-        aa: if aa == "ssaa" {
-            AntiAliasing::Supersampling
-        } else {
-            AntiAliasing::Multisampling
-        },
+        aa,
         cull_backfaces: ctx.input("cull_backfaces")?,
         shadows: ctx.input("shadows")?,
         shadow_resolution: res as u32,
@@ -133,11 +141,7 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
             slope_bias: slope,
         },
         ambient,
-        wrap: match wrap.as_str() {
-            "clamp" => Wrap::Clamp,
-            "mirror" => Wrap::Mirror,
-            _ => Wrap::Repeat,
-        },
+        wrap,
         mipmaps: ctx.input("mipmaps")?,
         background: bgc.0,
         // Only the passes someone reads are computed (and allocated).

@@ -11,6 +11,26 @@ use crate::nodes::mesh::vertex_select::select_vertices;
 use crate::prelude::*;
 use std::hash::{Hash, Hasher};
 
+impl Choice for Method {
+    const CHOICES: &'static [(&'static str, Self)] = &[
+        ("implicit", Method::Implicit),
+        ("semi_implicit", Method::SemiImplicit),
+        ("projective", Method::Projective),
+    ];
+}
+
+/// The axis gravity pulls along (the `gravity_axis` socket), as a coordinate index.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct GravityAxis(usize);
+
+impl Choice for GravityAxis {
+    const CHOICES: &'static [(&'static str, Self)] = &[
+        ("z", GravityAxis(2)),
+        ("y", GravityAxis(1)),
+        ("x", GravityAxis(0)),
+    ];
+}
+
 /// The node's state between frames.
 #[derive(Default)]
 struct NodeState {
@@ -33,13 +53,11 @@ pub const LOG_COLUMNS: [&str; 8] = [
 ];
 
 fn declare(b: &mut NodeBuilder) {
-    b.doc("Cloth as a mass-spring system: semi-implicit, implicit (Newton) or projective (Liu 2013) time steps, fixed vertices, sphere collider.")
-        .category("sim");
+    b.doc("Cloth as a mass-spring system: semi-implicit, implicit (Newton) or projective (Liu 2013) time steps, fixed vertices, sphere collider.");
     b.stateful();
     b.add_input::<Mesh>("mesh")
         .doc("Rest shape (e.g. the course's grid40x40.usda).");
-    b.add_input::<String>("integrator")
-        .choices(&["implicit", "semi_implicit", "projective"]);
+    b.add_choice::<Method>("integrator");
     b.add_input::<f64>("stiffness")
         .default(1000.0)
         .range(0.0, 1e9);
@@ -56,8 +74,7 @@ fn declare(b: &mut NodeBuilder) {
         .range(1e-6, 1.0)
         .doc("Velocity factor per 0.01 s (per step at the course's h = 0.01; 1 = undamped).");
     b.add_input::<f64>("gravity").default(-9.8).range(-1e4, 1e4);
-    b.add_input::<String>("gravity_axis")
-        .choices(&["z", "y", "x"]);
+    b.add_choice::<GravityAxis>("gravity_axis");
     b.add_input::<f64>("mass")
         .default(1.0)
         .min(1e-12)
@@ -125,18 +142,13 @@ fn build(
     mesh: &Mesh,
     with_sim: bool,
 ) -> Result<(Option<Simulator>, Params), NodeError> {
-    let method = Method::parse(&ctx.input::<String>("integrator")?)
-        .ok_or_else(|| NodeError::invalid("integrator", "unknown integrator"))?;
+    let method = ctx.choice::<Method>("integrator")?;
     let k: f64 = ctx.input("stiffness")?;
     let h: f64 = ctx.input("h")?;
     let substeps: i64 = ctx.input("substeps")?;
     let damping: f64 = ctx.input("damping")?;
     let g: f64 = ctx.input("gravity")?;
-    let axis = match ctx.input::<String>("gravity_axis")?.as_str() {
-        "x" => 0,
-        "y" => 1,
-        _ => 2,
-    };
+    let GravityAxis(axis) = ctx.choice::<GravityAxis>("gravity_axis")?;
     let mass: f64 = ctx.input("mass")?;
     for (name, v) in [
         ("stiffness", k),

@@ -19,18 +19,6 @@ pub enum Method {
     Projective,
 }
 
-impl Method {
-    /// Parses `semi_implicit`, `implicit` or `projective`.
-    pub fn parse(s: &str) -> Option<Method> {
-        match s {
-            "semi_implicit" => Some(Method::SemiImplicit),
-            "implicit" => Some(Method::Implicit),
-            "projective" => Some(Method::Projective),
-            _ => None,
-        }
-    }
-}
-
 /// Solver settings beyond the model.
 #[derive(Clone, Copy, Debug)]
 pub struct SolverOptions {

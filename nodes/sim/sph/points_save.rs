@@ -37,23 +37,35 @@ fn clean(name: &str) -> String {
         .collect()
 }
 
+/// The PLY encoding of the `format` socket.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum PlyFormat {
+    /// Binary little endian.
+    Binary,
+    /// Text.
+    Ascii,
+}
+
+impl Choice for PlyFormat {
+    const CHOICES: &'static [(&'static str, Self)] =
+        &[("binary", PlyFormat::Binary), ("ascii", PlyFormat::Ascii)];
+}
+
 fn declare(b: &mut NodeBuilder) {
-    b.doc("Writes particles as a PLY point cloud with their attributes.")
-        .category("sim");
+    b.doc("Writes particles as a PLY point cloud with their attributes.");
     b.sink();
     b.add_input::<Points>("points");
     b.add_input::<String>("path")
         .file_out()
         .doc("Output .ply file; `{frame}` or `{frame:04}` is replaced by the frame.");
-    b.add_input::<String>("format")
-        .choices(&["binary", "ascii"])
+    b.add_choice::<PlyFormat>("format")
         .doc("PLY encoding (binary little endian or ascii).");
 }
 
 fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let pts: Arc<Points> = ctx.input("points")?;
     let p: String = ctx.input("path")?;
-    let binary = ctx.input::<String>("format")? == "binary";
+    let binary = ctx.choice::<PlyFormat>("format")? == PlyFormat::Binary;
     let path = ctx.output_path("path", &p)?;
     if path.extension().and_then(|e| e.to_str()) != Some("ply") {
         return Err(NodeError::invalid(

@@ -120,18 +120,27 @@ impl SphState {
     }
 }
 
+impl Choice for Solver {
+    const CHOICES: &'static [(&'static str, Self)] =
+        &[("wcsph", Solver::Wcsph), ("dfsph", Solver::Dfsph)];
+}
+
+impl Choice for Boundary {
+    const CHOICES: &'static [(&'static str, Self)] = &[
+        ("particles", Boundary::Particles),
+        ("walls", Boundary::Walls),
+    ];
+}
+
 fn declare(b: &mut NodeBuilder) {
-    b.doc("SPH fluid (WCSPH or DFSPH) in a box; advances one frame per execution.")
-        .category("sim");
+    b.doc("SPH fluid (WCSPH or DFSPH) in a box; advances one frame per execution.");
     b.stateful();
     b.add_input::<i64>("dimension")
         .default(3i64)
         .range(2.0, 3.0);
-    b.add_input::<String>("solver")
-        .choices(&["wcsph", "dfsph"])
+    b.add_choice::<Solver>("solver")
         .doc("wcsph: the course's weakly compressible SPH; dfsph: divergence-free SPH (Bender & Koschier 2017), incompressible to max_density_error.");
-    b.add_input::<String>("boundary")
-        .choices(&["particles", "walls"])
+    b.add_choice::<Boundary>("boundary")
         .doc("particles: Akinci 2012 boundary particles sampling the box; walls: clamp with restitution only.");
     b.add_input::<[f64; 3]>("sim_box_min")
         .default([0.0, 0.0, 0.0]);
@@ -208,14 +217,8 @@ fn declare(b: &mut NodeBuilder) {
 type Setup = (SphParams, [f64; 3], [f64; 3], Option<[usize; 3]>);
 
 fn read_params(ctx: &ExecContext) -> Result<Setup, NodeError> {
-    let solver = match ctx.input::<String>("solver")?.as_str() {
-        "dfsph" => Solver::Dfsph,
-        _ => Solver::Wcsph,
-    };
-    let boundary = match ctx.input::<String>("boundary")?.as_str() {
-        "walls" => Boundary::Walls,
-        _ => Boundary::Particles,
-    };
+    let solver = ctx.choice::<Solver>("solver")?;
+    let boundary = ctx.choice::<Boundary>("boundary")?;
     let prm = SphParams {
         dim: ctx.input::<i64>("dimension")? as usize,
         solver,

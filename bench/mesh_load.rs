@@ -3,7 +3,7 @@
 //! the same options. Run: `cargo bench --bench mesh_load` (reads /work/shared, or the path
 //! given as the first argument).
 
-use cgnodes::nodes::mesh::load::{load_mesh, LoadOptions};
+use cgnodes::nodes::mesh::mesh_load::{load_mesh, LoadOptions};
 use std::path::PathBuf;
 use std::time::Instant;
 

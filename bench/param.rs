@@ -6,7 +6,7 @@
 //! is `bench/peers/param_libigl.py` (`pip install libigl`); without it only our times print.
 //! Our time includes building the mesh connectivity (the mesh is rebuilt before every run).
 
-use cgnodes::nodes::mesh::load::{load_mesh, LoadOptions};
+use cgnodes::nodes::mesh::mesh_load::{load_mesh, LoadOptions};
 use cgnodes::nodes::param::triangles::fan_triangles;
 use cgnodes::nodes::param::tutte::{tutte, TutteOptions, TutteWeights};
 use cgnodes::nodes::param::uv_metrics::uv_metrics;

@@ -8,7 +8,7 @@
 //! with only the colour and with all six passes (what a graph linking only `color`, or
 //! every output, computes), and 4x supersampling for comparison.
 
-use cgnodes::nodes::mesh::load::{load_mesh, LoadOptions};
+use cgnodes::nodes::mesh::mesh_load::{load_mesh, LoadOptions};
 use cgnodes::nodes::mesh::mesh_plane::plane_mesh;
 use cgnodes::nodes::render::raster::{render, AntiAliasing, Passes, RasterOptions};
 use cgnodes::types::*;

@@ -12,7 +12,7 @@
 //! Options (after `--`): `--ref-spp N` (default 2048), `--spp a,b,c` (default 4,16,64,256),
 //! `--quick` (one 64-spp timing, no reference).
 
-use cgnodes::nodes::trace::path::{render, Filter, PathSettings, Strategy};
+use cgnodes::nodes::trace::render_path::{render, Filter, PathSettings, Strategy};
 use cgnodes::nodes::trace::render_scene::{PinholeCamera, RenderScene};
 use cgnodes::nodes::trace::scene_load::load_obj_scene;
 use cgnodes::types::{Camera, FovAxis, Image};

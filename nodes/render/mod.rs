@@ -4,9 +4,9 @@
 pub mod camera;
 pub mod light;
 pub mod material;
+pub mod mesh_uv_project;
 pub mod raster;
 pub mod scene;
-pub mod uv_project;
 
 use crate::registry::Registry;
 
@@ -18,7 +18,7 @@ pub fn register(r: &mut Registry) {
         material::register(r);
         scene::register(r);
         raster::register(r);
-        uv_project::register(r);
+        mesh_uv_project::register(r);
     });
 }
 

@@ -3,21 +3,21 @@
 
 pub mod bsdf;
 pub mod bvh;
-pub mod path;
+pub mod render_path;
 pub mod render_scene;
+pub mod render_whitted;
 pub mod sampling;
 pub mod scene_load;
 pub mod tracer_node;
 pub mod v3;
-pub mod whitted;
 
 use crate::registry::Registry;
 
 /// Registers the trace nodes.
 pub fn register(r: &mut Registry) {
     r.with_category("trace", |r| {
-        path::register(r);
+        render_path::register(r);
         scene_load::register(r);
-        whitted::register(r);
+        render_whitted::register(r);
     });
 }

@@ -366,7 +366,7 @@ impl Topology {
 /// corners are `s..s + n`, the triangles `(s, s + k, s + k + 1)` for `k` in `1..n - 1`, as
 /// `(f, [corner; 3])` in face order. Corners index the mesh's `face_indices`, so per-corner
 /// and per-face data can follow the triangles. Exact for convex polygons; see
-/// `nodes::mesh::triangulate` for ear clipping of non-convex ones.
+/// `nodes::mesh::mesh_triangulate` for ear clipping of non-convex ones.
 pub fn fan_corners(face_counts: &[u32]) -> impl Iterator<Item = (usize, [usize; 3])> + '_ {
     face_counts
         .iter()

@@ -145,7 +145,7 @@ fn plain_mode_energy_is_monotone_too() {
 
 #[test]
 fn fold_free_on_every_course_disk_mesh() {
-    use cgnodes::nodes::mesh::load::{load_mesh, LoadOptions};
+    use cgnodes::nodes::mesh::mesh_load::{load_mesh, LoadOptions};
     // every disk-like course mesh (Beetle_ABF has 11 holes, filled for the Tutte start)
     for name in [
         "Beetle_ABF",

@@ -258,9 +258,9 @@ fn buffer_pattern_runs_end_to_end() {
     assert!(r.ok(), "{:?}", r.errors());
     // Write USD's File Name lands in the output directory, as USDA.
     let written = out.join("uv.usda");
-    let m = cgnodes::nodes::mesh::load::load_mesh(
+    let m = cgnodes::nodes::mesh::mesh_load::load_mesh(
         &written,
-        &cgnodes::nodes::mesh::load::LoadOptions {
+        &cgnodes::nodes::mesh::mesh_load::LoadOptions {
             prim: "/geometry".into(),
             apply_transform: true,
             ..Default::default()

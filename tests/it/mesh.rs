@@ -1,7 +1,7 @@
 //! Mesh I/O against the course and literature meshes shipped in `assets/`, round trips, and
 //! every bad-input case of issue 3.
 
-use cgnodes::nodes::mesh::load::{load_mesh, LoadOptions};
+use cgnodes::nodes::mesh::mesh_load::{load_mesh, LoadOptions};
 use cgnodes::nodes::mesh::{obj, ply, usda};
 use cgnodes::types::{Attribute, Domain, Mesh};
 use std::path::{Path, PathBuf};

@@ -2,7 +2,7 @@
 //! exact reproduction of a regular grid, refusals of closed and holed meshes with the issue's
 //! messages, and hole filling on the 11-hole beetle.
 
-use cgnodes::nodes::mesh::load::{load_mesh, LoadOptions};
+use cgnodes::nodes::mesh::mesh_load::{load_mesh, LoadOptions};
 use cgnodes::nodes::param::boundary_map::Spacing;
 use cgnodes::nodes::param::laplacian::fan_triangles;
 use cgnodes::nodes::param::tutte::{

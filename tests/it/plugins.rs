@@ -563,9 +563,9 @@ fn the_example_crate_adds_a_node_to_a_working_binary() {
         String::from_utf8_lossy(&o.stdout).contains("42"),
         "{stderr}"
     );
-    let before = cgnodes::nodes::mesh::load::load_mesh(&asset, &Default::default()).unwrap();
+    let before = cgnodes::nodes::mesh::mesh_load::load_mesh(&asset, &Default::default()).unwrap();
     let after =
-        cgnodes::nodes::mesh::load::load_mesh(&out.join("twisted.obj"), &Default::default())
+        cgnodes::nodes::mesh::mesh_load::load_mesh(&out.join("twisted.obj"), &Default::default())
             .unwrap();
     assert_eq!(after.face_indices(), before.face_indices());
     let mut turned = 0.0f64;

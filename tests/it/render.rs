@@ -482,7 +482,7 @@ fn golden_scene() -> (Scene, Camera) {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
     let tex_bytes = std::fs::read(root.join("assets/course/green_checkerboard.png")).unwrap();
     let tex = decode_image(&tex_bytes, ColorSpace::Srgb).unwrap();
-    let bunny = cgnodes::nodes::mesh::load::load_mesh(
+    let bunny = cgnodes::nodes::mesh::mesh_load::load_mesh(
         &root.join("assets/meshes/bunny_closed.obj"),
         &Default::default(),
     )

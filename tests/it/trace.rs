@@ -1,7 +1,7 @@
 //! Path tracer checks against analytic results and against Mitsuba 3's Cornell box
 //! (`tests/data/trace/ref_stats.json`, see `assets/cornell/README.md`).
 
-use cgnodes::nodes::trace::path::{render_path, Filter, PathSettings, Strategy};
+use cgnodes::nodes::trace::render_path::{render_path, Filter, PathSettings, Strategy};
 use cgnodes::nodes::trace::scene_load::load_obj_scene;
 use cgnodes::types::{Camera, FovAxis, Image, Material, MaterialKind, Mesh, Scene, SceneObject};
 use std::sync::Arc;

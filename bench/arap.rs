@@ -331,21 +331,28 @@ fn curve(label: &str, r: &ArapResult, offset_ms: f64) -> Curve {
 }
 
 fn write_csv(path: &Path, r: &ArapResult) {
-    let mut s = String::from("iteration,energy,flips,elapsed_ms,step,blocked,refactors\n");
-    for x in &r.log {
-        let _ = writeln!(
-            s,
-            "{},{},{},{},{},{},{}",
-            x.iteration,
-            x.energy,
-            x.flips,
-            x.elapsed_ms,
-            x.step,
-            u8::from(x.blocked),
-            x.refactors
-        );
-    }
-    let _ = std::fs::write(path, s);
+    let header = [
+        "iteration",
+        "energy",
+        "flips",
+        "elapsed_ms",
+        "step",
+        "blocked",
+        "refactors",
+    ];
+    let rows = r.log.iter().map(|x| {
+        vec![
+            x.iteration.to_string(),
+            x.energy.to_string(),
+            x.flips.to_string(),
+            x.elapsed_ms.to_string(),
+            x.step.to_string(),
+            u8::from(x.blocked).to_string(),
+            x.refactors.to_string(),
+        ]
+    });
+    let header = std::iter::once(header.iter().map(|h| h.to_string()).collect::<Vec<_>>());
+    let _ = std::fs::write(path, cgnodes::io::csv::to_text(header.chain(rows)));
 }
 
 /// Runs the libigl peer; `None` (with a note) when Python or libigl is missing.

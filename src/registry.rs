@@ -83,6 +83,37 @@ pub fn closest<'a>(name: &str, candidates: impl Iterator<Item = &'a str>) -> Opt
         .map(|(_, c)| c.to_string())
 }
 
+/// Declares a domain of built-in nodes in its `mod.rs`: the modules that hold nodes (each with
+/// a `register` function), the domain's other modules, and a `register` that adds every node
+/// under the domain's category. Adding a node to a domain is one more name in `nodes`.
+///
+/// ```text
+/// cgnodes::node_domain! {
+///     category: "mesh",
+///     nodes: [mesh_load, mesh_save],
+///     modules: [obj, ply],
+/// }
+/// ```
+#[macro_export]
+macro_rules! node_domain {
+    (
+        category: $category:literal,
+        nodes: [$($node:ident),* $(,)?]
+        $(, modules: [$($module:ident),* $(,)?])?
+        $(,)?
+    ) => {
+        $(pub mod $node;)*
+        $($(pub mod $module;)*)?
+
+        /// Registers this domain's nodes, in the domain's category.
+        pub fn register(r: &mut $crate::registry::Registry) {
+            r.with_category($category, |r| {
+                $($node::register(r);)*
+            });
+        }
+    };
+}
+
 #[cfg(test)]
 mod tests {
     use super::Registry;

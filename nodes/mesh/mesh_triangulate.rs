@@ -4,6 +4,7 @@
 //! are split along their shorter diagonal. Per-corner and per-face data follow.
 
 use crate::prelude::*;
+use crate::types::vec3;
 
 fn newell(p: &[[f64; 3]]) -> [f64; 3] {
     let mut n = [0.0; 3];
@@ -17,8 +18,9 @@ fn newell(p: &[[f64; 3]]) -> [f64; 3] {
     n
 }
 
+/// Twice the signed area of the triangle `o, a, b` (positive when counter-clockwise).
 fn cross2(o: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
-    (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+    vec3::cross2(vec3::sub2(a, o), vec3::sub2(b, o))
 }
 
 /// Triangles (as local corner indices) covering a simple polygon given by its 3-D corners,

@@ -101,7 +101,10 @@ impl TriangleFrames {
     }
 
     /// The Jacobian of triangle `t` under the UVs `uv`.
-    #[inline]
+    // `always`, here and on the local step's helpers below: when the loop that calls them moved
+    // to its own module (issue 22), LLVM stopped inlining them into the per-triangle closure and
+    // an ARAP iteration on camelhead went from 0.96 to 1.24 ms (`bench/arap.rs`, 2026-12-01).
+    #[inline(always)]
     pub fn jacobian(&self, t: usize, uv: &[[f64; 2]]) -> Mat2 {
         let [e1, e2] = self.edges(t, uv);
         self.jacobian_of_edges(t, e1, e2)
@@ -137,7 +140,7 @@ impl TriangleFrames {
 /// The similarity part `(E, H)` and the anti-similarity part `(F, G)` of `J`:
 /// `J = [[E, -H], [H, E]] + [[F, G], [G, -F]]`. The singular values are
 /// `sqrt(E²+H²) ± sqrt(F²+G²)` (closed-form 2x2 SVD), the second signed like `det J`.
-#[inline]
+#[inline(always)]
 pub fn similarity_parts(j: &Mat2) -> (f64, f64, f64, f64) {
     let e = 0.5 * (j[0][0] + j[1][1]);
     let h = 0.5 * (j[1][0] - j[0][1]);
@@ -147,7 +150,7 @@ pub fn similarity_parts(j: &Mat2) -> (f64, f64, f64, f64) {
 }
 
 /// Signed singular values `(s1, s2)` of a 2x2 matrix, `s1 >= |s2|`, `s2 < 0` when `det < 0`.
-#[inline]
+#[inline(always)]
 pub fn signed_singular_values(j: &Mat2) -> (f64, f64) {
     let (e, h, f, g) = similarity_parts(j);
     let q = norm2(e, h);
@@ -157,7 +160,7 @@ pub fn signed_singular_values(j: &Mat2) -> (f64, f64) {
 
 /// `sqrt(a² + b²)`: the plain formula (libm's `hypot` is much slower in the hot loops),
 /// falling back to `hypot` when the squares overflow or underflow.
-#[inline]
+#[inline(always)]
 pub fn norm2(a: f64, b: f64) -> f64 {
     let s = a * a + b * b;
     if s.is_normal() {
@@ -174,7 +177,7 @@ pub type Similarity = [f64; 2];
 /// or the scaled rotation minimising `|J - sR|² + 2λ(s²-1)²` (hybrid, §4.3; `lambda = 0` is
 /// ASAP's similarity). Returns the target and `|J - L|² + 2λ(s²-1)²`, the triangle's energy
 /// per unit area at the optimum.
-#[inline]
+#[inline(always)]
 pub fn local_step(j: &Mat2, lambda: Option<f64>) -> (Similarity, f64) {
     let (e, h, _, _) = similarity_parts(j);
     let q = norm2(e, h);

@@ -22,7 +22,9 @@
 //! (both methods are deterministic).
 
 use cgnodes::nodes::mesh::obj::load_obj;
-use cgnodes::nodes::param::arap::{arap_parameterize, ArapOptions, ArapResult, RefactorSchedule};
+use cgnodes::nodes::param::arap::{
+    arap_parameterize, ArapOptions, ArapResult, RefactorSchedule, LOG_COLUMNS,
+};
 use cgnodes::nodes::param::tutte::{tutte_parameterize, BoundaryShape, TutteWeights};
 use cgnodes::nodes::param::uv_metrics::uv_metrics;
 use std::fmt::Write as _;
@@ -331,15 +333,6 @@ fn curve(label: &str, r: &ArapResult, offset_ms: f64) -> Curve {
 }
 
 fn write_csv(path: &Path, r: &ArapResult) {
-    let header = [
-        "iteration",
-        "energy",
-        "flips",
-        "elapsed_ms",
-        "step",
-        "blocked",
-        "refactors",
-    ];
     let rows = r.log.iter().map(|x| {
         vec![
             x.iteration.to_string(),
@@ -351,7 +344,7 @@ fn write_csv(path: &Path, r: &ArapResult) {
             x.refactors.to_string(),
         ]
     });
-    let header = std::iter::once(header.iter().map(|h| h.to_string()).collect::<Vec<_>>());
+    let header = std::iter::once(LOG_COLUMNS.map(String::from).to_vec());
     let _ = std::fs::write(path, cgnodes::io::csv::to_text(header.chain(rows)));
 }
 

@@ -100,15 +100,7 @@ fn execute_with(ctx: &mut ExecContext, lambda: Option<f64>) -> Result<(), NodeEr
         ..Default::default()
     };
     let res = arap_parameterize(&tri_mesh.positions, &triangles, &uv0, &opts)?;
-    let mut table = Table::with_columns(&[
-        "iteration",
-        "energy",
-        "flips",
-        "elapsed_ms",
-        "step",
-        "blocked",
-        "refactors",
-    ]);
+    let mut table = Table::with_columns(&super::LOG_COLUMNS);
     for r in &res.log {
         table.push_row(&[
             r.iteration as f64,

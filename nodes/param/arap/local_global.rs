@@ -17,6 +17,18 @@ use super::solver::iterate;
 use super::StopReason;
 use rayon::prelude::*;
 
+/// The columns of the convergence log as the `arap` node's table and the benchmark's CSV
+/// write it, one per field of `ArapIteration`.
+pub const LOG_COLUMNS: [&str; 7] = [
+    "iteration",
+    "energy",
+    "flips",
+    "elapsed_ms",
+    "step",
+    "blocked",
+    "refactors",
+];
+
 /// One row of the convergence log.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ArapIteration {

@@ -357,7 +357,12 @@ fn convert(
         };
         // Widget values of unlinked inputs become parameters.
         for &s in &n.inputs {
-            let sock = &sockets[&s];
+            let sock = sockets.get(&s).ok_or_else(|| {
+                ImportError(format!(
+                    "node {} ({}) names input socket {s}, which sockets_info does not list",
+                    n.id, n.id_name
+                ))
+            })?;
             let linked = obj("links_info")?
                 .values()
                 .any(|l| l.get("EndPinID").and_then(|v| v.as_i64()) == Some(s));
@@ -424,8 +429,14 @@ fn convert(
         };
         let (fnode, tnode) = (&nodes[fi], &nodes[ti]);
         let (fmap, tmap) = (&maps[&fnode.id_name], &maps[&tnode.id_name]);
-        let fsock = &sockets[&from].identifier;
-        let tsock = &sockets[&to].identifier;
+        let socket = |id: i64| {
+            sockets.get(&id).map(|s| &s.identifier).ok_or_else(|| {
+                ImportError(format!(
+                    "link {lid} names socket {id}, which sockets_info does not list"
+                ))
+            })
+        };
+        let (fsock, tsock) = (socket(from)?, socket(to)?);
         if tmap.node_type.is_none() {
             continue; // into a removed node (storage, time gain)
         }

@@ -38,7 +38,9 @@ pub fn read_off(text: &str) -> Result<Mesh, String> {
         ));
     }
     let (nv, nf) = (counts[0], counts[1]);
-    let mut positions = Vec::with_capacity(nv);
+    // The header's counts are not trusted for allocation: a vertex line takes at least 5 bytes
+    // ("0 0 0") and a face line at least 7 ("3 0 1 2"), so no file holds more than that.
+    let mut positions = Vec::with_capacity(nv.min(text.len() / 5));
     for k in 0..nv {
         let (ln, l) = lines
             .next()
@@ -58,8 +60,8 @@ pub fn read_off(text: &str) -> Result<Mesh, String> {
         }
         positions.push([v[0], v[1], v[2]]);
     }
-    let mut fc = Vec::with_capacity(nf);
-    let mut fi = Vec::with_capacity(nf * 3);
+    let mut fc = Vec::with_capacity(nf.min(text.len() / 7));
+    let mut fi = Vec::with_capacity(nf.saturating_mul(3).min(text.len() / 2));
     for k in 0..nf {
         let (ln, l) = lines
             .next()
@@ -125,5 +127,15 @@ mod tests {
         assert!(e.starts_with("line 8:"), "{e}");
         let e = read_off(&t.replace("1 1 0", "1 inf 0")).unwrap_err();
         assert!(e.starts_with("line 6:"), "{e}");
+    }
+
+    /// Huge declared counts (issue 23: `OFF\n100000000000 0 0` aborted on allocation, and
+    /// `nf * 3` could overflow) are an error about the missing data, not an abort.
+    #[test]
+    fn huge_header_counts_are_refused_without_allocating() {
+        let e = read_off("OFF\n100000000000 0 0").unwrap_err();
+        assert!(e.contains("file ends after 0 of 100000000000 vertices"), "{e}");
+        let e = read_off(&format!("OFF\n3 {} 0\n0 0 0\n1 0 0\n0 1 0\n", usize::MAX)).unwrap_err();
+        assert!(e.contains("file ends after 0 of"), "{e}");
     }
 }

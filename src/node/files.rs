@@ -82,6 +82,10 @@ impl FileEnv {
     }
 }
 
+/// The widest zero-padded frame number a path may ask for (`{frame:020}`): wider widths are
+/// refused rather than formatted (a width past 65,535 would panic in `format!`).
+pub const MAX_FRAME_WIDTH: usize = 20;
+
 /// Replaces `{frame}` and `{frame:0N}` in a path.
 pub fn substitute_frame(p: &str, frame: i64) -> Result<String, String> {
     let mut out = String::new();
@@ -98,7 +102,13 @@ pub fn substitute_frame(p: &str, frame: i64) -> Result<String, String> {
         } else if let Some(w) = spec.strip_prefix(":0").or_else(|| spec.strip_prefix(':')) {
             let w: usize = w
                 .parse()
-                .map_err(|_| format!("bad frame format '{{frame{spec}}}' in '{p}'"))?;
+                .ok()
+                .filter(|w| *w <= MAX_FRAME_WIDTH)
+                .ok_or_else(|| {
+                    format!(
+                        "bad frame format '{{frame{spec}}}' in '{p}' (a width of at most {MAX_FRAME_WIDTH} digits)"
+                    )
+                })?;
             out.push_str(&format!("{frame:0w$}"));
         } else {
             return Err(format!("bad frame format '{{frame{spec}}}' in '{p}'"));
@@ -121,6 +131,10 @@ mod tests {
             "a_0007.obj"
         );
         assert!(substitute_frame("a_{frame:x}.obj", 7).is_err());
+        // Hostile widths are an error, not a panic in format! (issue 23).
+        let e = substitute_frame("a_{frame:070000}.obj", 7).unwrap_err();
+        assert!(e.contains("at most 20 digits"), "{e}");
+        assert_eq!(substitute_frame("a_{frame:020}", 7).unwrap().len(), 22);
     }
 
     #[test]

@@ -315,6 +315,30 @@ fn bad_trees_give_clear_errors() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("alias for 'geom_x'"), "{e}");
+    // a socket id that sockets_info does not list (issue 23: a panic while loading, exit 101)
+    for drop_input in [true, false] {
+        let mut v = uv_from_xy_tree();
+        let linked_from: Vec<i64> = v["links_info"]
+            .as_object()
+            .unwrap()
+            .values()
+            .filter_map(|l| l["StartPinID"].as_i64())
+            .collect();
+        let sockets = v["sockets_info"].as_object_mut().unwrap();
+        let key = sockets
+            .iter()
+            .find(|(_, s)| {
+                let input = s["in_out"] == 1;
+                input == drop_input && (input || linked_from.contains(&s["ID"].as_i64().unwrap()))
+            })
+            .map(|(k, _)| k.clone())
+            .unwrap();
+        sockets.remove(&key);
+        let e = import(&v, &Aliases::default(), &builtin_registry())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("which sockets_info does not list"), "{e}");
+    }
 }
 
 #[test]

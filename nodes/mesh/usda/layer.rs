@@ -87,6 +87,7 @@ fn parse_value(lx: &mut Lexer) -> Result<UsdValue, String> {
             UsdValue::Ident(s)
         }
         Tok::Punct(open @ (b'[' | b'(')) => {
+            lx.enter(line)?;
             let close = if open == b'[' { b']' } else { b')' };
             let mut items = Vec::new();
             loop {
@@ -111,6 +112,7 @@ fn parse_value(lx: &mut Lexer) -> Result<UsdValue, String> {
                     }
                 }
             }
+            lx.leave();
             if open == b'[' {
                 UsdValue::List(items)
             } else {
@@ -118,6 +120,7 @@ fn parse_value(lx: &mut Lexer) -> Result<UsdValue, String> {
             }
         }
         Tok::Punct(b'{') => {
+            lx.enter(line)?;
             let mut items = Vec::new();
             loop {
                 if lx.is_punct(b'}')? {
@@ -145,6 +148,7 @@ fn parse_value(lx: &mut Lexer) -> Result<UsdValue, String> {
                     lx.next()?;
                 }
             }
+            lx.leave();
             UsdValue::Dict(items)
         }
         other => {
@@ -227,6 +231,7 @@ fn parse_prim(
         parse_meta(lx)?;
     }
     lx.expect_punct(b'{')?;
+    lx.enter(line)?;
     let path = format!("{parent}/{name}");
     let mut prim = UsdPrim {
         specifier,
@@ -267,6 +272,7 @@ fn parse_prim(
             }
         }
     }
+    lx.leave();
     Ok(prim)
 }
 

@@ -18,7 +18,13 @@ pub(super) struct Lexer<'a> {
     i: usize,
     line: usize,
     peeked: Option<(Tok, usize)>,
+    /// How many prims, lists, tuples and dictionaries enclose the parser's position.
+    depth: usize,
 }
+
+/// The deepest nesting of prims and values the parser follows: real layers nest a few dozen
+/// levels, and a limit keeps a hostile file of nested `[` or `def` from overflowing the stack.
+pub const MAX_NESTING: usize = 200;
 
 /// An error message prefixed with its line.
 pub(super) fn err(line: usize, msg: impl std::fmt::Display) -> String {
@@ -33,7 +39,25 @@ impl<'a> Lexer<'a> {
             i: 0,
             line: 1,
             peeked: None,
+            depth: 0,
         }
+    }
+
+    /// Enters one more level of nesting, opened on `line`; an error past `MAX_NESTING`.
+    pub(super) fn enter(&mut self, line: usize) -> Result<(), String> {
+        self.depth += 1;
+        if self.depth > MAX_NESTING {
+            return Err(err(
+                line,
+                format!("nesting deeper than {MAX_NESTING} levels of prims or values"),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Leaves the level `enter` opened.
+    pub(super) fn leave(&mut self) {
+        self.depth -= 1;
     }
 
     fn skip_ws(&mut self) {

@@ -131,3 +131,30 @@ fn nalgebra_products_match_the_explicit_sums_bit_for_bit() {
     assert_eq!(r, e);
     assert_eq!(world_transform(&[]).unwrap(), Mat4::identity());
 }
+
+/// Issue 23: ten thousand nested lists or prims overflowed the stack and aborted the process;
+/// past `MAX_NESTING` levels they are an error naming the line.
+#[test]
+fn deep_nesting_is_an_error_not_a_stack_overflow() {
+    let lists = format!(
+        "#usda 1.0\ndef Mesh \"m\" {{\n    int[] a = {}1{}\n}}\n",
+        "[".repeat(10_000),
+        "]".repeat(10_000)
+    );
+    let e = parse_usda(&lists).unwrap_err();
+    assert!(e.contains("nesting deeper than 200"), "{e}");
+    let prims = format!(
+        "#usda 1.0\n{}{}",
+        "def Xform \"x\" {\n".repeat(10_000),
+        "}\n".repeat(10_000)
+    );
+    let e = parse_usda(&prims).unwrap_err();
+    assert!(e.starts_with("line 202:") && e.contains("nesting"), "{e}");
+    // Nesting within the limit still parses.
+    let ok = format!(
+        "#usda 1.0\n{}{}",
+        "def Xform \"x\" {\n".repeat(50),
+        "}\n".repeat(50)
+    );
+    assert_eq!(parse_usda(&ok).unwrap().prims.len(), 1);
+}

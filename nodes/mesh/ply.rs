@@ -269,6 +269,14 @@ pub fn read_ply(bytes: &[u8]) -> Result<Mesh, String> {
         if is_face && fv.is_none() {
             return Err("the face element has no vertex_indices list".into());
         }
+        if el.props.is_empty() && el.count > 0 {
+            // Nothing to read per instance: a binary body would be looped over `count` times
+            // without consuming a byte.
+            return Err(format!(
+                "element '{}' declares {} instances but no properties",
+                el.name, el.count
+            ));
+        }
         let mut vals: Vec<Vec<f64>> = vec![Vec::new(); el.props.len()];
         for k in 0..el.count {
             src.begin()?;
@@ -290,13 +298,14 @@ pub fn read_ply(bytes: &[u8]) -> Result<Mesh, String> {
                 }
             }
             src.end()?;
-            let g = |i: Option<usize>| i.map(|i| vals[i][0]);
+            // A property declared as a list may hold no value: read the first one, if any.
+            let first = |i: usize| vals[i].first().copied();
+            let g = |i: Option<usize>| i.and_then(first);
             if is_vertex {
-                let p = [
-                    vals[px.unwrap_or(0)][0],
-                    vals[py.unwrap_or(0)][0],
-                    vals[pz.unwrap_or(0)][0],
-                ];
+                let (Some(x), Some(y), Some(z)) = (g(px), g(py), g(pz)) else {
+                    return Err(format!("vertex {k}: x, y and z need one value each"));
+                };
+                let p = [x, y, z];
                 if p.iter().any(|x| !x.is_finite()) {
                     return Err(format!("vertex {k} has a non-finite coordinate {p:?}"));
                 }
@@ -313,7 +322,9 @@ pub fn read_ply(bytes: &[u8]) -> Result<Mesh, String> {
                     } else {
                         1.0
                     };
-                    colors.push([vals[r][0] * scale, vals[gg][0] * scale, vals[b][0] * scale]);
+                    if let (Some(r), Some(gg), Some(b)) = (first(r), first(gg), first(b)) {
+                        colors.push([r * scale, gg * scale, b * scale]);
+                    }
                 }
             } else if is_face {
                 let idx = &vals[fv.unwrap_or(0)];
@@ -508,6 +519,18 @@ mod tests {
     use super::*;
 
     const SQUARE: &str = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n";
+
+    /// Issue 23: a binary element with no properties and a count near 2^64 looped without
+    /// reading a byte; a vertex coordinate declared as a list of length 0 indexed out of bounds.
+    #[test]
+    fn hostile_headers_are_errors() {
+        let junk = "ply\nformat binary_little_endian 1.0\nelement junk 18446744073709551615\nend_header\n";
+        let e = read_ply(junk.as_bytes()).unwrap_err();
+        assert!(e.contains("element 'junk' declares 18446744073709551615 instances but no properties"), "{e}");
+        let empty_x = "ply\nformat ascii 1.0\nelement vertex 1\nproperty list uchar float x\nproperty float y\nproperty float z\nend_header\n0 1 2\n";
+        let e = read_ply(empty_x.as_bytes()).unwrap_err();
+        assert!(e.contains("vertex 0: x, y and z need one value each"), "{e}");
+    }
 
     #[test]
     fn ascii_square_and_line_numbers() {

@@ -98,6 +98,13 @@ impl Executor {
             };
             match v.convert_to(&sdecl.ty) {
                 Some(v) => {
+                    // Validation checked literals against the declared range and choices; a
+                    // linked value arrives only now and gets the same check (issue 23).
+                    if matches!(src, InputSource::Links(_)) {
+                        if let Err(msg) = sdecl.check_literal(&v) {
+                            return fail(report, NodeError::invalid(name, msg));
+                        }
+                    }
                     inputs.insert(name.clone(), v);
                 }
                 None => {

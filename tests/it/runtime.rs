@@ -758,3 +758,34 @@ fn nodes_compute_only_linked_or_requested_outputs() {
     assert_eq!(last(), Some(vec!["a", "b"]));
     assert_eq!(log.lock().unwrap().len(), 4);
 }
+
+/// Issue 23: a linked value is checked against the declared range and choices like a literal
+/// (a linked 0 cells used to reach `mesh_grid`, a misspelt linked plane its fallback).
+#[test]
+fn linked_values_are_checked_against_ranges_and_choices() {
+    let text = r#"{"format": "cgnodes-graph", "version": 1, "nodes": {
+        "n": {"type": "value_int", "params": {"value": 0}},
+        "p": {"type": "value_string", "params": {"value": "diagonal"}},
+        "few": {"type": "mesh_grid", "inputs": {"cells_u": "n.value"}},
+        "odd": {"type": "mesh_grid", "inputs": {"plane": "p.value"}},
+        "ok": {"type": "mesh_grid", "params": {"cells_u": 2}}
+      }, "outputs": ["few", "odd", "ok"]}"#;
+    let dir = tempfile::tempdir().unwrap();
+    let r = cgnodes::nodes::builtin_registry();
+    let rep = crate::common::run_graph(text, &r, dir.path(), dir.path(), 1, 0..=0).remove(0);
+    let failed = |id: &str| match &rep.node(id).unwrap().status {
+        NodeStatus::Failed(e) => e.clone(),
+        other => panic!("{id}: {other:?}"),
+    };
+    let e = failed("few");
+    assert_eq!(e.socket.as_deref(), Some("cells_u"));
+    assert!(e.message.contains("below the minimum 1"), "{}", e.message);
+    let e = failed("odd");
+    assert_eq!(e.socket.as_deref(), Some("plane"));
+    assert!(
+        e.message.contains("'diagonal' is not one of"),
+        "{}",
+        e.message
+    );
+    assert!(rep.output("ok", "mesh").is_some());
+}

@@ -510,6 +510,7 @@ fn convert(
         }
     }
     let graph = GraphFile {
+        schema: None,
         format: FORMAT.to_string(),
         version: VERSION,
         nodes: out_nodes,

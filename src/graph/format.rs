@@ -16,6 +16,10 @@ pub const VERSION: u32 = 1;
 #[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct GraphFile {
+    /// The JSON Schema editors check the file against (`docs/graph.schema.json`); ignored by
+    /// the runtime, accepted so that an editor can attach the schema.
+    #[serde(rename = "$schema", default, skip_serializing_if = "Option::is_none")]
+    pub schema: Option<String>,
     /// Always `cgnodes-graph`.
     pub format: String,
     /// Format version (1).

@@ -246,6 +246,24 @@ fn unknown_fields_such_as_a_command_are_refused() {
     assert!(e.contains("unknown field `command`"), "{e}");
 }
 
+/// Issue 23: an editor's `"$schema"` key is accepted (and other unknown keys still refused).
+#[test]
+fn a_schema_key_is_accepted() {
+    let g = parse(
+        r#"{"$schema": "../docs/graph.schema.json", "format": "cgnodes-graph", "version": 1,
+            "nodes": {"a": {"type": "value_float", "params": {"value": 2}}}}"#,
+    );
+    assert_eq!(g.spec.schema.as_deref(), Some("../docs/graph.schema.json"));
+    let e = graph::parse(
+        r#"{"$scheme": "x", "format": "cgnodes-graph", "version": 1, "nodes": {}}"#,
+        Path::new("inline.json"),
+        Path::new("."),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("unknown field `$scheme`"), "{e}");
+}
+
 #[test]
 fn unknown_target_and_missing_file() {
     let e = errors_of("bad_target.json");

@@ -137,21 +137,21 @@ pub fn solve_dirichlet_weights<const D: usize>(
     if fixed.iter().all(|f| f.is_some()) {
         return Ok(out);
     }
-    let sys = assemble_dirichlet(weights, fixed, symmetric)?;
+    let DirichletSystem { matrix, rhs, index } = assemble_dirichlet(weights, fixed, symmetric)?;
     let x = if symmetric {
         // faer's AMD order; one thread (see `SpdFactor`)
-        let factor = SpdFactor::from_lower(sys.matrix.clone(), None, faer::Par::Seq)
-            .map_err(not_positive_definite)?;
-        let mut x = sys.rhs.clone();
+        let factor =
+            SpdFactor::from_lower(matrix, None, faer::Par::Seq).map_err(not_positive_definite)?;
+        let mut x = rhs;
         factor.solve_in_place(x.as_mut());
         x
     } else {
-        sys.matrix
+        matrix
             .sp_lu()
             .map_err(|e| NodeError::singular(format!("the Laplace system is singular ({e:?})")))?
-            .solve(&sys.rhs)
+            .solve(&rhs)
     };
-    for (v, &r) in sys.index.iter().enumerate() {
+    for (v, &r) in index.iter().enumerate() {
         if r != u32::MAX {
             for d in 0..D {
                 let val = x[(r as usize, d)];

@@ -73,20 +73,19 @@ pub fn grid_mesh_in(
             pos.push(p);
         }
     }
-    let (mut counts, mut idx) = (Vec::new(), Vec::new());
-    for j in 0..cells_v {
-        for i in 0..cells_u {
-            let a = (j * nu + i) as u32;
-            let (b, c, d) = (a + 1, a + 1 + nu as u32, a + nu as u32);
-            if triangles {
-                counts.extend([3, 3]);
-                idx.extend([a, b, c, a, c, d]);
-            } else {
-                counts.push(4);
-                idx.extend([a, b, c, d]);
+    let (counts, idx) = if triangles {
+        let tris = grid_triangles(cells_u, cells_v);
+        (vec![3; tris.len()], tris.into_iter().flatten().collect())
+    } else {
+        let mut idx = Vec::with_capacity(4 * cells_u * cells_v);
+        for j in 0..cells_v {
+            for i in 0..cells_u {
+                let a = (j * nu + i) as u32;
+                idx.extend([a, a + 1, a + 1 + nu as u32, a + nu as u32]);
             }
         }
-    }
+        (vec![4; cells_u * cells_v], idx)
+    };
     Mesh::new(pos, counts, idx).map_err(|e| e.to_string())
 }
 

@@ -21,15 +21,8 @@ pub fn plane_mesh(size: f64, center: [f64; 3], n: usize, uv_scale: f64) -> Mesh 
             uvs.push([s * uv_scale, t * uv_scale]);
         }
     }
-    let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
-    let mut tris = Vec::with_capacity(2 * n * n);
-    for j in 0..n {
-        for i in 0..n {
-            // Rows go towards -Z as j grows, so (i,j),(i+1,j),(i+1,j+1) is CCW from +Y.
-            tris.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-            tris.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-        }
-    }
+    // Rows go towards -Z as j grows, so the grid's (i,j),(i+1,j),(i+1,j+1) is CCW from +Y.
+    let tris = grid_triangles(n, n);
     let nv = pos.len();
     let mut m = Mesh::from_triangles(pos, &tris).expect("valid indices by construction");
     m.normals = Some(Attribute {

@@ -10,7 +10,6 @@
 use faer::sparse::{SparseColMat, Triplet};
 use rayon::prelude::*;
 
-pub use super::triangles::fan_triangles;
 pub use crate::nodes::linalg::laplace_weights::EdgeWeight;
 
 /// The cotangent of each corner's angle, per triangle: `cot[t][k]` is the cotangent of the
@@ -147,7 +146,7 @@ pub fn count_negative_edges(weights: &[EdgeWeight]) -> usize {
     count
 }
 
-pub(crate) use crate::types::vec3::{cross, dot, norm, sub};
+use crate::types::vec3::{cross, dot, norm, sub};
 
 #[cfg(test)]
 mod tests {

@@ -6,7 +6,8 @@
 //! course) or cotangent weights taken from the input geometry. The three coordinates share one
 //! sparse Cholesky factorization.
 
-use super::laplacian::{fan_triangles, mean_value_weights};
+use super::laplacian::mean_value_weights;
+use super::triangles::fan_triangles;
 use super::laplacian_rows::LaplacianRows;
 use super::tutte::TutteWeights;
 use crate::nodes::linalg::laplace::solve_dirichlet;

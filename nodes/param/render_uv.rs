@@ -1,7 +1,7 @@
 //! `render_uv`: the UV layout drawn as a wireframe over the mesh's texture (or white), with
 //! flipped triangles filled red, for a quick look at a parameterization.
 
-use super::laplacian::fan_triangles;
+use super::triangles::fan_triangles;
 use super::uv_metrics::uv_metrics;
 use crate::prelude::*;
 

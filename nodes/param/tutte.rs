@@ -13,7 +13,8 @@
 //! dropped, which keeps the no-fold guarantee for the real triangles.
 
 use super::boundary_map::{map_boundary, parse_start, rotate_loop, Spacing};
-use super::laplacian::{fan_triangles, mean_value_weights};
+use super::laplacian::mean_value_weights;
+use super::triangles::fan_triangles;
 use super::laplacian_rows::LaplacianRows;
 use super::uv_metrics::uv_metrics;
 use crate::nodes::linalg::laplace::DirichletFactor;

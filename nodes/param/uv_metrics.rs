@@ -11,7 +11,8 @@
 //! area-weighted over the 3D triangles. A triangle is flipped when its UV orientation disagrees
 //! with the majority's.
 
-use super::laplacian::{cross, fan_triangles, norm, sub};
+use crate::types::vec3::{cross, norm, sub};
+use super::triangles::fan_triangles;
 use crate::prelude::*;
 
 /// Distortion measures of a triangle mesh's UVs.

@@ -82,14 +82,7 @@ mod tests {
     use std::collections::BTreeMap;
 
     fn run(inputs: BTreeMap<String, Value>) -> Scene {
-        let mut r = Registry::new();
-        register(&mut r);
-        let decl = r.get("scene").unwrap();
-        let mut state = None;
-        let files = FileEnv::default();
-        let mut ctx = ExecContext::standalone(decl, inputs, &mut state, &files, 0);
-        (decl.exec.as_ref().unwrap())(&mut ctx).unwrap();
-        match &ctx.take_outputs()["scene"] {
+        match &super::super::run_node("scene", inputs).unwrap()["scene"] {
             Value::Scene(s) => (**s).clone(),
             _ => panic!("not a scene"),
         }

@@ -227,20 +227,13 @@ impl RenderScene {
                 }
             }
             let n = mesh.positions.len() as u32;
-            for f in mesh.faces() {
-                if f.len() < 3 || f.iter().any(|&i| i >= n) {
-                    return Err(format!("object {oi}: a face has a bad vertex index"));
-                }
-                // Fan triangulation (faces are planar convex polygons in practice).
-                for k in 1..f.len() - 1 {
-                    let t = [
-                        v3(mesh.positions[f[0] as usize]),
-                        v3(mesh.positions[f[k] as usize]),
-                        v3(mesh.positions[f[k + 1] as usize]),
-                    ];
-                    tris.push(t);
-                    tri_mat.push(mi);
-                }
+            if mesh.faces().any(|f| f.len() < 3 || f.iter().any(|&i| i >= n)) {
+                return Err(format!("object {oi}: a face has a bad vertex index"));
+            }
+            // Fan triangulation (faces are planar convex polygons in practice).
+            for t in mesh.fan_triangles() {
+                tris.push(t.map(|i| v3(mesh.positions[i as usize])));
+                tri_mat.push(mi);
             }
         }
         let bvh = Bvh::build(&tris);

@@ -1,7 +1,8 @@
 //! `cgnodes import-f3d`: converts a Framework3D saved node tree into a cgnodes graph file.
 
+use super::validate::read_aliases;
 use super::EXIT_INVALID;
-use crate::f3d::{import_lenient, Aliases};
+use crate::f3d::import_lenient;
 use crate::registry::Registry;
 use std::path::Path;
 
@@ -14,11 +15,7 @@ pub(super) fn cmd(registry: &Registry, input: &Path, output: &Path, aliases: Opt
     };
     let result = (|| -> Result<(), String> {
         let raw = read_json(input)?;
-        let al = match aliases {
-            Some(a) => serde_json::from_value(read_json(a)?)
-                .map_err(|e| format!("{}: {e}", a.display()))?,
-            None => Aliases::default(),
-        };
+        let al = aliases.map(read_aliases).transpose()?.unwrap_or_default();
         let (g, missing) =
             import_lenient(&raw, &al, registry).map_err(|e| format!("{}: {e}", input.display()))?;
         if !missing.is_empty() {

@@ -4,7 +4,7 @@
 use super::validate::{load_valid_with, read_aliases};
 use super::{RunArgs, EXIT_NODE_FAILED, EXIT_USAGE};
 use crate::exec::{Executor, NodeStatus, RunOptions, RunReport};
-use crate::graph::{self, parse_frames};
+use crate::graph::parse_frames;
 use crate::node::{FileEnv, ProgressFn};
 use crate::registry::Registry;
 use std::io::IsTerminal;
@@ -19,10 +19,11 @@ pub(super) fn cmd(registry: &Registry, args: RunArgs) -> i32 {
             return EXIT_USAGE;
         }
     };
-    let graph = match load_valid_with(registry, &args.graph, &args.set, &aliases, &args.assets) {
-        Ok(g) => g,
-        Err(c) => return c,
-    };
+    let (graph, hint) =
+        match load_valid_with(registry, &args.graph, &args.set, &aliases, &args.assets) {
+            Ok(g) => g,
+            Err(c) => return c,
+        };
     for t in &args.target {
         if !graph.index.contains_key(t) {
             eprintln!(
@@ -32,9 +33,6 @@ pub(super) fn cmd(registry: &Registry, args: RunArgs) -> i32 {
             return EXIT_USAGE;
         }
     }
-    let hint = graph::load_with(&args.graph, &aliases, registry)
-        .ok()
-        .and_then(|g| g.spec.frames_hint());
     let (f0, f1) = match args.frames.as_deref().map(parse_frames).transpose() {
         Ok(r) => r.or(hint).unwrap_or((0, 0)),
         Err(e) => {

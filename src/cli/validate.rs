@@ -22,7 +22,7 @@ pub(super) fn cmd(registry: &Registry, graph: &Path, set: &[String]) -> i32 {
 
 /// Loads, applies overrides and validates, printing errors; `Err` is the exit code.
 pub fn load_valid(registry: &Registry, path: &Path, sets: &[String]) -> Result<ValidGraph, i32> {
-    load_valid_with(registry, path, sets, &Aliases::default(), &[])
+    load_valid_with(registry, path, sets, &Aliases::default(), &[]).map(|(g, _)| g)
 }
 
 /// Reads Framework3D aliases (`--f3d-aliases FILE`).
@@ -31,14 +31,15 @@ pub fn read_aliases(p: &Path) -> Result<Aliases, String> {
     serde_json::from_str(&t).map_err(|e| format!("{}: {e}", p.display()))
 }
 
-/// Like `load_valid`, with aliases for custom Framework3D node names.
+/// Like `load_valid`, with aliases for custom Framework3D node names; also returns the
+/// graph's own frame range (`meta.frames`), read from the same load.
 pub fn load_valid_with(
     registry: &Registry,
     path: &Path,
     sets: &[String],
     aliases: &Aliases,
     assets: &[PathBuf],
-) -> Result<ValidGraph, i32> {
+) -> Result<(ValidGraph, Option<(i64, i64)>), i32> {
     let mut g = match graph::load_with(path, aliases, registry) {
         Ok(g) => g,
         Err(e) => {
@@ -50,10 +51,12 @@ pub fn load_valid_with(
         eprintln!("error: {e}");
         return Err(EXIT_USAGE);
     }
-    validate_with(&g, registry, assets).map_err(|errs| {
+    let hint = g.spec.frames_hint();
+    let valid = validate_with(&g, registry, assets).map_err(|errs| {
         print_graph_errors(&errs);
         EXIT_INVALID
-    })
+    })?;
+    Ok((valid, hint))
 }
 
 fn print_graph_errors(errs: &[GraphError]) {

@@ -6,18 +6,23 @@
 pub fn to_text<R, F>(records: impl IntoIterator<Item = R>) -> String
 where
     R: IntoIterator<Item = F>,
-    F: AsRef<[u8]>,
+    F: AsRef<str>,
 {
     let mut w = csv::WriterBuilder::new()
         .flexible(true)
         .from_writer(Vec::new());
     for r in records {
-        // Writing into memory does not fail.
-        if w.write_record(r).is_err() {
-            break;
+        for f in r {
+            w.write_field(f.as_ref())
+                .expect("writing CSV into memory cannot fail");
         }
+        w.write_record(None::<&[u8]>)
+            .expect("writing CSV into memory cannot fail");
     }
-    String::from_utf8(w.into_inner().unwrap_or_default()).unwrap_or_default()
+    let bytes = w
+        .into_inner()
+        .expect("flushing CSV into memory cannot fail");
+    String::from_utf8(bytes).expect("CSV of UTF-8 fields is UTF-8")
 }
 
 /// A CSV read whole: its header row and the rows after it (which may have more or fewer

@@ -13,9 +13,7 @@ pub mod vec3;
 
 pub use mesh::{Attribute, AttributeData, Domain, Mesh, MeshError};
 pub use misc::{Curve, Image, Joint, Points, Skeleton, Table};
-pub use scene::{
-    Camera, CameraFloat, FovAxis, Light, LookAt, Material, MaterialKind, Scene, SceneObject,
-};
+pub use scene::{Camera, FovAxis, Light, LookAt, Material, MaterialKind, Scene, SceneObject};
 pub use topology::{grid_triangles, grid_triangles_with, Topology};
 pub use value::{Color, FromValue, SocketType, Typed, Value};
 

@@ -86,12 +86,6 @@ pub fn unit(a: [f64; 3]) -> [f64; 3] {
     [a[0] / n, a[1] / n, a[2] / n]
 }
 
-/// `-a`.
-#[inline]
-pub fn neg(a: [f64; 3]) -> [f64; 3] {
-    [-a[0], -a[1], -a[2]]
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -109,6 +103,5 @@ mod tests {
         assert_eq!(normalize([0.0; 3]), None);
         assert_eq!(normalize_recip([f64::NAN, 0.0, 0.0]), None);
         assert_eq!(unit([2.0, 0.0, 0.0]), [1.0, 0.0, 0.0]);
-        assert_eq!(neg(a), [-1.0, -2.0, -3.0]);
     }
 }

@@ -1,7 +1,7 @@
 //! `mass_spring` against analytic references (`tests/data/springs/analytic_checks.json`, from
 //! the shared reference folder): single-spring period and energy, the symplectic stability
 //! limit 2/omega_max on an 8x8 grid, implicit stability far beyond it, fixed vertices, the
-//! sphere collider, and degenerate models (the node in graphs: `tests/mass_spring_node.rs`).
+//! sphere collider, and degenerate models (the node in graphs: `tests/it/mass_spring_node.rs`).
 
 use cgnodes::nodes::mesh::mesh_grid::grid_mesh;
 use cgnodes::nodes::sim::mass_spring::{

@@ -1,6 +1,6 @@
 //! The `mass_spring` node in graphs run by the executor: state kept across frames, blow-ups
 //! reported with frame and step, and bad fixed-vertex selections rejected as input errors.
-//! The simulator itself is checked in `tests/mass_spring.rs`.
+//! The simulator itself is checked in `tests/it/mass_spring.rs`.
 
 use crate::support::hanging_cloth;
 

@@ -4,7 +4,7 @@
 
 use cgnodes::nodes::mesh::mesh_load::{load_mesh, LoadOptions};
 use cgnodes::nodes::param::boundary_map::Spacing;
-use cgnodes::nodes::param::laplacian::fan_triangles;
+use cgnodes::nodes::param::triangles::fan_triangles;
 use cgnodes::nodes::param::tutte::{
     tutte, tutte_parameterize, BoundaryShape, TutteOptions, TutteWeights,
 };

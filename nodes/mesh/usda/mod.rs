@@ -10,7 +10,8 @@
 //! it does not understand is an error with the line number, never a guess.
 //!
 //! Layout: `lexer` (tokens) -> `layer` (the prim tree) -> `access` (typed values, prim
-//! lookup) and `transform` (xformOps), used by `read` (Mesh prims) and other schema readers;
+//! lookup) and `transform` (xformOps), used by `read` (Mesh prims; a reader of another schema,
+//! such as skeletons, would sit beside it);
 //! `write` emits a layer.
 
 pub mod access;

@@ -52,7 +52,8 @@ impl Default for NewtonOptions {
     }
 }
 
-/// The reduced sparsity pattern and its symbolic Cholesky, built once per model.
+/// The reduced sparsity pattern of the Hessian (built once per model) and its sparse Cholesky
+/// factor (analysed once, at the first Newton step).
 pub struct Implicit {
     /// Index of each vertex among the free ones (`None` when fixed).
     free: Vec<Option<u32>>,
@@ -78,8 +79,8 @@ pub struct Implicit {
 }
 
 impl Implicit {
-    /// Builds the reduced pattern `S^T H S` and its symbolic factorization.
-    pub fn new(m: &Model, opts: NewtonOptions) -> Result<Implicit, String> {
+    /// Builds the reduced pattern `S^T H S`; the factor is analysed at the first Newton step.
+    pub fn new(m: &Model, opts: NewtonOptions) -> Implicit {
         let n = m.num_vertices();
         let (free, n_free) = m.free_indices();
         let mut idx: Vec<(usize, usize)> = Vec::new();
@@ -113,7 +114,7 @@ impl Implicit {
         } else {
             Par::Seq
         };
-        Ok(Implicit {
+        Implicit {
             free,
             n_free,
             vals: vec![0.0; idx.len()],
@@ -126,7 +127,7 @@ impl Implicit {
             opts,
             symbolic_count: 0,
             numeric_count: 0,
-        })
+        }
     }
 
     /// `g(x)` (without the constant part of fixed vertices).

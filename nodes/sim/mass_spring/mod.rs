@@ -22,7 +22,6 @@ pub mod semi_implicit;
 pub mod simulator;
 pub mod springs;
 
-pub use crate::nodes::mesh::vertex_select::select_vertices;
 pub use implicit::{Implicit, NewtonError, NewtonOptions};
 pub use keyframes::{keyframed_center, parse_keyframes};
 pub use mass_spring::LOG_COLUMNS;

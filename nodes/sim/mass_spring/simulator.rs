@@ -162,7 +162,7 @@ impl Simulator {
         let solver = match method {
             Method::SemiImplicit => Solver::Semi(SemiImplicit::new(&model)),
             Method::Implicit => Solver::Implicit(Box::new(
-                Implicit::new(&model, opts.newton).map_err(SetupError::Invalid)?,
+                Implicit::new(&model, opts.newton),
             )),
             Method::Projective => Solver::Projective(Box::new(
                 Projective::new(&model, h, opts.pd_iterations)

@@ -97,3 +97,22 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
 pub fn register(r: &mut Registry) {
     r.add("image_load", declare, execute);
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// BMP (a common texture format in MTL files) decodes like PNG. (TGA has no signature to
+    /// recognise it by, so it would need the file extension; it is not read.)
+    #[test]
+    fn bmp_textures_decode() {
+        let px = image::RgbImage::from_raw(2, 1, vec![255, 0, 0, 0, 0, 255]).unwrap();
+        let mut bytes = Vec::new();
+        px.write_to(&mut Cursor::new(&mut bytes), image::ImageFormat::Bmp)
+            .unwrap();
+        let img = decode_image(&bytes, ColorSpace::Raw).unwrap();
+        assert_eq!((img.width, img.height), (2, 1));
+        let first = img.pixels[0];
+        assert!((first[0] - 1.0).abs() < 1e-6 && first[2].abs() < 1e-6, "{first:?}");
+    }
+}

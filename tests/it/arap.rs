@@ -133,14 +133,47 @@ fn plain_mode_energy_is_monotone_too() {
     for w in r.log.windows(2) {
         assert!(w[1].energy <= w[0].energy, "{:?} -> {:?}", w[0], w[1]);
     }
-    // the metric of the param module agrees with ours up to its area rescaling
+    // Both energies are Liu et al.'s `Σ A ((σ1-1)² + (σ2-1)²) / Σ A`; they differ only because
+    // uv_metrics first scales the UVs by `uv_scale` (total UV area = total 3-D area). Computed
+    // here from the Jacobians at scale 1 and at `uv_scale`, each must match to rounding.
     let m = uv_metrics(&mesh.positions, &tris, &r.uv);
     assert!(
         (m.uv_scale - 1.0).abs() < 0.1,
         "ARAP keeps the size: {}",
         m.uv_scale
     );
-    assert!((m.arap_energy - r.energy).abs() < 0.5 * r.energy + 1e-3);
+    assert_eq!(m.degenerate, 0);
+    let own = arap_energy_at_scale(&mesh.positions, &tris, &r.uv, 1.0);
+    assert!(
+        (own - r.energy).abs() <= 1e-9 * r.energy,
+        "ARAP energy {} vs direct {own}",
+        r.energy
+    );
+    let scaled = arap_energy_at_scale(&mesh.positions, &tris, &r.uv, m.uv_scale);
+    assert!(
+        (scaled - m.arap_energy).abs() <= 1e-9 * m.arap_energy,
+        "uv_metrics {} vs direct {scaled} at scale {}",
+        m.arap_energy,
+        m.uv_scale
+    );
+    // The rescaling matters here: the two energies are not the same number.
+    assert!((m.arap_energy - r.energy).abs() > 1e-6 * r.energy);
+}
+
+/// Liu et al. 2008's ARAP energy (eq. 3 in the singular-value form) of the UVs scaled by `s`:
+/// `Σ A ((s σ1 - 1)² + (s σ2 - 1)²) / Σ A` over the 3-D triangle areas `A`, with `σ1 >= |σ2|`
+/// the signed singular values of each triangle's Jacobian (`σ2 < 0` when it is flipped).
+fn arap_energy_at_scale(p: &[[f64; 3]], tris: &[[u32; 3]], uv: &[[f64; 2]], s: f64) -> f64 {
+    use cgnodes::nodes::param::uv_metrics::{signed_singular_values_2x2, triangle_jacobian};
+    let (mut e, mut area) = (0.0, 0.0);
+    for t in tris {
+        let (j, a) = triangle_jacobian(t.map(|v| p[v as usize]), t.map(|v| uv[v as usize]))
+            .expect("no degenerate triangle");
+        let (s1, s2) = signed_singular_values_2x2(j[0], j[1], j[2], j[3]);
+        e += a * ((s * s1 - 1.0).powi(2) + (s * s2 - 1.0).powi(2));
+        area += a;
+    }
+    e / area
 }
 
 #[test]

@@ -47,3 +47,20 @@ pub fn run_graph(
     };
     frames.map(|f| exec.run(&valid, &opts, f)).collect()
 }
+
+/// Whether the tests run on CI (`CI` set and not `0`/`false`, as `.ci/run` does). There a test
+/// that needs an optional tool (Python with numpy, a built example binary) fails instead of
+/// skipping, so a missing tool cannot turn a check into a silent pass.
+pub fn on_ci() -> bool {
+    std::env::var("CI").is_ok_and(|v| !v.is_empty() && v != "0" && v != "false")
+}
+
+/// Reports that `test` cannot run because `why`: a panic on CI (see `on_ci`), a `SKIPPED` line
+/// on stderr otherwise. The caller returns after it.
+pub fn skip_or_fail(test: &str, why: &str) {
+    let msg = format!("{test}: {why}");
+    if on_ci() {
+        panic!("{msg} (CI is set, so a missing tool is an error, not a skip)");
+    }
+    eprintln!("SKIPPED {msg}");
+}

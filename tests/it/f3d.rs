@@ -33,36 +33,8 @@ fn blueprint_unknown_node_is_named_with_its_id() {
     );
 }
 
-/// With the alias file the blueprint converts; it runs once the parameterization and image
-/// nodes are in the build, and until then the importer names exactly the missing ones.
-#[test]
-fn blueprint_with_aliases_imports_or_names_missing_nodes() {
-    let reg = builtin_registry();
-    let needed = [
-        ("geom_min_surf (node 14)", "tutte"),
-        ("geom_set_texture (node 68)", "texture_map"),
-        ("geom_set_texture (node 68)", "image_load"),
-        ("geom_map_boundary_to_circle (node 131)", "boundary_map"),
-    ];
-    let missing: Vec<_> = needed
-        .iter()
-        .filter(|(_, t)| reg.get(t).is_none())
-        .collect();
-    let r = import(&blueprint(), &blueprint_aliases(), &reg);
-    if missing.is_empty() {
-        let g = r.unwrap();
-        assert_eq!(g.nodes["min_surf_14"].node_type, "tutte");
-        return;
-    }
-    let e = r.unwrap_err().to_string();
-    for (node, ty) in &missing {
-        assert!(e.contains(&format!("{node} needs '{ty}'")), "{e}");
-    }
-    let listed = e.matches(" needs '").count();
-    assert_eq!(listed, missing.len(), "{e}");
-    // The lenient import (import-f3d) still converts, keeping ids, links and widget values.
-    let (g, miss) = cgnodes::f3d::import_lenient(&blueprint(), &blueprint_aliases(), &reg).unwrap();
-    assert_eq!(miss.len(), missing.len());
+/// The conversions the importer must keep from the blueprint: ids, widget values and links.
+fn check_blueprint_conversion(g: &cgnodes::graph::GraphFile) {
     assert_eq!(g.nodes["read_usd_1"].params["path"], json!("Balls.usda"));
     assert_eq!(g.nodes["read_usd_1"].params["prim"], json!("/Balls/Balls"));
     assert_eq!(
@@ -86,6 +58,63 @@ fn blueprint_with_aliases_imports_or_names_missing_nodes() {
         link("set_texture_68", "image"),
         "set_texture_68_image_load.image"
     );
+}
+
+/// The nodes of the blueprint that need a node type of this build, with that type.
+const BLUEPRINT_NEEDS: [(&str, &str); 4] = [
+    ("geom_min_surf (node 14)", "tutte"),
+    ("geom_set_texture (node 68)", "texture_map"),
+    ("geom_set_texture (node 68)", "image_load"),
+    ("geom_map_boundary_to_circle (node 131)", "boundary_map"),
+];
+
+/// With the alias file the blueprint converts with every node type of this build.
+#[test]
+fn blueprint_with_aliases_imports() {
+    let reg = builtin_registry();
+    for (node, ty) in BLUEPRINT_NEEDS {
+        assert!(reg.get(ty).is_some(), "{node} needs '{ty}', not built in");
+    }
+    let g = import(&blueprint(), &blueprint_aliases(), &reg).unwrap();
+    assert_eq!(g.nodes["min_surf_14"].node_type, "tutte");
+    assert_eq!(g.nodes["read_usd_1"].node_type, "mesh_load");
+    check_blueprint_conversion(&g);
+}
+
+/// Against a build that lacks some node types (the built-in registry without `tutte` and
+/// `boundary_map`), the strict import names exactly the nodes that need them, and the lenient
+/// import (import-f3d) still converts, keeping ids, links and widget values.
+#[test]
+fn blueprint_with_missing_node_types_is_named_or_converted_leniently() {
+    let absent = ["tutte", "boundary_map"];
+    let mut reg = cgnodes::registry::Registry::new();
+    for d in builtin_registry().iter() {
+        if !absent.contains(&d.type_name.as_str()) {
+            reg.add_decl((**d).clone());
+        }
+    }
+    let missing: Vec<_> = BLUEPRINT_NEEDS
+        .iter()
+        .filter(|(_, t)| absent.contains(t))
+        .collect();
+    assert_eq!(missing.len(), 2);
+    let e = import(&blueprint(), &blueprint_aliases(), &reg)
+        .unwrap_err()
+        .to_string();
+    for (node, ty) in &missing {
+        assert!(e.contains(&format!("{node} needs '{ty}'")), "{e}");
+    }
+    let listed = e.matches(" needs '").count();
+    assert_eq!(listed, missing.len(), "{e}");
+    let (g, miss) = cgnodes::f3d::import_lenient(&blueprint(), &blueprint_aliases(), &reg).unwrap();
+    assert_eq!(miss.len(), missing.len(), "{miss:?}");
+    for (node, ty) in &missing {
+        assert!(
+            miss.iter().any(|m| m.contains(node) && m.contains(ty)),
+            "{miss:?}"
+        );
+    }
+    check_blueprint_conversion(&g);
 }
 
 /// A small Framework3D tree built here: nodes with numbered sockets, widget values, links.

@@ -107,16 +107,59 @@ fn uniform_tutte_reproduces_a_regular_grid_on_the_square() {
                 ..Default::default()
             };
             let uv = tutte(m, &opts).unwrap().uvs;
+            assert_eq!(uv.len(), flat.positions.len());
+            // Every case: the uniform Tutte map puts each interior vertex at the mean of its
+            // neighbours (Tutte 1963) and the boundary on the unit square.
+            check_uniform_tutte(m, &uv, &format!("{spacing:?}"));
+            let off = flat
+                .positions
+                .iter()
+                .zip(&uv)
+                .map(|(p, t)| (p[0] - t[0]).abs().max((p[1] - t[1]).abs()))
+                .fold(0.0, f64::max);
             if check_all {
-                for (p, t) in flat.positions.iter().zip(&uv) {
-                    assert!(
-                        (p[0] - t[0]).abs() < 1e-12 && (p[1] - t[1]).abs() < 1e-12,
-                        "{spacing:?}: {p:?} -> {t:?}"
-                    );
-                }
+                assert!(off < 1e-12, "{spacing:?}: the grid is off by {off}");
+            } else {
+                // Arc-length spacing on the bent grid: its boundary edges have unequal 3-D
+                // lengths, so the map is not the planar grid.
+                assert!(off > 1e-3, "{spacing:?}: arc length had no effect ({off})");
             }
         }
     }
+}
+
+/// Checks the defining properties of a uniform Tutte map with a square boundary: boundary
+/// vertices on the unit square's perimeter, interior vertices at the mean of their neighbours.
+fn check_uniform_tutte(m: &Mesh, uv: &[[f64; 2]], what: &str) {
+    let topo = m.topology();
+    let mut interior = 0;
+    for (v, t) in uv.iter().enumerate() {
+        if topo.is_boundary_vertex(v) {
+            let on_side = [t[0], t[1], 1.0 - t[0], 1.0 - t[1]]
+                .iter()
+                .any(|d| d.abs() < 1e-12);
+            let inside =
+                (-1e-12..=1.0 + 1e-12).contains(&t[0]) && (-1e-12..=1.0 + 1e-12).contains(&t[1]);
+            assert!(on_side && inside, "{what}: boundary vertex {v} at {t:?}");
+        } else {
+            let nb = topo.neighbors(v);
+            let mut mean = [0.0; 2];
+            for &j in nb {
+                for c in 0..2 {
+                    mean[c] += uv[j as usize][c] / nb.len() as f64;
+                }
+            }
+            assert!(
+                (mean[0] - t[0]).abs() < 1e-12 && (mean[1] - t[1]).abs() < 1e-12,
+                "{what}: vertex {v} at {t:?}, its neighbours' mean {mean:?}"
+            );
+            interior += 1;
+        }
+    }
+    assert_eq!(
+        interior, 81,
+        "{what}: a 10x10 grid has 9x9 interior vertices"
+    );
 }
 
 #[test]

@@ -211,9 +211,9 @@ fn smooth_reference(
 #[test]
 fn python_laplacian_smooth_matches_a_direct_computation() {
     if !numpy_available() {
-        eprintln!(
-            "SKIPPED python_laplacian_smooth_matches_a_direct_computation: python3 with numpy is \
-             not installed (python3 -m pip install numpy)"
+        crate::common::skip_or_fail(
+            "python_laplacian_smooth_matches_a_direct_computation",
+            "python3 with numpy is not installed (python3 -m pip install numpy)",
         );
         return;
     }
@@ -319,46 +319,55 @@ fn pid_alive(pid: u32) -> bool {
     }
 }
 
+/// The plugin prints a line, starts a child, writes the child's pid to `pidfile` (the marker
+/// that it reached its sleep) and sleeps for an hour; the runtime must kill it and its child at
+/// the timeout. On a loaded machine Python may not reach the marker within a short timeout, so
+/// the run is repeated with longer timeouts until it does; the child check always runs.
 #[test]
 fn a_hanging_plugin_is_killed_at_its_timeout() {
-    let tmp = tempfile::tempdir().unwrap();
-    let pidfile = tmp.path().join("child.pid");
-    let text = format!(
-        r#"{{"format": "cgnodes-graph", "version": 1, "nodes": {{
-        "hang": {{"type": "pl_hang", "params": {{"timeout": 4.0, "pidfile": {:?}}}}},
-        "show": {{"type": "print", "inputs": {{"value": "hang.y"}}}},
-        "ok": {{"type": "pl_echo", "params": {{"x": 1}}}},
-        "show_ok": {{"type": "print", "inputs": {{"value": "ok.y"}}}}
-    }}}}"#,
-        pidfile.to_str().unwrap()
-    );
-    let t0 = std::time::Instant::now();
-    let r = run(&text, root(), tmp.path(), 0..=0).remove(0);
-    // The plugin sleeps for an hour; the run ends because the process was killed. (The
-    // limit leaves a loaded CI machine time to start Python and print its first line.)
-    assert!(t0.elapsed().as_secs() < 600);
-    let e = failure(&r, "hang");
-    assert_eq!(e.kind, ErrorKind::Plugin);
-    assert!(e.message.contains("timed out after 4 s"), "{}", e.message);
-    assert!(matches!(r.output("ok", "y"), Some(Value::Float(y)) if *y == 2.0));
-    // The plugin writes the pid file after its first stderr line; on a machine so loaded that
-    // Python did not get that far within the limit, there is nothing more to check.
-    let Ok(pid) = std::fs::read_to_string(&pidfile) else {
-        eprintln!("the plugin did not reach its sleep before the timeout; child check skipped");
-        return;
-    };
-    assert!(e.message.contains("hanging now"), "{}", e.message);
-    // The process the plugin started was killed with it.
-    let pid: u32 = pid.trim().parse().unwrap();
-    let mut alive = pid_alive(pid);
-    for _ in 0..100 {
-        if !alive {
-            break;
+    for timeout in [4u32, 16, 64] {
+        let tmp = tempfile::tempdir().unwrap();
+        let pidfile = tmp.path().join("child.pid");
+        let text = format!(
+            r#"{{"format": "cgnodes-graph", "version": 1, "nodes": {{
+            "hang": {{"type": "pl_hang", "params": {{"timeout": {timeout}.0, "pidfile": {:?}}}}},
+            "show": {{"type": "print", "inputs": {{"value": "hang.y"}}}},
+            "ok": {{"type": "pl_echo", "params": {{"x": 1}}}},
+            "show_ok": {{"type": "print", "inputs": {{"value": "ok.y"}}}}
+        }}}}"#,
+            pidfile.to_str().unwrap()
+        );
+        let t0 = std::time::Instant::now();
+        let r = run(&text, root(), tmp.path(), 0..=0).remove(0);
+        // The plugin sleeps for an hour; the run ends because the process was killed.
+        assert!(t0.elapsed().as_secs() < 600);
+        let e = failure(&r, "hang");
+        assert_eq!(e.kind, ErrorKind::Plugin);
+        let want = format!("timed out after {timeout} s");
+        assert!(e.message.contains(&want), "{}", e.message);
+        assert!(matches!(r.output("ok", "y"), Some(Value::Float(y)) if *y == 2.0));
+        // No complete pid yet: killed before it reached the sleep; try a longer timeout.
+        let Some(pid) = std::fs::read_to_string(&pidfile)
+            .ok()
+            .and_then(|s| s.trim().parse::<u32>().ok())
+        else {
+            eprintln!("timeout {timeout} s: the plugin did not reach its sleep; retrying longer");
+            continue;
+        };
+        assert!(e.message.contains("hanging now"), "{}", e.message);
+        // The process the plugin started was killed with it.
+        let mut alive = pid_alive(pid);
+        for _ in 0..100 {
+            if !alive {
+                break;
+            }
+            std::thread::sleep(std::time::Duration::from_millis(20));
+            alive = pid_alive(pid);
         }
-        std::thread::sleep(std::time::Duration::from_millis(20));
-        alive = pid_alive(pid);
+        assert!(!alive, "the plugin's child {pid} outlived the timeout");
+        return;
     }
-    assert!(!alive, "the plugin's child {pid} outlived the timeout");
+    panic!("the hanging plugin never reached its sleep, even with a 64 s timeout");
 }
 
 #[test]
@@ -519,10 +528,7 @@ fn example_binary() -> Option<PathBuf> {
          `cargo build --example custom_node` first",
         bin.display()
     );
-    if std::env::var_os("CI").is_some() {
-        panic!("{msg}");
-    }
-    eprintln!("SKIPPED the example-binary checks: {msg}");
+    crate::common::skip_or_fail("the example-binary checks", &msg);
     None
 }
 

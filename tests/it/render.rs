@@ -549,8 +549,14 @@ fn golden_image_matches_within_tolerance() {
     let got = decode_image(&png, ColorSpace::Raw).unwrap();
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("tests/data/render/golden_raster.png");
+    // Blessing writes the golden and fails: a run that rewrote the golden compared nothing.
     if std::env::var_os("CGNODES_BLESS").is_some() {
         std::fs::write(&path, &png).unwrap();
+        panic!(
+            "CGNODES_BLESS: wrote {}; check it by eye, then run this test again without \
+             CGNODES_BLESS to compare",
+            path.display()
+        );
     }
     let want = decode_image(&std::fs::read(&path).unwrap(), ColorSpace::Raw).unwrap();
     assert_eq!((got.width, got.height), (want.width, want.height));

@@ -133,14 +133,26 @@ fn a_sweep_file_through_the_command_line() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
+    // One row per radius, in the order given, each with the area of its own radius.
     let csv = std::fs::read_to_string(dir.path().join("areas.csv")).unwrap();
-    let areas: Vec<f64> = csv
-        .lines()
-        .skip(1)
-        .map(|l| l.rsplit(',').next().unwrap().parse().unwrap())
+    let mut lines = csv.lines();
+    let head: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| {
+        head.iter()
+            .position(|h| *h == name)
+            .unwrap_or_else(|| panic!("no column {name} in {head:?}"))
+    };
+    let (rc, ac) = (col("radius.value"), col("pi_r2.value"));
+    let rows: Vec<(f64, f64)> = lines
+        .map(|l| {
+            let f: Vec<&str> = l.split(',').collect();
+            (f[rc].parse().unwrap(), f[ac].parse().unwrap())
+        })
         .collect();
-    for (r, a) in [1.0, 2.0, 3.0].iter().zip(&areas) {
-        assert!((a - std::f64::consts::PI * r * r).abs() < 1e-9);
+    assert_eq!(rows.len(), 3, "{csv}");
+    for ((r, a), want_r) in rows.iter().zip([1.0, 2.0, 3.0]) {
+        assert_eq!(*r, want_r, "{csv}");
+        assert!((a - std::f64::consts::PI * r * r).abs() < 1e-9, "{csv}");
     }
     assert!(image::open(dir.path().join("areas.png")).is_ok());
     // A measure that does not exist is an error, not a silent empty column.

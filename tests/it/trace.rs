@@ -188,16 +188,35 @@ fn cornell_camera(w: u32, h: u32) -> Camera {
 #[test]
 fn nee_bsdf_and_mis_agree_in_expectation() {
     let mut scene = cornell_scene();
+    let mut glossy = 0;
     for o in &mut scene.objects {
         let m = o.mesh.bounds();
-        // The short box's faces all lie within y <= -0.4 and x >= -0.04.
+        // The short box ("small-box" in the OBJ): its faces all lie within -1 <= y <= -0.4
+        // and x >= -0.04; the floor and the tall box reach further.
         if m.1[1] <= -0.39 && m.0[0] > -0.05 && m.1[1] > -0.9 {
+            assert_eq!(o.mesh.num_faces(), 12, "the short box has 12 triangles");
             let mut mm = (**o.material.as_ref().unwrap()).clone();
             mm.kind = MaterialKind::Conductor { roughness: 0.5 };
             mm.base_color = [0.9, 0.7, 0.4];
             o.material = Some(Arc::new(mm));
+            glossy += 1;
         }
     }
+    // Without the glossy box the comparison would run on an all-diffuse scene.
+    assert_eq!(
+        glossy, 1,
+        "the short box was not found in the Cornell scene"
+    );
+    let conductors = scene
+        .objects
+        .iter()
+        .filter(|o| {
+            o.material.as_ref().is_some_and(
+                |m| matches!(m.kind, MaterialKind::Conductor { roughness } if roughness == 0.5),
+            )
+        })
+        .count();
+    assert_eq!(conductors, 1);
     let cam = cornell_camera(32, 32);
     let mut means = Vec::new();
     for (strategy, spp) in [

@@ -299,6 +299,7 @@ fn buffer_pattern_runs_end_to_end() {
     assert_eq!((m.num_vertices(), m.num_faces()), (121, 200));
     let uv = m.uvs.as_ref().unwrap();
     assert_eq!(uv.domain, cgnodes::types::Domain::Vertex);
+    assert_eq!(uv.values.len(), m.positions.len());
     for (p, t) in m.positions.iter().zip(&uv.values) {
         assert_eq!([p[0], p[1]], *t);
     }

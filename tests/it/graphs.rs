@@ -1,6 +1,6 @@
 //! Every example graph in `graphs/` validates and runs end to end on the shipped assets.
 
-use cgnodes::exec::{Executor, RunOptions};
+use cgnodes::exec::{Executor, NodeStatus, RunOptions};
 use cgnodes::node::FileEnv;
 use cgnodes::nodes::builtin_registry;
 use std::path::Path;
@@ -47,20 +47,52 @@ fn every_example_graph_runs() {
             },
             ..Default::default()
         };
-        for frame in f0..=f1 {
-            let r = exec.run(&valid, &opts, frame);
-            failures.extend(r.errors());
-            assert!(!r.nodes.is_empty());
-        }
-        let written = walk(out.path());
-        if written == 0
-            && valid.nodes.iter().any(|n| {
+        // Every writer (a node with a file-output socket) that ran writes a file in some frame.
+        let writers: Vec<&str> = valid
+            .nodes
+            .iter()
+            .filter(|n| {
                 n.decl
                     .inputs
                     .iter()
                     .any(|s| s.file == cgnodes::node::FileRole::Output)
             })
-        {
+            .map(|n| n.id.as_str())
+            .collect();
+        let mut ran = std::collections::BTreeSet::new();
+        let mut wrote = std::collections::BTreeSet::new();
+        for frame in f0..=f1 {
+            let r = exec.run(&valid, &opts, frame);
+            failures.extend(r.errors());
+            assert!(!r.nodes.is_empty());
+            for n in r.nodes.iter().filter(|n| writers.contains(&n.id.as_str())) {
+                if matches!(n.status, NodeStatus::Ran) {
+                    ran.insert(n.id.clone());
+                }
+                for p in &n.written {
+                    assert!(
+                        p.starts_with(out.path()),
+                        "{}: {}",
+                        f.display(),
+                        p.display()
+                    );
+                    assert!(
+                        p.is_file(),
+                        "{}: {} is not a file",
+                        f.display(),
+                        p.display()
+                    );
+                    wrote.insert(n.id.clone());
+                }
+            }
+        }
+        for id in ran.difference(&wrote) {
+            failures.push(format!(
+                "{}: writer '{id}' ran but wrote no file",
+                f.display()
+            ));
+        }
+        if !writers.is_empty() && walk(out.path()) == 0 {
             failures.push(format!("{}: wrote no file", f.display()));
         }
     }

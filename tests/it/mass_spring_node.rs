@@ -55,6 +55,7 @@ fn executor_keeps_state_across_frames() {
             sim.step(None).unwrap();
         }
         let m = output_mesh(r);
+        assert_eq!(m.positions.len(), sim.state.x.len(), "frame {}", f + 1);
         let err = m
             .positions
             .iter()

@@ -281,7 +281,9 @@ fn check_cornell(filter: Filter, key: &str, mean_key: &str) {
             "{key}: image mean {m:?} vs Mitsuba {want:?}"
         );
     }
-    for (name, p) in r["patches_rows_cols_halfopen"].as_object().unwrap() {
+    let patches = r["patches_rows_cols_halfopen"].as_object().unwrap();
+    assert_eq!(patches.len(), 8, "the reference's patches");
+    for (name, p) in patches {
         let rows = triple(&serde_json::json!([p["rows"][0], p["rows"][1], 0]));
         let cols = triple(&serde_json::json!([p["cols"][0], p["cols"][1], 0]));
         let got = patch_mean(

@@ -3,6 +3,7 @@
 //! libraries and their texture maps).
 
 use std::collections::HashMap;
+use std::io::{BufRead, Read};
 use std::path::{Path, PathBuf};
 use std::sync::{Mutex, OnceLock};
 use std::time::UNIX_EPOCH;
@@ -30,6 +31,26 @@ pub fn size_and_mtime(path: &Path) -> Option<(u64, u128)> {
     Some((m.len(), t))
 }
 
+/// Whether `path` is a regular file (not a folder, device or FIFO, which are never read:
+/// `/dev/zero` never ends and opening a FIFO blocks).
+fn is_regular(path: &Path) -> bool {
+    std::fs::metadata(path).is_ok_and(|m| m.is_file())
+}
+
+/// Reads at most `CONTENT_HASH_MAX` + 1 bytes of a regular file.
+fn read_small(path: &Path) -> Option<Vec<u8>> {
+    if !is_regular(path) {
+        return None;
+    }
+    let mut bytes = Vec::new();
+    std::fs::File::open(path)
+        .ok()?
+        .take(CONTENT_HASH_MAX + 1)
+        .read_to_end(&mut bytes)
+        .ok()?;
+    Some(bytes)
+}
+
 /// Adds one file to a key: its path, size, modification time and, when small, content hash;
 /// a missing or unreadable file adds a marker instead.
 pub fn stamp_file(h: &mut blake3::Hasher, path: &Path) {
@@ -40,7 +61,7 @@ pub fn stamp_file(h: &mut blake3::Hasher, path: &Path) {
             h.update(&len.to_le_bytes());
             h.update(&t.to_le_bytes());
             if len <= CONTENT_HASH_MAX {
-                if let Ok(bytes) = std::fs::read(path) {
+                if let Some(bytes) = read_small(path) {
                     h.update(blake3::hash(&bytes).as_bytes());
                 }
             }
@@ -102,11 +123,16 @@ const MTL_MAPS: &[&str] = &[
 pub fn obj_companions(path: &Path) -> Vec<PathBuf> {
     let dir = path.parent().unwrap_or(Path::new("."));
     let mut out = Vec::new();
-    let Ok(bytes) = std::fs::read(path) else {
+    if !is_regular(path) {
+        return out;
+    }
+    let Ok(f) = std::fs::File::open(path) else {
         return out;
     };
-    let text = String::from_utf8_lossy(&bytes);
-    for line in text.lines() {
+    // Streamed: an OBJ may be large, and only its `mtllib` lines matter.
+    for line in std::io::BufReader::new(f).split(b'\n') {
+        let Ok(line) = line else { break };
+        let line = String::from_utf8_lossy(&line);
         let Some(rest) = line.trim_start().strip_prefix("mtllib") else {
             continue;
         };
@@ -129,7 +155,8 @@ pub fn obj_companions(path: &Path) -> Vec<PathBuf> {
 /// The texture files an MTL file names.
 fn mtl_textures(mtl: &Path) -> Vec<PathBuf> {
     let dir = mtl.parent().unwrap_or(Path::new("."));
-    let Ok(bytes) = std::fs::read(mtl) else {
+    // MTL files are small; a larger one is read only as far as the stamp limit.
+    let Some(bytes) = read_small(mtl) else {
         return Vec::new();
     };
     let text = String::from_utf8_lossy(&bytes);
@@ -222,5 +249,18 @@ mod tests {
             .unwrap();
         assert_ne!(s1, stamp(&f));
         assert_ne!(stamp(&f), stamp(&d.path().join("missing.txt")));
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn devices_are_stamped_without_being_read() {
+        // /dev/zero has length 0 and never ends: reading it would hang the planner.
+        let mut h = blake3::Hasher::new();
+        stamp_input(&mut h, Path::new("/dev/zero"), Some(obj_companions));
+        assert!(obj_companions(Path::new("/dev/zero")).is_empty());
+        let d = tempfile::tempdir().unwrap();
+        std::fs::write(d.path().join("m.obj"), "mtllib /dev/zero\n").unwrap();
+        assert_eq!(obj_companions(&d.path().join("m.obj")).len(), 1);
+        stamp_input(&mut h, &d.path().join("m.obj"), Some(obj_companions));
     }
 }

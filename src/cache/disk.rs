@@ -84,7 +84,8 @@ impl DiskCache {
 
     /// Removes the least recently used entries (oldest modification time first) until the
     /// entries take at most `limit` bytes; `limit` 0 means no limit. Sizes are file lengths.
-    /// Files that are not entries (`ab/<64 hex digits>.bin`) are left alone.
+    /// Temporary files of interrupted writes older than an hour are removed too; other files
+    /// that are not entries (`ab/<64 hex digits>.bin`) are left alone.
     pub fn evict(&self, limit: u64) -> Evicted {
         let mut files = self.entries();
         let total: u64 = files.iter().map(|f| f.1).sum();
@@ -132,7 +133,16 @@ impl DiskCache {
                         && n[..64].bytes().all(|b| b.is_ascii_hexdigit())
                 });
                 let Ok(m) = f.metadata() else { continue };
-                if is_entry && m.is_file() {
+                let stale_tmp = fname
+                    .to_str()
+                    .is_some_and(|n| n.starts_with(".cgnodes-") && n.ends_with(".tmp"))
+                    && m.modified()
+                        .ok()
+                        .and_then(|t| t.elapsed().ok())
+                        .is_some_and(|age| age.as_secs() > 3600);
+                if stale_tmp {
+                    let _ = std::fs::remove_file(f.path());
+                } else if is_entry && m.is_file() {
                     let t = m.modified().unwrap_or(SystemTime::UNIX_EPOCH);
                     v.push((t, m.len(), f.path()));
                 }
@@ -213,8 +223,13 @@ mod tests {
         // A hit makes entry 0 the most recently used.
         assert_eq!(value(&c.get(&keys[0]).unwrap()), 0.0);
         let size = std::fs::metadata(c.path(&keys[0])).unwrap().len();
-        // A stray file that is no entry is neither counted nor removed.
+        // A stray file that is no entry is neither counted nor removed; a temporary file of
+        // a write interrupted long ago is removed.
         std::fs::write(d.path().join("notes.txt"), "keep").unwrap();
+        let tmp = c.path(&keys[0]).with_file_name(".cgnodes-x.tmp");
+        std::fs::write(&tmp, "partial").unwrap();
+        let f = std::fs::OpenOptions::new().append(true).open(&tmp).unwrap();
+        f.set_modified(t0 - Duration::from_secs(60)).unwrap();
         assert_eq!(c.evict(0).removed, 0, "0 means no limit");
         let ev = c.evict(2 * size);
         assert_eq!((ev.removed, ev.kept), (2, 2 * size), "{ev:?}");
@@ -223,6 +238,7 @@ mod tests {
         assert_eq!(value(&c.get(&keys[3]).unwrap()), 3.0);
         assert_eq!(value(&c.get(&keys[0]).unwrap()), 0.0);
         assert!(d.path().join("notes.txt").exists());
+        assert!(!tmp.exists());
         // Under the limit: nothing more goes.
         assert_eq!(c.evict(2 * size).removed, 0);
     }

@@ -84,6 +84,8 @@ pub fn load_obj_scene(path: &Path, two_sided_emission: bool) -> Result<Scene, St
 
 fn declare(b: &mut NodeBuilder) {
     b.doc("Reads an OBJ + MTL file (Kd, Ke emission, illum/Ni) into a scene for the tracers.");
+    // The MTL libraries (and their textures) enter the cache key with the OBJ.
+    b.companions(crate::cache::obj_companions);
     b.add_input::<String>("path")
         .file_in()
         .doc("OBJ file, relative to the graph's folder; its mtllib is read too.");

@@ -194,6 +194,10 @@ struct RunArgs {
     /// Content-addressed result cache folder.
     #[arg(long)]
     cache: Option<PathBuf>,
+    /// Size limit of the --cache folder: after the run, the least recently used entries are
+    /// removed until it fits (B, KiB, MiB, GiB, also K, M, G; 0 = no limit).
+    #[arg(long = "cache-size", value_name = "SIZE", default_value = "1GiB", value_parser = run::parse_size)]
+    cache_size: u64,
     /// Further folders searched for input files.
     #[arg(long = "assets")]
     assets: Vec<PathBuf>,

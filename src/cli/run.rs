@@ -105,6 +105,16 @@ pub(super) fn cmd(registry: &Registry, args: RunArgs) -> i32 {
         }
         profile.push(profile_json(&report));
     }
+    if let Some(ev) = exec.evict_disk_cache(args.cache_size) {
+        if ev.removed > 0 && !args.quiet {
+            eprintln!(
+                "cache: removed {} least recently used entries ({:.1} MiB) to stay under --cache-size; {:.1} MiB kept",
+                ev.removed,
+                ev.freed as f64 / 1048576.0,
+                ev.kept as f64 / 1048576.0
+            );
+        }
+    }
     if let Some(p) = &args.profile_json {
         let text = serde_json::to_string_pretty(&profile).unwrap_or_default();
         if let Err(e) = crate::io::write_atomic(p, |w| w.write_all(text.as_bytes())) {
@@ -113,6 +123,36 @@ pub(super) fn cmd(registry: &Registry, args: RunArgs) -> i32 {
         }
     }
     code
+}
+
+/// Parses a size such as `1GiB`, `500MiB`, `64K` or `1048576` (bytes); units are powers of
+/// 1024 (`K`/`KiB`, `M`/`MiB`, `G`/`GiB`, `T`/`TiB`), case-insensitive, with an optional `B`.
+pub(super) fn parse_size(s: &str) -> Result<u64, String> {
+    let t = s.trim();
+    let split = t
+        .find(|c: char| !(c.is_ascii_digit() || c == '.'))
+        .unwrap_or(t.len());
+    let (num, unit) = t.split_at(split);
+    let x: f64 = num
+        .parse()
+        .map_err(|_| format!("'{s}' is not a size (for example 500MiB, 2GiB, 0)"))?;
+    let shift = match unit.trim().to_ascii_lowercase().as_str() {
+        "" | "b" => 0,
+        "k" | "kb" | "kib" => 10,
+        "m" | "mb" | "mib" => 20,
+        "g" | "gb" | "gib" => 30,
+        "t" | "tb" | "tib" => 40,
+        u => {
+            return Err(format!(
+                "unknown size unit '{u}' in '{s}' (B, KiB, MiB, GiB, TiB)"
+            ))
+        }
+    };
+    let bytes = x * (1u64 << shift) as f64;
+    if !bytes.is_finite() || bytes >= u64::MAX as f64 {
+        return Err(format!("'{s}' is too large"));
+    }
+    Ok(bytes as u64)
 }
 
 fn print_report(r: &RunReport, frames: bool) {
@@ -200,4 +240,22 @@ pub fn profile_json(r: &RunReport) -> serde_json::Value {
         })
         .collect();
     serde_json::json!({"frame": r.frame, "total_ms": r.total_ms, "peak_rss_kib": r.peak_rss_kib, "nodes": nodes})
+}
+
+#[cfg(test)]
+mod tests {
+    use super::parse_size;
+
+    #[test]
+    fn sizes_parse_with_binary_units() {
+        assert_eq!(parse_size("0"), Ok(0));
+        assert_eq!(parse_size("1024"), Ok(1024));
+        assert_eq!(parse_size("1GiB"), Ok(1 << 30));
+        assert_eq!(parse_size("500 MiB"), Ok(500 << 20));
+        assert_eq!(parse_size("1.5k"), Ok(1536));
+        assert_eq!(parse_size("2G"), Ok(2 << 30));
+        assert!(parse_size("lots").is_err());
+        assert!(parse_size("3 parsecs").is_err());
+        assert!(parse_size("99999999999TiB").is_err());
+    }
 }

@@ -1,10 +1,10 @@
-//! Running one node: blocks it when an upstream node failed, serves it from the caches when
-//! its key is unchanged, else gathers its inputs, runs it (catching panics), checks its
+//! Running one node: blocks it when an upstream node failed, completes its key with the
+//! stamps of files named through links, serves it from the caches when its key is unchanged, else gathers its inputs, runs it (catching panics), checks its
 //! outputs against the declaration and stores the result.
 
 use super::{Executor, NodeReport, NodeStatus, Shared};
-use crate::cache::{Entry, Key};
-use crate::node::{ErrorKind, ExecContext, NodeError};
+use crate::cache::{stamp_input, Entry, Key};
+use crate::node::{ErrorKind, ExecContext, FileRole, NodeError};
 use crate::types::{SocketType, Value};
 use crate::validate::InputSource;
 use std::collections::BTreeMap;
@@ -31,7 +31,8 @@ impl Executor {
                 return Err(failed.clone());
             }
         }
-        let key = sh.keys[i];
+        let key = complete_key(sh, i);
+        let _ = sh.final_keys[i].set(key);
         let wanted = sh.wanted[i].as_ref();
         // A cached entry that skipped an output wanted now is kept, to merge with the rerun.
         let mut older = None;
@@ -150,11 +151,16 @@ impl Executor {
         report.written = std::mem::take(&mut ctx.written);
         drop(ctx);
         if decl.stateful {
+            // The history follows the state: the next frame's key chains onto this one while
+            // the node holds state, and starts anew when it dropped it.
+            // Locked in the order the planner locks them.
+            let mut states = self.states.lock().unwrap_or_else(|p| p.into_inner());
+            let mut hist = self.histories.lock().unwrap_or_else(|p| p.into_inner());
             if let Some(s) = state {
-                self.states
-                    .lock()
-                    .unwrap_or_else(|p| p.into_inner())
-                    .insert(node.id.clone(), s);
+                states.insert(node.id.clone(), s);
+                hist.insert(node.id.clone(), key);
+            } else {
+                hist.remove(&node.id);
             }
         }
         match res {
@@ -241,5 +247,54 @@ impl Executor {
             Some(e)
         });
         hit.filter(|e| e.files_present())
+    }
+}
+
+/// The node's key completed at evaluation time: the planned key, plus the completed keys of
+/// upstream nodes whose keys changed, plus the stamp (and companions) of every file named by
+/// a path that arrives through a link. Equal to the planned key when there is neither.
+fn complete_key(sh: &Shared, i: usize) -> Key {
+    let node = &sh.graph.nodes[i];
+    let decl = &node.decl;
+    let mut h: Option<blake3::Hasher> = None;
+    for &d in &node.deps {
+        let k = sh.final_keys[d].get().copied().unwrap_or(sh.keys[d]);
+        if k != sh.keys[d] {
+            let h = h.get_or_insert_with(blake3::Hasher::new);
+            h.update(&(d as u64).to_le_bytes());
+            h.update(&k);
+        }
+    }
+    for (name, src) in &node.inputs {
+        let InputSource::Links(links) = src else {
+            continue;
+        };
+        if decl.input(name).map(|s| s.file) != Some(FileRole::Input) {
+            continue;
+        }
+        for (j, out) in links {
+            let slot = sh.slots[*j].lock().unwrap_or_else(|p| p.into_inner());
+            let Some(v) = slot
+                .as_ref()
+                .and_then(|r| r.as_ref().ok())
+                .and_then(|o| o.get(out))
+            else {
+                continue;
+            };
+            let h = h.get_or_insert_with(blake3::Hasher::new);
+            h.update(name.as_bytes());
+            h.update(b"=");
+            for p in super::plan::path_strings(v) {
+                stamp_input(h, &sh.opts.files.input_path(p), decl.companions);
+            }
+        }
+    }
+    match h {
+        None => sh.keys[i],
+        Some(mut h) => {
+            h.update(b"planned");
+            h.update(&sh.keys[i]);
+            *h.finalize().as_bytes()
+        }
     }
 }

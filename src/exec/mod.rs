@@ -9,7 +9,7 @@ mod report;
 pub use plan::cache_keys;
 pub use report::{NodeReport, NodeStatus, RunReport};
 
-use crate::cache::{DiskCache, Key, MemoryCache};
+use crate::cache::{DiskCache, Evicted, Key, MemoryCache};
 use crate::node::{FileEnv, ProgressFn};
 use crate::types::Value;
 use crate::validate::ValidGraph;
@@ -17,7 +17,7 @@ use report::read_status_kib;
 use std::any::Any;
 use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::{Arc, Mutex};
+use std::sync::{Arc, Mutex, OnceLock};
 use std::time::Instant;
 
 /// How a run is done.
@@ -50,6 +50,9 @@ pub struct Executor {
     memory: Mutex<MemoryCache>,
     disk: Option<DiskCache>,
     states: Mutex<HashMap<String, Box<dyn Any + Send>>>,
+    /// For each stateful node that holds state: its key at the frame that last advanced it
+    /// (the history its next key chains onto; see `crate::cache`).
+    histories: Mutex<HashMap<String, Key>>,
 }
 
 type Slot = Mutex<Option<Result<Arc<BTreeMap<String, Value>>, String>>>;
@@ -79,6 +82,7 @@ impl Executor {
             memory: Mutex::new(MemoryCache::default()),
             disk,
             states: Mutex::new(HashMap::new()),
+            histories: Mutex::new(HashMap::new()),
         })
     }
 
@@ -88,6 +92,16 @@ impl Executor {
             .lock()
             .unwrap_or_else(|p| p.into_inner())
             .clear();
+        self.histories
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .clear();
+    }
+
+    /// Trims the disk cache to `limit` bytes, removing the least recently used entries
+    /// (`limit` 0: no limit); `None` without a disk cache.
+    pub fn evict_disk_cache(&self, limit: u64) -> Option<Evicted> {
+        self.disk.as_ref().map(|d| d.evict(limit))
     }
 
     /// Runs `graph` for one frame.
@@ -99,7 +113,14 @@ impl Executor {
             .next_generation();
         let n = graph.nodes.len();
         let (need, wanted) = plan::wanted_outputs(graph, opts);
-        let keys = plan::cache_keys(graph, &need, &opts.files, frame);
+        let keys = {
+            // Only a node that still holds its state continues its history.
+            let states = self.states.lock().unwrap_or_else(|p| p.into_inner());
+            let mut history = self.histories.lock().unwrap_or_else(|p| p.into_inner());
+            history.retain(|id, _| states.contains_key(id));
+            plan::cache_keys(graph, &need, &opts.files, frame, &history)
+        };
+        let final_keys: Vec<OnceLock<Key>> = (0..n).map(|_| OnceLock::new()).collect();
         let mut fresh = vec![false; n];
         for (i, node) in graph.nodes.iter().enumerate() {
             fresh[i] = opts.recompute.contains(&node.id) || node.deps.iter().any(|&d| fresh[d]);
@@ -123,6 +144,7 @@ impl Executor {
             opts,
             frame,
             keys: &keys,
+            final_keys: &final_keys,
             fresh: &fresh,
             wanted: &wanted,
             slots: &slots,
@@ -199,6 +221,9 @@ struct Shared<'a> {
     opts: &'a RunOptions,
     frame: i64,
     keys: &'a [Key],
+    /// Keys completed at evaluation time (stamps of linked file paths), set by each node
+    /// before its dependents start.
+    final_keys: &'a [OnceLock<Key>],
     fresh: &'a [bool],
     wanted: &'a [Option<BTreeSet<String>>],
     slots: &'a [Slot],

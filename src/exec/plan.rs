@@ -1,13 +1,14 @@
 //! Planning a run: which nodes the requested outputs need, which outputs each must produce,
-//! and every needed node's cache key (type, literals, input file stamps, upstream keys,
-//! frame for time-dependent nodes, output folder for writers).
+//! and every needed node's cache key (build identity, type, literals, input file stamps,
+//! upstream keys, frame for time-dependent nodes, history for stateful nodes, output folder
+//! for writers).
 
 use super::RunOptions;
-use crate::cache::Key;
+use crate::cache::{stamp_input, Key};
 use crate::node::{FileEnv, FileRole};
 use crate::types::Value;
 use crate::validate::{InputSource, ValidGraph};
-use std::collections::BTreeSet;
+use std::collections::{BTreeSet, HashMap};
 
 /// The nodes a run needs and the outputs each must produce: `None` = all of them (targets,
 /// and outputs the caller reads whole); else the sockets linked by needed nodes or read by
@@ -67,8 +68,19 @@ pub(super) fn wanted_outputs(
     (need, wanted)
 }
 
-/// Computes every needed node's cache key in topological order.
-pub fn cache_keys(graph: &ValidGraph, need: &[bool], files: &FileEnv, frame: i64) -> Vec<Key> {
+/// Computes every needed node's cache key in topological order (see `crate::cache` for
+/// what a key covers). `history` holds, for each stateful node that holds state, the key
+/// it had at the frame that last advanced that state; a stateful node absent from it starts
+/// a new history here. Paths that arrive through links are stamped later, when their value
+/// is known (`Executor::evaluate`).
+pub fn cache_keys(
+    graph: &ValidGraph,
+    need: &[bool],
+    files: &FileEnv,
+    frame: i64,
+    history: &HashMap<String, Key>,
+) -> Vec<Key> {
+    let identity = crate::cache::build_identity();
     let mut keys = vec![[0u8; 32]; graph.nodes.len()];
     for (i, node) in graph.nodes.iter().enumerate() {
         if !need[i] {
@@ -76,7 +88,7 @@ pub fn cache_keys(graph: &ValidGraph, need: &[bool], files: &FileEnv, frame: i64
         }
         let d = &node.decl;
         let mut h = blake3::Hasher::new();
-        h.update(b"cgnodes-key-1\0");
+        h.update(&identity);
         h.update(d.type_name.as_bytes());
         h.update(b"\0");
         h.update(d.source.as_bytes());
@@ -89,17 +101,9 @@ pub fn cache_keys(graph: &ValidGraph, need: &[bool], files: &FileEnv, frame: i64
                     let j = v.to_json().map(|j| j.to_string()).unwrap_or_default();
                     h.update(j.as_bytes());
                     let role = d.input(name).map(|s| s.file).unwrap_or_default();
-                    if let (FileRole::Input, Value::String(p)) = (role, v) {
-                        let path = files.input_path(p);
-                        h.update(path.to_string_lossy().as_bytes());
-                        if let Ok(m) = std::fs::metadata(&path) {
-                            h.update(&m.len().to_le_bytes());
-                            if let Ok(t) = m.modified().and_then(|t| {
-                                t.duration_since(std::time::UNIX_EPOCH)
-                                    .map_err(std::io::Error::other)
-                            }) {
-                                h.update(&t.as_nanos().to_le_bytes());
-                            }
+                    if role == FileRole::Input {
+                        for p in path_strings(v) {
+                            stamp_input(&mut h, &files.input_path(p), d.companions);
                         }
                     }
                 }
@@ -120,6 +124,17 @@ pub fn cache_keys(graph: &ValidGraph, need: &[bool], files: &FileEnv, frame: i64
             h.update(b"frame");
             h.update(&frame.to_le_bytes());
         }
+        if d.stateful {
+            match history.get(&node.id) {
+                Some(prev) => {
+                    h.update(b"after");
+                    h.update(prev);
+                }
+                None => {
+                    h.update(b"origin");
+                }
+            }
+        }
         if d.sink || d.inputs.iter().any(|s| s.file == FileRole::Output) {
             h.update(files.out_dir.to_string_lossy().as_bytes());
             h.update(&[u8::from(files.allow_write_anywhere)]);
@@ -127,4 +142,19 @@ pub fn cache_keys(graph: &ValidGraph, need: &[bool], files: &FileEnv, frame: i64
         keys[i] = *h.finalize().as_bytes();
     }
     keys
+}
+
+/// The paths a file socket's value names: a string, or each string of a list.
+pub(super) fn path_strings(v: &Value) -> Vec<&str> {
+    match v {
+        Value::String(s) => vec![s.as_str()],
+        Value::List(items) => items
+            .iter()
+            .filter_map(|x| match x {
+                Value::String(s) => Some(s.as_str()),
+                _ => None,
+            })
+            .collect(),
+        _ => Vec::new(),
+    }
 }

@@ -81,6 +81,7 @@ impl NodeBuilder {
                 sink: false,
                 source: "builtin".into(),
                 exec: None,
+                companions: None,
             },
         }
     }
@@ -124,6 +125,12 @@ impl NodeBuilder {
     /// Has an effect outside the graph (writes a file, prints): evaluated by default.
     pub fn sink(&mut self) -> &mut Self {
         self.decl.sink = true;
+        self
+    }
+    /// Names the further files the node reads because of an input file (`f(path)`, for
+    /// example `cache::obj_companions`), so that the cache key stamps them too.
+    pub fn companions(&mut self, f: crate::cache::CompanionFn) -> &mut Self {
+        self.decl.companions = Some(f);
         self
     }
     /// Where the node comes from (default `builtin`).

@@ -130,6 +130,11 @@ pub struct NodeDecl {
     #[serde(skip)]
     #[schemars(skip)]
     pub exec: Option<ExecFn>,
+    /// Lists the further files the node reads because of each of its input files (an OBJ's
+    /// MTL libraries and textures): they are stamped in the cache key with the input file.
+    #[serde(skip)]
+    #[schemars(skip)]
+    pub companions: Option<crate::cache::CompanionFn>,
 }
 
 impl std::fmt::Debug for NodeDecl {

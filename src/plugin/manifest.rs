@@ -166,28 +166,53 @@ pub fn load(dir: &Path) -> Result<Plugin, String> {
     })
 }
 
-/// A short hash of the names, sizes and modification times of the files at the top of a
-/// plugin folder: it changes when the plugin's scripts are edited.
+/// Files and folders of a plugin at most this deep are stamped.
+const STAMP_DEPTH: usize = 8;
+/// At most this many files of a plugin folder are stamped (in name order).
+const STAMP_FILES: usize = 10_000;
+
+/// A short hash of the relative paths, sizes and modification times of the files in a plugin
+/// folder and its subfolders (modules, data, binaries it ships): it changes when any of
+/// them is edited. Hidden entries (`.git`) and `__pycache__` are left out (Python rewrites
+/// them as it runs); at most `STAMP_DEPTH` levels and `STAMP_FILES` files are visited.
 fn folder_stamp(dir: &Path) -> String {
-    let mut files: Vec<(String, u64, u128)> = std::fs::read_dir(dir)
-        .map(|rd| {
-            rd.filter_map(|e| e.ok())
-                .filter_map(|e| {
-                    let m = e.metadata().ok().filter(|m| m.is_file())?;
-                    let t = m
-                        .modified()
-                        .ok()
-                        .and_then(|t| t.duration_since(std::time::UNIX_EPOCH).ok())
-                        .map_or(0, |d| d.as_nanos());
-                    Some((e.file_name().to_string_lossy().into_owned(), m.len(), t))
-                })
-                .collect()
-        })
-        .unwrap_or_default();
+    let mut files: Vec<(String, u64, u128)> = Vec::new();
+    let mut stack = vec![(dir.to_path_buf(), 0usize)];
+    while let Some((d, depth)) = stack.pop() {
+        let Ok(rd) = std::fs::read_dir(&d) else {
+            continue;
+        };
+        let mut entries: Vec<_> = rd.filter_map(|e| e.ok()).collect();
+        entries.sort_by_key(|e| e.file_name());
+        for e in entries {
+            let name = e.file_name().to_string_lossy().into_owned();
+            if name.starts_with('.') || name == "__pycache__" || files.len() >= STAMP_FILES {
+                continue;
+            }
+            let Ok(m) = e.metadata() else { continue };
+            let rel = e
+                .path()
+                .strip_prefix(dir)
+                .map_or(name.clone(), |p| p.to_string_lossy().into_owned());
+            if m.is_dir() {
+                if depth + 1 < STAMP_DEPTH {
+                    stack.push((e.path(), depth + 1));
+                }
+            } else if m.is_file() {
+                let t = m
+                    .modified()
+                    .ok()
+                    .and_then(|t| t.duration_since(std::time::UNIX_EPOCH).ok())
+                    .map_or(0, |d| d.as_nanos());
+                files.push((rel, m.len(), t));
+            }
+        }
+    }
     files.sort();
     let mut h = blake3::Hasher::new();
     for (name, len, t) in files {
         h.update(name.as_bytes());
+        h.update(b"\0");
         h.update(&len.to_le_bytes());
         h.update(&t.to_le_bytes());
     }
@@ -281,5 +306,21 @@ mod tests {
         assert!(n.source.starts_with("plugin p ("));
         let t = n.input(TIMEOUT_SOCKET).unwrap();
         assert_eq!(t.default, Some(json!(5.0)));
+    }
+
+    #[test]
+    fn the_stamp_covers_subfolders_but_not_python_caches() {
+        let d = tempfile::tempdir().unwrap();
+        std::fs::create_dir_all(d.path().join("lib/deep")).unwrap();
+        std::fs::create_dir_all(d.path().join("__pycache__")).unwrap();
+        std::fs::write(d.path().join("run.py"), "import lib").unwrap();
+        std::fs::write(d.path().join("lib/deep/m.py"), "X = 1").unwrap();
+        let s0 = folder_stamp(d.path());
+        std::fs::write(d.path().join("__pycache__/m.pyc"), "bytecode").unwrap();
+        std::fs::write(d.path().join(".hidden"), "x").unwrap();
+        assert_eq!(folder_stamp(d.path()), s0);
+        // A module two folders down changes (size differs): the stamp changes.
+        std::fs::write(d.path().join("lib/deep/m.py"), "X = 22").unwrap();
+        assert_ne!(folder_stamp(d.path()), s0);
     }
 }

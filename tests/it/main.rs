@@ -6,6 +6,7 @@ mod common;
 mod support;
 
 mod arap;
+mod cache_semantics;
 mod f3d;
 mod graphs;
 mod mass_spring;

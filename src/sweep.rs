@@ -66,6 +66,10 @@ pub struct SweepSpec {
     /// Output directory for the graph's writers (default: a temporary folder).
     #[serde(default)]
     pub out: Option<PathBuf>,
+    /// Most bytes one node's buffers may take (`--max-memory`; default: CGNODES_MAX_MEMORY,
+    /// else half the physical memory).
+    #[serde(default)]
+    pub max_memory: Option<u64>,
 }
 
 fn one() -> usize {
@@ -298,6 +302,7 @@ pub fn run(
                     .iter()
                     .filter_map(|m| m.split(':').next().map(str::to_string))
                     .collect(),
+                max_memory: spec.max_memory,
                 recompute: if rep > 0 {
                     varied_nodes.clone()
                 } else {

@@ -22,6 +22,15 @@ impl Choice for ColorSpace {
         &[("srgb", ColorSpace::Srgb), ("raw", ColorSpace::Raw)];
 }
 
+/// The width and height an image file declares, read from its header without decoding.
+pub fn image_dimensions(bytes: &[u8]) -> Result<(u32, u32), String> {
+    image::ImageReader::new(Cursor::new(bytes))
+        .with_guessed_format()
+        .map_err(|e| e.to_string())?
+        .into_dimensions()
+        .map_err(|e| e.to_string())
+}
+
 /// Decodes image file bytes to a linear RGBA image (see the module doc for the rules).
 pub fn decode_image(bytes: &[u8], space: ColorSpace) -> Result<Image, String> {
     let dynimg = image::ImageReader::new(Cursor::new(bytes))
@@ -88,6 +97,11 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let space = ctx.choice::<ColorSpace>("color_space")?;
     let path = ctx.input_path(&p);
     let bytes = std::fs::read(&path).map_err(|e| NodeError::io(&path, e).at("path"))?;
+    // The declared size is checked before decoding: up to 16 bytes per pixel decoded, 16
+    // converted and 16 in the output image.
+    let (w, h) = image_dimensions(&bytes).map_err(|e| NodeError::io(&path, e).at("path"))?;
+    let what = format!("{}: a {w}x{h} image", path.display());
+    ctx.reserve_bytes("path", &what, crate::node::bytes_of(&[w as u64, h as u64, 48]))?;
     let img = decode_image(&bytes, space).map_err(|e| NodeError::io(&path, e).at("path"))?;
     ctx.set_output("image", img);
     Ok(())

@@ -89,6 +89,23 @@ pub fn grid_mesh_in(
     Mesh::new(pos, counts, idx).map_err(|e| e.to_string())
 }
 
+/// The bytes a `cells_u x cells_v` grid takes while it is built: 24 per vertex (position),
+/// per face 8 (count and offset) and per corner 8 (the index and its copy during the build).
+/// An estimate for `ExecContext::reserve_bytes`, saturating instead of overflowing.
+pub fn grid_mesh_bytes(cells_u: u64, cells_v: u64, triangles: bool) -> u64 {
+    use crate::node::bytes_of;
+    let vertices = bytes_of(&[cells_u.saturating_add(1), cells_v.saturating_add(1)]);
+    let cells = bytes_of(&[cells_u, cells_v]);
+    let (faces, corners) = if triangles {
+        (bytes_of(&[cells, 2]), bytes_of(&[cells, 6]))
+    } else {
+        (cells, bytes_of(&[cells, 4]))
+    };
+    bytes_of(&[vertices, 24])
+        .saturating_add(bytes_of(&[faces, 8]))
+        .saturating_add(bytes_of(&[corners, 8]))
+}
+
 fn declare(b: &mut NodeBuilder) {
     b.doc("A flat rectangular grid mesh (cloth), like the course's gridNxN.usda.");
     b.add_input::<i64>("cells_u")
@@ -120,6 +137,12 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let plane = ctx.choice::<GridPlane>("plane")?;
     let center: [f64; 3] = ctx.input("center")?;
     let tri: bool = ctx.input("triangles")?;
+    let (cu, cv) = (cu.max(1), cv.max(1));
+    ctx.reserve_bytes(
+        "cells_u",
+        &format!("a {cu}x{cv} grid"),
+        grid_mesh_bytes(cu as u64, cv as u64, tri),
+    )?;
     let m = grid_mesh_in(
         cu.max(1) as usize,
         cv.max(1) as usize,

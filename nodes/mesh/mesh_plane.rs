@@ -101,6 +101,11 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
         return Err(NodeError::invalid("center", "values must be finite"));
     }
     let up = ctx.choice::<Up>("up")?;
+    // The grid plus 40 bytes of UV and normal per vertex.
+    let nv = (n as u64 + 1) * (n as u64 + 1);
+    let bytes = crate::nodes::mesh::mesh_grid::grid_mesh_bytes(n as u64, n as u64, true)
+        .saturating_add(crate::node::bytes_of(&[nv, 40]));
+    ctx.reserve_bytes("subdivisions", &format!("a {n}x{n} plane"), bytes)?;
     let mut m = plane_mesh(size, center, n as usize, uv_scale);
     if up == Up::Z {
         y_up_to_z_up(&mut m, center);

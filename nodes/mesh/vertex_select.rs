@@ -7,9 +7,11 @@ use crate::types::{AttributeData, Domain, Mesh};
 
 /// Vertices named by a selection: `""`/`none`, a list of indices (`"0,39"` or `"0 39"`),
 /// `top_corners`, `top_edge`, `corners`, or `attr:NAME` (a vertex attribute, nonzero = selected).
-/// "Top" is against gravity when the mesh extends along it, else along the in-plane axis
-/// with the largest extent (y first), so the course's xy grids hang from their y = 1 side.
-pub fn select_vertices(mesh: &Mesh, sel: &str, gravity_axis: usize) -> Result<Vec<usize>, String> {
+/// `gravity` is the direction gravity pulls (its largest component names the axis; a zero
+/// vector means -z). "Top" is against gravity when the mesh extends along it (the lowest
+/// coordinate when gravity points along +axis), else along the in-plane axis with the largest
+/// extent (y first), so the course's xy grids hang from their y = 1 side.
+pub fn select_vertices(mesh: &Mesh, sel: &str, gravity: [f64; 3]) -> Result<Vec<usize>, String> {
     let sel = sel.trim();
     let n = mesh.num_vertices();
     if sel.is_empty() || sel == "none" {
@@ -53,9 +55,13 @@ pub fn select_vertices(mesh: &Mesh, sel: &str, gravity_axis: usize) -> Result<Ve
     let ext = [hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]];
     let diag = (ext[0] * ext[0] + ext[1] * ext[1] + ext[2] * ext[2]).sqrt();
     let tol = 1e-6 * diag.max(1e-300);
-    let g = gravity_axis.min(2);
+    let g = (0..3)
+        .max_by(|&a, &b| gravity[a].abs().total_cmp(&gravity[b].abs()))
+        .filter(|&a| gravity[a] != 0.0)
+        .unwrap_or(2);
+    // Up is against gravity: with gravity along +g the top is the lowest coordinate.
     let (top, top_sign) = if ext[g] > 1e-3 * diag {
-        (g, 1.0)
+        (g, if gravity[g] > 0.0 { -1.0 } else { 1.0 })
     } else {
         let mut best = None;
         for a in [1usize, 2, 0] {
@@ -106,6 +112,9 @@ mod tests {
     use super::*;
     use crate::types::Attribute;
 
+    /// Gravity along -z, as in the course.
+    const DOWN_Z: [f64; 3] = [0.0, 0.0, -9.8];
+
     /// The vertices of a `cells x cells` grid of `size` centred at the origin in the plane of
     /// axes `(au, av)`, vertex `(i, j)` at index `j * (cells + 1) + i` (as `mesh_grid` orders them).
     fn grid(cells: usize, size: f64, au: usize, av: usize) -> Mesh {
@@ -125,22 +134,22 @@ mod tests {
     fn selections() {
         let m = grid(10, 2.0, 0, 1);
         assert_eq!(
-            select_vertices(&m, "top_corners", 2).unwrap(),
+            select_vertices(&m, "top_corners", DOWN_Z).unwrap(),
             vec![120, 110]
         );
-        assert_eq!(select_vertices(&m, "0, 39", 2).unwrap(), vec![0, 39]);
+        assert_eq!(select_vertices(&m, "0, 39", DOWN_Z).unwrap(), vec![0, 39]);
         assert_eq!(
-            select_vertices(&m, "top_edge", 2).unwrap(),
+            select_vertices(&m, "top_edge", DOWN_Z).unwrap(),
             (110..121).collect::<Vec<_>>()
         );
-        let mut c = select_vertices(&m, "corners", 2).unwrap();
+        let mut c = select_vertices(&m, "corners", DOWN_Z).unwrap();
         c.sort();
         assert_eq!(c, vec![0, 10, 110, 120]);
-        assert!(select_vertices(&m, "", 2).unwrap().is_empty());
-        assert!(select_vertices(&m, "121", 2).is_err());
+        assert!(select_vertices(&m, "", DOWN_Z).unwrap().is_empty());
+        assert!(select_vertices(&m, "121", DOWN_Z).is_err());
         // A vertical cloth (xz plane) hangs from its highest side along gravity (z).
         let v = grid(4, 1.0, 0, 2);
-        assert_eq!(select_vertices(&v, "top_corners", 2).unwrap(), vec![24, 20]);
+        assert_eq!(select_vertices(&v, "top_corners", DOWN_Z).unwrap(), vec![24, 20]);
         let mut a = m.clone();
         let vals = (0..121).map(|i| if i == 5 { 1.0 } else { 0.0 }).collect();
         a.attributes.insert(
@@ -150,6 +159,33 @@ mod tests {
                 values: vals,
             }),
         );
-        assert_eq!(select_vertices(&a, "attr:pin", 2).unwrap(), vec![5]);
+        assert_eq!(select_vertices(&a, "attr:pin", DOWN_Z).unwrap(), vec![5]);
+    }
+
+    /// Issue 23: "top" is against gravity, whichever sign gravity has.
+    #[test]
+    fn top_is_against_gravity_of_either_sign() {
+        // A vertical cloth (xz plane): gravity along -z hangs it from z = +0.5, along +z
+        // from z = -0.5.
+        let v = grid(4, 1.0, 0, 2);
+        assert_eq!(select_vertices(&v, "top_corners", DOWN_Z).unwrap(), vec![24, 20]);
+        let up_z = [0.0, 0.0, 9.8];
+        assert_eq!(select_vertices(&v, "top_corners", up_z).unwrap(), vec![4, 0]);
+        assert_eq!(
+            select_vertices(&v, "top_edge", up_z).unwrap(),
+            (0..5).collect::<Vec<_>>()
+        );
+        // An xy cloth with gravity along y: -y pins the y = +1 corners, +y the y = -1 ones.
+        let m = grid(10, 2.0, 0, 1);
+        assert_eq!(
+            select_vertices(&m, "top_corners", [0.0, -1.0, 0.0]).unwrap(),
+            vec![120, 110]
+        );
+        assert_eq!(
+            select_vertices(&m, "top_corners", [0.0, 1.0, 0.0]).unwrap(),
+            vec![10, 0]
+        );
+        // A zero vector means the default, -z.
+        assert_eq!(select_vertices(&v, "top_corners", [0.0; 3]).unwrap(), vec![24, 20]);
     }
 }

@@ -149,6 +149,17 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let text =
         std::fs::read_to_string(&path).map_err(|e| NodeError::io(&path, e).at("reference"))?;
     let reference = read_csv_columns(&text, &xc, &yc).map_err(|e| {
+        // The error may quote the header row: only files of the run's own folders are
+        // quoted, so a graph cannot read the first line of any file through it (issue 23).
+        let e = if ctx.files().is_within_run_folders(&path) {
+            e
+        } else {
+            format!(
+                "not a CSV with numeric columns '{xc}' and '{yc}' under a recognised header \
+                 (its content is not shown: the file lies outside the graph's folder, the \
+                 asset folders and the output directory)"
+            )
+        };
         NodeError::invalid("reference", format!("{}: {e}", Path::new(&p).display()))
     })?;
     let col = |c: &str| {

@@ -149,13 +149,11 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
         .material
         .as_ref()
         .and_then(|m| m.base_color_texture.clone());
-    let img = render_uv_layout(
-        &tris,
-        &uvs,
-        tex.as_deref(),
-        &m.face_flipped,
-        size.clamp(16, 8192) as u32,
-    );
+    let size = size.clamp(16, 8192) as u32;
+    let what = format!("a {size}x{size} image");
+    let bytes = crate::node::bytes_of(&[size as u64, size as u64, 16]);
+    ctx.reserve_bytes("size", &what, bytes)?;
+    let img = render_uv_layout(&tris, &uvs, tex.as_deref(), &m.face_flipped, size);
     ctx.set_output("image", img);
     Ok(())
 }

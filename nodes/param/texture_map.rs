@@ -51,13 +51,14 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let size: i64 = ctx.input("checker_size")?;
     let (tex, name) = match img {
         Some(i) => (i, "texture"),
-        None => (
-            Arc::new(checkerboard(
-                size.clamp(8, 8192) as u32,
-                squares.clamp(1, 1024) as u32,
-            )),
-            "checker",
-        ),
+        None => {
+            let s = size.clamp(8, 8192) as u32;
+            let what = format!("a {s}x{s} checkerboard");
+            let bytes = crate::node::bytes_of(&[s as u64, s as u64, 16]);
+            ctx.reserve_bytes("checker_size", &what, bytes)?;
+            let squares = squares.clamp(1, 1024) as u32;
+            (Arc::new(checkerboard(s, squares)), "checker")
+        }
     };
     let base = mesh.material.as_deref().cloned().unwrap_or_default();
     let mat = Material {

@@ -15,6 +15,23 @@ pub fn progress_reporter(ctx: &ExecContext) -> impl Fn(f64) + Sync {
     }
 }
 
+/// Checks that a tracer's image buffers, `bytes_per_pixel` for every pixel of the camera's
+/// image (the linked `camera`, else the scene's), fit under the run's memory limit before
+/// rendering; an error on `camera` stating the size otherwise. Without any camera it passes
+/// (the renderer reports the missing camera).
+pub fn reserve_image(
+    ctx: &ExecContext,
+    scene: &Scene,
+    camera: Option<&Camera>,
+    bytes_per_pixel: u64,
+) -> Result<(), NodeError> {
+    let Some(c) = camera.or(scene.camera.as_ref()) else {
+        return Ok(());
+    };
+    let bytes = crate::node::bytes_of(&[c.width as u64, c.height as u64, bytes_per_pixel]);
+    ctx.reserve_bytes("camera", &format!("a {}x{} image", c.width, c.height), bytes)
+}
+
 /// A renderer's error as a node error on `camera` when it is about the camera, else on
 /// `scene`.
 pub fn trace_error(e: String) -> NodeError {

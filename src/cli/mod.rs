@@ -170,6 +170,10 @@ struct SweepArgs {
     /// Worker threads.
     #[arg(long)]
     threads: Option<usize>,
+    /// Most memory one node's buffers may take, e.g. 4G or 512MiB (default: CGNODES_MAX_MEMORY,
+    /// else half the physical memory).
+    #[arg(long = "max-memory", value_name = "SIZE", value_parser = crate::node::parse_size)]
+    max_memory: Option<u64>,
 }
 
 #[derive(clap::Args)]
@@ -216,6 +220,10 @@ struct RunArgs {
     /// JSON file mapping custom Framework3D node names onto cgnodes nodes.
     #[arg(long = "f3d-aliases")]
     f3d_aliases: Option<PathBuf>,
+    /// Most memory one node's buffers may take, e.g. 4G or 512MiB (default: CGNODES_MAX_MEMORY,
+    /// else half the physical memory).
+    #[arg(long = "max-memory", value_name = "SIZE", value_parser = crate::node::parse_size)]
+    max_memory: Option<u64>,
 }
 
 /// Runs the command line with `registry` (`nodes::builtin_registry()` plus anything a crate

@@ -86,6 +86,7 @@ pub(super) fn cmd(registry: &Registry, args: RunArgs) -> i32 {
         // The command line reads no outputs after the run: writers are the targets.
         read_outputs: Vec::new(),
         all_outputs: false,
+        max_memory: args.max_memory,
     };
     let mut code = 0;
     let mut profile = Vec::new();

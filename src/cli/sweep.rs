@@ -67,6 +67,7 @@ pub(super) fn cmd(registry: &Registry, a: SweepArgs) -> i32 {
     spec.frames = a.frames.or(spec.frames);
     spec.log_x |= a.log_x;
     spec.log_y |= a.log_y;
+    spec.max_memory = a.max_memory.or(spec.max_memory);
     match run_and_write(&spec, &base, registry, a.threads) {
         Ok(rows) => {
             let failed = rows.iter().filter(|r| !r.ok).count();

@@ -144,6 +144,7 @@ impl Executor {
             written: Vec::new(),
             progress: sh.opts.progress.clone(),
             wanted: wanted.cloned(),
+            memory_limit: sh.opts.memory_limit(),
         };
         let res = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| exec(&mut ctx)));
         let outputs = std::mem::take(&mut ctx.outputs);

@@ -41,6 +41,17 @@ pub struct RunOptions {
     pub read_outputs: Vec<String>,
     /// Every node that runs computes all its outputs, wanted or not.
     pub all_outputs: bool,
+    /// The most bytes one buffer request of a node may take (`--max-memory`); `None` uses
+    /// `node::default_memory_limit()` (CGNODES_MAX_MEMORY, else half the physical memory).
+    pub max_memory: Option<u64>,
+}
+
+impl RunOptions {
+    /// The memory limit nodes check their buffers against (`ExecContext::reserve_bytes`).
+    pub fn memory_limit(&self) -> u64 {
+        self.max_memory
+            .unwrap_or_else(crate::node::default_memory_limit)
+    }
 }
 
 /// Runs graphs. Holds the caches, the simulation state of stateful nodes (by node id) and the

@@ -29,6 +29,8 @@ pub struct ExecContext<'a> {
     pub(crate) progress: Option<ProgressFn>,
     /// The outputs someone will read; `None` = all of them.
     pub(crate) wanted: Option<BTreeSet<String>>,
+    /// The most bytes one buffer request may take (`reserve_bytes`).
+    pub(crate) memory_limit: u64,
 }
 
 impl<'a> ExecContext<'a> {
@@ -58,7 +60,14 @@ impl<'a> ExecContext<'a> {
             written: Vec::new(),
             progress: None,
             wanted: None,
+            memory_limit: super::default_memory_limit(),
         }
+    }
+
+    /// Sets the memory limit `reserve_bytes` checks against (standalone use; a run takes it
+    /// from `RunOptions::max_memory`).
+    pub fn set_memory_limit(&mut self, bytes: u64) {
+        self.memory_limit = bytes;
     }
 
     /// Limits the outputs this context reports as wanted to `names` (standalone use; by

@@ -49,6 +49,21 @@ impl FileEnv {
         first
     }
 
+    /// Whether `path` lies inside the graph's folder, an asset folder or the output directory
+    /// (after resolving symbolic links and `..`). Nodes quote the content of such files in
+    /// their errors, but not of files elsewhere, so a graph cannot use an error message to
+    /// read an arbitrary file (issue 23).
+    pub fn is_within_run_folders(&self, path: &Path) -> bool {
+        let Ok(p) = path.canonicalize() else {
+            return false;
+        };
+        std::iter::once(&self.graph_dir)
+            .chain(&self.asset_dirs)
+            .chain(std::iter::once(&self.out_dir))
+            .filter_map(|d| d.canonicalize().ok())
+            .any(|d| p.starts_with(d))
+    }
+
     /// Resolves an output path under the output directory, substituting `{frame}` and
     /// `{frame:04}`; refuses absolute paths and `..` unless writes anywhere are allowed.
     pub fn output_path(&self, p: &str, frame: i64) -> Result<PathBuf, String> {
@@ -135,6 +150,29 @@ mod tests {
         let e = substitute_frame("a_{frame:070000}.obj", 7).unwrap_err();
         assert!(e.contains("at most 20 digits"), "{e}");
         assert_eq!(substitute_frame("a_{frame:020}", 7).unwrap().len(), 22);
+    }
+
+    #[test]
+    fn run_folders_hold_their_files_and_nothing_else() {
+        let root = tempfile::tempdir().unwrap();
+        let [g, a, o, x] = ["graph", "assets", "out", "elsewhere"].map(|d| root.path().join(d));
+        for d in [&g, &a, &o, &x] {
+            std::fs::create_dir_all(d.join("sub")).unwrap();
+            std::fs::write(d.join("sub/f.csv"), "T,Z\n").unwrap();
+        }
+        let env = FileEnv {
+            graph_dir: g.clone(),
+            asset_dirs: vec![a.clone()],
+            out_dir: o.clone(),
+            allow_write_anywhere: false,
+        };
+        for d in [&g, &a, &o] {
+            assert!(env.is_within_run_folders(&d.join("sub/f.csv")), "{d:?}");
+        }
+        assert!(!env.is_within_run_folders(&x.join("sub/f.csv")));
+        // `..` out of the graph's folder and missing files do not count.
+        assert!(!env.is_within_run_folders(&g.join("../elsewhere/sub/f.csv")));
+        assert!(!env.is_within_run_folders(&g.join("missing.csv")));
     }
 
     #[test]

@@ -29,6 +29,7 @@ mod context;
 mod decl;
 mod error;
 mod files;
+mod memory;
 
 pub use builder::{NodeBuilder, SocketBuilder};
 pub use choice::{parse_choice, Choice};
@@ -36,3 +37,7 @@ pub use context::{ExecContext, ProgressFn};
 pub use decl::{ExecFn, FileRole, NodeDecl, SocketDecl};
 pub use error::{ErrorKind, NodeError};
 pub use files::{substitute_frame, FileEnv};
+pub use memory::{
+    bytes_of, default_memory_limit, format_size, parse_size, physical_memory,
+    FALLBACK_MEMORY_LIMIT, MAX_MEMORY_ENV,
+};

@@ -12,6 +12,7 @@ mod graphs;
 mod mass_spring;
 mod mass_spring_node;
 mod mesh;
+mod node_bounds;
 mod param;
 mod plugins;
 mod render;

@@ -64,6 +64,34 @@ pub fn render(scene: &Scene, cam: &Camera, opts: &RasterOptions) -> Result<Rende
     Ok(resolve::resolve_bands(&sh, &bins, cam, s, opts, triangles))
 }
 
+/// The bytes `render` allocates for its buffers: 16 per pixel and produced pass, the
+/// visibility buffer of the bands in flight (8 bytes per sample, one band per thread) and the
+/// shadow maps (4 bytes per texel, a point light's six half-size faces counted as 1.5 maps).
+/// Saturates instead of overflowing; checked with `ExecContext::reserve_bytes` before rendering.
+pub fn raster_bytes(cam: &Camera, opts: &RasterOptions, lights: usize) -> u64 {
+    use crate::node::bytes_of;
+    let p = opts.passes;
+    let passes = [p.color, p.depth, p.normal, p.position, p.uv, p.base_color]
+        .iter()
+        .filter(|&&on| on)
+        .count() as u64;
+    let (w, h, s) = (
+        cam.width as u64,
+        cam.height as u64,
+        opts.samples_per_axis.clamp(1, 8) as u64,
+    );
+    let images = bytes_of(&[w, h, passes, 16]);
+    let threads = rayon::current_num_threads() as u64;
+    let bands = bytes_of(&[w, s, resolve::BAND_PX as u64, s, 8, threads]);
+    let res = opts.shadow_resolution.clamp(16, 8192) as u64;
+    let shadows = if p.color && opts.shadows {
+        bytes_of(&[lights as u64, res, res, 6])
+    } else {
+        0
+    };
+    images.saturating_add(bands).saturating_add(shadows)
+}
+
 /// Registers `render_raster`.
 pub fn register(r: &mut Registry) {
     render_raster::register(r);

@@ -2,7 +2,7 @@
 //! renders only the passes someone reads, and sets them as outputs.
 
 use super::options::{AntiAliasing, Passes, RasterOptions};
-use super::render;
+use super::{raster_bytes, render};
 use super::shadow::ShadowParams;
 use super::texture::Wrap;
 use crate::prelude::*;
@@ -154,6 +154,11 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
             base_color: ctx.output_wanted("base_color"),
         },
     };
+    let what = format!(
+        "a {}x{} image with {} samples per pixel",
+        cam.width, cam.height, samples
+    );
+    ctx.reserve_bytes("camera", &what, raster_bytes(&cam, &opts, scene.lights.len()))?;
     let out = render(&scene, &cam, &opts).map_err(|e| NodeError::invalid("scene", e))?;
     ctx.log(format!(
         "{}x{} with {} samples: {} triangles, {} shading evaluations",

@@ -182,7 +182,10 @@ fn build(
     let springs = springs_from_mesh(mesh, k, kinds);
     let mut fixed = vec![false; n];
     let sel: String = ctx.input("fixed")?;
-    for i in select_vertices(mesh, &sel, axis).map_err(|e| NodeError::invalid("fixed", e))? {
+    // "Top" is against gravity, so the selection needs its sign (gravity 0 counts as down).
+    let mut down = [0.0; 3];
+    down[axis] = if g > 0.0 { 1.0 } else { -1.0 };
+    for i in select_vertices(mesh, &sel, down).map_err(|e| NodeError::invalid("fixed", e))? {
         fixed[i] = true;
     }
     if let Some(list) = ctx.input_opt::<Vec<i64>>("fixed_indices")? {

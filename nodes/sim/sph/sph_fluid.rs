@@ -213,14 +213,72 @@ fn declare(b: &mut NodeBuilder) {
     );
 }
 
+/// An estimate of the bytes a simulation of `prm` takes, and the particle counts (fluid,
+/// boundary) it is made of, for `ExecContext::reserve_bytes` before `Fluid::block` allocates:
+/// per fluid particle 220 bytes of state and solver arrays plus 40 per neighbour (about
+/// 4/3 pi (h/s)^3 in 3-D, pi (h/s)^2 in 2-D, with support h = 4r at spacing s = 2r); per
+/// boundary particle 40 bytes (position, volume, grid entries). Counts follow `Fluid::block`.
+fn estimated_bytes(
+    prm: &SphParams,
+    pmin: [f64; 3],
+    pmax: [f64; 3],
+    counts: Option<[usize; 3]>,
+) -> (u64, f64, f64) {
+    let dim = prm.dim.clamp(2, 3);
+    let r = prm.particle_radius.max(1e-300);
+    let mut fluid = 1.0f64;
+    for a in 0..dim {
+        fluid *= match counts {
+            Some(c) => c[a].max(1) as f64,
+            None => ((pmax[a] - pmin[a]) / (2.0 * r) + 1e-9).floor().max(1.0),
+        };
+    }
+    let mut boundary = 0.0;
+    if prm.boundary == Boundary::Particles {
+        let layers = (prm.support_factor / 2.0).ceil();
+        let (mut outer, mut inner) = (1.0f64, 1.0f64);
+        for a in 0..dim {
+            let n = ((prm.box_max[a] - prm.box_min[a]) / (2.0 * r))
+                .round()
+                .max(1.0);
+            outer *= n + 2.0 * layers;
+            inner *= n;
+        }
+        boundary = outer - inner;
+    }
+    let k = prm.support_factor / 2.0;
+    let neighbours = if dim == 3 {
+        4.0 / 3.0 * std::f64::consts::PI * k.powi(3)
+    } else {
+        std::f64::consts::PI * k * k
+    };
+    let bytes = fluid * (220.0 + 40.0 * neighbours) + boundary * 40.0;
+    // NaN (an empty or inverted box) is left to `Fluid::block` to report.
+    let bytes = if bytes.is_nan() {
+        0
+    } else if bytes >= u64::MAX as f64 {
+        u64::MAX
+    } else {
+        bytes as u64
+    };
+    (bytes, fluid, boundary)
+}
+
 /// Simulation parameters, the fluid block corners and the optional particle counts.
 type Setup = (SphParams, [f64; 3], [f64; 3], Option<[usize; 3]>);
 
 fn read_params(ctx: &ExecContext) -> Result<Setup, NodeError> {
     let solver = ctx.choice::<Solver>("solver")?;
     let boundary = ctx.choice::<Boundary>("boundary")?;
+    let dim: i64 = ctx.input("dimension")?;
+    if !(2..=3).contains(&dim) {
+        return Err(NodeError::invalid(
+            "dimension",
+            format!("{dim} is not 2 or 3"),
+        ));
+    }
     let prm = SphParams {
-        dim: ctx.input::<i64>("dimension")? as usize,
+        dim: dim as usize,
         solver,
         boundary,
         box_min: ctx.input("sim_box_min")?,
@@ -270,6 +328,20 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let width = ctx.input::<i64>("image_width")? as u32;
     let key = format!("{prm:?} {pmin:?} {pmax:?} {counts:?} {frame_dt}");
     let frame = ctx.frame();
+    // The buffers are checked every frame (cheap), before a restart allocates them.
+    let (bytes, nf, nb) = estimated_bytes(&prm, pmin, pmax, counts);
+    let what = format!("{nf:.3e} fluid and {nb:.3e} boundary particles");
+    ctx.reserve_bytes("particle_radius", &what, bytes)?;
+    // The image is as wide as asked and as high as the box's aspect (at most 8192).
+    let (bx, bup) = (
+        prm.box_max[0] - prm.box_min[0],
+        prm.box_max[prm.dim.clamp(2, 3) - 1] - prm.box_min[prm.dim.clamp(2, 3) - 1],
+    );
+    let height = (bup * width as f64 / bx).round().clamp(1.0, 8192.0);
+    let height = if height.is_nan() { 1 } else { height as u64 };
+    let what = format!("a {width}x{height} image");
+    let bytes = crate::node::bytes_of(&[width as u64, height, 16]);
+    ctx.reserve_bytes("image_width", &what, bytes)?;
     let st = ctx.state::<SphState>()?;
     if st.fluid.is_none() || st.key != key || frame <= st.last_frame {
         let mut f = Fluid::block(prm.clone(), pmin, pmax, counts)

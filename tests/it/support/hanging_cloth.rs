@@ -9,8 +9,12 @@ use cgnodes::types::Mesh;
 /// A 10x10-cell course-like grid hanging from its top corners (xy plane, gravity along -z).
 pub fn hanging(method: Method, h: f64) -> (Simulator, Vec<usize>) {
     let mesh = grid_mesh(10, 10, [2.0, 2.0], "xy", [0.0; 3], true).unwrap();
-    let fixed =
-        cgnodes::nodes::mesh::vertex_select::select_vertices(&mesh, "top_corners", 2).unwrap();
+    let fixed = cgnodes::nodes::mesh::vertex_select::select_vertices(
+        &mesh,
+        "top_corners",
+        [0.0, 0.0, -9.8],
+    )
+    .unwrap();
     assert_eq!(fixed, vec![120, 110]);
     let mut f = vec![false; mesh.num_vertices()];
     for &i in &fixed {

@@ -292,6 +292,13 @@ pub fn load_obj(path: &Path, group: &str) -> Result<Mesh, String> {
             None => has_n = false,
         }
     }
+    if counts.is_empty() {
+        // tobj drops vertices that no face uses, so an empty mesh would hide the file's points
+        return Err(match locate() {
+            Some((ln, msg)) => format!("line {ln}: {msg}"),
+            None => "no faces: a mesh needs at least one polygon (f lines)".into(),
+        });
+    }
     let mut mesh = Mesh::new(positions, counts, idx).map_err(|e| match locate() {
         Some((ln, msg)) => format!("line {ln}: {msg}"),
         None => e.to_string(),
@@ -431,6 +438,17 @@ mod tests {
             assert!(o.material_id.is_some_and(|i| i < mats.len()), "{}", o.name);
         }
         assert!(load_obj_objects(Path::new("/nonexistent/x.obj")).is_err());
+    }
+
+    #[test]
+    fn a_file_without_faces_is_an_error_not_an_empty_mesh() {
+        let d = tempfile::tempdir().unwrap();
+        let p = d.path().join("points.obj");
+        for text in ["v 0 0 0\nv 1 0 0\n", ""] {
+            std::fs::write(&p, text).unwrap();
+            let e = load_obj(&p, "").unwrap_err();
+            assert!(e.contains("no faces"), "{e}");
+        }
     }
 
     /// The fuzzer's crash (tobj panicked on `Ks 0.95`): a one-number colour means grey, a

@@ -340,8 +340,8 @@ fn mesh_cases() -> Vec<Case> {
         mesh_case("OBJ face index 0", "obj", "in.obj", t("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n"), "line 4"),
         mesh_case("OBJ NaN coordinate", "obj", "in.obj", t("v nan 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"), "line 1"),
         mesh_case("OBJ infinite coordinate", "obj", "in.obj", t("v inf 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"), "line 1"),
-        mesh_case("OBJ without faces", "obj", "in.obj", t("v 0 0 0\n"), "face"),
-        mesh_case("OBJ empty file", "obj", "in.obj", Vec::new(), "face"),
+        mesh_case("OBJ without faces", "obj", "in.obj", t("v 0 0 0\n"), "no faces"),
+        mesh_case("OBJ empty file", "obj", "in.obj", Vec::new(), "no faces"),
         mesh_case("OBJ binary garbage", "obj", "in.obj", (0..=255u8).cycle().take(4096).collect(), "in.obj"),
         mesh_case("OBJ two-corner face", "obj", "in.obj", t("v 0 0 0\nv 1 0 0\nf 1 2\n"), "line 3"),
         Case {

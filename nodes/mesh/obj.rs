@@ -104,10 +104,46 @@ fn read_tobj(path: &Path) -> Result<(Vec<tobj::Model>, ObjMaterials), String> {
         single_index: false,
         ..Default::default()
     };
-    tobj::load_obj(path, &opts).map_err(|e| match locate_bad_line(path) {
+    let file = std::fs::File::open(path).map_err(|e| e.to_string())?;
+    let dir = path.parent().unwrap_or(Path::new(""));
+    tobj::load_obj_buf(&mut std::io::BufReader::new(file), &opts, |mtl| {
+        load_mtl(&dir.join(mtl))
+    })
+    .map_err(|e| match locate_bad_line(path) {
         Some((ln, msg)) => format!("line {ln}: {msg}"),
         None => format!("{e}"),
     })
+}
+
+/// Reads an MTL library for tobj after `complete_mtl_colours`.
+fn load_mtl(path: &Path) -> tobj::MTLLoadResult {
+    let bytes = std::fs::read(path).map_err(|_| tobj::LoadError::OpenFileFailed)?;
+    let text = complete_mtl_colours(&String::from_utf8_lossy(&bytes));
+    tobj::load_mtl_buf(&mut text.as_bytes())
+}
+
+/// MTL text with every colour statement (`Ka`, `Kd`, `Ks`, `Ke`) given three numbers: the
+/// Wavefront MTL specification lets `Kd r` stand for `Kd r r r` ("g and b are optional"),
+/// and a statement with no or two numbers becomes one tobj rejects as a parse error
+/// (tobj 4.0 panics on fewer than three numbers; found by the `mtl` fuzz target).
+pub fn complete_mtl_colours(text: &str) -> String {
+    let mut out = String::with_capacity(text.len() + 16);
+    for line in text.lines() {
+        let mut words = line.split_whitespace();
+        match words.next() {
+            Some(key @ ("Ka" | "Kd" | "Ks" | "Ke")) => {
+                let vals: Vec<&str> = words.collect();
+                match vals.len() {
+                    1 => out.push_str(&format!("{key} {0} {0} {0}", vals[0])),
+                    0 | 2 => out.push_str(&format!("{key} ? ? ?")),
+                    _ => out.push_str(line),
+                }
+            }
+            _ => out.push_str(line),
+        }
+        out.push('\n');
+    }
+    out
 }
 
 /// Corner counts of a tobj mesh's faces (all 3 when tobj gives no arities).
@@ -256,6 +292,13 @@ pub fn load_obj(path: &Path, group: &str) -> Result<Mesh, String> {
             None => has_n = false,
         }
     }
+    if counts.is_empty() {
+        // tobj drops vertices that no face uses, so an empty mesh would hide the file's points
+        return Err(match locate() {
+            Some((ln, msg)) => format!("line {ln}: {msg}"),
+            None => "no faces: a mesh needs at least one polygon (f lines)".into(),
+        });
+    }
     let mut mesh = Mesh::new(positions, counts, idx).map_err(|e| match locate() {
         Some((ln, msg)) => format!("line {ln}: {msg}"),
         None => e.to_string(),
@@ -395,5 +438,37 @@ mod tests {
             assert!(o.material_id.is_some_and(|i| i < mats.len()), "{}", o.name);
         }
         assert!(load_obj_objects(Path::new("/nonexistent/x.obj")).is_err());
+    }
+
+    #[test]
+    fn a_file_without_faces_is_an_error_not_an_empty_mesh() {
+        let d = tempfile::tempdir().unwrap();
+        let p = d.path().join("points.obj");
+        for text in ["v 0 0 0\nv 1 0 0\n", ""] {
+            std::fs::write(&p, text).unwrap();
+            let e = load_obj(&p, "").unwrap_err();
+            assert!(e.contains("no faces"), "{e}");
+        }
+    }
+
+    /// The fuzzer's crash (tobj panicked on `Ks 0.95`): a one-number colour means grey, a
+    /// two-number one is an error in the materials, and neither panics.
+    #[test]
+    fn short_mtl_colours_do_not_panic() {
+        let d = tempfile::tempdir().unwrap();
+        let obj = d.path().join("m.obj");
+        std::fs::write(&obj, "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\n").unwrap();
+        std::fs::write(d.path().join("m.mtl"), "newmtl a\nKs 0.95\nKd\t0.5\n").unwrap();
+        let (objects, mats) = load_obj_objects(&obj).unwrap();
+        assert_eq!(objects.len(), 1);
+        let mats = mats.unwrap();
+        assert_eq!(mats[0].specular, Some([0.95; 3]));
+        assert_eq!(mats[0].diffuse, Some([0.5; 3]));
+        for bad in ["newmtl a\nKs 0.95 0.5\n", "newmtl a\nKa\n"] {
+            std::fs::write(d.path().join("m.mtl"), bad).unwrap();
+            let (objects, mats) = load_obj_objects(&obj).unwrap();
+            assert_eq!(objects.len(), 1, "{bad:?}");
+            assert!(mats.is_err(), "{bad:?}");
+        }
     }
 }

@@ -9,6 +9,7 @@ mod arap;
 mod cache_semantics;
 mod f3d;
 mod graphs;
+mod hostile;
 mod mass_spring;
 mod mass_spring_node;
 mod mesh;

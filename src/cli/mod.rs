@@ -51,13 +51,7 @@ enum Cmd {
     /// Validate and run a graph.
     Run(RunArgs),
     /// Check a graph without running it.
-    Validate {
-        /// Graph file.
-        graph: PathBuf,
-        /// Set an input literal: NODE.SOCKET=VALUE (repeatable).
-        #[arg(long = "set", value_name = "NODE.SOCKET=VALUE")]
-        set: Vec<String>,
-    },
+    Validate(GraphArgs),
     /// List every node type with its sockets.
     Nodes {
         /// Print the declarations as JSON.
@@ -72,10 +66,7 @@ enum Cmd {
     /// Print the JSON Schema of the graph format.
     Schema,
     /// Print a graph as Graphviz dot.
-    Dot {
-        /// Graph file.
-        graph: PathBuf,
-    },
+    Dot(GraphArgs),
     /// Run a graph for every combination of parameter values; write a CSV and a chart.
     Sweep(SweepArgs),
     /// Chart columns of one or more CSV files (for example a sweep beside a peer's results).
@@ -172,16 +163,30 @@ struct SweepArgs {
     threads: Option<usize>,
 }
 
+/// What `run`, `validate` and `dot` share: the graph and how it is loaded, so the three
+/// commands accept (and refuse) the same graphs.
 #[derive(clap::Args)]
-struct RunArgs {
+struct GraphArgs {
     /// Graph file (cgnodes JSON or a Framework3D saved node tree).
     graph: PathBuf,
-    /// Output directory; writer nodes write under it.
-    #[arg(long, default_value = "out")]
-    out: PathBuf,
     /// Set an input literal: NODE.SOCKET=VALUE (repeatable).
     #[arg(long = "set", value_name = "NODE.SOCKET=VALUE")]
     set: Vec<String>,
+    /// Further folders searched for input files.
+    #[arg(long = "assets")]
+    assets: Vec<PathBuf>,
+    /// JSON file mapping custom Framework3D node names onto cgnodes nodes.
+    #[arg(long = "f3d-aliases")]
+    f3d_aliases: Option<PathBuf>,
+}
+
+#[derive(clap::Args)]
+struct RunArgs {
+    #[command(flatten)]
+    load: GraphArgs,
+    /// Output directory; writer nodes write under it.
+    #[arg(long, default_value = "out")]
+    out: PathBuf,
     /// Evaluate these nodes instead of the graph's outputs (repeatable).
     #[arg(long = "target", value_name = "NODE")]
     target: Vec<String>,
@@ -194,9 +199,6 @@ struct RunArgs {
     /// Content-addressed result cache folder.
     #[arg(long)]
     cache: Option<PathBuf>,
-    /// Further folders searched for input files.
-    #[arg(long = "assets")]
-    assets: Vec<PathBuf>,
     /// Let writers use absolute paths and '..'.
     #[arg(long)]
     allow_write_anywhere: bool,
@@ -209,9 +211,6 @@ struct RunArgs {
     /// Print only errors.
     #[arg(long, short)]
     quiet: bool,
-    /// JSON file mapping custom Framework3D node names onto cgnodes nodes.
-    #[arg(long = "f3d-aliases")]
-    f3d_aliases: Option<PathBuf>,
 }
 
 /// Runs the command line with `registry` (`nodes::builtin_registry()` plus anything a crate
@@ -233,11 +232,11 @@ pub fn main_with(registry: Registry) -> i32 {
     };
     match cli.cmd {
         Cmd::Run(args) => run::cmd(&registry, args),
-        Cmd::Validate { graph, set } => validate::cmd(&registry, &graph, &set),
+        Cmd::Validate(args) => validate::cmd(&registry, &args),
         Cmd::Nodes { json } => nodes::cmd(&registry, json),
         Cmd::Describe { node_type } => describe::cmd(&registry, &node_type),
         Cmd::Schema => schema::cmd(),
-        Cmd::Dot { graph } => dot::cmd(&registry, &graph),
+        Cmd::Dot(args) => dot::cmd(&registry, &args),
         Cmd::Sweep(args) => sweep::cmd(&registry, args),
         Cmd::Chart(args) => chart::cmd(&args),
         Cmd::ImportF3d {

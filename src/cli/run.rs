@@ -1,7 +1,7 @@
 //! `cgnodes run`: validates a graph and runs it over a frame range, with progress bars,
 //! a run report per frame, and an optional profile (`--profile`, `--profile-json`).
 
-use super::validate::{load_valid_with, read_aliases};
+use super::validate::load_args;
 use super::{RunArgs, EXIT_NODE_FAILED, EXIT_USAGE};
 use crate::exec::{Executor, NodeStatus, RunOptions, RunReport};
 use crate::graph::parse_frames;
@@ -12,23 +12,15 @@ use std::sync::Arc;
 
 /// `cgnodes run GRAPH ...`: runs the graph once per frame; exit code 1 when a node failed.
 pub(super) fn cmd(registry: &Registry, args: RunArgs) -> i32 {
-    let aliases = match args.f3d_aliases.as_deref().map(read_aliases).transpose() {
-        Ok(a) => a.unwrap_or_default(),
-        Err(e) => {
-            eprintln!("error: {e}");
-            return EXIT_USAGE;
-        }
+    let (graph, hint) = match load_args(registry, &args.load) {
+        Ok(g) => g,
+        Err(c) => return c,
     };
-    let (graph, hint) =
-        match load_valid_with(registry, &args.graph, &args.set, &aliases, &args.assets) {
-            Ok(g) => g,
-            Err(c) => return c,
-        };
     for t in &args.target {
         if !graph.index.contains_key(t) {
             eprintln!(
                 "error: --target '{t}' is not a node of {}",
-                args.graph.display()
+                args.load.graph.display()
             );
             return EXIT_USAGE;
         }
@@ -76,7 +68,7 @@ pub(super) fn cmd(registry: &Registry, args: RunArgs) -> i32 {
         targets: (!args.target.is_empty()).then(|| args.target.clone()),
         files: FileEnv {
             graph_dir: graph.dir.clone(),
-            asset_dirs: args.assets.clone(),
+            asset_dirs: args.load.assets.clone(),
             out_dir: args.out.clone(),
             allow_write_anywhere: args.allow_write_anywhere,
         },

@@ -2,22 +2,38 @@
 //! Framework3D tree is imported against the registry), apply `--set`, validate, and print
 //! every error with the exit code to return.
 
-use super::{EXIT_INVALID, EXIT_USAGE};
+use super::{GraphArgs, EXIT_INVALID, EXIT_USAGE};
 use crate::f3d::Aliases;
 use crate::graph::{self, apply_sets};
 use crate::registry::Registry;
 use crate::validate::{validate_with, GraphError, ValidGraph};
 use std::path::{Path, PathBuf};
 
-/// `cgnodes validate GRAPH [--set ...]`.
-pub(super) fn cmd(registry: &Registry, graph: &Path, set: &[String]) -> i32 {
-    match load_valid(registry, graph, set) {
-        Ok(g) => {
-            println!("{}: ok ({} nodes)", graph.display(), g.nodes.len());
+/// `cgnodes validate GRAPH [--set ...] [--assets DIR] [--f3d-aliases FILE]`.
+pub(super) fn cmd(registry: &Registry, args: &GraphArgs) -> i32 {
+    match load_args(registry, args) {
+        Ok((g, _)) => {
+            println!("{}: ok ({} nodes)", args.graph.display(), g.nodes.len());
             0
         }
         Err(code) => code,
     }
+}
+
+/// Loads and validates the graph of `run`, `validate` or `dot` from their shared options
+/// (`--set`, `--assets`, `--f3d-aliases`); `Err` is the exit code, the errors are printed.
+pub(super) fn load_args(
+    registry: &Registry,
+    args: &GraphArgs,
+) -> Result<(ValidGraph, Option<(i64, i64)>), i32> {
+    let aliases = match args.f3d_aliases.as_deref().map(read_aliases).transpose() {
+        Ok(a) => a.unwrap_or_default(),
+        Err(e) => {
+            eprintln!("error: {e}");
+            return Err(EXIT_USAGE);
+        }
+    };
+    load_valid_with(registry, &args.graph, &args.set, &aliases, &args.assets)
 }
 
 /// Loads, applies overrides and validates, printing errors; `Err` is the exit code.

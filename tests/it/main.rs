@@ -14,6 +14,7 @@ mod mesh;
 mod param;
 mod plugins;
 mod render;
+mod run_semantics;
 mod runtime;
 mod sph;
 mod sweep;

@@ -89,6 +89,9 @@ pub(super) fn cmd(registry: &Registry, args: RunArgs) -> i32 {
         for e in report.errors() {
             eprintln!("error: {e}");
         }
+        if frame < f1 {
+            print_stops(&exec, &report, f1);
+        }
         if args.profile {
             print_profile(&report);
         }
@@ -105,6 +108,24 @@ pub(super) fn cmd(registry: &Registry, args: RunArgs) -> i32 {
         }
     }
     code
+}
+
+/// Says once, at the frame where it happens, that a simulation which failed (or could not
+/// run) stays stopped with everything downstream for the rest of the range.
+fn print_stops(exec: &Executor, r: &RunReport, last: i64) {
+    for n in &r.nodes {
+        if matches!(n.status, NodeStatus::Failed(_) | NodeStatus::Blocked { .. })
+            && exec.stopped_since(&n.id) == Some(r.frame)
+        {
+            eprintln!(
+                "error: {}: node '{}' ({}) keeps state between frames: it and the nodes it feeds stay failed for frames {}..{last}",
+                r.file.display(),
+                n.id,
+                n.node_type,
+                r.frame + 1
+            );
+        }
+    }
 }
 
 fn print_report(r: &RunReport, frames: bool) {
@@ -131,11 +152,15 @@ fn print_report(r: &RunReport, frames: bool) {
         .map(|n| n.id.as_str())
         .collect();
     eprintln!(
-        "{prefix}ran {}, cached {}, failed {}, blocked {}, skipped {}{} in {:.1} ms",
+        "{prefix}ran {}, cached {}, failed {}, blocked {}{}, skipped {}{} in {:.1} ms",
         count(|s| matches!(s, NodeStatus::Ran)),
         count(|s| matches!(s, NodeStatus::Cached)),
         count(|s| matches!(s, NodeStatus::Failed(_))),
         count(|s| matches!(s, NodeStatus::Blocked { .. })),
+        match count(|s| matches!(s, NodeStatus::Stopped { .. })) {
+            0 => String::new(),
+            k => format!(", stopped {k}"),
+        },
         skipped.len(),
         if skipped.is_empty() || skipped.len() > 10 {
             String::new()
@@ -158,6 +183,7 @@ fn print_profile(r: &RunReport) {
             NodeStatus::Skipped => continue,
             NodeStatus::Failed(_) => "failed",
             NodeStatus::Blocked { .. } => "blocked",
+            NodeStatus::Stopped { .. } => "stopped",
         };
         eprintln!(
             "{:<20} {:<20} {:>10.2} {:>8} {:>10.1}",
@@ -187,6 +213,7 @@ pub fn profile_json(r: &RunReport) -> serde_json::Value {
                 NodeStatus::Skipped => "skipped",
                 NodeStatus::Failed(_) => "failed",
                 NodeStatus::Blocked { .. } => "blocked",
+                NodeStatus::Stopped { .. } => "stopped",
             };
             serde_json::json!({"id": n.id, "type": n.node_type, "status": st, "ms": n.ms, "rss_kib": n.rss_kib})
         })

@@ -50,6 +50,9 @@ pub struct Executor {
     memory: Mutex<MemoryCache>,
     disk: Option<DiskCache>,
     states: Mutex<HashMap<String, Box<dyn Any + Send>>>,
+    /// Stateful nodes that failed or were blocked, by node id, with the frame: they stay
+    /// stopped (issue 23: a simulation must not restart from its initial state mid-range).
+    stopped: Mutex<HashMap<String, i64>>,
 }
 
 type Slot = Mutex<Option<Result<Arc<BTreeMap<String, Value>>, String>>>;
@@ -79,15 +82,45 @@ impl Executor {
             memory: Mutex::new(MemoryCache::default()),
             disk,
             states: Mutex::new(HashMap::new()),
+            stopped: Mutex::new(HashMap::new()),
         })
     }
 
-    /// Drops the state of every stateful node (simulations restart).
+    /// Drops the state of every stateful node (simulations restart), including the stopped
+    /// mark of those that failed.
     pub fn reset_states(&self) {
         self.states
             .lock()
             .unwrap_or_else(|p| p.into_inner())
             .clear();
+        self.stopped
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .clear();
+    }
+
+    /// The frame at which stateful node `id` failed or was blocked, if it did: from then on
+    /// it reports `NodeStatus::Stopped` and the nodes it feeds are blocked.
+    pub fn stopped_since(&self, id: &str) -> Option<i64> {
+        self.stopped
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .get(id)
+            .copied()
+    }
+
+    /// Marks a stateful node whose step did not happen at `frame` as stopped, and drops its
+    /// state: a later frame would continue from a history with a step missing.
+    fn stop(&self, id: &str, frame: i64) {
+        self.stopped
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .entry(id.to_string())
+            .or_insert(frame);
+        self.states
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .remove(id);
     }
 
     /// Runs `graph` for one frame.
@@ -179,7 +212,16 @@ impl Executor {
             logs: Vec::new(),
             written: Vec::new(),
         };
-        let result = self.evaluate(sh, i, &mut report);
+        let result = match self.stopped_since(&node.id) {
+            Some(since) if node.decl.stateful => {
+                report.status = NodeStatus::Stopped { since };
+                Err(node.id.clone())
+            }
+            _ => self.evaluate(sh, i, &mut report),
+        };
+        if node.decl.stateful && result.is_err() {
+            self.stop(&node.id, sh.frame);
+        }
         report.ms = t0.elapsed().as_secs_f64() * 1e3;
         if sh.opts.measure_memory {
             report.rss_kib = read_status_kib("VmRSS:");

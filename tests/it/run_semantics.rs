@@ -61,3 +61,114 @@ fn validate_and_dot_take_assets_like_run() {
     let o = cgnodes(d.path(), &["dot", "g.json", "--f3d-aliases", "nope.json"]);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
 }
+
+/// Sorted names of the files in `dir` (empty when it does not exist).
+fn files_in(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir)
+        .map(|rd| {
+            rd.map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+                .collect()
+        })
+        .unwrap_or_default();
+    v.sort();
+    v
+}
+
+#[test]
+fn a_failed_simulation_stays_failed_for_the_rest_of_the_frames() {
+    // The course cloth with the semi-implicit integrator at h = 0.05 blows up at frame 2.
+    // Before issue 23 frame 3 restarted from the rest state and the run wrote frames
+    // 0, 1, 3, 4 of two different histories and exited 0.
+    let d = tempfile::tempdir().unwrap();
+    let graph = crate::common::asset("graphs/cloth_hang.json");
+    let o = cgnodes(
+        d.path(),
+        &[
+            "run",
+            graph.to_str().unwrap(),
+            "--set",
+            "semi.h=0.05",
+            "--set",
+            "semi.substeps=1",
+            "--target",
+            "save_semi",
+            "--target",
+            "save_impl",
+            "--frames",
+            "0..5",
+            "--out",
+            "out",
+        ],
+    );
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert_eq!(
+        files_in(&d.path().join("out/semi_implicit")),
+        ["cloth_0000.obj", "cloth_0001.obj"],
+        "{err}"
+    );
+    // The independent implicit cloth ran every frame.
+    assert_eq!(
+        files_in(&d.path().join("out/implicit")),
+        (0..=5)
+            .map(|f| format!("cloth_{f:04}.usda"))
+            .collect::<Vec<_>>(),
+        "{err}"
+    );
+    // The failure, the blocked writer and the stop are each reported once.
+    assert_eq!(err.matches("failed [unstable]").count(), 1, "{err}");
+    assert_eq!(
+        err.matches("node 'save_semi' (mesh_save) did not run")
+            .count(),
+        1,
+        "{err}"
+    );
+    assert_eq!(
+        err.matches("node 'semi' (mass_spring) keeps state between frames: it and the nodes it feeds stay failed for frames 3..5").count(),
+        1,
+        "{err}"
+    );
+    assert!(
+        err.contains("[frame 5] ran 2, cached 1, failed 0, blocked 1, stopped 1"),
+        "{err}"
+    );
+}
+
+#[test]
+fn a_stopped_simulation_restarts_only_after_reset_states() {
+    use cgnodes::exec::{Executor, NodeStatus, RunOptions};
+    let text = r#"{"format": "cgnodes-graph", "version": 1, "nodes": {
+        "grid": {"type": "mesh_grid", "params": {"cells_u": 6, "cells_v": 6}},
+        "sim": {"type": "mass_spring", "inputs": {"mesh": "grid.mesh"},
+                "params": {"integrator": "semi_implicit", "h": 0.05, "substeps": 1, "fixed": "top_corners"}},
+        "n": {"type": "mesh_info", "inputs": {"mesh": "sim.mesh"}}
+    }, "outputs": ["n"]}"#;
+    let d = tempfile::tempdir().unwrap();
+    let g = cgnodes::graph::parse(text, &d.path().join("g.json"), d.path()).unwrap();
+    let reg = cgnodes::nodes::builtin_registry();
+    let valid = cgnodes::validate::validate(&g, &reg).unwrap();
+    let exec = Executor::new(Some(1), None).unwrap();
+    let opts = RunOptions::default();
+    let reports: Vec<_> = (0..8).map(|f| exec.run(&valid, &opts, f)).collect();
+    let first = reports
+        .iter()
+        .position(|r| !r.ok())
+        .expect("the cloth should blow up");
+    assert!(matches!(
+        reports[first].node("sim").unwrap().status,
+        NodeStatus::Failed(_)
+    ));
+    assert_eq!(exec.stopped_since("sim"), Some(first as i64));
+    for r in &reports[first + 1..] {
+        assert!(!r.ok());
+        assert!(
+            matches!(r.node("sim").unwrap().status, NodeStatus::Stopped { since } if since == first as i64)
+        );
+        assert!(matches!(&r.node("n").unwrap().status, NodeStatus::Blocked { by } if by == "sim"));
+        // Reported in the frame where it failed, not again.
+        assert!(r.errors().is_empty(), "{:?}", r.errors());
+    }
+    exec.reset_states();
+    assert_eq!(exec.stopped_since("sim"), None);
+    assert!(exec.run(&valid, &opts, 0).ok());
+}

@@ -12,7 +12,8 @@ use std::sync::Arc;
 
 /// `cgnodes run GRAPH ...`: runs the graph once per frame; exit code 1 when a node failed.
 pub(super) fn cmd(registry: &Registry, args: RunArgs) -> i32 {
-    let (graph, hint) = match load_args(registry, &args.load) {
+    let targets = (!args.target.is_empty()).then_some(args.target.as_slice());
+    let (graph, hint) = match load_args(registry, &args.load, targets) {
         Ok(g) => g,
         Err(c) => return c,
     };

@@ -172,3 +172,60 @@ fn a_stopped_simulation_restarts_only_after_reset_states() {
     assert_eq!(exec.stopped_since("sim"), None);
     assert!(exec.run(&valid, &opts, 0).ok());
 }
+
+/// A graph with two branches: `w` writes a value, `s` saves a mesh from a missing file.
+const BRANCHES: &str = r#"{"format": "cgnodes-graph", "version": 1, "nodes": {
+    "x": {"type": "value_float", "params": {"value": 2.5}},
+    "w": {"type": "table_write", "inputs": {"value": "x.value"}, "params": {"path": "x.json"}},
+    "m": {"type": "mesh_load", "params": {"path": "missing.obj"}},
+    "s": {"type": "mesh_save", "inputs": {"mesh": "m.mesh"}, "params": {"path": "m.obj"}}
+}OUTPUTS}"#;
+
+#[test]
+fn a_missing_file_in_an_unused_branch_is_a_warning() {
+    let d = tempfile::tempdir().unwrap();
+    std::fs::write(d.path().join("g.json"), BRANCHES.replace("OUTPUTS", "")).unwrap();
+    let o = cgnodes(
+        d.path(),
+        &["run", "g.json", "--target", "w", "--out", "out"],
+    );
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    assert!(d.path().join("out/x.json").exists(), "{err}");
+    assert!(!d.path().join("out/m.obj").exists(), "{err}");
+    assert!(
+        err.contains("warning: ") && err.contains("node 'm' (mesh_load): input 'path': file"),
+        "{err}"
+    );
+    assert!(!err.contains("error"), "{err}");
+    // The graph's own outputs choose the branch the same way, for run and validate.
+    std::fs::write(
+        d.path().join("o.json"),
+        BRANCHES.replace("OUTPUTS", r#", "outputs": ["w"]"#),
+    )
+    .unwrap();
+    let o = cgnodes(d.path(), &["validate", "o.json"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(stderr(&o).contains("warning: "), "{}", stderr(&o));
+}
+
+#[test]
+fn a_missing_file_in_the_used_branch_is_an_error() {
+    let d = tempfile::tempdir().unwrap();
+    std::fs::write(d.path().join("g.json"), BRANCHES.replace("OUTPUTS", "")).unwrap();
+    for args in [
+        &["run", "g.json", "--target", "s", "--out", "out"][..],
+        &["run", "g.json", "--out", "out"][..],
+        &["validate", "g.json"][..],
+    ] {
+        let o = cgnodes(d.path(), args);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(3), "{args:?}: {err}");
+        assert!(
+            err.contains("error: ") && err.contains("node 'm' (mesh_load): input 'path': file"),
+            "{err}"
+        );
+        assert!(err.contains("nothing was run"), "{err}");
+        assert!(!d.path().join("out").exists());
+    }
+}

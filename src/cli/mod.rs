@@ -216,6 +216,8 @@ struct RunArgs {
 /// Runs the command line with `registry` (`nodes::builtin_registry()` plus anything a crate
 /// adds). Returns the process exit code.
 pub fn main_with(registry: Registry) -> i32 {
+    // Ctrl-C and SIGTERM kill plugin processes, remove temporaries and exit 130.
+    crate::io::interrupt::install();
     let cli = match Cli::try_parse() {
         Ok(c) => c,
         Err(e) => {

@@ -229,3 +229,125 @@ fn a_missing_file_in_the_used_branch_is_an_error() {
         assert!(!d.path().join("out").exists());
     }
 }
+
+/// Whether process `pid` is running (a zombie is not).
+#[cfg(unix)]
+fn pid_alive(pid: i32) -> bool {
+    match std::fs::read_to_string(format!("/proc/{pid}/stat")) {
+        Err(_) => false,
+        Ok(s) => s
+            .rsplit_once(')')
+            .and_then(|(_, rest)| rest.split_whitespace().next())
+            .is_some_and(|state| state != "Z" && state != "X"),
+    }
+}
+
+/// The parent of process `pid`, from /proc.
+#[cfg(unix)]
+fn parent_of(pid: i32) -> Option<i32> {
+    let s = std::fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
+    s.rsplit_once(')')?
+        .1
+        .split_whitespace()
+        .nth(1)?
+        .parse()
+        .ok()
+}
+
+#[cfg(unix)]
+#[test]
+fn ctrl_c_kills_the_plugins_and_removes_the_temporaries() {
+    let python = Command::new("python3")
+        .arg("--version")
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !python {
+        assert!(std::env::var_os("CI").is_none(), "CI=1 needs python3");
+        eprintln!("python3 not found; Ctrl-C test skipped");
+        return;
+    }
+    let d = tempfile::tempdir().unwrap();
+    let tmp = d.path().join("tmp");
+    std::fs::create_dir(&tmp).unwrap();
+    let pidfile = d.path().join("child.pid");
+    // The misbehaving test plugin's `pl_hang` starts `sleep 3600` and sleeps for an hour.
+    let graph = format!(
+        r#"{{"format": "cgnodes-graph", "version": 1, "nodes": {{
+        "hang": {{"type": "pl_hang", "params": {{"timeout": 3600.0, "pidfile": {:?}}}}},
+        "show": {{"type": "print", "inputs": {{"value": "hang.y"}}}},
+        "x": {{"type": "value_float", "params": {{"value": 1}}}},
+        "w": {{"type": "table_write", "inputs": {{"value": "x.value"}}, "params": {{"path": "x.json"}}}}
+    }}}}"#,
+        pidfile.to_str().unwrap()
+    );
+    std::fs::write(d.path().join("g.json"), graph).unwrap();
+    let plugins = crate::common::asset("tests/data/plugins/misbehave");
+    let mut run = Command::new(env!("CARGO_BIN_EXE_cgnodes"))
+        .current_dir(d.path())
+        .env("TMPDIR", &tmp)
+        .args(["--plugins", plugins.to_str().unwrap(), "run", "g.json"])
+        .args(["--out", "out", "--threads", "2"])
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Wait (generously, for a loaded machine) until the plugin started its child.
+    let mut child = None;
+    for _ in 0..1200 {
+        if let Some(p) = std::fs::read_to_string(&pidfile)
+            .ok()
+            .and_then(|s| s.trim().parse::<i32>().ok())
+        {
+            child = Some(p);
+            break;
+        }
+        assert!(run.try_wait().unwrap().is_none(), "cgnodes ended early");
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    let child = child.expect("the plugin did not start its child within 60 s");
+    let plugin = parent_of(child).expect("the plugin process");
+    assert!(pid_alive(plugin) && pid_alive(child));
+    // The plugin's call folder is a temporary in TMPDIR.
+    assert!(
+        std::fs::read_dir(&tmp).unwrap().count() > 0,
+        "no call folder in TMPDIR"
+    );
+    let pid = i32::try_from(run.id()).unwrap();
+    // SAFETY: kill(2) sends SIGINT to the process this test started.
+    assert_eq!(unsafe { libc::kill(pid, libc::SIGINT) }, 0);
+    let mut status = None;
+    for _ in 0..600 {
+        status = run.try_wait().unwrap();
+        if status.is_some() {
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    let Some(status) = status else {
+        let _ = run.kill();
+        panic!("cgnodes did not end within 30 s of SIGINT");
+    };
+    let mut err = String::new();
+    std::io::Read::read_to_string(&mut run.stderr.take().unwrap(), &mut err).unwrap();
+    assert_eq!(status.code(), Some(130), "{err}");
+    // Killed with SIGKILL by the time cgnodes exits; give the kernel a moment to reap them.
+    for _ in 0..100 {
+        if !pid_alive(plugin) && !pid_alive(child) {
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    assert!(!pid_alive(plugin), "the plugin {plugin} outlived Ctrl-C");
+    assert!(
+        !pid_alive(child),
+        "the plugin's child {child} outlived Ctrl-C"
+    );
+    // No temporaries: the call folder is gone, and nothing half-written in the output folder.
+    let left: Vec<_> = std::fs::read_dir(&tmp).unwrap().collect();
+    assert!(left.is_empty(), "{left:?}");
+    let stray = files_in(&d.path().join("out"))
+        .into_iter()
+        .filter(|f| f.starts_with(".cgnodes-"))
+        .count();
+    assert_eq!(stray, 0);
+}

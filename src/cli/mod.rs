@@ -3,7 +3,7 @@
 //! `cgnodes` binary in a few lines.
 //!
 //! Exit codes: 0 success; 1 some node failed (the others still ran); 2 bad command line;
-//! 3 the graph could not be loaded or did not validate.
+//! 3 the graph could not be loaded or did not validate; 130 interrupted (SIGINT, SIGTERM).
 
 mod chart;
 mod describe;

@@ -266,6 +266,14 @@ fn ctrl_c_kills_the_plugins_and_removes_the_temporaries() {
         eprintln!("python3 not found; Ctrl-C test skipped");
         return;
     }
+    interrupt_a_plugin_run(libc::SIGINT);
+    interrupt_a_plugin_run(libc::SIGTERM);
+}
+
+/// Runs a graph whose plugin hangs, sends `signal` once the plugin started its child, and
+/// checks the exit code, the processes and the temporaries.
+#[cfg(unix)]
+fn interrupt_a_plugin_run(signal: libc::c_int) {
     let d = tempfile::tempdir().unwrap();
     let tmp = d.path().join("tmp");
     std::fs::create_dir(&tmp).unwrap();
@@ -313,8 +321,8 @@ fn ctrl_c_kills_the_plugins_and_removes_the_temporaries() {
         "no call folder in TMPDIR"
     );
     let pid = i32::try_from(run.id()).unwrap();
-    // SAFETY: kill(2) sends SIGINT to the process this test started.
-    assert_eq!(unsafe { libc::kill(pid, libc::SIGINT) }, 0);
+    // SAFETY: kill(2) sends a signal to the process this test started.
+    assert_eq!(unsafe { libc::kill(pid, signal) }, 0);
     let mut status = None;
     for _ in 0..600 {
         status = run.try_wait().unwrap();
@@ -325,11 +333,12 @@ fn ctrl_c_kills_the_plugins_and_removes_the_temporaries() {
     }
     let Some(status) = status else {
         let _ = run.kill();
-        panic!("cgnodes did not end within 30 s of SIGINT");
+        panic!("cgnodes did not end within 30 s of signal {signal}");
     };
     let mut err = String::new();
     std::io::Read::read_to_string(&mut run.stderr.take().unwrap(), &mut err).unwrap();
     assert_eq!(status.code(), Some(130), "{err}");
+    assert!(err.contains("interrupted"), "{err}");
     // Killed with SIGKILL by the time cgnodes exits; give the kernel a moment to reap them.
     for _ in 0..100 {
         if !pid_alive(plugin) && !pid_alive(child) {
@@ -337,7 +346,10 @@ fn ctrl_c_kills_the_plugins_and_removes_the_temporaries() {
         }
         std::thread::sleep(std::time::Duration::from_millis(20));
     }
-    assert!(!pid_alive(plugin), "the plugin {plugin} outlived Ctrl-C");
+    assert!(
+        !pid_alive(plugin),
+        "the plugin {plugin} outlived signal {signal}"
+    );
     assert!(
         !pid_alive(child),
         "the plugin's child {child} outlived Ctrl-C"

@@ -231,7 +231,11 @@ pub fn run(
         Some(f) => parse_frames(f)?,
         None => graph0.spec.frames_hint().unwrap_or((0, 0)),
     };
-    let tmp = tempfile::tempdir().map_err(|e| e.to_string())?;
+    // Registered so that Ctrl-C removes it (`io::interrupt`).
+    let (_tracked, tmp) = crate::io::interrupt::track(tempfile::tempdir, |t| {
+        crate::io::interrupt::Resource::Path(t.path().to_path_buf())
+    })
+    .map_err(|e| e.to_string())?;
     let out_dir = spec
         .out
         .as_ref()

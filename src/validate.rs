@@ -11,6 +11,9 @@ use std::fmt;
 use std::path::PathBuf;
 use std::sync::Arc;
 
+mod partial;
+pub use partial::validate_needed;
+
 /// Which side of a node a socket is on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Side {

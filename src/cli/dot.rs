@@ -1,13 +1,13 @@
 //! `cgnodes dot GRAPH`: a validated graph as Graphviz dot.
 
-use super::validate::load_valid;
+use super::validate::load_args;
+use super::GraphArgs;
 use crate::registry::Registry;
-use std::path::Path;
 
-/// `cgnodes dot GRAPH`.
-pub(super) fn cmd(registry: &Registry, graph: &Path) -> i32 {
-    match load_valid(registry, graph, &[]) {
-        Ok(g) => {
+/// `cgnodes dot GRAPH [--set ...] [--assets DIR] [--f3d-aliases FILE]`.
+pub(super) fn cmd(registry: &Registry, args: &GraphArgs) -> i32 {
+    match load_args(registry, args, None) {
+        Ok((g, _)) => {
             print!("{}", g.to_dot());
             0
         }

@@ -3,7 +3,7 @@
 //! `cgnodes` binary in a few lines.
 //!
 //! Exit codes: 0 success; 1 some node failed (the others still ran); 2 bad command line;
-//! 3 the graph could not be loaded or did not validate.
+//! 3 the graph could not be loaded or did not validate; 130 interrupted (SIGINT, SIGTERM).
 
 mod chart;
 mod describe;
@@ -51,13 +51,7 @@ enum Cmd {
     /// Validate and run a graph.
     Run(RunArgs),
     /// Check a graph without running it.
-    Validate {
-        /// Graph file.
-        graph: PathBuf,
-        /// Set an input literal: NODE.SOCKET=VALUE (repeatable).
-        #[arg(long = "set", value_name = "NODE.SOCKET=VALUE")]
-        set: Vec<String>,
-    },
+    Validate(GraphArgs),
     /// List every node type with its sockets.
     Nodes {
         /// Print the declarations as JSON.
@@ -72,10 +66,7 @@ enum Cmd {
     /// Print the JSON Schema of the graph format.
     Schema,
     /// Print a graph as Graphviz dot.
-    Dot {
-        /// Graph file.
-        graph: PathBuf,
-    },
+    Dot(GraphArgs),
     /// Run a graph for every combination of parameter values; write a CSV and a chart.
     Sweep(SweepArgs),
     /// Chart columns of one or more CSV files (for example a sweep beside a peer's results).
@@ -176,16 +167,30 @@ struct SweepArgs {
     max_memory: Option<u64>,
 }
 
+/// What `run`, `validate` and `dot` share: the graph and how it is loaded, so the three
+/// commands accept (and refuse) the same graphs.
 #[derive(clap::Args)]
-struct RunArgs {
+struct GraphArgs {
     /// Graph file (cgnodes JSON or a Framework3D saved node tree).
     graph: PathBuf,
-    /// Output directory; writer nodes write under it.
-    #[arg(long, default_value = "out")]
-    out: PathBuf,
     /// Set an input literal: NODE.SOCKET=VALUE (repeatable).
     #[arg(long = "set", value_name = "NODE.SOCKET=VALUE")]
     set: Vec<String>,
+    /// Further folders searched for input files.
+    #[arg(long = "assets")]
+    assets: Vec<PathBuf>,
+    /// JSON file mapping custom Framework3D node names onto cgnodes nodes.
+    #[arg(long = "f3d-aliases")]
+    f3d_aliases: Option<PathBuf>,
+}
+
+#[derive(clap::Args)]
+struct RunArgs {
+    #[command(flatten)]
+    load: GraphArgs,
+    /// Output directory; writer nodes write under it.
+    #[arg(long, default_value = "out")]
+    out: PathBuf,
     /// Evaluate these nodes instead of the graph's outputs (repeatable).
     #[arg(long = "target", value_name = "NODE")]
     target: Vec<String>,
@@ -199,12 +204,9 @@ struct RunArgs {
     #[arg(long)]
     cache: Option<PathBuf>,
     /// Size limit of the --cache folder: after the run, the least recently used entries are
-    /// removed until it fits (B, KiB, MiB, GiB, also K, M, G; 0 = no limit).
-    #[arg(long = "cache-size", value_name = "SIZE", default_value = "1GiB", value_parser = run::parse_size)]
+    /// removed until it fits (e.g. 500MiB, 2G; 0 = no limit).
+    #[arg(long = "cache-size", value_name = "SIZE", default_value = "1GiB", value_parser = run::parse_cache_size)]
     cache_size: u64,
-    /// Further folders searched for input files.
-    #[arg(long = "assets")]
-    assets: Vec<PathBuf>,
     /// Let writers use absolute paths and '..'.
     #[arg(long)]
     allow_write_anywhere: bool,
@@ -217,9 +219,6 @@ struct RunArgs {
     /// Print only errors.
     #[arg(long, short)]
     quiet: bool,
-    /// JSON file mapping custom Framework3D node names onto cgnodes nodes.
-    #[arg(long = "f3d-aliases")]
-    f3d_aliases: Option<PathBuf>,
     /// Most memory one node's buffers may take, e.g. 4G or 512MiB (default: CGNODES_MAX_MEMORY,
     /// else half the physical memory).
     #[arg(long = "max-memory", value_name = "SIZE", value_parser = crate::node::parse_size)]
@@ -229,6 +228,8 @@ struct RunArgs {
 /// Runs the command line with `registry` (`nodes::builtin_registry()` plus anything a crate
 /// adds). Returns the process exit code.
 pub fn main_with(registry: Registry) -> i32 {
+    // Ctrl-C and SIGTERM kill plugin processes, remove temporaries and exit 130.
+    crate::io::interrupt::install();
     let cli = match Cli::try_parse() {
         Ok(c) => c,
         Err(e) => {
@@ -245,11 +246,11 @@ pub fn main_with(registry: Registry) -> i32 {
     };
     match cli.cmd {
         Cmd::Run(args) => run::cmd(&registry, args),
-        Cmd::Validate { graph, set } => validate::cmd(&registry, &graph, &set),
+        Cmd::Validate(args) => validate::cmd(&registry, &args),
         Cmd::Nodes { json } => nodes::cmd(&registry, json),
         Cmd::Describe { node_type } => describe::cmd(&registry, &node_type),
         Cmd::Schema => schema::cmd(),
-        Cmd::Dot { graph } => dot::cmd(&registry, &graph),
+        Cmd::Dot(args) => dot::cmd(&registry, &args),
         Cmd::Sweep(args) => sweep::cmd(&registry, args),
         Cmd::Chart(args) => chart::cmd(&args),
         Cmd::ImportF3d {

@@ -1,7 +1,7 @@
 //! `cgnodes run`: validates a graph and runs it over a frame range, with progress bars,
 //! a run report per frame, and an optional profile (`--profile`, `--profile-json`).
 
-use super::validate::{load_valid_with, read_aliases};
+use super::validate::load_args;
 use super::{RunArgs, EXIT_NODE_FAILED, EXIT_USAGE};
 use crate::exec::{Executor, NodeStatus, RunOptions, RunReport};
 use crate::graph::parse_frames;
@@ -12,23 +12,16 @@ use std::sync::Arc;
 
 /// `cgnodes run GRAPH ...`: runs the graph once per frame; exit code 1 when a node failed.
 pub(super) fn cmd(registry: &Registry, args: RunArgs) -> i32 {
-    let aliases = match args.f3d_aliases.as_deref().map(read_aliases).transpose() {
-        Ok(a) => a.unwrap_or_default(),
-        Err(e) => {
-            eprintln!("error: {e}");
-            return EXIT_USAGE;
-        }
+    let targets = (!args.target.is_empty()).then_some(args.target.as_slice());
+    let (graph, hint) = match load_args(registry, &args.load, targets) {
+        Ok(g) => g,
+        Err(c) => return c,
     };
-    let (graph, hint) =
-        match load_valid_with(registry, &args.graph, &args.set, &aliases, &args.assets) {
-            Ok(g) => g,
-            Err(c) => return c,
-        };
     for t in &args.target {
         if !graph.index.contains_key(t) {
             eprintln!(
                 "error: --target '{t}' is not a node of {}",
-                args.graph.display()
+                args.load.graph.display()
             );
             return EXIT_USAGE;
         }
@@ -76,7 +69,7 @@ pub(super) fn cmd(registry: &Registry, args: RunArgs) -> i32 {
         targets: (!args.target.is_empty()).then(|| args.target.clone()),
         files: FileEnv {
             graph_dir: graph.dir.clone(),
-            asset_dirs: args.assets.clone(),
+            asset_dirs: args.load.assets.clone(),
             out_dir: args.out.clone(),
             allow_write_anywhere: args.allow_write_anywhere,
         },
@@ -97,6 +90,9 @@ pub(super) fn cmd(registry: &Registry, args: RunArgs) -> i32 {
         }
         for e in report.errors() {
             eprintln!("error: {e}");
+        }
+        if frame < f1 {
+            print_stops(&exec, &report, f1);
         }
         if args.profile {
             print_profile(&report);
@@ -126,34 +122,32 @@ pub(super) fn cmd(registry: &Registry, args: RunArgs) -> i32 {
     code
 }
 
-/// Parses a size such as `1GiB`, `500MiB`, `64K` or `1048576` (bytes); units are powers of
-/// 1024 (`K`/`KiB`, `M`/`MiB`, `G`/`GiB`, `T`/`TiB`), case-insensitive, with an optional `B`.
-pub(super) fn parse_size(s: &str) -> Result<u64, String> {
-    let t = s.trim();
-    let split = t
-        .find(|c: char| !(c.is_ascii_digit() || c == '.'))
-        .unwrap_or(t.len());
-    let (num, unit) = t.split_at(split);
-    let x: f64 = num
-        .parse()
-        .map_err(|_| format!("'{s}' is not a size (for example 500MiB, 2GiB, 0)"))?;
-    let shift = match unit.trim().to_ascii_lowercase().as_str() {
-        "" | "b" => 0,
-        "k" | "kb" | "kib" => 10,
-        "m" | "mb" | "mib" => 20,
-        "g" | "gb" | "gib" => 30,
-        "t" | "tb" | "tib" => 40,
-        u => {
-            return Err(format!(
-                "unknown size unit '{u}' in '{s}' (B, KiB, MiB, GiB, TiB)"
-            ))
-        }
-    };
-    let bytes = x * (1u64 << shift) as f64;
-    if !bytes.is_finite() || bytes >= u64::MAX as f64 {
-        return Err(format!("'{s}' is too large"));
+/// Parses `--cache-size`: a size as `node::parse_size` reads it (`500MiB`, `2G`), or `0` for
+/// no limit.
+pub(super) fn parse_cache_size(s: &str) -> Result<u64, String> {
+    if s.trim() == "0" {
+        Ok(0)
+    } else {
+        crate::node::parse_size(s)
     }
-    Ok(bytes as u64)
+}
+
+/// Says once, at the frame where it happens, that a simulation which failed (or could not
+/// run) stays stopped with everything downstream for the rest of the range.
+fn print_stops(exec: &Executor, r: &RunReport, last: i64) {
+    for n in &r.nodes {
+        if matches!(n.status, NodeStatus::Failed(_) | NodeStatus::Blocked { .. })
+            && exec.stopped_since(&n.id) == Some(r.frame)
+        {
+            eprintln!(
+                "error: {}: node '{}' ({}) keeps state between frames: it and the nodes it feeds stay failed for frames {}..{last}",
+                r.file.display(),
+                n.id,
+                n.node_type,
+                r.frame + 1
+            );
+        }
+    }
 }
 
 fn print_report(r: &RunReport, frames: bool) {
@@ -180,11 +174,15 @@ fn print_report(r: &RunReport, frames: bool) {
         .map(|n| n.id.as_str())
         .collect();
     eprintln!(
-        "{prefix}ran {}, cached {}, failed {}, blocked {}, skipped {}{} in {:.1} ms",
+        "{prefix}ran {}, cached {}, failed {}, blocked {}{}, skipped {}{} in {:.1} ms",
         count(|s| matches!(s, NodeStatus::Ran)),
         count(|s| matches!(s, NodeStatus::Cached)),
         count(|s| matches!(s, NodeStatus::Failed(_))),
         count(|s| matches!(s, NodeStatus::Blocked { .. })),
+        match count(|s| matches!(s, NodeStatus::Stopped { .. })) {
+            0 => String::new(),
+            k => format!(", stopped {k}"),
+        },
         skipped.len(),
         if skipped.is_empty() || skipped.len() > 10 {
             String::new()
@@ -207,6 +205,7 @@ fn print_profile(r: &RunReport) {
             NodeStatus::Skipped => continue,
             NodeStatus::Failed(_) => "failed",
             NodeStatus::Blocked { .. } => "blocked",
+            NodeStatus::Stopped { .. } => "stopped",
         };
         eprintln!(
             "{:<20} {:<20} {:>10.2} {:>8} {:>10.1}",
@@ -236,6 +235,7 @@ pub fn profile_json(r: &RunReport) -> serde_json::Value {
                 NodeStatus::Skipped => "skipped",
                 NodeStatus::Failed(_) => "failed",
                 NodeStatus::Blocked { .. } => "blocked",
+                NodeStatus::Stopped { .. } => "stopped",
             };
             serde_json::json!({"id": n.id, "type": n.node_type, "status": st, "ms": n.ms, "rss_kib": n.rss_kib})
         })
@@ -245,18 +245,17 @@ pub fn profile_json(r: &RunReport) -> serde_json::Value {
 
 #[cfg(test)]
 mod tests {
-    use super::parse_size;
+    use super::parse_cache_size;
 
     #[test]
-    fn sizes_parse_with_binary_units() {
-        assert_eq!(parse_size("0"), Ok(0));
-        assert_eq!(parse_size("1024"), Ok(1024));
-        assert_eq!(parse_size("1GiB"), Ok(1 << 30));
-        assert_eq!(parse_size("500 MiB"), Ok(500 << 20));
-        assert_eq!(parse_size("1.5k"), Ok(1536));
-        assert_eq!(parse_size("2G"), Ok(2 << 30));
-        assert!(parse_size("lots").is_err());
-        assert!(parse_size("3 parsecs").is_err());
-        assert!(parse_size("99999999999TiB").is_err());
+    fn cache_sizes_parse_and_zero_means_no_limit() {
+        assert_eq!(parse_cache_size("0"), Ok(0));
+        assert_eq!(parse_cache_size("1024"), Ok(1024));
+        assert_eq!(parse_cache_size("1GiB"), Ok(1 << 30));
+        assert_eq!(parse_cache_size("500 MiB"), Ok(500 << 20));
+        assert_eq!(parse_cache_size("2G"), Ok(2_000_000_000));
+        assert!(parse_cache_size("lots").is_err());
+        assert!(parse_cache_size("3 parsecs").is_err());
+        assert!(parse_cache_size("99999999999TiB").is_err());
     }
 }

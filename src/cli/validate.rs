@@ -2,22 +2,54 @@
 //! Framework3D tree is imported against the registry), apply `--set`, validate, and print
 //! every error with the exit code to return.
 
-use super::{EXIT_INVALID, EXIT_USAGE};
+use super::{GraphArgs, EXIT_INVALID, EXIT_USAGE};
 use crate::f3d::Aliases;
-use crate::graph::{self, apply_sets};
+use crate::graph::{self, apply_sets, Graph};
 use crate::registry::Registry;
-use crate::validate::{validate_with, GraphError, ValidGraph};
+use crate::validate::{validate_needed, validate_with, GraphError, ValidGraph};
 use std::path::{Path, PathBuf};
 
-/// `cgnodes validate GRAPH [--set ...]`.
-pub(super) fn cmd(registry: &Registry, graph: &Path, set: &[String]) -> i32 {
-    match load_valid(registry, graph, set) {
-        Ok(g) => {
-            println!("{}: ok ({} nodes)", graph.display(), g.nodes.len());
+/// `cgnodes validate GRAPH [--set ...] [--assets DIR] [--f3d-aliases FILE]`.
+pub(super) fn cmd(registry: &Registry, args: &GraphArgs) -> i32 {
+    match load_args(registry, args, None) {
+        Ok((g, _)) => {
+            println!("{}: ok ({} nodes)", args.graph.display(), g.nodes.len());
             0
         }
         Err(code) => code,
     }
+}
+
+/// Loads and validates the graph of `run`, `validate` or `dot` from their shared options
+/// (`--set`, `--assets`, `--f3d-aliases`); `Err` is the exit code, the errors are printed.
+/// Only the nodes that `targets` (default: the graph's outputs) need must validate; problems
+/// in the others are printed as warnings and those nodes are left out.
+pub(super) fn load_args(
+    registry: &Registry,
+    args: &GraphArgs,
+    targets: Option<&[String]>,
+) -> Result<(ValidGraph, Option<(i64, i64)>), i32> {
+    let aliases = match args.f3d_aliases.as_deref().map(read_aliases).transpose() {
+        Ok(a) => a.unwrap_or_default(),
+        Err(e) => {
+            eprintln!("error: {e}");
+            return Err(EXIT_USAGE);
+        }
+    };
+    load_checked(registry, &args.graph, &args.set, &aliases, |g| {
+        let (valid, warnings) = validate_needed(g, registry, &args.assets, targets)?;
+        for w in &warnings {
+            eprintln!("warning: {w}");
+        }
+        if !warnings.is_empty() {
+            eprintln!(
+                "warning: {} problem{} in nodes the requested outputs do not need; those nodes do not run",
+                warnings.len(),
+                if warnings.len() == 1 { "" } else { "s" }
+            );
+        }
+        Ok(valid)
+    })
 }
 
 /// Loads, applies overrides and validates, printing errors; `Err` is the exit code.
@@ -40,6 +72,20 @@ pub fn load_valid_with(
     aliases: &Aliases,
     assets: &[PathBuf],
 ) -> Result<(ValidGraph, Option<(i64, i64)>), i32> {
+    load_checked(registry, path, sets, aliases, |g| {
+        validate_with(g, registry, assets)
+    })
+}
+
+/// Reads the graph, applies `--set` and checks it with `check`; also returns the graph's
+/// own frame range.
+fn load_checked(
+    registry: &Registry,
+    path: &Path,
+    sets: &[String],
+    aliases: &Aliases,
+    check: impl FnOnce(&Graph) -> Result<ValidGraph, Vec<GraphError>>,
+) -> Result<(ValidGraph, Option<(i64, i64)>), i32> {
     let mut g = match graph::load_with(path, aliases, registry) {
         Ok(g) => g,
         Err(e) => {
@@ -52,7 +98,7 @@ pub fn load_valid_with(
         return Err(EXIT_USAGE);
     }
     let hint = g.spec.frames_hint();
-    let valid = validate_with(&g, registry, assets).map_err(|errs| {
+    let valid = check(&g).map_err(|errs| {
         print_graph_errors(&errs);
         EXIT_INVALID
     })?;

@@ -64,6 +64,9 @@ pub struct Executor {
     /// For each stateful node that holds state: its key at the frame that last advanced it
     /// (the history its next key chains onto; see `crate::cache`).
     histories: Mutex<HashMap<String, Key>>,
+    /// Stateful nodes that failed or were blocked, by node id, with the frame: they stay
+    /// stopped (issue 23: a simulation must not restart from its initial state mid-range).
+    stopped: Mutex<HashMap<String, i64>>,
 }
 
 type Slot = Mutex<Option<Result<Arc<BTreeMap<String, Value>>, String>>>;
@@ -94,10 +97,12 @@ impl Executor {
             disk,
             states: Mutex::new(HashMap::new()),
             histories: Mutex::new(HashMap::new()),
+            stopped: Mutex::new(HashMap::new()),
         })
     }
 
-    /// Drops the state of every stateful node (simulations restart).
+    /// Drops the state of every stateful node (simulations restart), including the stopped
+    /// mark of those that failed.
     pub fn reset_states(&self) {
         self.states
             .lock()
@@ -107,12 +112,44 @@ impl Executor {
             .lock()
             .unwrap_or_else(|p| p.into_inner())
             .clear();
+        self.stopped
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .clear();
     }
 
     /// Trims the disk cache to `limit` bytes, removing the least recently used entries
     /// (`limit` 0: no limit); `None` without a disk cache.
     pub fn evict_disk_cache(&self, limit: u64) -> Option<Evicted> {
         self.disk.as_ref().map(|d| d.evict(limit))
+    }
+
+    /// The frame at which stateful node `id` failed or was blocked, if it did: from then on
+    /// it reports `NodeStatus::Stopped` and the nodes it feeds are blocked.
+    pub fn stopped_since(&self, id: &str) -> Option<i64> {
+        self.stopped
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .get(id)
+            .copied()
+    }
+
+    /// Marks a stateful node whose step did not happen at `frame` as stopped, and drops its
+    /// state: a later frame would continue from a history with a step missing.
+    fn stop(&self, id: &str, frame: i64) {
+        self.stopped
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .entry(id.to_string())
+            .or_insert(frame);
+        self.states
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .remove(id);
+        self.histories
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .remove(id);
     }
 
     /// Runs `graph` for one frame.
@@ -212,7 +249,16 @@ impl Executor {
             logs: Vec::new(),
             written: Vec::new(),
         };
-        let result = self.evaluate(sh, i, &mut report);
+        let result = match self.stopped_since(&node.id) {
+            Some(since) if node.decl.stateful => {
+                report.status = NodeStatus::Stopped { since };
+                Err(node.id.clone())
+            }
+            _ => self.evaluate(sh, i, &mut report),
+        };
+        if node.decl.stateful && result.is_err() {
+            self.stop(&node.id, sh.frame);
+        }
         report.ms = t0.elapsed().as_secs_f64() * 1e3;
         if sh.opts.measure_memory {
             report.rss_kib = read_status_kib("VmRSS:");

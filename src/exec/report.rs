@@ -23,6 +23,13 @@ pub enum NodeStatus {
         /// The failed node upstream.
         by: String,
     },
+    /// A stateful node (a simulation) that failed or could not run at an earlier frame of
+    /// this executor: it does not run again until `Executor::reset_states`, since restarting
+    /// from its initial state would produce frames of another history.
+    Stopped {
+        /// The frame at which it failed or was blocked.
+        since: i64,
+    },
 }
 
 /// One node's part of a run.
@@ -64,12 +71,14 @@ pub struct RunReport {
 }
 
 impl RunReport {
-    /// Whether no node failed.
+    /// Whether no node failed (now, or as a simulation stopped at an earlier frame).
     pub fn ok(&self) -> bool {
-        !self
-            .nodes
-            .iter()
-            .any(|n| matches!(n.status, NodeStatus::Failed(_) | NodeStatus::Blocked { .. }))
+        !self.nodes.iter().any(|n| {
+            matches!(
+                n.status,
+                NodeStatus::Failed(_) | NodeStatus::Blocked { .. } | NodeStatus::Stopped { .. }
+            )
+        })
     }
     /// The value of `node.socket`, if computed.
     pub fn output(&self, node: &str, socket: &str) -> Option<&Value> {
@@ -87,8 +96,14 @@ impl RunReport {
             .map(|n| n.id.as_str())
             .collect()
     }
-    /// Error messages of failed nodes, each naming the file, node id and type.
+    /// Error messages of failed nodes, each naming the file, node id and type. A simulation
+    /// stopped at an earlier frame, and the nodes it blocks, were reported in that frame's
+    /// report and are not repeated here.
     pub fn errors(&self) -> Vec<String> {
+        let stopped = |id: &str| {
+            self.node(id)
+                .is_some_and(|n| matches!(n.status, NodeStatus::Stopped { .. }))
+        };
         self.nodes
             .iter()
             .filter_map(|n| match &n.status {
@@ -100,7 +115,7 @@ impl RunReport {
                     e.kind,
                     e
                 )),
-                NodeStatus::Blocked { by } => Some(format!(
+                NodeStatus::Blocked { by } if !stopped(by) => Some(format!(
                     "{}: node '{}' ({}) did not run because '{by}' failed",
                     self.file.display(),
                     n.id,

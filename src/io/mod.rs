@@ -1,6 +1,8 @@
-//! File helpers shared by the runtime and the writer nodes: atomic writes, and CSV (`csv`).
+//! File helpers shared by the runtime and the writer nodes: atomic writes, CSV (`csv`), and
+//! the cleanup of temporaries and plugin processes on Ctrl-C (`interrupt`).
 
 pub mod csv;
+pub mod interrupt;
 
 use std::io::{BufWriter, Write};
 use std::path::Path;
@@ -16,10 +18,16 @@ pub fn write_atomic(
         _ => std::path::PathBuf::from("."),
     };
     std::fs::create_dir_all(&dir)?;
-    let tmp = tempfile::Builder::new()
-        .prefix(".cgnodes-")
-        .suffix(".tmp")
-        .tempfile_in(&dir)?;
+    // Registered so that Ctrl-C removes it (`interrupt`).
+    let (_tracked, tmp) = interrupt::track(
+        || {
+            tempfile::Builder::new()
+                .prefix(".cgnodes-")
+                .suffix(".tmp")
+                .tempfile_in(&dir)
+        },
+        |t| interrupt::Resource::Path(t.path().to_path_buf()),
+    )?;
     {
         let mut w = BufWriter::new(tmp.as_file());
         f(&mut w)?;

@@ -135,10 +135,12 @@ pub fn call(
     let fail =
         |msg: String| NodeError::new(ErrorKind::Plugin, format!("plugin '{}': {msg}", r.plugin));
     let t0 = Instant::now();
-    let tmp = tempfile::Builder::new()
-        .prefix("cgnodes-call-")
-        .tempdir()
-        .map_err(|e| fail(format!("cannot create the call folder: {e}")))?;
+    // Registered so that Ctrl-C removes it (`io::interrupt`).
+    let (_tracked, tmp) = crate::io::interrupt::track(
+        || tempfile::Builder::new().prefix("cgnodes-call-").tempdir(),
+        |t| crate::io::interrupt::Resource::Path(t.path().to_path_buf()),
+    )
+    .map_err(|e| fail(format!("cannot create the call folder: {e}")))?;
     let dir = tmp.path();
     let mut enc = serde_json::Map::new();
     for (name, v) in inputs {

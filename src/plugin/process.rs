@@ -50,9 +50,13 @@ pub fn run(
         cmd.process_group(0);
     }
     let t0 = Instant::now();
-    let mut child = cmd
-        .spawn()
-        .map_err(|e| format!("cannot start {}: {e}", prog.to_string_lossy()))?;
+    // The group is registered so that Ctrl-C kills it (`io::interrupt`): it does not get the
+    // terminal's SIGINT itself.
+    let (_tracked, mut child) = crate::io::interrupt::track(
+        || cmd.spawn(),
+        |c| crate::io::interrupt::Resource::ProcessGroup(i32::try_from(c.id()).unwrap_or(0)),
+    )
+    .map_err(|e| format!("cannot start {}: {e}", prog.to_string_lossy()))?;
     let spawn_ms = t0.elapsed().as_secs_f64() * 1e3;
     let pid = child.id();
     let (tx, rx) = mpsc::channel::<(bool, Vec<u8>)>();

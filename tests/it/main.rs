@@ -17,6 +17,7 @@ mod node_bounds;
 mod param;
 mod plugins;
 mod render;
+mod run_semantics;
 mod runtime;
 mod sph;
 mod sweep;

@@ -180,7 +180,8 @@ fn graph_cases() -> Vec<Case> {
         ),
         graph_case(
             "unknown input socket",
-            &g(r#""x": {"type": "value_float", "params": {"valeu": 1.0}}"#),
+            &g(r#""x": {"type": "value_float", "params": {"valeu": 1.0}},
+                 "p": {"type": "print", "inputs": {"value": "x.value"}}"#),
             vec!["'x'", "value_float", "valeu"],
         ),
         graph_case(
@@ -295,22 +296,50 @@ fn graph_cases() -> Vec<Case> {
     ]
 }
 
+/// The course's Tutte blueprint (tests/data/f3d) with the socket its first link starts at
+/// removed from `sockets_info` (this panicked while loading, before issue 23).
+fn f3d_without_a_linked_socket() -> String {
+    let text =
+        std::fs::read_to_string(root().join("tests/data/f3d/hw4_tutte_blueprint.json")).unwrap();
+    let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let links = v["links_info"].as_object().unwrap();
+    let start = links
+        .values()
+        .find_map(|l| l["StartPinID"].as_i64())
+        .unwrap();
+    let sockets = v["sockets_info"].as_object_mut().unwrap();
+    let key = sockets
+        .iter()
+        .find(|(k, s)| s["ID"].as_i64() == Some(start) || k.parse::<i64>().ok() == Some(start))
+        .map(|(k, _)| k.clone())
+        .unwrap();
+    sockets.remove(&key);
+    v.to_string()
+}
+
 /// Framework3D node trees.
 fn f3d_cases() -> Vec<Case> {
+    let aliases = root().join("graphs/f3d/hw4_tutte_aliases.json");
     let case = |name: &'static str, text: &str, expect: Vec<&'static str>| Case {
         name,
         reader: "f3d",
         files: vec![("graph.json", text.as_bytes().to_vec())],
-        args: run_args(),
+        args: vec![
+            "run".into(),
+            "graph.json".into(),
+            "--out".into(),
+            "out".into(),
+            "--f3d-aliases".into(),
+            aliases.display().to_string(),
+        ],
         exit: 3,
         expect,
     };
     vec![
         case(
             "link to a socket missing from sockets_info",
-            r#"{"nodes_info": {"1": {"id_name": "mesh_load", "inputs": [], "outputs": [77]}},
-                "sockets_info": {}, "links_info": []}"#,
-            vec!["77"],
+            &f3d_without_a_linked_socket(),
+            vec!["which sockets_info does not list"],
         ),
         case(
             "unknown Framework3D node",
@@ -665,16 +694,32 @@ fn node_cases() -> Vec<Case> {
                 vec!["'c' (mass_spring)", "unstable"],
             )
         },
-        node_case(
-            "render of 16384 x 16384 at 64 samples",
-            r#""g": {"type": "mesh_grid"},
-               "cam": {"type": "camera", "params": {"width": 16384, "height": 16384}},
-               "s": {"type": "scene", "inputs": {"meshes": "g.mesh", "camera": "cam.camera"}},
-               "r": {"type": "render_raster", "params": {"samples": 64, "antialiasing": "ssaa"}, "inputs": {"scene": "s.scene"}},
-               "p": {"type": "print", "inputs": {"value": "r.color"}}"#,
-            1,
-            vec!["'r' (render_raster)", "GiB"],
-        ),
+        Case {
+            args: args(&["run", "graph.json", "--out", "out", "--max-memory", "1G"]),
+            ..node_case(
+                "render of 16384 x 16384 over --max-memory 1G",
+                r#""g": {"type": "mesh_grid"},
+                   "cam": {"type": "camera", "params": {"width": 16384, "height": 16384}},
+                   "s": {"type": "scene", "inputs": {"meshes": "g.mesh", "camera": "cam.camera"}},
+                   "r": {"type": "render_raster", "inputs": {"scene": "s.scene"}},
+                   "p": {"type": "print", "inputs": {"value": "r.color"}}"#,
+                1,
+                vec!["'r' (render_raster)", "16384x16384", "over the 1 GB limit"],
+            )
+        },
+        Case {
+            args: args(&["run", "graph.json", "--out", "out", "--max-memory", "1G"]),
+            ..node_case(
+                "path tracer of 16384 x 16384 over --max-memory 1G",
+                r#""g": {"type": "mesh_grid"},
+                   "cam": {"type": "camera", "params": {"width": 16384, "height": 16384}},
+                   "s": {"type": "scene", "inputs": {"meshes": "g.mesh", "camera": "cam.camera"}},
+                   "r": {"type": "render_path", "inputs": {"scene": "s.scene"}},
+                   "p": {"type": "print", "inputs": {"value": "r.color"}}"#,
+                1,
+                vec!["'r' (render_path)", "over the 1 GB limit"],
+            )
+        },
     ]
 }
 
@@ -696,7 +741,7 @@ fn plugin_cases() -> Vec<Case> {
                 },
                 out = if ty == "pl_wrong_type" {
                     "count"
-                } else if ty == "pl_wrong_shape" {
+                } else if ty == "pl_wrong_shape" || ty == "pl_escape" {
                     "mesh"
                 } else {
                     "y"

@@ -16,6 +16,7 @@ pub mod chart;
 pub mod cli;
 pub mod exec;
 pub mod f3d;
+pub mod fuzz;
 pub mod graph;
 pub mod io;
 pub mod node;

@@ -2,8 +2,13 @@
 
 use std::path::PathBuf;
 
-/// A scratch folder unique to this fuzzing process (readers that take a path read from it).
-pub fn scratch() -> PathBuf {
+/// A scratch folder unique to this fuzzing process (in /dev/shm when there is one).
+pub fn scratch() -> &'static std::path::Path {
+    static DIR: std::sync::OnceLock<PathBuf> = std::sync::OnceLock::new();
+    DIR.get_or_init(make)
+}
+
+fn make() -> PathBuf {
     let base = std::env::var_os("CGNODES_FUZZ_TMP")
         .map(PathBuf::from)
         .unwrap_or_else(|| {

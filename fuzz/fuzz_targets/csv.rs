@@ -1,16 +1,10 @@
 #![no_main]
-//! CSV tables: the shared reader (all option combinations) and compare_series' column reader.
+//! Fuzz target `csv`: see `cgnodes::fuzz::csv`.
 use libfuzzer_sys::fuzz_target;
 
+#[path = "common.rs"]
+mod common;
+
 fuzz_target!(|data: &[u8]| {
-    let Ok(text) = std::str::from_utf8(data) else {
-        return;
-    };
-    for comments in [false, true] {
-        for trim in [false, true] {
-            let _ = cgnodes::io::csv::read(text, comments, trim);
-        }
-    }
-    let _ = cgnodes::nodes::metrics::compare_series::read_csv_columns(text, "x", "y");
-    let _ = cgnodes::nodes::metrics::compare_series::read_csv_columns(text, "t", "h");
+    cgnodes::fuzz::run("csv", data, common::scratch());
 });

@@ -1,12 +1,10 @@
 #![no_main]
-//! `.npy` arrays as plugins return them, and their conversions.
+//! Fuzz target `npy`: see `cgnodes::fuzz::npy`.
 use libfuzzer_sys::fuzz_target;
 
+#[path = "common.rs"]
+mod common;
+
 fuzz_target!(|data: &[u8]| {
-    if let Ok(a) = cgnodes::plugin::npy::NpyArray::from_bytes(data) {
-        let _ = a.shape_str();
-        let _ = a.to_f64();
-        let _ = a.to_i64();
-        let _ = a.to_bytes();
-    }
+    cgnodes::fuzz::run("npy", data, common::scratch());
 });

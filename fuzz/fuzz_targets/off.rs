@@ -1,9 +1,10 @@
 #![no_main]
-//! OFF text meshes.
+//! Fuzz target `off`: see `cgnodes::fuzz::off`.
 use libfuzzer_sys::fuzz_target;
 
+#[path = "common.rs"]
+mod common;
+
 fuzz_target!(|data: &[u8]| {
-    if let Ok(text) = std::str::from_utf8(data) {
-        let _ = cgnodes::nodes::mesh::off::read_off(text);
-    }
+    cgnodes::fuzz::run("off", data, common::scratch());
 });

@@ -1,7 +1,10 @@
 #![no_main]
-//! PLY meshes, ASCII and binary (both endians).
+//! Fuzz target `ply`: see `cgnodes::fuzz::ply`.
 use libfuzzer_sys::fuzz_target;
 
+#[path = "common.rs"]
+mod common;
+
 fuzz_target!(|data: &[u8]| {
-    let _ = cgnodes::nodes::mesh::ply::read_ply(data);
+    cgnodes::fuzz::run("ply", data, common::scratch());
 });

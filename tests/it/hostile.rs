@@ -1089,3 +1089,34 @@ fn the_bad_input_corpus_gets_clear_errors() {
 fn ci() -> bool {
     std::env::var_os("CI").is_some()
 }
+
+/// Every crashing input the fuzz targets found (tests/data/fuzz/<target>/), replayed through
+/// the same entry points (`cgnodes::fuzz`) on the stable toolchain: none may panic.
+#[test]
+fn fuzz_crashes_stay_fixed() {
+    let dir = root().join("tests/data/fuzz");
+    let scratch = tempfile::tempdir().unwrap();
+    let mut n = 0;
+    for t in std::fs::read_dir(&dir).unwrap() {
+        let t = t.unwrap().path();
+        if !t.is_dir() {
+            continue;
+        }
+        let target = t.file_name().unwrap().to_str().unwrap().to_string();
+        for f in std::fs::read_dir(&t).unwrap() {
+            let f = f.unwrap().path();
+            let data = std::fs::read(&f).unwrap();
+            assert!(
+                cgnodes::fuzz::run(&target, &data, scratch.path()),
+                "{}: no fuzz target '{target}'",
+                f.display()
+            );
+            n += 1;
+        }
+    }
+    assert!(
+        n >= 4,
+        "only {n} fuzz regressions found in {}",
+        dir.display()
+    );
+}

@@ -42,7 +42,7 @@ pub fn find_bad_obj_line(text: &str) -> Option<(usize, String)> {
                 nn += 1;
                 nums(w, 3)
             }
-            "f" => (|| {
+            "f" | "l" => (|| {
                 let mut seen = Vec::new();
                 for corner in w {
                     let mut parts = corner.split('/');
@@ -62,12 +62,15 @@ pub fn find_bad_obj_line(text: &str) -> Option<(usize, String)> {
                             ));
                         }
                         if k == 0 {
-                            if seen.contains(&abs) {
-                                return Err(format!("degenerate face: vertex {abs} appears twice"));
-                            }
                             seen.push(abs);
                         }
                     }
+                }
+                if kw == "l" {
+                    return Ok(()); // a polyline: its indices are in range, nothing else to check
+                }
+                if let Some(abs) = first_repeat(&seen) {
+                    return Err(format!("degenerate face: vertex {abs} appears twice"));
                 }
                 if seen.len() < 3 {
                     return Err(format!(
@@ -86,6 +89,18 @@ pub fn find_bad_obj_line(text: &str) -> Option<(usize, String)> {
     None
 }
 
+/// The first corner (in order) whose vertex appeared earlier in `face`: a scan for small
+/// faces, a set for large ones (a scan per corner was quadratic in the face's size).
+fn first_repeat(face: &[i64]) -> Option<i64> {
+    if face.len() <= 32 {
+        return (1..face.len())
+            .find(|&k| face[..k].contains(&face[k]))
+            .map(|k| face[k]);
+    }
+    let mut set = std::collections::HashSet::with_capacity(face.len());
+    face.iter().copied().find(|&v| !set.insert(v))
+}
+
 /// The first malformed line of the OBJ file at `path`, if it can be read and has one.
 fn locate_bad_line(path: &Path) -> Option<(usize, String)> {
     std::fs::read_to_string(path)
@@ -96,18 +111,41 @@ fn locate_bad_line(path: &Path) -> Option<(usize, String)> {
 /// The tobj materials of an OBJ file, or why its material library could not be read.
 pub type ObjMaterials = Result<Vec<tobj::Material>, tobj::LoadError>;
 
-/// Runs tobj on `path` (polygons kept, separate position/UV/normal indices); a failure
-/// names the first bad line when `find_bad_obj_line` finds one, else is tobj's message.
+/// Runs tobj on `path` (polygons kept, separate position/UV/normal indices). The text is
+/// checked with `find_bad_obj_line` first, so a bad line is reported with its number and
+/// tobj never sees an index it would mishandle (issue 23: a huge negative texture index
+/// overflowed its `vt * 2`, and index 0 became "the previous corner's UV"); a later failure
+/// is tobj's message. MTL libraries are read through `load_mtl_checked`.
 fn read_tobj(path: &Path) -> Result<(Vec<tobj::Model>, ObjMaterials), String> {
     let opts = tobj::LoadOptions {
         triangulate: false,
         single_index: false,
         ..Default::default()
     };
-    tobj::load_obj(path, &opts).map_err(|e| match locate_bad_line(path) {
-        Some((ln, msg)) => format!("line {ln}: {msg}"),
-        None => format!("{e}"),
+    let bytes = std::fs::read(path).map_err(|e| e.to_string())?;
+    let text = std::str::from_utf8(&bytes).map_err(|e| format!("not UTF-8 text: {e}"))?;
+    if let Some((ln, msg)) = find_bad_obj_line(text) {
+        return Err(format!("line {ln}: {msg}"));
+    }
+    let dir = path.parent().unwrap_or(Path::new(""));
+    tobj::load_obj_buf(&mut text.as_bytes(), &opts, |mtl| {
+        load_mtl_checked(&dir.join(mtl))
     })
+    .map_err(|e| e.to_string())
+}
+
+/// Reads an MTL library with tobj after checking the lines tobj would panic on: a colour
+/// (`Ka`, `Kd`, `Ks`, `Ke`) with fewer than three values hit an `unwrap` in tobj 4.0.
+fn load_mtl_checked(path: &Path) -> tobj::MTLLoadResult {
+    let bytes = std::fs::read(path).map_err(|_| tobj::LoadError::OpenFileFailed)?;
+    let text = std::str::from_utf8(&bytes).map_err(|_| tobj::LoadError::ReadError)?;
+    for line in text.lines() {
+        let mut w = line.split_whitespace();
+        if matches!(w.next(), Some("Ka" | "Kd" | "Ks" | "Ke")) && w.count() < 3 {
+            return Err(tobj::LoadError::MaterialParseError);
+        }
+    }
+    tobj::load_mtl_buf(&mut text.as_bytes())
 }
 
 /// Corner counts of a tobj mesh's faces (all 3 when tobj gives no arities).
@@ -395,5 +433,74 @@ mod tests {
             assert!(o.material_id.is_some_and(|i| i < mats.len()), "{}", o.name);
         }
         assert!(load_obj_objects(Path::new("/nonexistent/x.obj")).is_err());
+    }
+
+    /// Writes `files` (name, text) into a fresh folder.
+    fn folder(files: &[(&str, &str)]) -> tempfile::TempDir {
+        let d = tempfile::tempdir().unwrap();
+        for (name, text) in files {
+            std::fs::write(d.path().join(name), text).unwrap();
+        }
+        d
+    }
+
+    const TRI: &str = "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nusemtl red\nf 1/1 2/1 3/1\n";
+
+    /// Issue 23: an MTL colour with fewer than three numbers (`Kd 0.5`) panicked inside
+    /// tobj (`try_into().unwrap()`); it is now a material-library error, and the mesh itself
+    /// still loads.
+    #[test]
+    fn short_mtl_colours_are_errors_not_panics() {
+        for line in ["Kd 0.5", "Ka", "Ks 1 2", "Ke 1"] {
+            let d = folder(&[("t.obj", TRI), ("m.mtl", &format!("newmtl red\n{line}\n"))]);
+            let p = d.path().join("t.obj");
+            let (objects, mats) = load_obj_objects(&p).unwrap();
+            assert_eq!(objects.len(), 1);
+            assert!(mats.is_err(), "{line}");
+            assert_eq!(load_obj(&p, "").unwrap().num_faces(), 1);
+        }
+        let d = folder(&[("t.obj", TRI), ("m.mtl", "newmtl red\nKd 1 0 0\n")]);
+        let (_, mats) = load_obj_objects(&d.path().join("t.obj")).unwrap();
+        assert_eq!(mats.unwrap()[0].diffuse, Some([1.0, 0.0, 0.0]));
+    }
+
+    /// Issue 23: indices tobj would mishandle are refused, with the line, before tobj runs: a
+    /// huge negative texture index overflowed tobj's `vt * 2` (a panic with overflow checks),
+    /// and texture index 0 silently became "the previous corner's UV".
+    #[test]
+    fn indices_tobj_mishandles_are_refused_first() {
+        for (corner, what) in [
+            ("1/-9223372036854775807", "texture coordinate index -9223372036854775807"),
+            ("1/0", "texture coordinate index 0"),
+            ("1//-9223372036854775807", "normal index -9223372036854775807"),
+            ("-9223372036854775807", "vertex index -9223372036854775807"),
+        ] {
+            let obj = format!("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvn 0 0 1\nf {corner} 2/1/1 3/1/1\n");
+            let d = folder(&[("t.obj", &obj)]);
+            let p = d.path().join("t.obj");
+            let e = load_obj(&p, "").unwrap_err();
+            assert!(e.starts_with("line 6: ") && e.contains(what), "{corner}: {e}");
+            let e = load_obj_objects(&p).unwrap_err();
+            assert!(e.starts_with("line 6: "), "{e}");
+        }
+        // Polylines are checked too.
+        let d = folder(&[("t.obj", "v 0 0 0\nvt 0 0\nl 1/-9223372036854775807 1/1\n")]);
+        let e = load_obj(&d.path().join("t.obj"), "").unwrap_err();
+        assert!(e.starts_with("line 3: "), "{e}");
+    }
+
+    /// A face with many corners is checked for repeats in linear time (a scan per corner was
+    /// quadratic), and the repeat is still found.
+    #[test]
+    fn repeats_in_large_faces_are_found() {
+        let n = 2000;
+        let mut t: String = (0..n).map(|k| format!("v {k} {} 0\n", k * k)).collect();
+        let mut idx: Vec<String> = (1..=n).map(|k| k.to_string()).collect();
+        assert!(find_bad_obj_line(&format!("{t}f {}\n", idx.join(" "))).is_none());
+        idx[n - 1] = "5".into();
+        t.push_str(&format!("f {}\n", idx.join(" ")));
+        let (ln, msg) = find_bad_obj_line(&t).unwrap();
+        assert_eq!(ln, n + 1);
+        assert!(msg.starts_with("degenerate face: vertex 5 appears twice"), "{msg}");
     }
 }

@@ -6,16 +6,17 @@
 //!
 //! Cost (issue 23: the former clipper rescanned every corner against every corner for each
 //! ear, O(n³), so one 100k-corner face hung): the remaining corners form a doubly linked
-//! list, an ear is tested only against the reflex corners (Eberly §2: only a reflex corner
-//! can lie inside a candidate ear), found through a uniform grid over the polygon's bounding
-//! box, and clipping an ear re-tests only its two neighbours. A convex polygon is O(n log n)
-//! (the ears wait in an ordered set), a polygon with r reflex corners O(n·r) at worst. A face
-//! whose clipping would exceed `MAX_EAR_TESTS` point-in-triangle tests is refused with an
-//! error naming the face and its corner count, rather than running for minutes.
+//! list walked as Mapbox's earcut walks it (after a clip, go on from the corner past the
+//! ear's far neighbour), an ear is tested only against the reflex corners (Eberly §2: only a
+//! reflex corner can lie inside a candidate ear), found through a uniform grid over the
+//! polygon's bounding box, and a clip re-classifies only the ear's two neighbours. A convex
+//! polygon takes O(n) ear tests and no point-in-triangle test; a polygon with r reflex
+//! corners O(n²) ear tests of O(r) each at worst. A face whose clipping would exceed
+//! `MAX_EAR_TESTS` point-in-triangle tests is refused with an error naming the face and its
+//! corner count, rather than running for minutes.
 
 use crate::prelude::*;
 use crate::types::vec3;
-use std::collections::BTreeSet;
 
 /// The most point-in-triangle tests spent on one face (about a second of work) before
 /// `triangulate_polygon` gives up on it.
@@ -216,31 +217,29 @@ fn clip_polygon(p: &[[f64; 3]], budget: u64) -> Result<Vec<[usize; 3]>, String> 
     for &i in &reflex {
         s.set_reflex(i);
     }
-    // Ears are clipped lowest corner index first, as the former clipper did.
-    let mut ears = BTreeSet::new();
-    for i in 0..n {
-        if s.is_ear(i)? {
-            ears.insert(i);
-        }
-    }
+    // Walk the ring as Mapbox's earcut does: test the corner under the cursor; after a clip,
+    // go on two corners further, so one pass cuts every other corner of a convex run and the
+    // triangles stay local (clipping the lowest-index ear each time made a fan whose ever
+    // larger triangles each overlapped every grid cell).
     let mut out = Vec::with_capacity(n - 2);
-    let (mut left, mut any) = (n, 0);
+    let (mut left, mut b, mut stop) = (n, 0, 0);
+    let mut any = 0;
     while left > 3 {
-        let b = match ears.pop_first() {
-            Some(b) => b,
-            None => {
-                // A neighbour-only update can leave an ear unlisted (a reflex corner inside
-                // its triangle turned convex): look again before cutting a corner blindly.
-                let mut i = any;
-                for _ in 0..left {
-                    if s.is_ear(i)? {
-                        ears.insert(i);
-                    }
-                    i = s.next[i];
-                }
-                ears.pop_first().unwrap_or(s.next[any])
+        let ear = s.is_ear(b)?;
+        if !ear {
+            b = s.next[b];
+            if b != stop {
+                continue;
             }
-        };
+            // A whole turn without an ear (degenerate or self-intersecting input): cut a
+            // nearby convex corner, or this one, so the output still has n - 2 triangles.
+            for _ in 0..left.min(64) {
+                if !s.reflex[b] {
+                    break;
+                }
+                b = s.next[b];
+            }
+        }
         let (a, c) = (s.prev[b], s.next[b]);
         out.push([a, b, c]);
         s.next[a] = c;
@@ -248,13 +247,10 @@ fn clip_polygon(p: &[[f64; 3]], budget: u64) -> Result<Vec<[usize; 3]>, String> 
         s.alive[b] = false;
         left -= 1;
         any = a;
-        for v in [a, c] {
-            s.set_reflex(v);
-            ears.remove(&v);
-            if left > 3 && s.is_ear(v)? {
-                ears.insert(v);
-            }
-        }
+        s.set_reflex(a);
+        s.set_reflex(c);
+        b = s.next[c];
+        stop = b;
     }
     // The last three corners, from the lowest index, in the polygon's order.
     let a = any.min(s.next[any]).min(s.prev[any]);
@@ -452,6 +448,28 @@ mod tests {
             .map(|c| [c[0] as usize, c[1] as usize, c[2] as usize])
             .collect();
         assert_valid(&p, &tris);
+    }
+
+    /// A 100k-corner circle of radius 100 stored in single precision: rounding turns the
+    /// arc into a zigzag with about half its corners reflex. Clipping the lowest corner first
+    /// made a fan whose triangles covered the whole grid, past the test budget; walking the
+    /// ring keeps ears local, and the result still covers the polygon without folds.
+    #[test]
+    fn a_rounded_circle_with_100k_corners_triangulates() {
+        let n = 100_000;
+        let p: Vec<[f64; 3]> = star(n, 1.0)
+            .iter()
+            .map(|x| [(100.0 * x[0]) as f32 as f64, (100.0 * x[1]) as f32 as f64, 0.0])
+            .collect();
+        let reflex = (0..n)
+            .filter(|&k| cross2_3(p[(k + n - 1) % n], p[k], p[(k + 1) % n]) <= 0.0)
+            .count();
+        assert!(reflex > n / 10, "{reflex} reflex corners");
+        assert_valid(&p, &triangulate_polygon(&p).unwrap());
+    }
+
+    fn cross2_3(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> f64 {
+        cross2([a[0], a[1]], [b[0], b[1]], [c[0], c[1]])
     }
 
     /// A star with 20k corners, half of them reflex, and star-shaped polygons with random

@@ -8,6 +8,7 @@ mod support;
 mod arap;
 mod f3d;
 mod graphs;
+mod loader_bounds;
 mod mass_spring;
 mod mass_spring_node;
 mod mesh;

@@ -120,7 +120,10 @@ impl Clipper<'_> {
     /// triangle's own in the closed triangle `prev(b), b, next(b)`.
     fn is_ear(&mut self, b: usize) -> Result<bool, String> {
         if self.reflex[b] {
-            return Ok(false);
+            // Counted too: on self-intersecting input whole turns can pass over reflex
+            // corners, and the budget must bound those walks as well.
+            self.tests += 1;
+            return self.within_budget(false);
         }
         let (a, c) = (self.prev[b], self.next[b]);
         let (qa, qb, qc) = (self.q[a], self.q[b], self.q[c]);
@@ -153,13 +156,18 @@ impl Clipper<'_> {
             }
         }
         self.tests += tests;
+        self.within_budget(!inside)
+    }
+
+    /// `Ok(ear)` while the work spent is within the budget, else the error.
+    fn within_budget(&self, ear: bool) -> Result<bool, String> {
         if self.tests > self.budget {
             return Err(format!(
                 "triangulating it would take more than {} point-in-triangle tests; split it first",
                 self.budget
             ));
         }
-        Ok(!inside)
+        Ok(ear)
     }
 }
 
@@ -514,6 +522,24 @@ mod tests {
             comb.extend([[x + 2.0, 10.0, 0.0], [x + 1.0, 10.0, 0.0], [x + 1.0, 1.0, 0.0], [x, 1.0, 0.0]]);
         }
         assert_valid(&comb, &triangulate_polygon(&comb).unwrap());
+    }
+
+    /// A self-intersecting figure eight (one lobe wound against the projected normal, so its
+    /// corners all look reflex) still gives n - 2 triangles, and a large one is bounded by
+    /// the budget instead of walking whole turns for every clip.
+    #[test]
+    fn self_intersecting_input_terminates() {
+        let eight = |n: usize| -> Vec<[f64; 3]> {
+            (0..n)
+                .map(|k| {
+                    let t = std::f64::consts::TAU * k as f64 / n as f64;
+                    [t.sin(), (2.0 * t).sin() * if k < n / 2 { 0.5 } else { 0.3 }, 0.0]
+                })
+                .collect()
+        };
+        assert_eq!(triangulate_polygon(&eight(200)).unwrap().len(), 198);
+        let e = clip_polygon(&eight(20_000), 1_000_000).unwrap_err();
+        assert!(e.contains("more than 1000000 point-in-triangle tests"), "{e}");
     }
 
     /// Past its budget of point-in-triangle tests a face is refused, and the error names the

@@ -116,7 +116,7 @@ pub type ObjMaterials = Result<Vec<tobj::Material>, tobj::LoadError>;
 /// tobj never sees an index it would mishandle (issue 23: a huge negative texture index
 /// overflowed its `vt * 2`, and index 0 became "the previous corner's UV"); a later failure
 /// is tobj's message. MTL libraries are read through `load_mtl_checked`.
-fn read_tobj(path: &Path) -> Result<(Vec<tobj::Model>, ObjMaterials), String> {
+fn read_tobj(path: &Path) -> Result<(Vec<tobj::Model>, ObjMaterials, [bool; 2]), String> {
     let opts = tobj::LoadOptions {
         triangulate: false,
         single_index: false,
@@ -128,10 +128,32 @@ fn read_tobj(path: &Path) -> Result<(Vec<tobj::Model>, ObjMaterials), String> {
         return Err(format!("line {ln}: {msg}"));
     }
     let dir = path.parent().unwrap_or(Path::new(""));
-    tobj::load_obj_buf(&mut text.as_bytes(), &opts, |mtl| {
+    let (models, mats) = tobj::load_obj_buf(&mut text.as_bytes(), &opts, |mtl| {
         load_mtl_checked(&dir.join(mtl))
     })
-    .map_err(|e| e.to_string())
+    .map_err(|e| e.to_string())?;
+    Ok((models, mats, corners_complete(text)))
+}
+
+/// Whether every face corner of an OBJ text names a texture coordinate, and whether every
+/// one names a normal. tobj fills a missing index with the previous corner's (or the first
+/// `vt`/`vn` of the file), so its UVs and normals are kept only when complete (issue 23:
+/// a file with `vt` lines and bare `f 1 2 3` faces got the first `vt` on every corner).
+fn corners_complete(text: &str) -> [bool; 2] {
+    let mut all = [true; 2];
+    for line in text.lines() {
+        let mut w = line.split_whitespace();
+        if w.next() != Some("f") {
+            continue;
+        }
+        for corner in w {
+            let mut parts = corner.split('/').skip(1);
+            for a in all.iter_mut() {
+                *a &= parts.next().is_some_and(|p| !p.is_empty());
+            }
+        }
+    }
+    all
 }
 
 /// Reads an MTL library with tobj after checking the lines tobj would panic on: a colour
@@ -202,7 +224,7 @@ pub struct ObjObject {
 /// objects and materials apart. Errors name the first bad line when there is one, like
 /// `load_obj`; a block whose mesh is invalid otherwise gives `object '<name>': <error>`.
 pub fn load_obj_objects(path: &Path) -> Result<(Vec<ObjObject>, ObjMaterials), String> {
-    let (models, materials) = read_tobj(path)?;
+    let (models, materials, [all_uv, all_n]) = read_tobj(path)?;
     let mut objects = Vec::new();
     for m in models {
         let mesh = &m.mesh;
@@ -221,11 +243,11 @@ pub fn load_obj_objects(path: &Path) -> Result<(Vec<ObjObject>, ObjMaterials), S
                     None => format!("object '{}': {e}", m.name),
                 }
             })?;
-        out.uvs = corner_uvs(mesh).map(|values| Attribute {
+        out.uvs = corner_uvs(mesh).filter(|_| all_uv).map(|values| Attribute {
             domain: Domain::Corner,
             values,
         });
-        out.normals = corner_normals(mesh).map(|values| Attribute {
+        out.normals = corner_normals(mesh).filter(|_| all_n).map(|values| Attribute {
             domain: Domain::Corner,
             values,
         });
@@ -243,7 +265,7 @@ pub fn load_obj_objects(path: &Path) -> Result<(Vec<ObjObject>, ObjMaterials), S
 /// per block, so when merging, vertices of different blocks at bit-identical positions are
 /// welded back together (OBJ blocks share one vertex list).
 pub fn load_obj(path: &Path, group: &str) -> Result<Mesh, String> {
-    let (models, _) = read_tobj(path)?;
+    let (models, _, [all_uv, all_n]) = read_tobj(path)?;
     let locate = || locate_bad_line(path);
     let models: Vec<&tobj::Model> = if group.is_empty() {
         models.iter().collect()
@@ -264,7 +286,7 @@ pub fn load_obj(path: &Path, group: &str) -> Result<Mesh, String> {
     let mut idx = Vec::new();
     let mut uvs = Vec::new();
     let mut normals = Vec::new();
-    let (mut has_uv, mut has_n) = (true, true);
+    let (mut has_uv, mut has_n) = (all_uv, all_n);
     let multi = models.len() > 1;
     for m in &models {
         let mesh = &m.mesh;
@@ -502,5 +524,26 @@ mod tests {
         let (ln, msg) = find_bad_obj_line(&t).unwrap();
         assert_eq!(ln, n + 1);
         assert!(msg.starts_with("degenerate face: vertex 5 appears twice"), "{msg}");
+    }
+
+    /// Issue 23: corners without a `vt` (or `vn`) got another corner's from tobj; such a
+    /// file now loads without UVs (normals) instead of with invented ones.
+    #[test]
+    fn incomplete_corner_uvs_and_normals_are_dropped() {
+        let head = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0.25 0.75\nvt 1 0\nvn 0 0 1\n";
+        for (faces, uv, n) in [
+            ("f 1 2 3\n", false, false),
+            ("f 1/1/1 2/2/1 3/2\n", true, false),
+            ("f 1/1/1 2//1 3/2/1\n", false, true),
+            ("f 1/1/1 2/2/1 3/2/1\n", true, true),
+        ] {
+            let d = folder(&[("t.obj", &format!("{head}{faces}"))]);
+            let p = d.path().join("t.obj");
+            let m = load_obj(&p, "").unwrap();
+            assert_eq!((m.uvs.is_some(), m.normals.is_some()), (uv, n), "{faces}");
+            let (o, _) = load_obj_objects(&p).unwrap();
+            let m = &o[0].mesh;
+            assert_eq!((m.uvs.is_some(), m.normals.is_some()), (uv, n), "{faces}");
+        }
     }
 }

@@ -42,7 +42,7 @@ pub fn find_bad_obj_line(text: &str) -> Option<(usize, String)> {
                 nn += 1;
                 nums(w, 3)
             }
-            "f" => (|| {
+            "f" | "l" => (|| {
                 let mut seen = Vec::new();
                 for corner in w {
                     let mut parts = corner.split('/');
@@ -62,12 +62,15 @@ pub fn find_bad_obj_line(text: &str) -> Option<(usize, String)> {
                             ));
                         }
                         if k == 0 {
-                            if seen.contains(&abs) {
-                                return Err(format!("degenerate face: vertex {abs} appears twice"));
-                            }
                             seen.push(abs);
                         }
                     }
+                }
+                if kw == "l" {
+                    return Ok(()); // a polyline: its indices are in range, nothing else to check
+                }
+                if let Some(abs) = first_repeat(&seen) {
+                    return Err(format!("degenerate face: vertex {abs} appears twice"));
                 }
                 if seen.len() < 3 {
                     return Err(format!(
@@ -86,6 +89,18 @@ pub fn find_bad_obj_line(text: &str) -> Option<(usize, String)> {
     None
 }
 
+/// The first corner (in order) whose vertex appeared earlier in `face`: a scan for small
+/// faces, a set for large ones (a scan per corner was quadratic in the face's size).
+fn first_repeat(face: &[i64]) -> Option<i64> {
+    if face.len() <= 32 {
+        return (1..face.len())
+            .find(|&k| face[..k].contains(&face[k]))
+            .map(|k| face[k]);
+    }
+    let mut set = std::collections::HashSet::with_capacity(face.len());
+    face.iter().copied().find(|&v| !set.insert(v))
+}
+
 /// The first malformed line of the OBJ file at `path`, if it can be read and has one.
 fn locate_bad_line(path: &Path) -> Option<(usize, String)> {
     std::fs::read_to_string(path)
@@ -96,23 +111,49 @@ fn locate_bad_line(path: &Path) -> Option<(usize, String)> {
 /// The tobj materials of an OBJ file, or why its material library could not be read.
 pub type ObjMaterials = Result<Vec<tobj::Material>, tobj::LoadError>;
 
-/// Runs tobj on `path` (polygons kept, separate position/UV/normal indices); a failure
-/// names the first bad line when `find_bad_obj_line` finds one, else is tobj's message.
-fn read_tobj(path: &Path) -> Result<(Vec<tobj::Model>, ObjMaterials), String> {
+/// Runs tobj on `path` (polygons kept, separate position/UV/normal indices). The text is
+/// checked with `find_bad_obj_line` first, so a bad line is reported with its number and
+/// tobj never sees an index it would mishandle (issue 23: a huge negative texture index
+/// overflowed its `vt * 2`, and index 0 became "the previous corner's UV"); a later failure
+/// is tobj's message. MTL libraries are read through `load_mtl_checked`.
+fn read_tobj(path: &Path) -> Result<(Vec<tobj::Model>, ObjMaterials, [bool; 2]), String> {
     let opts = tobj::LoadOptions {
         triangulate: false,
         single_index: false,
         ..Default::default()
     };
-    let file = std::fs::File::open(path).map_err(|e| e.to_string())?;
+    let bytes = std::fs::read(path).map_err(|e| e.to_string())?;
+    let text = std::str::from_utf8(&bytes).map_err(|e| format!("not UTF-8 text: {e}"))?;
+    if let Some((ln, msg)) = find_bad_obj_line(text) {
+        return Err(format!("line {ln}: {msg}"));
+    }
     let dir = path.parent().unwrap_or(Path::new(""));
-    tobj::load_obj_buf(&mut std::io::BufReader::new(file), &opts, |mtl| {
+    let (models, mats) = tobj::load_obj_buf(&mut text.as_bytes(), &opts, |mtl| {
         load_mtl(&dir.join(mtl))
     })
-    .map_err(|e| match locate_bad_line(path) {
-        Some((ln, msg)) => format!("line {ln}: {msg}"),
-        None => format!("{e}"),
-    })
+    .map_err(|e| e.to_string())?;
+    Ok((models, mats, corners_complete(text)))
+}
+
+/// Whether every face corner of an OBJ text names a texture coordinate, and whether every
+/// one names a normal. tobj fills a missing index with the previous corner's (or the first
+/// `vt`/`vn` of the file), so its UVs and normals are kept only when complete (issue 23:
+/// a file with `vt` lines and bare `f 1 2 3` faces got the first `vt` on every corner).
+fn corners_complete(text: &str) -> [bool; 2] {
+    let mut all = [true; 2];
+    for line in text.lines() {
+        let mut w = line.split_whitespace();
+        if w.next() != Some("f") {
+            continue;
+        }
+        for corner in w {
+            let mut parts = corner.split('/').skip(1);
+            for a in all.iter_mut() {
+                *a &= parts.next().is_some_and(|p| !p.is_empty());
+            }
+        }
+    }
+    all
 }
 
 /// Reads an MTL library for tobj after `complete_mtl_colours`.
@@ -200,7 +241,7 @@ pub struct ObjObject {
 /// objects and materials apart. Errors name the first bad line when there is one, like
 /// `load_obj`; a block whose mesh is invalid otherwise gives `object '<name>': <error>`.
 pub fn load_obj_objects(path: &Path) -> Result<(Vec<ObjObject>, ObjMaterials), String> {
-    let (models, materials) = read_tobj(path)?;
+    let (models, materials, [all_uv, all_n]) = read_tobj(path)?;
     let mut objects = Vec::new();
     for m in models {
         let mesh = &m.mesh;
@@ -219,11 +260,11 @@ pub fn load_obj_objects(path: &Path) -> Result<(Vec<ObjObject>, ObjMaterials), S
                     None => format!("object '{}': {e}", m.name),
                 }
             })?;
-        out.uvs = corner_uvs(mesh).map(|values| Attribute {
+        out.uvs = corner_uvs(mesh).filter(|_| all_uv).map(|values| Attribute {
             domain: Domain::Corner,
             values,
         });
-        out.normals = corner_normals(mesh).map(|values| Attribute {
+        out.normals = corner_normals(mesh).filter(|_| all_n).map(|values| Attribute {
             domain: Domain::Corner,
             values,
         });
@@ -241,7 +282,7 @@ pub fn load_obj_objects(path: &Path) -> Result<(Vec<ObjObject>, ObjMaterials), S
 /// per block, so when merging, vertices of different blocks at bit-identical positions are
 /// welded back together (OBJ blocks share one vertex list).
 pub fn load_obj(path: &Path, group: &str) -> Result<Mesh, String> {
-    let (models, _) = read_tobj(path)?;
+    let (models, _, [all_uv, all_n]) = read_tobj(path)?;
     let locate = || locate_bad_line(path);
     let models: Vec<&tobj::Model> = if group.is_empty() {
         models.iter().collect()
@@ -262,7 +303,7 @@ pub fn load_obj(path: &Path, group: &str) -> Result<Mesh, String> {
     let mut idx = Vec::new();
     let mut uvs = Vec::new();
     let mut normals = Vec::new();
-    let (mut has_uv, mut has_n) = (true, true);
+    let (mut has_uv, mut has_n) = (all_uv, all_n);
     let multi = models.len() > 1;
     for m in &models {
         let mesh = &m.mesh;
@@ -469,6 +510,78 @@ mod tests {
             let (objects, mats) = load_obj_objects(&obj).unwrap();
             assert_eq!(objects.len(), 1, "{bad:?}");
             assert!(mats.is_err(), "{bad:?}");
+        }
+    }
+
+    /// Writes `files` (name, text) into a fresh folder.
+    fn folder(files: &[(&str, &str)]) -> tempfile::TempDir {
+        let d = tempfile::tempdir().unwrap();
+        for (name, text) in files {
+            std::fs::write(d.path().join(name), text).unwrap();
+        }
+        d
+    }
+
+    const TRI: &str = "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nusemtl red\nf 1/1 2/1 3/1\n";
+
+    /// Issue 23: indices tobj would mishandle are refused, with the line, before tobj runs: a
+    /// huge negative texture index overflowed tobj's `vt * 2` (a panic with overflow checks),
+    /// and texture index 0 silently became "the previous corner's UV".
+    #[test]
+    fn indices_tobj_mishandles_are_refused_first() {
+        for (corner, what) in [
+            ("1/-9223372036854775807", "texture coordinate index -9223372036854775807"),
+            ("1/0", "texture coordinate index 0"),
+            ("1//-9223372036854775807", "normal index -9223372036854775807"),
+            ("-9223372036854775807", "vertex index -9223372036854775807"),
+        ] {
+            let obj = format!("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvn 0 0 1\nf {corner} 2/1/1 3/1/1\n");
+            let d = folder(&[("t.obj", &obj)]);
+            let p = d.path().join("t.obj");
+            let e = load_obj(&p, "").unwrap_err();
+            assert!(e.starts_with("line 6: ") && e.contains(what), "{corner}: {e}");
+            let e = load_obj_objects(&p).unwrap_err();
+            assert!(e.starts_with("line 6: "), "{e}");
+        }
+        // Polylines are checked too.
+        let d = folder(&[("t.obj", "v 0 0 0\nvt 0 0\nl 1/-9223372036854775807 1/1\n")]);
+        let e = load_obj(&d.path().join("t.obj"), "").unwrap_err();
+        assert!(e.starts_with("line 3: "), "{e}");
+    }
+
+    /// A face with many corners is checked for repeats in linear time (a scan per corner was
+    /// quadratic), and the repeat is still found.
+    #[test]
+    fn repeats_in_large_faces_are_found() {
+        let n = 2000;
+        let mut t: String = (0..n).map(|k| format!("v {k} {} 0\n", k * k)).collect();
+        let mut idx: Vec<String> = (1..=n).map(|k| k.to_string()).collect();
+        assert!(find_bad_obj_line(&format!("{t}f {}\n", idx.join(" "))).is_none());
+        idx[n - 1] = "5".into();
+        t.push_str(&format!("f {}\n", idx.join(" ")));
+        let (ln, msg) = find_bad_obj_line(&t).unwrap();
+        assert_eq!(ln, n + 1);
+        assert!(msg.starts_with("degenerate face: vertex 5 appears twice"), "{msg}");
+    }
+
+    /// Issue 23: corners without a `vt` (or `vn`) got another corner's from tobj; such a
+    /// file now loads without UVs (normals) instead of with invented ones.
+    #[test]
+    fn incomplete_corner_uvs_and_normals_are_dropped() {
+        let head = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0.25 0.75\nvt 1 0\nvn 0 0 1\n";
+        for (faces, uv, n) in [
+            ("f 1 2 3\n", false, false),
+            ("f 1/1/1 2/2/1 3/2\n", true, false),
+            ("f 1/1/1 2//1 3/2/1\n", false, true),
+            ("f 1/1/1 2/2/1 3/2/1\n", true, true),
+        ] {
+            let d = folder(&[("t.obj", &format!("{head}{faces}"))]);
+            let p = d.path().join("t.obj");
+            let m = load_obj(&p, "").unwrap();
+            assert_eq!((m.uvs.is_some(), m.normals.is_some()), (uv, n), "{faces}");
+            let (o, _) = load_obj_objects(&p).unwrap();
+            let m = &o[0].mesh;
+            assert_eq!((m.uvs.is_some(), m.normals.is_some()), (uv, n), "{faces}");
         }
     }
 }

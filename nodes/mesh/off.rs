@@ -75,6 +75,9 @@ pub fn read_off(text: &str) -> Result<Mesh, String> {
             return Err(format!("line {ln}: degenerate face with {n} corners"));
         }
         let start = fi.len();
+        // Repeats: a scan for small faces, a set for large ones (a scan per corner was
+        // quadratic, so one line of a million indices took minutes). Not sized from `n`.
+        let mut seen = std::collections::HashSet::new();
         for _ in 0..n {
             let i: usize = w
                 .next()
@@ -85,7 +88,12 @@ pub fn read_off(text: &str) -> Result<Mesh, String> {
                     "line {ln}: vertex index {i} out of range ({nv} vertices)"
                 ));
             }
-            if fi[start..].contains(&(i as u32)) {
+            let repeated = if n > 32 {
+                !seen.insert(i)
+            } else {
+                fi[start..].contains(&(i as u32))
+            };
+            if repeated {
                 return Err(format!(
                     "line {ln}: degenerate face, vertex {i} appears twice"
                 ));
@@ -137,5 +145,22 @@ mod tests {
         assert!(e.contains("file ends after 0 of 100000000000 vertices"), "{e}");
         let e = read_off(&format!("OFF\n3 {} 0\n0 0 0\n1 0 0\n0 1 0\n", usize::MAX)).unwrap_err();
         assert!(e.contains("file ends after 0 of"), "{e}");
+    }
+
+    /// A face line with many corners is checked for repeats in linear time, and the repeat
+    /// is still reported with its line.
+    #[test]
+    fn repeats_in_large_faces_are_found() {
+        let n = 3000;
+        let mut t = format!("OFF\n{n} 1 0\n");
+        for k in 0..n {
+            t.push_str(&format!("{k} {} 0\n", k * k));
+        }
+        let mut idx: Vec<String> = (0..n).map(|k| k.to_string()).collect();
+        let ok = format!("{t}{n} {}\n", idx.join(" "));
+        assert_eq!(read_off(&ok).unwrap().face(0).len(), n);
+        idx[n - 1] = "7".into();
+        let e = read_off(&format!("{t}{n} {}\n", idx.join(" "))).unwrap_err();
+        assert_eq!(e, format!("line {}: degenerate face, vertex 7 appears twice", n + 3));
     }
 }

@@ -152,6 +152,34 @@ impl Source for Ascii<'_> {
     }
 }
 
+/// Refuses element counts the body cannot hold, before anything is read or allocated
+/// (issue 23): every instance takes at least its fixed-size values and list counts in a
+/// binary body, and at least two bytes (a digit and a separator) per property in an ASCII
+/// one. Overflowing totals count as too large.
+fn check_counts(elements: &[Element], format: Format, body: usize) -> Result<(), String> {
+    let mut need: u128 = 0;
+    for el in elements {
+        let per: u128 = el
+            .props
+            .iter()
+            .map(|p| match format {
+                Format::Ascii => 2,
+                _ => p.list_count.unwrap_or(p.ty).size() as u128,
+            })
+            .sum();
+        need = need.saturating_add(per.saturating_mul(el.count as u128));
+        // The last value of an ASCII body may end the file without a separator.
+        let slack = u128::from(format == Format::Ascii);
+        if need > body as u128 + slack {
+            return Err(format!(
+                "element '{}' declares {} instances, more than the {body} bytes of data can hold",
+                el.name, el.count
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// Reads a PLY file (ASCII or binary). Errors give the header or body line (ASCII) or the
 /// byte offset (binary).
 pub fn read_ply(bytes: &[u8]) -> Result<Mesh, String> {
@@ -219,6 +247,7 @@ pub fn read_ply(bytes: &[u8]) -> Result<Mesh, String> {
         }
     }
     let format = format.ok_or("the header has no 'format' line")?;
+    check_counts(&elements, format, bytes.len().saturating_sub(body))?;
     let header_lines = header.lines().count() + 1;
     let text_body;
     let mut src: Box<dyn Source> = match format {
@@ -331,14 +360,22 @@ pub fn read_ply(bytes: &[u8]) -> Result<Mesh, String> {
                 if idx.len() < 3 {
                     return Err(format!("face {k} is degenerate: {} corners", idx.len()));
                 }
+                // Large faces find repeats through a set: a scan per corner was O(k²).
+                let mut seen = std::collections::HashSet::new();
                 for (c, &i) in idx.iter().enumerate() {
-                    if i < 0.0 || i as usize >= positions.len() {
+                    // `i as usize` would turn NaN into 0 and 1.5 into 1: only whole numbers.
+                    if !(i >= 0.0 && i.fract() == 0.0 && i < positions.len() as f64) {
                         return Err(format!(
                             "face {k} refers to vertex {i}, but there are {} vertices",
                             positions.len()
                         ));
                     }
-                    if idx[..c].contains(&i) {
+                    let repeated = if idx.len() > 32 {
+                        !seen.insert(i as u32)
+                    } else {
+                        idx[..c].contains(&i)
+                    };
+                    if repeated {
                         return Err(format!("face {k} is degenerate: vertex {i} appears twice"));
                     }
                     fi.push(i as u32);
@@ -432,6 +469,41 @@ pub fn write_ply_points(
     w.write_all(&buf)
 }
 
+/// The type of a list's length in a written PLY file: the narrowest that holds every length.
+#[derive(Clone, Copy)]
+enum ListCount {
+    U8,
+    U16,
+    U32,
+}
+
+impl ListCount {
+    fn holding(max: usize) -> ListCount {
+        if max <= u8::MAX as usize {
+            ListCount::U8
+        } else if max <= u16::MAX as usize {
+            ListCount::U16
+        } else {
+            ListCount::U32
+        }
+    }
+    fn name(self) -> &'static str {
+        match self {
+            ListCount::U8 => "uchar",
+            ListCount::U16 => "ushort",
+            ListCount::U32 => "uint",
+        }
+    }
+    /// Writes `n` little endian in this type (`holding` chose a type that fits it).
+    fn write(self, w: &mut dyn Write, n: usize) -> std::io::Result<()> {
+        match self {
+            ListCount::U8 => w.write_all(&[n as u8]),
+            ListCount::U16 => w.write_all(&(n as u16).to_le_bytes()),
+            ListCount::U32 => w.write_all(&(n as u32).to_le_bytes()),
+        }
+    }
+}
+
 /// Writes a PLY file: ASCII, or binary little endian with double-precision vertices.
 /// Per-vertex normals, UVs and colours become vertex properties; per-corner UVs a face
 /// `texcoord` list.
@@ -455,10 +527,16 @@ pub fn write_ply(mesh: &Mesh, binary: bool, w: &mut dyn Write) -> std::io::Resul
     for n in &names {
         writeln!(w, "property double {n}")?;
     }
+    // List counts in the narrowest type that holds the largest face (issue 23: a uchar count
+    // clamped to 255 while every index was written made faces past 255 corners, or 127 with
+    // per-corner UVs, corrupt the rest of the file). Usual meshes keep `uchar`.
+    let widest = mesh.face_counts().iter().copied().max().unwrap_or(0) as usize;
+    let idx_ty = ListCount::holding(widest);
+    let uv_ty = ListCount::holding(2 * widest);
     writeln!(w, "element face {}", mesh.num_faces())?;
-    writeln!(w, "property list uchar int vertex_indices")?;
+    writeln!(w, "property list {} int vertex_indices", idx_ty.name())?;
     if cuv.is_some() {
-        writeln!(w, "property list uchar double texcoord")?;
+        writeln!(w, "property list {} double texcoord", uv_ty.name())?;
     }
     writeln!(w, "end_header")?;
     for v in 0..mesh.num_vertices() {
@@ -483,15 +561,15 @@ pub fn write_ply(mesh: &Mesh, binary: bool, w: &mut dyn Write) -> std::io::Resul
     }
     let starts = mesh.face_starts();
     for (f, face) in mesh.faces().enumerate() {
-        let n = face.len().min(255);
+        let n = face.len();
         let uv = cuv.map(|a| &a.values[starts[f] as usize..starts[f + 1] as usize]);
         if binary {
-            w.write_all(&[n as u8])?;
+            idx_ty.write(w, n)?;
             for &v in face {
                 w.write_all(&(v as i32).to_le_bytes())?;
             }
             if let Some(uv) = uv {
-                w.write_all(&[(2 * n).min(255) as u8])?;
+                uv_ty.write(w, 2 * n)?;
                 for t in uv {
                     w.write_all(&t[0].to_le_bytes())?;
                     w.write_all(&t[1].to_le_bytes())?;
@@ -515,47 +593,5 @@ pub fn write_ply(mesh: &Mesh, binary: bool, w: &mut dyn Write) -> std::io::Resul
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    const SQUARE: &str = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n";
-
-    /// Issue 23: a binary element with no properties and a count near 2^64 looped without
-    /// reading a byte; a vertex coordinate declared as a list of length 0 indexed out of bounds.
-    #[test]
-    fn hostile_headers_are_errors() {
-        let junk = "ply\nformat binary_little_endian 1.0\nelement junk 18446744073709551615\nend_header\n";
-        let e = read_ply(junk.as_bytes()).unwrap_err();
-        assert!(e.contains("element 'junk' declares 18446744073709551615 instances but no properties"), "{e}");
-        let empty_x = "ply\nformat ascii 1.0\nelement vertex 1\nproperty list uchar float x\nproperty float y\nproperty float z\nend_header\n0 1 2\n";
-        let e = read_ply(empty_x.as_bytes()).unwrap_err();
-        assert!(e.contains("vertex 0: x, y and z need one value each"), "{e}");
-    }
-
-    #[test]
-    fn ascii_square_and_line_numbers() {
-        let m = read_ply(SQUARE.as_bytes()).unwrap();
-        assert_eq!(m.face(0), &[0, 1, 2, 3]);
-        assert_eq!(m.positions[2], [1.0, 1.0, 0.0]);
-        let e = read_ply(SQUARE.replace("1 1 0", "1 x 0").as_bytes()).unwrap_err();
-        assert!(e.starts_with("line 12:"), "{e}");
-    }
-
-    #[test]
-    fn binary_round_trip_is_exact() {
-        let mut m = read_ply(SQUARE.as_bytes()).unwrap();
-        m.positions[1][1] = 0.1 + 0.2;
-        m.uvs = Some(Attribute {
-            domain: Domain::Corner,
-            values: vec![[0.1, 0.2], [0.3, 0.4], [0.5, 0.6], [0.7, 0.8]],
-        });
-        for binary in [false, true] {
-            let mut buf = Vec::new();
-            write_ply(&m, binary, &mut buf).unwrap();
-            let r = read_ply(&buf).unwrap();
-            assert_eq!(r.positions, m.positions);
-            assert_eq!(r.face_indices(), m.face_indices());
-            assert_eq!(r.uvs, m.uvs);
-        }
-    }
-}
+#[path = "ply_tests.rs"]
+mod tests;

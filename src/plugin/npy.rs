@@ -54,7 +54,10 @@ impl DType {
     }
 
     fn parse(descr: &str) -> Result<DType, String> {
-        let (order, code) = descr.split_at(descr.len().min(1));
+        // Split after the first character, not the first byte: a multi-byte first character
+        // made `split_at(1)` panic (issue 23).
+        let cut = descr.chars().next().map_or(0, char::len_utf8);
+        let (order, code) = descr.split_at(cut);
         if order == ">" && !matches!(code, "u1" | "b1" | "i1") {
             return Err(format!(
                 "dtype '{descr}' is big-endian; write little-endian arrays (arr.astype('<{code}'))"
@@ -253,15 +256,32 @@ impl NpyArray {
             .filter(|s| !s.is_empty())
             .map(|s| s.parse().map_err(|_| format!("bad shape {shape_text}")))
             .collect::<Result<_, _>>()?;
+        // No dimension may exceed what the file could hold (issue 23): with another
+        // dimension 0 the data check below passes, and readers size buffers from the rest
+        // (a `(10**18, 0)` array of triangles asked for 10^18 face counts).
+        if let Some(&d) = shape.iter().find(|&&d| d > bytes.len()) {
+            return Err(format!(
+                "shape {} declares a dimension of {d}, more than a {}-byte file can hold",
+                shape_str(&shape),
+                bytes.len()
+            ));
+        }
         let n: usize = shape
             .iter()
             .try_fold(1usize, |a, &d| a.checked_mul(d))
-            .ok_or("shape too large")?;
+            .ok_or_else(|| format!("shape {} is too large", shape_str(&shape)))?;
         let data = &bytes[start + hlen..];
-        let want = n.checked_mul(dtype.size()).ok_or("shape too large")?;
-        if data.len() < want {
+        let want = n
+            .checked_mul(dtype.size())
+            .ok_or_else(|| format!("shape {} is too large", shape_str(&shape)))?;
+        if data.len() != want {
+            let what = if data.len() < want {
+                "truncated"
+            } else {
+                "longer than its shape"
+            };
             return Err(format!(
-                "the .npy data is truncated: shape {} of {} needs {want} bytes, found {}",
+                "the .npy data is {what}: shape {} of {} needs {want} bytes, found {}",
                 shape_str(&shape),
                 dtype.descr(),
                 data.len()
@@ -270,7 +290,7 @@ impl NpyArray {
         let mut a = NpyArray {
             shape,
             dtype,
-            data: data[..want].to_vec(),
+            data: data.to_vec(),
         };
         if fortran && a.shape.len() > 1 {
             a.data = fortran_to_c(&a.data, &a.shape, dtype.size());
@@ -325,6 +345,10 @@ fn header_field<'a>(header: &'a str, key: &str) -> Option<&'a str> {
 /// Reorders Fortran-order (column-major) element bytes to C order.
 fn fortran_to_c(data: &[u8], shape: &[usize], size: usize) -> Vec<u8> {
     let n: usize = shape.iter().product();
+    if n == 0 {
+        // Nothing to reorder; the strides of the other dimensions could overflow.
+        return Vec::new();
+    }
     // Fortran strides (in elements): first axis fastest.
     let mut fstride = vec![1usize; shape.len()];
     for k in 1..shape.len() {
@@ -400,5 +424,40 @@ mod tests {
         assert!(NpyArray::from_bytes(big)
             .unwrap_err()
             .contains("big-endian"));
+    }
+
+    /// An `.npy` file with `header` (a dict literal) and `data` after it.
+    fn npy(header: &str, data: &[u8]) -> Vec<u8> {
+        let mut b = b"\x93NUMPY\x01\x00".to_vec();
+        b.extend_from_slice(&(header.len() as u16).to_le_bytes());
+        b.extend_from_slice(header.as_bytes());
+        b.extend_from_slice(data);
+        b
+    }
+
+    /// Issue 23: hostile headers are errors, not panics or huge allocations: a multi-byte
+    /// first character in 'descr' (a panic in `split_at`), a shape whose product overflows,
+    /// a zero-size shape with a huge other dimension (Fortran strides overflowed, and decoders
+    /// sized buffers from it), and data longer than the shape (it was silently cut).
+    #[test]
+    fn hostile_headers_are_errors() {
+        let h = "{'descr': '\u{e9}8', 'fortran_order': False, 'shape': (1,), }";
+        let e = NpyArray::from_bytes(&npy(h, &[0; 8])).unwrap_err();
+        assert!(e.contains("unsupported dtype"), "{e}");
+        let h = "{'descr': '<f8', 'fortran_order': False, 'shape': (4294967296, 4294967296, 2), }";
+        let e = NpyArray::from_bytes(&npy(h, &[])).unwrap_err();
+        assert!(e.contains("declares a dimension of 4294967296"), "{e}");
+        let h = "{'descr': '<f8', 'fortran_order': True, 'shape': (100000000000000, 100000000000000, 0), }";
+        let e = NpyArray::from_bytes(&npy(h, &[])).unwrap_err();
+        assert!(e.contains("declares a dimension of 100000000000000"), "{e}");
+        let h = "{'descr': '<f8', 'fortran_order': True, 'shape': (3, 0), }";
+        assert!(NpyArray::from_bytes(&npy(h, &[])).unwrap().is_empty());
+        let h = "{'descr': '<i4', 'fortran_order': False, 'shape': (2,), }";
+        let e = NpyArray::from_bytes(&npy(h, &[0; 12])).unwrap_err();
+        assert!(
+            e.contains("longer than its shape: shape (2,) of <i4 needs 8 bytes, found 12"),
+            "{e}"
+        );
+        assert_eq!(NpyArray::from_bytes(&npy(h, &[0; 8])).unwrap().len(), 2);
     }
 }

@@ -127,6 +127,9 @@ impl Mesh {
             }
         }
         let n = self.positions.len();
+        // Repeated corners: a linear scan for small faces; large ones stamp each vertex with
+        // the face number (a scan per corner was O(k²) and hung on one face with 100k corners).
+        let mut stamp: Vec<u32> = Vec::new();
         for f in 0..self.num_faces() {
             let face = self.face(f);
             if face.len() < 3 {
@@ -134,6 +137,10 @@ impl Mesh {
                     face: f,
                     size: face.len() as u32,
                 });
+            }
+            let big = face.len() > 32;
+            if big && stamp.is_empty() {
+                stamp = vec![u32::MAX; n];
             }
             for (k, &v) in face.iter().enumerate() {
                 if v as usize >= n {
@@ -143,7 +150,12 @@ impl Mesh {
                         count: n,
                     });
                 }
-                if face[..k].contains(&v) {
+                let repeated = if big {
+                    std::mem::replace(&mut stamp[v as usize], f as u32) == f as u32
+                } else {
+                    face[..k].contains(&v)
+                };
+                if repeated {
                     return Err(MeshError::RepeatedVertex { face: f, index: v });
                 }
             }
@@ -419,6 +431,24 @@ mod tests {
             Mesh::from_triangles(bad, &[[0, 1, 2]]),
             Err(MeshError::NonFinite { vertex: 1, .. })
         ));
+    }
+
+    /// Large faces take the stamped path of the repeated-corner check: a repeat is still
+    /// found (in the second large face, so stale stamps of the first must not count), and
+    /// two large faces sharing vertices are fine.
+    #[test]
+    fn repeated_corners_in_large_faces() {
+        let p: Vec<[f64; 3]> = (0..100).map(|i| [i as f64, (i * i) as f64, 0.0]).collect();
+        let a: Vec<u32> = (0..100).collect();
+        let mut b: Vec<u32> = (0..100).rev().collect();
+        let ok = Mesh::new(p.clone(), vec![100, 100], [a.clone(), b.clone()].concat());
+        assert!(ok.is_ok());
+        b[70] = b[10];
+        let e = Mesh::new(p, vec![100, 100], [a, b].concat()).unwrap_err();
+        assert!(
+            matches!(e, MeshError::RepeatedVertex { face: 1, index: 89 }),
+            "{e:?}"
+        );
     }
 
     #[test]

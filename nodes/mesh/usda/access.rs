@@ -51,6 +51,15 @@ pub fn ints(a: &UsdAttr) -> Result<Vec<i64>, String> {
             if x.fract() != 0.0 {
                 return Err(err(a.line, format!("'{}' holds non-integer {x}", a.name)));
             }
+            // Past 2^53 a double no longer holds every integer, and `as i64` would saturate
+            // 1e300 to i64::MAX without a word (issue 23).
+            const EXACT: f64 = 9_007_199_254_740_992.0;
+            if x.abs() > EXACT {
+                return Err(err(
+                    a.line,
+                    format!("'{}' holds {x}, beyond the exact integers of a double", a.name),
+                ));
+            }
             Ok(x as i64)
         })
         .collect()

@@ -169,12 +169,26 @@ pub fn read_usda(text: &str, prim_path: &str, apply_transform: bool) -> Result<M
     let counts = ints(ca)?;
     let idx = ints(ia)?;
     let nv = positions.len();
+    // Counts are checked before anything is sized from them (issue 23): each between 3 and
+    // the number of indices, so `as u32` cannot truncate, and their sum with checked
+    // arithmetic (an i64 sum of hostile counts overflowed).
     let mut c32 = Vec::with_capacity(counts.len());
+    let mut sum: u64 = 0;
     for (f, &c) in counts.iter().enumerate() {
         if c < 3 {
             return Err(err(
                 ca.line,
                 format!("face {f} has {c} corners; a face needs at least 3"),
+            ));
+        }
+        sum = sum.saturating_add(c as u64);
+        if sum > idx.len() as u64 {
+            return Err(err(
+                ia.line,
+                format!(
+                    "faceVertexCounts add up to more than the {} entries of faceVertexIndices (at face {f}, {c} corners)",
+                    idx.len()
+                ),
             ));
         }
         c32.push(c as u32);
@@ -189,8 +203,7 @@ pub fn read_usda(text: &str, prim_path: &str, apply_transform: bool) -> Result<M
         }
         i32v.push(i as u32);
     }
-    let sum: i64 = counts.iter().sum();
-    if sum as usize != idx.len() {
+    if sum != idx.len() as u64 {
         return Err(err(
             ia.line,
             format!(

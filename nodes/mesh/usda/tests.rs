@@ -158,3 +158,27 @@ fn deep_nesting_is_an_error_not_a_stack_overflow() {
     );
     assert_eq!(parse_usda(&ok).unwrap().prims.len(), 1);
 }
+
+/// Issue 23: face counts are checked before their sum is trusted: huge counts whose i64 sum
+/// overflowed (a panic in debug builds, a wrapped total otherwise), and integers a double
+/// cannot hold exactly (1e300 became i64::MAX), are errors naming the line.
+#[test]
+fn hostile_face_counts_are_errors() {
+    let many = vec!["9007199254740992"; 1100].join(", ");
+    let bad = QUAD.replace("faceVertexCounts = [4]", &format!("faceVertexCounts = [{many}]"));
+    let e = read_usda(&bad, "", true).unwrap_err();
+    assert!(
+        e.starts_with("line 16:")
+            && e.contains("add up to more than the 4 entries of faceVertexIndices (at face 0"),
+        "{e}"
+    );
+    let bad = QUAD.replace("faceVertexCounts = [4]", "faceVertexCounts = [1e300]");
+    let e = read_usda(&bad, "", true).unwrap_err();
+    assert!(e.starts_with("line 15:") && e.contains("beyond the exact integers"), "{e}");
+    let bad = QUAD.replace("faceVertexCounts = [4]", "faceVertexCounts = [3, 3]");
+    let e = read_usda(&bad, "", true).unwrap_err();
+    assert!(e.contains("at face 1, 3 corners"), "{e}");
+    let bad = QUAD.replace("faceVertexCounts = [4]", "faceVertexCounts = [3]");
+    let e = read_usda(&bad, "", true).unwrap_err();
+    assert!(e.contains("add up to 3 but faceVertexIndices has 4 entries"), "{e}");
+}

@@ -522,8 +522,6 @@ mod tests {
         d
     }
 
-    const TRI: &str = "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nusemtl red\nf 1/1 2/1 3/1\n";
-
     /// Issue 23: indices tobj would mishandle are refused, with the line, before tobj runs: a
     /// huge negative texture index overflowed tobj's `vt * 2` (a panic with overflow checks),
     /// and texture index 0 silently became "the previous corner's UV".

@@ -143,6 +143,21 @@ fn crc32(data: &[u8]) -> u32 {
     !c
 }
 
+/// An OBJ of one convex face with `n` corners on the unit circle (ear clipping was O(n³)).
+fn big_polygon_obj(n: usize) -> Vec<u8> {
+    let mut t = String::new();
+    for k in 0..n {
+        let a = std::f64::consts::TAU * k as f64 / n as f64;
+        t.push_str(&format!("v {} {} 0\n", a.cos(), a.sin()));
+    }
+    t.push('f');
+    for k in 1..=n {
+        t.push_str(&format!(" {k}"));
+    }
+    t.push('\n');
+    t.into_bytes()
+}
+
 fn nested(open: &str, close: &str, n: usize) -> String {
     format!("{}{}", open.repeat(n), close.repeat(n))
 }
@@ -498,6 +513,22 @@ fn mesh_cases() -> Vec<Case> {
         ),
         mesh_case("USDA unterminated string", "usda", "in.usda", t("#usda 1.0\ndef Mesh \"m {\n"), "in.usda"),
         mesh_case("USDA no mesh", "usda", "in.usda", t("#usda 1.0\ndef Xform \"x\" {\n}\n"), "in.usda"),
+        Case {
+            exit: 0,
+            expect: vec!["99998 faces"],
+            files: vec![
+                ("in.obj", big_polygon_obj(100_000)),
+                (
+                    "graph.json",
+                    graph(
+                        r#""m": {"type": "mesh_load", "params": {"path": "in.obj"}},
+                           "t": {"type": "mesh_triangulate", "inputs": {"mesh": "m.mesh"}},
+                           "p": {"type": "print", "inputs": {"value": "t.mesh"}}"#,
+                    ),
+                ),
+            ],
+            ..mesh_case("one face of 100k corners, triangulated", "obj", "in.obj", Vec::new(), "")
+        },
         mesh_case("unknown mesh extension", "mesh", "in.stl", t("solid x\nendsolid x\n"), "stl"),
     ];
     // An MTL that names a texture that is not there: the mesh still loads (materials are for
@@ -658,7 +689,7 @@ fn node_cases() -> Vec<Case> {
             vec!["'c' (camera)", "fov_axis", "diagonal"],
         ),
         node_case(
-            "NaN linked into a float range",
+            "0/0 in a math node feeding a simulation",
             r#""x": {"type": "value_float", "params": {"value": 0.0}},
                "z": {"type": "math", "params": {"op": "div"}, "inputs": {"a": "x.value", "b": "x.value"}},
                "g": {"type": "mesh_grid"},
@@ -1056,7 +1087,7 @@ fn the_bad_input_corpus_gets_clear_errors() {
         let first = o
             .text
             .lines()
-            .find(|l| l.starts_with("error") || l.contains("error:"))
+            .find(|l| l.starts_with("error") || l.starts_with("warning") || l.contains("error:"))
             .or_else(|| o.text.lines().next())
             .unwrap_or("")
             .replace('|', "\\|");

@@ -2,7 +2,7 @@
 # Prints the fuzzing record of docs/reliability.md from fuzz/logs/*.log (written by run_all.sh):
 # per target the seconds fuzzed, inputs executed, coverage, corpus size, and the OOMs, timeouts
 # and crashes libFuzzer counted (each a distinct failing input, not a distinct bug).
-cd "$(dirname "$0")"
+cd "${FUZZ_DIR:-$(dirname "$0")}"
 echo "| target | seconds | executions | exec/s | coverage (edges) | corpus | oom / timeout / crash |"
 echo "|---|---|---|---|---|---|---|"
 for f in logs/*.log; do

@@ -1047,7 +1047,11 @@ fn the_bad_input_corpus_gets_clear_errors() {
     }
     let mut failures = Vec::new();
     let mut report = String::from(
-        "| # | reader | case | exit | ms | first error line |\n|---|---|---|---|---|---|\n",
+        "# The bad-input corpus: what each case gets\n\n\
+         Written by `CGNODES_HOSTILE_REPORT=docs/hostile-corpus.md cargo test --release --test it \
+         hostile` (see [reliability.md](reliability.md)); times are wall-clock milliseconds for \
+         the whole `cgnodes` process.\n\n\
+         | # | reader | case | exit | ms | first error line |\n|---|---|---|---|---|---|\n",
     );
     for (i, c) in all.iter().enumerate() {
         if c.reader == "plugin reply" && !python {

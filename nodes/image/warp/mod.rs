@@ -323,3 +323,65 @@ pub fn warp_image(
         }
     })
 }
+
+/// The largest distance (px) between `map` evaluated on a `grid`-pixel grid and interpolated
+/// (`apply::eval_field`) and `map` evaluated at every pixel centre of a `w` x `h` image: what
+/// `grid` costs in accuracy. 0 for `grid` = 0.
+pub fn grid_error(map: &dyn WarpMap, w: u32, h: u32, grid: u32) -> f64 {
+    if grid == 0 {
+        return 0.0;
+    }
+    let exact = apply::eval_field(map, w, h, 0);
+    let coarse = apply::eval_field(map, w, h, grid);
+    exact
+        .iter()
+        .zip(&coarse)
+        .map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1]))
+        .fold(0.0, f64::max)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn grid_error_vanishes_for_affine_maps_only() {
+        let p = [[10.0, 10.0], [90.0, 15.0], [50.0, 70.0], [20.0, 95.0]];
+        let aff: Vec<[f64; 2]> = p.iter().map(|x| [1.1 * x[0] + 2.0, 0.9 * x[1] - x[0] * 0.1]).collect();
+        let bent: Vec<[f64; 2]> = p.iter().map(|x| [x[0] + 0.02 * x[1] * x[1], x[1]]).collect();
+        let w = WarpParams {
+            method: Method::MlsAffine,
+            ..Default::default()
+        };
+        let f = fit(&w, &p, &aff).unwrap();
+        assert!(grid_error(f.as_ref(), 100, 100, 16) < 1e-9);
+        let g = fit(&w, &p, &bent).unwrap();
+        assert!(grid_error(g.as_ref(), 100, 100, 16) > 1e-3);
+        assert_eq!(grid_error(g.as_ref(), 100, 100, 0), 0.0);
+    }
+
+    #[test]
+    fn check_points_refuses_each_degenerate_input() {
+        let ok = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]];
+        assert!(check_points(Method::Rbf, &ok, &ok).is_ok());
+        assert!(matches!(
+            check_points(Method::Rbf, &ok, &ok[..2]),
+            Err(WarpError::Mismatch { from: 3, to: 2 })
+        ));
+        assert!(matches!(
+            check_points(Method::MlsAffine, &ok[..2], &ok[..2]),
+            Err(WarpError::TooFew { need: 3, got: 2 })
+        ));
+        let dup = [[0.0, 0.0], [1.0, 0.0], [0.0, 0.0]];
+        assert_eq!(
+            check_points(Method::Idw, &dup, &ok),
+            Err(WarpError::Coincident { i: 0, j: 2 })
+        );
+        let nan = [[0.0, 0.0], [1.0, f64::NAN], [0.0, 1.0]];
+        let e = check_points(Method::Idw, &ok, &nan).unwrap_err();
+        assert_eq!(e.side(), Side::To);
+        let line = [[0.0, 0.0], [1.0, 1.0], [3.0, 3.0]];
+        assert_eq!(check_points(Method::Rbf, &line, &ok), Err(WarpError::Collinear));
+        assert!(check_points(Method::MlsRigid, &line, &ok).is_ok());
+    }
+}

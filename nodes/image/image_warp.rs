@@ -171,10 +171,12 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
 }
 
 /// The node error of a fit error: the socket is the user's list at fault (for inverse
-/// mapping the fit runs from the target points to the source points), or `points_file`.
+/// mapping the fit runs from the target points to the source points), or `points_file`. Too
+/// few points is blamed on `source_points`, different counts on `target_points`.
 fn warp_error(e: &WarpError, mapping: Mapping, from_file: bool) -> NodeError {
     let user_side = match (e, mapping) {
         (WarpError::Mismatch { .. }, _) => Side::To,
+        (WarpError::TooFew { .. }, _) => Side::From,
         (_, Mapping::Forward) => e.side(),
         (_, Mapping::Inverse) => match e.side() {
             Side::From => Side::To,

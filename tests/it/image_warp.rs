@@ -70,6 +70,12 @@ fn identity_control_points_give_the_input_back_exactly() {
             let r = warp_image(&img, &p, &p, &params, Mapping::Inverse, Fill::None, grid).unwrap();
             assert!(r.image == img, "{params:?} grid {grid}");
             assert_eq!(r.outside, 0);
+            // Forward mapping moves every centre onto itself: no hole either.
+            let r = warp_image(&img, &p, &p, &params, Mapping::Forward, Fill::None, grid).unwrap();
+            assert!(
+                r.image == img && r.hole_count == 0,
+                "{params:?} grid {grid}"
+            );
         }
     }
 }
@@ -206,7 +212,7 @@ fn a_good_graph_runs_and_bad_inputs_name_their_socket() {
         (
             r#""source_points": [[1, 2], [3, 4]], "target_points": [[1, 2], [3, 4]], "method": "rbf""#,
             &[],
-            "target_points",
+            "source_points",
             "needs at least 3",
         ),
         (

@@ -3,6 +3,6 @@
 
 crate::node_domain! {
     category: "image",
-    nodes: [image_compare, image_load, image_save],
-    modules: [srgb],
+    nodes: [image_compare, image_load, image_save, image_warp],
+    modules: [srgb, warp],
 }

@@ -3,6 +3,7 @@
 //! Heavy values (meshes, images, ...) are held in `Arc`s so that passing them between nodes
 //! never copies; a node that wants to change one calls `Arc::make_mut` (clone on write).
 
+mod image_ops;
 mod mesh;
 mod misc;
 mod scene;
@@ -11,6 +12,7 @@ mod value;
 
 pub mod vec3;
 
+pub use image_ops::TRANSPARENT;
 pub use mesh::{Attribute, AttributeData, Domain, Mesh, MeshError};
 pub use misc::{Curve, Image, Joint, Points, Skeleton, Table};
 pub use scene::{Camera, FovAxis, Light, LookAt, Material, MaterialKind, Scene, SceneObject};

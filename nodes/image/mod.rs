@@ -3,6 +3,6 @@
 
 crate::node_domain! {
     category: "image",
-    nodes: [image_compare, image_load, image_save],
+    nodes: [image_compare, image_load, image_save, poisson_blend],
     modules: [srgb],
 }

@@ -18,6 +18,7 @@ mod mesh;
 mod node_bounds;
 mod param;
 mod plugins;
+mod poisson;
 mod render;
 mod run_semantics;
 mod runtime;

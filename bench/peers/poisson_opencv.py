@@ -1,0 +1,149 @@
+#!/usr/bin/env python3
+"""`poisson_blend` against OpenCV's `cv2.seamlessClone` (NORMAL_CLONE = seamless, MIXED_CLONE =
+mixed) on the course's bear pasted into NewBackGround.jpg and on a 1-megapixel paste (both
+images upscaled, the whole source rectangle less a 2-pixel frame as the mask).
+
+For each case and mode, cgnodes runs one graph (one thread) with several `poisson_blend` nodes
+that paste the same mask at different offsets: the first factors the Poisson matrix, the
+others reuse the factor (their `table` says `reused = 1`). Times are the node's own `time_ms`
+(checks, right-hand side, factorization or cache lookup, solve, composing the image); OpenCV's
+the `seamlessClone` call on decoded arrays (median of the offsets). The mean difference is
+between the two 8-bit results over the mask, in 8-bit units: OpenCV solves on sRGB-encoded
+bytes with its own solver and boundary (it also drops the mask's outer pixel ring), cgnodes on
+linear values, so the two differ by design.
+
+    python3 bench/peers/poisson_opencv.py       # needs target/release/cgnodes (or $CGNODES)
+
+Installs `opencv-python-headless` and `numpy` into target/peers-venv when they are missing.
+"""
+import csv
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.abspath(os.path.join(HERE, "..", ".."))
+VENV = os.path.join(ROOT, "target", "peers-venv")
+
+
+def ensure_cv2():
+    try:
+        import cv2  # noqa: F401
+        import numpy  # noqa: F401
+        return
+    except ImportError:
+        pass
+    if os.environ.get("POISSON_OPENCV_REEXEC"):
+        sys.exit("opencv-python-headless could not be imported after installing it")
+    py = os.path.join(VENV, "bin", "python")
+    if not os.path.exists(py):
+        subprocess.check_call([sys.executable, "-m", "venv", VENV])
+    subprocess.check_call([py, "-m", "pip", "install", "--quiet", "opencv-python-headless", "numpy"])
+    env = dict(os.environ, POISSON_OPENCV_REEXEC="1")
+    os.execve(py, [py, os.path.abspath(__file__)] + sys.argv[1:], env)
+
+
+def cgnodes_bin():
+    if os.environ.get("CGNODES"):
+        return os.environ["CGNODES"]
+    target = os.environ.get("CARGO_TARGET_DIR", os.path.join(ROOT, "target"))
+    return os.path.join(target, "release", "cgnodes")
+
+
+def cases(cv2, np):
+    img = os.path.join(ROOT, "assets", "images")
+    bear = cv2.imread(os.path.join(img, "BearInWater.jpg"))
+    sea = cv2.imread(os.path.join(img, "NewBackGround.jpg"))
+    mask = cv2.imread(os.path.join(img, "BearInWater_mask.png"), cv2.IMREAD_GRAYSCALE)
+    yield "course (14.9k px)", sea, bear, mask, [(62, 162), (40, 150), (90, 170), (20, 140), (100, 160)]
+    big_sea = cv2.resize(sea, (1600, 1200), interpolation=cv2.INTER_CUBIC)
+    big_bear = cv2.resize(bear, (1200, 900), interpolation=cv2.INTER_CUBIC)
+    big_mask = np.zeros((900, 1200), np.uint8)
+    big_mask[2:-2, 2:-2] = 255
+    yield "1 megapixel (1.07M px)", big_sea, big_bear, big_mask, [(200, 150), (210, 160), (190, 140), (220, 170), (180, 130)]
+
+
+def opencv_paste(cv2, target, source, mask, off, flag):
+    x, y, w, h = cv2.boundingRect(mask)
+    # OpenCV centres the mask's bounding box on `p`: its top-left lands at p - (w/2, h/2)
+    p = (off[0] + x + w // 2, off[1] + y + h // 2)
+    # copies: seamlessClone may write into its inputs (the mask shrank call after call)
+    source, target, mask = source.copy(), target.copy(), mask.copy()
+    t0 = time.perf_counter()
+    out = cv2.seamlessClone(source, target, mask, p, flag)
+    return out, (time.perf_counter() - t0) * 1e3
+
+
+def cgnodes_pastes(cv2, d, target, source, mask, offsets, mode):
+    cv2.imwrite(os.path.join(d, "target.png"), target)
+    cv2.imwrite(os.path.join(d, "source.png"), source)
+    cv2.imwrite(os.path.join(d, "mask.png"), mask)
+    nodes = {
+        "t": {"type": "image_load", "params": {"path": "target.png"}},
+        "s": {"type": "image_load", "params": {"path": "source.png"}},
+        "m": {"type": "image_load", "params": {"path": "mask.png", "color_space": "raw"}},
+    }
+    for i, (ox, oy) in enumerate(offsets):
+        nodes[f"b{i}"] = {
+            "type": "poisson_blend",
+            "params": {"offset": [float(ox), float(oy)], "mode": mode},
+            "inputs": {"target": "t.image", "source": "s.image", "mask": "m.image"},
+        }
+        nodes[f"w{i}"] = {"type": "table_write", "params": {"path": f"t{i}.csv"}, "inputs": {"value": f"b{i}.table"}}
+        nodes[f"i{i}"] = {"type": "image_save", "params": {"path": f"out{i}.png"}, "inputs": {"image": f"b{i}.image"}}
+    g = os.path.join(d, "g.json")
+    with open(g, "w") as f:
+        json.dump({"format": "cgnodes-graph", "version": 1, "nodes": nodes}, f)
+    out = os.path.join(d, "out")
+    subprocess.run([cgnodes_bin(), "run", g, "--out", out, "--threads", "1"], check=True, capture_output=True)
+    rows = []
+    for i in range(len(offsets)):
+        with open(os.path.join(out, f"t{i}.csv")) as f:
+            r = next(csv.DictReader(f))
+        rows.append({k: float(v) for k, v in r.items()})
+        rows[-1]["image"] = cv2.imread(os.path.join(out, f"out{i}.png"))
+    return rows
+
+
+def main():
+    ensure_cv2()
+    import cv2
+    import numpy as np
+
+    print(f"OpenCV {cv2.__version__}, cgnodes {cgnodes_bin()}, {os.cpu_count()} cores\n")
+    print("| case | mode | pixels | cgnodes first ms | cgnodes reused ms | OpenCV ms | first / OpenCV | reused / OpenCV | mean diff (8-bit) | residual |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    for name, target, source, mask, offsets in cases(cv2, np):
+        for mode, flag in (("seamless", cv2.NORMAL_CLONE), ("mixed", cv2.MIXED_CLONE)):
+            cv_times, cv_out = [], []
+            for off in offsets:
+                out, ms = opencv_paste(cv2, target, source, mask, off, flag)
+                cv_times.append(ms)
+                cv_out.append(out)
+            with tempfile.TemporaryDirectory() as d:
+                rows = cgnodes_pastes(cv2, d, target, source, mask, offsets, mode)
+            first = [r for r in rows if r["reused"] == 0.0]
+            reused = [r for r in rows if r["reused"] == 1.0]
+            if len(first) != 1 or len(reused) != len(rows) - 1:
+                sys.exit(f"expected one factorization, got reused = {[r['reused'] for r in rows]}")
+            diffs = []
+            for r, o, off in zip(rows, cv_out, offsets):
+                region = np.zeros(target.shape[:2], bool)
+                ys, xs = np.nonzero(mask > 127)
+                region[ys + off[1], xs + off[0]] = True
+                diffs.append(np.abs(r["image"].astype(float) - o.astype(float))[region].mean())
+            cv_ms = statistics.median(cv_times)
+            re_ms = statistics.median(r["time_ms"] for r in reused)
+            print(
+                f"| {name} | {mode} | {int(rows[0]['pixels'])} | {first[0]['time_ms']:.1f} | {re_ms:.1f} | {cv_ms:.1f} "
+                f"| {first[0]['time_ms'] / cv_ms:.2f} | {re_ms / cv_ms:.2f} | {statistics.mean(diffs):.2f} "
+                f"| {max(r['residual'] for r in rows):.1e} |"
+            )
+
+
+if __name__ == "__main__":
+    main()

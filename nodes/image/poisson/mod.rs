@@ -1,0 +1,121 @@
+//! Poisson image editing (Pérez, Gangnet, Blake 2003, "Poisson Image Editing"): the source's
+//! guidance field pasted into the target over a masked region Ω, solving the discrete
+//! Poisson equation (eq. 7) with the target as Dirichlet values on ∂Ω.
+//!
+//! `mask.rs` holds Ω and its numbering, `system.rs` the matrix, `guidance.rs` the
+//! right-hand side; this file the factorization cache and the solve. The matrix depends only
+//! on the shape of Ω, so its sparse Cholesky factor is kept in a small process-wide cache
+//! keyed by the shape up to translation: a sequence of pastes that only moves the offset (the
+//! course's interactive dragging) or changes the images solves without refactoring.
+
+pub mod guidance;
+pub mod mask;
+pub mod system;
+
+pub use guidance::Mode;
+pub use mask::{MaskShape, ShapeKey};
+
+use crate::nodes::linalg::SpdFactor;
+use crate::types::Image;
+use faer::Mat;
+use std::sync::{Arc, Mutex};
+use std::time::Instant;
+
+/// How many factorizations the cache keeps (least recently used dropped first).
+pub const CACHE_SLOTS: usize = 4;
+
+type Cache = Vec<(ShapeKey, Arc<SpdFactor>)>;
+static CACHE: Mutex<Cache> = Mutex::new(Vec::new());
+
+/// The factor of `shape`'s Poisson matrix, from the cache when a mask of the same shape was
+/// factored recently; the flag says whether it was reused.
+pub fn cached_factor(shape: &MaskShape) -> Result<(Arc<SpdFactor>, bool), String> {
+    let key = shape.key();
+    {
+        let mut cache = CACHE.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(i) = cache.iter().position(|(k, _)| *k == key) {
+            // move to the back: most recently used
+            let entry = cache.remove(i);
+            let f = entry.1.clone();
+            cache.push(entry);
+            return Ok((f, true));
+        }
+    }
+    // factored outside the lock: another paste may run meanwhile
+    let f = Arc::new(system::factor(shape)?);
+    let mut cache = CACHE.lock().unwrap_or_else(|e| e.into_inner());
+    if !cache.iter().any(|(k, _)| *k == key) {
+        if cache.len() >= CACHE_SLOTS {
+            cache.remove(0);
+        }
+        cache.push((key, f.clone()));
+    }
+    Ok((f, false))
+}
+
+/// A solved paste: the values of the unknowns before they are written into the image.
+#[derive(Clone, Debug)]
+pub struct Solution {
+    /// `n x 3`: the RGB value of inside pixel `k` (see `MaskShape::inside`), in f64.
+    pub values: Mat<f64>,
+    /// `||b - A x|| / ||b||` (Frobenius over the three channels; `||b - A x||` when b = 0).
+    pub residual: f64,
+    /// Whether the factorization came from the cache.
+    pub reused: bool,
+    /// Wall time of the solve (right-hand side, factorization or lookup, solve, residual).
+    pub millis: f64,
+}
+
+/// Solves the Poisson paste of `source` over Ω = `shape` into `target` with the source's
+/// top-left corner at target pixel `offset`. Ω must be non-empty and `offset` within
+/// `shape.offset_range` (else `Err`, as for a failed factorization).
+pub fn solve(
+    shape: &MaskShape,
+    target: &Image,
+    source: &Image,
+    offset: [i64; 2],
+    mode: Mode,
+) -> Result<Solution, String> {
+    let t0 = Instant::now();
+    let Some([xr, yr]) = shape.offset_range(target.width, target.height) else {
+        return Err("the mask region does not fit inside the target".into());
+    };
+    if !(xr[0]..=xr[1]).contains(&offset[0]) || !(yr[0]..=yr[1]).contains(&offset[1]) {
+        return Err(format!("offset {offset:?} outside {xr:?} x {yr:?}"));
+    }
+    if (source.width, source.height) != (shape.width, shape.height) {
+        return Err("source and mask sizes differ".into());
+    }
+    let b = guidance::right_hand_side(shape, target, source, offset, mode);
+    let (factor, reused) = cached_factor(shape)?;
+    let mut x = b.clone();
+    factor.solve_in_place(x.as_mut());
+    let r = system::apply(shape, x.as_ref()) - &b;
+    let bn = b.norm_l2();
+    let residual = if bn > 0.0 {
+        r.norm_l2() / bn
+    } else {
+        r.norm_l2()
+    };
+    Ok(Solution {
+        values: x,
+        residual,
+        reused,
+        millis: t0.elapsed().as_secs_f64() * 1e3,
+    })
+}
+
+/// The target with the solved RGB values written over Ω (alpha kept from the target).
+/// Values are not clamped (the image is linear; `image_save` clamps when it encodes).
+pub fn compose(target: &Image, shape: &MaskShape, offset: [i64; 2], values: &Mat<f64>) -> Image {
+    let mut out = target.clone();
+    for (k, &[x, y]) in shape.inside.iter().enumerate() {
+        let (tx, ty) = ((x as i64 + offset[0]) as u32, (y as i64 + offset[1]) as u32);
+        let mut p = out.get(tx, ty);
+        for c in 0..3 {
+            p[c] = values[(k, c)] as f32;
+        }
+        out.set(tx, ty, p);
+    }
+    out
+}

@@ -1,0 +1,373 @@
+//! `poisson_blend`: Poisson image editing (Pérez, Gangnet, Blake 2003), seamless cloning and
+//! mixed gradients, with the mask's sparse Cholesky factor reused across calls (see
+//! `poisson/mod.rs`).
+
+#[path = "poisson/mod.rs"]
+pub mod poisson;
+
+use crate::prelude::*;
+use poisson::{MaskShape, Mode};
+
+/// The first non-finite pixel of `img`, as an error message.
+fn check_finite(img: &Image) -> Result<(), String> {
+    match img.pixels.iter().position(|p| p.iter().any(|v| !v.is_finite())) {
+        Some(i) => Err(format!(
+            "pixel ({}, {}) is not finite",
+            i % img.width.max(1) as usize,
+            i / img.width.max(1) as usize
+        )),
+        None => Ok(()),
+    }
+}
+
+/// The result of `poisson_blend`: the image, and the table's facts.
+#[derive(Clone, Debug)]
+pub struct Blend {
+    /// The target with Ω replaced (the target itself for an empty mask).
+    pub image: Image,
+    /// The solve, `None` for an empty mask.
+    pub solution: Option<poisson::Solution>,
+    /// Unknowns solved.
+    pub pixels: usize,
+}
+
+/// Pastes `source` into `target` with its top-left corner at `offset` (rounded to whole
+/// pixels) over the inside of `mask` (the source's alpha when `None`; see
+/// `MaskShape::from_image`). Errors name the socket at fault.
+pub fn poisson_blend(
+    target: &Image,
+    source: &Image,
+    mask: Option<&Image>,
+    offset: [f64; 2],
+    mode: Mode,
+) -> Result<Blend, NodeError> {
+    check_finite(target).map_err(|e| NodeError::invalid("target", e))?;
+    check_finite(source).map_err(|e| NodeError::invalid("source", e))?;
+    if offset.iter().any(|v| !v.is_finite()) {
+        return Err(NodeError::invalid("offset", "the offset is not finite"));
+    }
+    let shape = match mask {
+        Some(m) => {
+            check_finite(m).map_err(|e| NodeError::invalid("mask", e))?;
+            if (m.width, m.height) != (source.width, source.height) {
+                return Err(NodeError::invalid(
+                    "mask",
+                    format!(
+                        "the mask is {}x{} but the source is {}x{}",
+                        m.width, m.height, source.width, source.height
+                    ),
+                ));
+            }
+            MaskShape::from_image(m)
+        }
+        None => {
+            let alpha = Image {
+                width: source.width,
+                height: source.height,
+                pixels: source.pixels.iter().map(|p| [0.0, 0.0, 0.0, p[3]]).collect(),
+            };
+            let mut s = MaskShape::from_image(&alpha);
+            if alpha.pixels.iter().all(|p| p[3] >= 1.0) {
+                // opaque source: the whole rectangle is inside
+                s = MaskShape::from_flags(source.width, source.height, &vec![true; s.index.len()]);
+            }
+            s
+        }
+    };
+    if shape.is_empty() {
+        return Ok(Blend {
+            image: target.clone(),
+            solution: None,
+            pixels: 0,
+        });
+    }
+    let socket = if mask.is_some() { "mask" } else { "source" };
+    let Some([xr, yr]) = shape.offset_range(target.width, target.height) else {
+        let [x0, y0, x1, y1] = shape.bbox().unwrap_or([0; 4]);
+        return Err(NodeError::invalid(
+            socket,
+            format!(
+                "the masked region is {}x{} pixels but must fit inside the {}x{} target with a \
+                 one-pixel margin (the target's border is the Dirichlet boundary)",
+                x1 - x0 + 1,
+                y1 - y0 + 1,
+                target.width,
+                target.height
+            ),
+        ));
+    };
+    // round half away from zero to whole pixels
+    let off = [offset[0].round() as i64, offset[1].round() as i64];
+    if !(xr[0]..=xr[1]).contains(&off[0]) || !(yr[0]..=yr[1]).contains(&off[1]) {
+        return Err(NodeError::invalid(
+            "offset",
+            format!(
+                "offset ({}, {}) puts the masked region on or past the target's border; \
+                 allowed: x in [{}, {}], y in [{}, {}]",
+                off[0], off[1], xr[0], xr[1], yr[0], yr[1]
+            ),
+        ));
+    }
+    let sol = poisson::solve(&shape, target, source, off, mode).map_err(|e| {
+        NodeError::singular(format!("Poisson system: {e}"))
+    })?;
+    Ok(Blend {
+        image: poisson::compose(target, &shape, off, &sol.values),
+        pixels: shape.len(),
+        solution: Some(sol),
+    })
+}
+
+fn declare(b: &mut NodeBuilder) {
+    b.doc(
+        "Poisson image editing (Pérez et al. 2003): pastes the source's gradients into the \
+         target over a mask, seamlessly. The mask's factorization is reused by later calls \
+         with the same mask shape (e.g. when only the offset moves).",
+    );
+    b.add_input::<Image>("target")
+        .doc("The image pasted into; its pixels around the mask are the boundary values.");
+    b.add_input::<Image>("source")
+        .doc("The image whose gradients are pasted (same size as the mask).");
+    b.add_input::<Image>("mask").optional().doc(
+        "Inside where alpha > 0.5, or, for an opaque mask, where luminance > 0.5. \
+         Default: the source's alpha (the whole source when it is opaque).",
+    );
+    b.add_input::<[f64; 2]>("offset").default([0.0, 0.0]).doc(
+        "Where the source's top-left corner lands in the target, in pixels (x right, y down); \
+         rounded to whole pixels. The masked region must stay one pixel away from the \
+         target's border.",
+    );
+    b.add_choice::<Mode>("mode").doc(
+        "seamless: source gradients; mixed: per edge and channel the stronger of the source \
+         and target gradients (transparent objects, holes).",
+    );
+    b.add_output::<Image>("image");
+    b.add_output::<Table>("table")
+        .doc("pixels solved, relative residual of the Poisson system, reused (0/1), time_ms.");
+}
+
+fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
+    let target: Arc<Image> = ctx.input("target")?;
+    let source: Arc<Image> = ctx.input("source")?;
+    let mask: Option<Arc<Image>> = ctx.input_opt("mask")?;
+    let offset: [f64; 2] = ctx.input("offset")?;
+    let mode = ctx.choice::<Mode>("mode")?;
+    let t0 = std::time::Instant::now();
+    let r = poisson_blend(&target, &source, mask.as_deref(), offset, mode)?;
+    let millis = t0.elapsed().as_secs_f64() * 1e3;
+    if r.solution.is_none() {
+        ctx.log("warning: the mask is empty; the target is returned unchanged");
+    }
+    let (residual, reused) = r
+        .solution
+        .as_ref()
+        .map_or((0.0, 0.0), |s| (s.residual, f64::from(u8::from(s.reused))));
+    ctx.set_output("image", r.image);
+    ctx.set_output(
+        "table",
+        Table::from_row(&[
+            ("pixels", r.pixels as f64),
+            ("residual", residual),
+            ("reused", reused),
+            ("time_ms", millis),
+        ]),
+    );
+    Ok(())
+}
+
+/// Registers `poisson_blend`.
+pub fn register(r: &mut Registry) {
+    r.add("poisson_blend", declare, execute);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::poisson::system;
+    use super::*;
+
+    /// A deterministic image with smooth structure and noise.
+    fn image(w: u32, h: u32, seed: u64) -> Image {
+        let mut s = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        let mut img = Image::new(w, h, [0.0, 0.0, 0.0, 1.0]);
+        for y in 0..h {
+            for x in 0..w {
+                let mut p = [0.0f32, 0.0, 0.0, 1.0];
+                for (c, v) in p.iter_mut().take(3).enumerate() {
+                    s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                    let noise = (s >> 40) as f32 / (1u64 << 24) as f32;
+                    *v = 0.5 + 0.3 * ((x as f32 * 0.3 + c as f32) + y as f32 * 0.2).sin()
+                        + 0.1 * noise;
+                }
+                img.set(x, y, p);
+            }
+        }
+        img
+    }
+
+    /// An opaque mask: a disc of radius `r` at the centre of a `w x h` image (white inside).
+    fn disc(w: u32, h: u32, r: f32) -> Image {
+        let mut m = Image::new(w, h, [0.0, 0.0, 0.0, 1.0]);
+        for y in 0..h {
+            for x in 0..w {
+                let (dx, dy) = (x as f32 + 0.5 - w as f32 / 2.0, y as f32 + 0.5 - h as f32 / 2.0);
+                if dx * dx + dy * dy < r * r {
+                    m.set(x, y, [1.0; 4]);
+                }
+            }
+        }
+        m
+    }
+
+    fn crop(img: &Image, x0: u32, y0: u32, w: u32, h: u32) -> Image {
+        let mut out = Image::new(w, h, [0.0; 4]);
+        for y in 0..h {
+            for x in 0..w {
+                out.set(x, y, img.get(x + x0, y + y0));
+            }
+        }
+        out
+    }
+
+    fn solved(b: &Blend) -> &poisson::Solution {
+        b.solution.as_ref().unwrap()
+    }
+
+    /// The solved values against the target's own values under Ω.
+    fn max_diff_from_target(b: &Blend, target: &Image, mask: &Image, off: [i64; 2]) -> f64 {
+        let shape = MaskShape::from_image(mask);
+        let mut worst = 0.0f64;
+        for (k, &[x, y]) in shape.inside.iter().enumerate() {
+            let t = target.get((x as i64 + off[0]) as u32, (y as i64 + off[1]) as u32);
+            for (c, &tc) in t.iter().take(3).enumerate() {
+                worst = worst.max((solved(b).values[(k, c)] - tc as f64).abs());
+            }
+        }
+        worst
+    }
+
+    #[test]
+    fn source_equal_to_target_returns_the_target() {
+        let target = image(40, 30, 1);
+        let source = crop(&target, 10, 6, 20, 18);
+        let mask = disc(20, 18, 8.5);
+        for mode in [Mode::Seamless, Mode::Mixed] {
+            let b = poisson_blend(&target, &source, Some(&mask), [10.0, 6.0], mode).unwrap();
+            assert!(b.pixels > 200);
+            assert!(max_diff_from_target(&b, &target, &mask, [10, 6]) < 1e-12);
+            assert!(solved(&b).residual < 1e-10);
+        }
+    }
+
+    #[test]
+    fn solution_satisfies_the_discrete_equation() {
+        let target = image(64, 48, 2);
+        let source = image(30, 25, 3);
+        let mut mask = disc(30, 25, 11.0);
+        mask.set(0, 0, [1.0; 4]); // a second component on the source's corner
+        for mode in [Mode::Seamless, Mode::Mixed] {
+            let b = poisson_blend(&target, &source, Some(&mask), [20.4, 9.6], mode).unwrap();
+            let s = solved(&b);
+            assert!(s.residual < 1e-10, "{mode:?}: {}", s.residual);
+            // and independently: A x = b recomputed here
+            let shape = MaskShape::from_image(&mask);
+            let rhs =
+                poisson::guidance::right_hand_side(&shape, &target, &source, [20, 10], mode);
+            let r = system::apply(&shape, s.values.as_ref()) - &rhs;
+            assert!(r.norm_l2() < 1e-10 * rhs.norm_l2());
+            // the pixels outside Ω are the target's
+            assert_eq!(b.image.get(0, 0), target.get(0, 0));
+            assert_eq!(b.image.get(20, 10)[3], target.get(20, 10)[3]);
+        }
+    }
+
+    #[test]
+    fn mixed_with_a_flat_source_returns_the_target() {
+        let target = image(32, 32, 4);
+        let source = Image::new(16, 12, [0.3, 0.6, 0.1, 1.0]);
+        let mask = disc(16, 12, 5.0);
+        let b = poisson_blend(&target, &source, Some(&mask), [7.0, 9.0], Mode::Mixed).unwrap();
+        assert!(max_diff_from_target(&b, &target, &mask, [7, 9]) < 1e-12);
+        // seamless with the flat source is the membrane interpolant instead: not the target
+        let b = poisson_blend(&target, &source, Some(&mask), [7.0, 9.0], Mode::Seamless).unwrap();
+        assert!(max_diff_from_target(&b, &target, &mask, [7, 9]) > 1e-3);
+    }
+
+    #[test]
+    fn same_shape_reuses_the_factorization_and_matches_a_fresh_solve() {
+        let target = image(50, 50, 5);
+        let source = image(13, 11, 6);
+        let mask = disc(13, 11, 4.7); // a shape no other unit test uses
+        let first = poisson_blend(&target, &source, Some(&mask), [5.0, 5.0], Mode::Seamless);
+        assert!(first.is_ok());
+        let again = poisson_blend(&target, &source, Some(&mask), [30.0, 21.0], Mode::Seamless);
+        let s = solved(again.as_ref().unwrap());
+        assert!(s.reused);
+        let shape = MaskShape::from_image(&mask);
+        let f = system::factor(&shape).unwrap();
+        let mut x =
+            poisson::guidance::right_hand_side(&shape, &target, &source, [30, 21], Mode::Seamless);
+        f.solve_in_place(x.as_mut());
+        assert!((&x - &s.values).norm_max() < 1e-12);
+    }
+
+    #[test]
+    fn default_mask_is_the_source_alpha() {
+        let target = image(20, 20, 7);
+        let mut source = image(6, 6, 8);
+        for p in source.pixels.iter_mut() {
+            p[3] = 0.0;
+        }
+        source.set(2, 3, [0.1, 0.2, 0.3, 1.0]);
+        let b = poisson_blend(&target, &source, None, [4.0, 4.0], Mode::Seamless).unwrap();
+        assert_eq!(b.pixels, 1);
+        // opaque source: all 36 pixels
+        let b = poisson_blend(&target, &image(6, 6, 9), None, [4.0, 4.0], Mode::Seamless);
+        assert_eq!(b.unwrap().pixels, 36);
+    }
+
+    #[test]
+    fn bad_inputs_name_their_socket() {
+        let target = image(20, 20, 10);
+        let source = image(8, 8, 11);
+        let mask = disc(8, 8, 3.0); // inside x, y in 1..=6 of the mask
+        let sock = |r: Result<Blend, NodeError>| r.unwrap_err().socket.unwrap();
+        let run = |t: &Image, s: &Image, m: Option<&Image>, o: [f64; 2]| {
+            poisson_blend(t, s, m, o, Mode::Seamless)
+        };
+        // touching the border (offset 0 puts mask pixel 1 at target column 1: fine; -1 not)
+        assert!(run(&target, &source, Some(&mask), [0.0, 0.0]).is_ok());
+        let e = run(&target, &source, Some(&mask), [-1.0, 0.0]).unwrap_err();
+        assert_eq!(e.socket.as_deref(), Some("offset"));
+        assert!(e.message.contains("x in [0, 12], y in [0, 12]"), "{}", e.message);
+        assert_eq!(sock(run(&target, &source, Some(&mask), [13.0, 3.0])), "offset");
+        assert_eq!(sock(run(&target, &source, Some(&mask), [3.0, 40.0])), "offset");
+        assert_eq!(sock(run(&target, &source, Some(&mask), [f64::NAN, 3.0])), "offset");
+        // a region larger than the target's interior
+        let small = image(7, 7, 12);
+        assert_eq!(sock(run(&small, &source, Some(&mask), [0.0, 0.0])), "mask");
+        assert_eq!(sock(run(&small, &source, None, [0.0, 0.0])), "source");
+        // sizes
+        assert_eq!(sock(run(&target, &source, Some(&disc(9, 8, 3.0)), [4.0, 4.0])), "mask");
+        // NaN
+        let mut bad = source.clone();
+        bad.set(3, 3, [f32::NAN, 0.0, 0.0, 1.0]);
+        assert_eq!(sock(run(&target, &bad, Some(&mask), [4.0, 4.0])), "source");
+        let mut bad = target.clone();
+        bad.set(0, 0, [0.0, f32::INFINITY, 0.0, 1.0]);
+        assert_eq!(sock(run(&bad, &source, Some(&mask), [4.0, 4.0])), "target");
+        let mut bad = mask.clone();
+        bad.set(0, 0, [0.0, 0.0, f32::NAN, 1.0]);
+        assert_eq!(sock(run(&target, &source, Some(&bad), [4.0, 4.0])), "mask");
+    }
+
+    #[test]
+    fn empty_mask_returns_the_target() {
+        let target = image(10, 10, 13);
+        let source = image(4, 4, 14);
+        let empty = Image::new(4, 4, [0.0, 0.0, 0.0, 1.0]);
+        // even an offset off the target is fine: nothing is pasted
+        let b = poisson_blend(&target, &source, Some(&empty), [50.0, 0.0], Mode::Mixed).unwrap();
+        assert_eq!(b.image, target);
+        assert!(b.solution.is_none());
+    }
+}

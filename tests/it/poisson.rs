@@ -1,0 +1,197 @@
+//! `poisson_blend` through the node interface: the table's facts (pixels, residual, reuse of
+//! the factorization), the empty-mask warning, and errors naming their socket.
+
+use cgnodes::node::{ExecContext, FileEnv};
+use cgnodes::types::{Image, Table, Value};
+use std::collections::BTreeMap;
+
+/// Runs `poisson_blend` outside a graph: its outputs and log lines, or the error text.
+fn blend(inputs: Vec<(&str, Value)>) -> Result<(BTreeMap<String, Value>, Vec<String>), String> {
+    let r = cgnodes::nodes::builtin_registry();
+    let decl = r.get("poisson_blend").unwrap();
+    let mut state = None;
+    let files = FileEnv::default();
+    let ins = inputs
+        .into_iter()
+        .map(|(k, v)| (k.to_string(), v))
+        .collect();
+    let mut ctx = ExecContext::standalone(decl, ins, &mut state, &files, 0);
+    (decl.exec.as_ref().unwrap())(&mut ctx).map_err(|e| e.to_string())?;
+    let logs = ctx.logs().to_vec();
+    Ok((ctx.take_outputs(), logs))
+}
+
+fn table(out: &BTreeMap<String, Value>) -> Table {
+    match &out["table"] {
+        Value::Table(t) => (**t).clone(),
+        v => panic!("table expected, got {v:?}"),
+    }
+}
+
+fn image(out: &BTreeMap<String, Value>) -> Image {
+    match &out["image"] {
+        Value::Image(i) => (**i).clone(),
+        v => panic!("image expected, got {v:?}"),
+    }
+}
+
+/// A smooth image with a ramp per channel.
+fn ramp(w: u32, h: u32, k: f32) -> Image {
+    let mut img = Image::new(w, h, [0.0, 0.0, 0.0, 1.0]);
+    for y in 0..h {
+        for x in 0..w {
+            let (fx, fy) = (x as f32 / w as f32, y as f32 / h as f32);
+            img.set(x, y, [fx * k, fy, (fx * fy * 7.0).sin().abs(), 1.0]);
+        }
+    }
+    img
+}
+
+/// A ring-shaped mask (white inside) of a `w x h` source: a shape with a hole.
+fn ring(w: u32, h: u32) -> Image {
+    let mut m = Image::new(w, h, [0.0, 0.0, 0.0, 1.0]);
+    for y in 0..h {
+        for x in 0..w {
+            let (dx, dy) = (x as f32 - w as f32 / 2.0, y as f32 - h as f32 / 2.0);
+            let r2 = dx * dx + dy * dy;
+            if r2 < (w as f32 * 0.45).powi(2) && r2 > 9.0 {
+                m.set(x, y, [1.0; 4]);
+            }
+        }
+    }
+    m
+}
+
+fn inputs(
+    target: &Image,
+    source: &Image,
+    mask: &Image,
+    offset: [f64; 2],
+    mode: &str,
+) -> Vec<(&'static str, Value)> {
+    vec![
+        ("target", Value::from(target.clone())),
+        ("source", Value::from(source.clone())),
+        ("mask", Value::from(mask.clone())),
+        ("offset", Value::Vec2(offset)),
+        ("mode", Value::from(mode)),
+    ]
+}
+
+#[test]
+fn second_paste_with_the_same_mask_shape_reuses_the_factorization() {
+    let target = ramp(120, 90, 1.0);
+    let source = ramp(41, 37, 3.0);
+    let mask = ring(41, 37); // a shape only this test uses
+    let (a, _) = blend(inputs(&target, &source, &mask, [10.0, 12.0], "seamless")).unwrap();
+    let ta = table(&a);
+    assert!(ta.column("pixels").unwrap()[0] > 500.0);
+    assert!(ta.column("residual").unwrap()[0] < 1e-10);
+    // moved: the same shape elsewhere, factor from the cache
+    let (b, _) = blend(inputs(&target, &source, &mask, [60.2, 40.4], "seamless")).unwrap();
+    let tb = table(&b);
+    assert_eq!(tb.column("reused").unwrap()[0], 1.0);
+    assert!(tb.column("residual").unwrap()[0] < 1e-10);
+    // the same result as a fresh factorization of the same system
+    use cgnodes::nodes::image::poisson_blend::poisson::{guidance, system, MaskShape, Mode};
+    let shape = MaskShape::from_image(&mask);
+    let f = system::factor(&shape).unwrap();
+    let mut x = guidance::right_hand_side(&shape, &target, &source, [60, 40], Mode::Seamless);
+    f.solve_in_place(x.as_mut());
+    let img = image(&b);
+    let mut worst = 0.0f64;
+    for (k, &[px, py]) in shape.inside.iter().enumerate() {
+        let p = img.get(px + 60, py + 40);
+        for c in 0..3 {
+            worst = worst.max((p[c] as f64 - x[(k, c)]).abs());
+        }
+    }
+    // the image holds f32: equal to the fresh f64 solution up to its rounding
+    assert!(worst < 1e-6, "{worst}");
+}
+
+#[test]
+fn source_equal_to_target_gives_the_target_back() {
+    let target = ramp(64, 64, 1.0);
+    let max_diff = |img: &Image| {
+        img.pixels
+            .iter()
+            .zip(&target.pixels)
+            .flat_map(|(a, b)| (0..4).map(move |c| (a[c] - b[c]).abs()))
+            .fold(0.0f32, f32::max)
+    };
+    // the source is the target itself, pasted in place over a ring: f = f* solves eq. 7
+    // exactly (f32 output of an f64 solution equal to f32 inputs)
+    for mode in ["seamless", "mixed"] {
+        let (out, _) = blend(inputs(&target, &target, &ring(64, 64), [0.0, 0.0], mode)).unwrap();
+        assert!(max_diff(&image(&out)) < 1e-6, "{mode}");
+        assert!(table(&out).column("residual").unwrap()[0] < 1e-10);
+    }
+    // a crop of the target pasted back over its whole rectangle: Ω touches the source's edges,
+    // where the source is extended by its nearest pixel (g_p - g_q = 0); mixed mode takes the
+    // target's gradient there and is exact, seamless is not (the membrane takes over there)
+    let mut source = Image::new(30, 20, [0.0; 4]);
+    for y in 0..20 {
+        for x in 0..30 {
+            source.set(x, y, target.get(x + 17, y + 23));
+        }
+    }
+    let full = Image::new(30, 20, [1.0; 4]);
+    let (out, _) = blend(inputs(&target, &source, &full, [17.0, 23.0], "mixed")).unwrap();
+    assert!(max_diff(&image(&out)) < 1e-6);
+    let (out, _) = blend(inputs(&target, &source, &full, [17.0, 23.0], "seamless")).unwrap();
+    assert!(max_diff(&image(&out)) > 1e-4);
+}
+
+#[test]
+fn empty_mask_warns_and_returns_the_target() {
+    let target = ramp(16, 16, 1.0);
+    let source = ramp(4, 4, 2.0);
+    let mask = Image::new(4, 4, [0.0, 0.0, 0.0, 1.0]);
+    let (out, logs) = blend(inputs(&target, &source, &mask, [2.0, 2.0], "seamless")).unwrap();
+    assert_eq!(image(&out), target);
+    assert_eq!(table(&out).column("pixels").unwrap()[0], 0.0);
+    assert!(logs
+        .iter()
+        .any(|l| l.contains("warning") && l.contains("empty")));
+}
+
+#[test]
+fn bad_inputs_get_errors_naming_the_socket() {
+    let target = ramp(16, 16, 1.0);
+    let source = ramp(6, 6, 2.0);
+    let full = Image::new(6, 6, [1.0; 4]);
+    let err = |ins| blend(ins).unwrap_err();
+    let e = err(inputs(&target, &source, &full, [0.0, 3.0], "seamless"));
+    assert!(
+        e.contains("socket 'offset'") && e.contains("x in [1, 9], y in [1, 9]"),
+        "{e}"
+    );
+    let e = err(inputs(&target, &source, &full, [9.0, 9.6], "seamless"));
+    assert!(e.contains("socket 'offset'"), "{e}");
+    let e = err(inputs(
+        &ramp(7, 7, 1.0),
+        &source,
+        &full,
+        [1.0, 1.0],
+        "seamless",
+    ));
+    assert!(e.contains("socket 'mask'") && e.contains("margin"), "{e}");
+    let e = err(inputs(
+        &target,
+        &source,
+        &Image::new(5, 6, [1.0; 4]),
+        [2.0, 2.0],
+        "mixed",
+    ));
+    assert!(e.contains("socket 'mask'") && e.contains("5x6"), "{e}");
+    let mut nan = source.clone();
+    nan.set(1, 1, [f32::NAN; 4]);
+    let e = err(inputs(&target, &nan, &full, [2.0, 2.0], "seamless"));
+    assert!(
+        e.contains("socket 'source'") && e.contains("not finite"),
+        "{e}"
+    );
+    let e = err(inputs(&target, &source, &full, [2.0, 2.0], "poisson"));
+    assert!(e.contains("socket 'mode'"), "{e}");
+}

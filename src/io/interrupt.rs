@@ -111,56 +111,39 @@ mod unix {
         set_errno(saved);
     }
 
+    /// The calling thread's `errno` location, where libc exposes it.
     #[cfg(any(target_os = "linux", target_os = "android"))]
-    fn errno_ptr() -> *mut libc::c_int {
+    fn errno_ptr() -> Option<*mut libc::c_int> {
         // SAFETY: returns the calling thread's errno location.
-        unsafe { libc::__errno_location() }
+        Some(unsafe { libc::__errno_location() })
     }
     #[cfg(any(target_os = "macos", target_os = "ios", target_os = "freebsd"))]
-    fn errno_ptr() -> *mut libc::c_int {
+    fn errno_ptr() -> Option<*mut libc::c_int> {
         // SAFETY: returns the calling thread's errno location.
-        unsafe { libc::__error() }
+        Some(unsafe { libc::__error() })
     }
-    #[cfg(any(
+    #[cfg(not(any(
         target_os = "linux",
         target_os = "android",
         target_os = "macos",
         target_os = "ios",
         target_os = "freebsd"
-    ))]
+    )))]
+    fn errno_ptr() -> Option<*mut libc::c_int> {
+        None
+    }
+
     fn errno() -> libc::c_int {
         // SAFETY: the pointer is the thread's own errno.
-        unsafe { *errno_ptr() }
+        errno_ptr().map_or(0, |p| unsafe { *p })
     }
-    #[cfg(any(
-        target_os = "linux",
-        target_os = "android",
-        target_os = "macos",
-        target_os = "ios",
-        target_os = "freebsd"
-    ))]
+
     fn set_errno(v: libc::c_int) {
-        // SAFETY: the pointer is the thread's own errno.
-        unsafe { *errno_ptr() = v }
+        if let Some(p) = errno_ptr() {
+            // SAFETY: the pointer is the thread's own errno.
+            unsafe { *p = v }
+        }
     }
-    #[cfg(not(any(
-        target_os = "linux",
-        target_os = "android",
-        target_os = "macos",
-        target_os = "ios",
-        target_os = "freebsd"
-    )))]
-    fn errno() -> libc::c_int {
-        0
-    }
-    #[cfg(not(any(
-        target_os = "linux",
-        target_os = "android",
-        target_os = "macos",
-        target_os = "ios",
-        target_os = "freebsd"
-    )))]
-    fn set_errno(_: libc::c_int) {}
 
     pub(super) fn install() {
         static ONCE: std::sync::Once = std::sync::Once::new();

@@ -64,3 +64,15 @@ pub fn skip_or_fail(test: &str, why: &str) {
     }
     eprintln!("SKIPPED {msg}");
 }
+
+/// Whether process `pid` is running, from /proc: a killed child that nobody reaped yet is a
+/// zombie ('Z') and does not count.
+pub fn pid_alive(pid: u32) -> bool {
+    match std::fs::read_to_string(format!("/proc/{pid}/stat")) {
+        Err(_) => false,
+        Ok(s) => s
+            .rsplit_once(')')
+            .and_then(|(_, rest)| rest.split_whitespace().next())
+            .is_some_and(|state| state != "Z" && state != "X"),
+    }
+}

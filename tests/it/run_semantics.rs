@@ -2,6 +2,8 @@
 //! (issue 23): frames after a failed simulation, unused branches with problems, the options
 //! the graph commands share, and Ctrl-C during a plugin call.
 
+#[cfg(unix)]
+use crate::common::pid_alive;
 use std::path::Path;
 use std::process::{Command, Output};
 
@@ -230,18 +232,6 @@ fn a_missing_file_in_the_used_branch_is_an_error() {
     }
 }
 
-/// Whether process `pid` is running (a zombie is not).
-#[cfg(unix)]
-fn pid_alive(pid: i32) -> bool {
-    match std::fs::read_to_string(format!("/proc/{pid}/stat")) {
-        Err(_) => false,
-        Ok(s) => s
-            .rsplit_once(')')
-            .and_then(|(_, rest)| rest.split_whitespace().next())
-            .is_some_and(|state| state != "Z" && state != "X"),
-    }
-}
-
 /// The parent of process `pid`, from /proc.
 #[cfg(unix)]
 fn parent_of(pid: i32) -> Option<i32> {
@@ -314,7 +304,7 @@ fn interrupt_a_plugin_run(signal: libc::c_int) {
     }
     let child = child.expect("the plugin did not start its child within 60 s");
     let plugin = parent_of(child).expect("the plugin process");
-    assert!(pid_alive(plugin) && pid_alive(child));
+    assert!(pid_alive(plugin as u32) && pid_alive(child as u32));
     // The plugin's call folder is a temporary in TMPDIR.
     assert!(
         std::fs::read_dir(&tmp).unwrap().count() > 0,
@@ -341,17 +331,17 @@ fn interrupt_a_plugin_run(signal: libc::c_int) {
     assert!(err.contains("interrupted"), "{err}");
     // Killed with SIGKILL by the time cgnodes exits; give the kernel a moment to reap them.
     for _ in 0..100 {
-        if !pid_alive(plugin) && !pid_alive(child) {
+        if !pid_alive(plugin as u32) && !pid_alive(child as u32) {
             break;
         }
         std::thread::sleep(std::time::Duration::from_millis(20));
     }
     assert!(
-        !pid_alive(plugin),
+        !pid_alive(plugin as u32),
         "the plugin {plugin} outlived signal {signal}"
     );
     assert!(
-        !pid_alive(child),
+        !pid_alive(child as u32),
         "the plugin's child {child} outlived Ctrl-C"
     );
     // No temporaries: the call folder is gone, and nothing half-written in the output folder.

@@ -11,7 +11,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use crate::common::root;
+use crate::common::{pid_alive, root};
 
 mod example_crate;
 
@@ -312,17 +312,6 @@ fn a_crashing_plugin_fails_its_node_only() {
     // The independent branch ran.
     assert!(matches!(r.output("echo", "y"), Some(Value::Float(y)) if *y == 8.0));
     assert!(matches!(r.node("show").unwrap().status, NodeStatus::Ran));
-}
-
-fn pid_alive(pid: u32) -> bool {
-    // A killed child that nobody reaped yet is a zombie ('Z'): not running.
-    match std::fs::read_to_string(format!("/proc/{pid}/stat")) {
-        Err(_) => false,
-        Ok(s) => s
-            .rsplit_once(')')
-            .and_then(|(_, rest)| rest.split_whitespace().next())
-            .is_some_and(|state| state != "Z" && state != "X"),
-    }
 }
 
 /// The plugin prints a line, starts a child, writes the child's pid to `pidfile` (the marker

@@ -11,17 +11,23 @@ use std::path::Path;
 /// bad numbers, NaN/infinite coordinates, faces with fewer than 3 corners, repeated or
 /// out-of-range indices. Used to put a line number on tobj's and the mesh checker's errors.
 pub fn find_bad_obj_line(text: &str) -> Option<(usize, String)> {
-    scan_obj(text, true)
+    scan_obj(text, true, &mut [true; 2])
 }
 
 /// Like `find_bad_obj_line` with the numbers of `v`/`vt`/`vn` lines only counted, not parsed:
 /// the check every OBJ gets before tobj reads it (tobj parses the numbers itself, and the
 /// mesh checker rejects non-finite ones; parsing them twice made loading 1.7x slower).
-fn find_bad_obj_index(text: &str) -> Option<(usize, String)> {
-    scan_obj(text, false)
+/// Also says, from the same pass, whether every face corner names a texture coordinate and
+/// whether every one names a normal: tobj fills a missing index with another corner's (or the
+/// first `vt`/`vn` of the file), so UVs and normals are kept only when complete (issue 23).
+fn find_bad_obj_index(text: &str) -> (Option<(usize, String)>, [bool; 2]) {
+    let mut complete = [true; 2];
+    let bad = scan_obj(text, false, &mut complete);
+    (bad, complete)
 }
 
-fn scan_obj(text: &str, numbers: bool) -> Option<(usize, String)> {
+/// `complete` is and-ed with whether each `f` corner names a texture coordinate and a normal.
+fn scan_obj(text: &str, numbers: bool, complete: &mut [bool; 2]) -> Option<(usize, String)> {
     let (mut nv, mut nt, mut nn) = (0i64, 0i64, 0i64);
     let mut seen = Vec::new();
     for (i, line) in text.lines().enumerate() {
@@ -62,10 +68,14 @@ fn scan_obj(text: &str, numbers: bool) -> Option<(usize, String)> {
                 seen.clear();
                 for corner in w {
                     let mut parts = corner.split('/');
+                    let mut has = [false; 2];
                     for (k, count) in [nv, nt, nn].into_iter().enumerate() {
                         let Some(p) = parts.next() else { break };
                         if p.is_empty() && k > 0 {
                             continue;
+                        }
+                        if k > 0 {
+                            has[k - 1] = true;
                         }
                         let i: i64 = p
                             .parse()
@@ -80,6 +90,10 @@ fn scan_obj(text: &str, numbers: bool) -> Option<(usize, String)> {
                         if k == 0 {
                             seen.push(abs);
                         }
+                    }
+                    if kw == "f" {
+                        complete[0] &= has[0];
+                        complete[1] &= has[1];
                     }
                 }
                 if kw == "l" {
@@ -140,7 +154,8 @@ fn read_tobj(path: &Path) -> Result<(Vec<tobj::Model>, ObjMaterials, [bool; 2]),
     };
     let bytes = std::fs::read(path).map_err(|e| e.to_string())?;
     let text = std::str::from_utf8(&bytes).map_err(|e| format!("not UTF-8 text: {e}"))?;
-    if let Some((ln, msg)) = find_bad_obj_index(text) {
+    let (bad, complete) = find_bad_obj_index(text);
+    if let Some((ln, msg)) = bad {
         return Err(format!("line {ln}: {msg}"));
     }
     let dir = path.parent().unwrap_or(Path::new(""));
@@ -151,28 +166,7 @@ fn read_tobj(path: &Path) -> Result<(Vec<tobj::Model>, ObjMaterials, [bool; 2]),
         Some((ln, msg)) => format!("line {ln}: {msg}"),
         None => e.to_string(),
     })?;
-    Ok((models, mats, corners_complete(text)))
-}
-
-/// Whether every face corner of an OBJ text names a texture coordinate, and whether every
-/// one names a normal. tobj fills a missing index with the previous corner's (or the first
-/// `vt`/`vn` of the file), so its UVs and normals are kept only when complete (issue 23:
-/// a file with `vt` lines and bare `f 1 2 3` faces got the first `vt` on every corner).
-fn corners_complete(text: &str) -> [bool; 2] {
-    let mut all = [true; 2];
-    for line in text.lines() {
-        let mut w = line.split_whitespace();
-        if w.next() != Some("f") {
-            continue;
-        }
-        for corner in w {
-            let mut parts = corner.split('/').skip(1);
-            for a in all.iter_mut() {
-                *a &= parts.next().is_some_and(|p| !p.is_empty());
-            }
-        }
-    }
-    all
+    Ok((models, mats, complete))
 }
 
 /// Reads an MTL library for tobj after `complete_mtl_colours`.

@@ -1,6 +1,6 @@
 //! `poisson_blend`: Poisson image editing (Pérez, Gangnet, Blake 2003), seamless cloning and
-//! mixed gradients, with the mask's sparse Cholesky factor reused across calls (see
-//! `poisson/mod.rs`).
+//! mixed gradients, with the mask's factorization (sine transforms for a rectangle, sparse
+//! Cholesky otherwise) reused across calls (see `poisson/mod.rs`).
 
 #[path = "poisson/mod.rs"]
 pub mod poisson;
@@ -61,17 +61,10 @@ pub fn poisson_blend(
             MaskShape::from_image(m)
         }
         None => {
-            let alpha = Image {
-                width: source.width,
-                height: source.height,
-                pixels: source.pixels.iter().map(|p| [0.0, 0.0, 0.0, p[3]]).collect(),
-            };
-            let mut s = MaskShape::from_image(&alpha);
-            if alpha.pixels.iter().all(|p| p[3] >= 1.0) {
-                // opaque source: the whole rectangle is inside
-                s = MaskShape::from_flags(source.width, source.height, &vec![true; s.index.len()]);
-            }
-            s
+            // the source's alpha; an opaque source is inside everywhere
+            let opaque = source.pixels.iter().all(|p| p[3] >= 1.0);
+            let flags: Vec<bool> = source.pixels.iter().map(|p| opaque || p[3] > 0.5).collect();
+            MaskShape::from_flags(source.width, source.height, &flags)
         }
     };
     if shape.is_empty() {
@@ -121,8 +114,9 @@ pub fn poisson_blend(
 fn declare(b: &mut NodeBuilder) {
     b.doc(
         "Poisson image editing (Pérez et al. 2003): pastes the source's gradients into the \
-         target over a mask, seamlessly. The mask's factorization is reused by later calls \
-         with the same mask shape (e.g. when only the offset moves).",
+         target over a mask, seamlessly. A rectangular mask is solved by sine transforms \
+         (O(n log n)), any other by sparse Cholesky; the factorization is reused by later \
+         calls with the same mask shape (e.g. when only the offset moves).",
     );
     b.add_input::<Image>("target")
         .doc("The image pasted into; its pixels around the mask are the boundary values.");
@@ -143,7 +137,10 @@ fn declare(b: &mut NodeBuilder) {
     );
     b.add_output::<Image>("image");
     b.add_output::<Table>("table")
-        .doc("pixels solved, relative residual of the Poisson system, reused (0/1), time_ms.");
+        .doc(
+            "pixels solved, relative residual of the Poisson system, reused (0/1), \
+             sine_transform (1: the rectangle's fast solver, 0: sparse Cholesky), time_ms.",
+        );
 }
 
 fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
@@ -158,10 +155,10 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     if r.solution.is_none() {
         ctx.log("warning: the mask is empty; the target is returned unchanged");
     }
-    let (residual, reused) = r
-        .solution
-        .as_ref()
-        .map_or((0.0, 0.0), |s| (s.residual, f64::from(u8::from(s.reused))));
+    let (residual, reused, rect) = r.solution.as_ref().map_or((0.0, 0.0, 0.0), |s| {
+        let flag = |b: bool| f64::from(u8::from(b));
+        (s.residual, flag(s.reused), flag(s.solver == "sine_transform"))
+    });
     ctx.set_output("image", r.image);
     ctx.set_output(
         "table",
@@ -169,6 +166,7 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
             ("pixels", r.pixels as f64),
             ("residual", residual),
             ("reused", reused),
+            ("sine_transform", rect),
             ("time_ms", millis),
         ]),
     );
@@ -308,6 +306,39 @@ mod tests {
             poisson::guidance::right_hand_side(&shape, &target, &source, [30, 21], Mode::Seamless);
         f.solve_in_place(x.as_mut());
         assert!((&x - &s.values).norm_max() < 1e-12);
+    }
+
+    #[test]
+    fn rectangular_mask_uses_the_sine_transform_and_matches_cholesky() {
+        let target = image(60, 40, 12);
+        let source = image(23, 17, 13); // opaque: the whole rectangle is Ω
+        let shape = MaskShape::from_flags(23, 17, &[true; 23 * 17]);
+        let f = system::factor(&shape).unwrap();
+        for mode in [Mode::Seamless, Mode::Mixed] {
+            let b = poisson_blend(&target, &source, None, [20.0, 11.0], mode).unwrap();
+            let s = solved(&b);
+            assert_eq!(s.solver, "sine_transform");
+            assert!(s.residual < 1e-10, "{mode:?}: {}", s.residual);
+            // the same system by sparse Cholesky
+            let mut x =
+                poisson::guidance::right_hand_side(&shape, &target, &source, [20, 11], mode);
+            f.solve_in_place(x.as_mut());
+            assert!((&x - &s.values).norm_max() < 1e-12 * x.norm_max());
+        }
+        // a source equal to the target under a rectangle (inside the source) returns the target
+        let source = crop(&target, 9, 5, 22, 20);
+        let mut rect = Image::new(22, 20, [0.0, 0.0, 0.0, 1.0]);
+        for y in 1..19 {
+            for x in 1..21 {
+                rect.set(x, y, [1.0; 4]);
+            }
+        }
+        let b = poisson_blend(&target, &source, Some(&rect), [9.0, 5.0], Mode::Seamless).unwrap();
+        assert_eq!(solved(&b).solver, "sine_transform");
+        assert!(max_diff_from_target(&b, &target, &rect, [9, 5]) < 1e-12);
+        // an irregular mask stays on Cholesky
+        let b = poisson_blend(&target, &source, Some(&disc(22, 20, 7.0)), [9.0, 5.0], Mode::Seamless);
+        assert_eq!(solved(b.as_ref().unwrap()).solver, "cholesky");
     }
 
     #[test]

@@ -26,10 +26,6 @@ impl crate::node::Choice for Mode {
         &[("seamless", Mode::Seamless), ("mixed", Mode::Mixed)];
 }
 
-fn rgb(p: [f32; 4]) -> [f64; 3] {
-    [p[0] as f64, p[1] as f64, p[2] as f64]
-}
-
 /// The `n x 3` right-hand side (RGB) for Ω = `shape` with the source's top-left corner at
 /// target pixel `offset`. The caller checked that Ω and ∂Ω lie inside the target
 /// (`MaskShape::offset_range`) and that the source has the mask's size.
@@ -41,22 +37,27 @@ pub fn right_hand_side(
     mode: Mode,
 ) -> Mat<f64> {
     let (sw, sh) = (source.width as i64, source.height as i64);
-    let src = |x: i64, y: i64| rgb(source.get(x.clamp(0, sw - 1) as u32, y.clamp(0, sh - 1) as u32));
-    let tgt = |x: i64, y: i64| rgb(target.get((x + offset[0]) as u32, (y + offset[1]) as u32));
+    let tw = target.width as i64;
+    // pixel indices: the source clamped to its edge, the target shifted by the offset
+    let sidx = |x: i64, y: i64| (y.clamp(0, sh - 1) * sw + x.clamp(0, sw - 1)) as usize;
+    let tidx = |x: i64, y: i64| ((y + offset[1]) * tw + x + offset[0]) as usize;
     let mut b = Mat::<f64>::zeros(shape.len(), 3);
     for (k, &[px, py]) in shape.inside.iter().enumerate() {
+        let mut row = [0.0f64; 3];
         let (px, py) = (px as i64, py as i64);
-        let (gp, fp) = (src(px, py), tgt(px, py));
+        let gp = source.pixels[sidx(px, py)];
+        let fp = target.pixels[tidx(px, py)];
         for (dx, dy) in [(1, 0), (-1, 0), (0, 1), (0, -1)] {
             let (qx, qy) = (px + dx, py + dy);
-            let (gq, fq) = (src(qx, qy), tgt(qx, qy));
+            let gq = source.pixels[sidx(qx, qy)];
+            let fq = target.pixels[tidx(qx, qy)];
             let boundary = shape.unknown(qx, qy).is_none();
             for c in 0..3 {
-                let vs = gp[c] - gq[c];
+                let vs = f64::from(gp[c]) - f64::from(gq[c]);
                 let v = match mode {
                     Mode::Seamless => vs,
                     Mode::Mixed => {
-                        let vt = fp[c] - fq[c];
+                        let vt = f64::from(fp[c]) - f64::from(fq[c]);
                         if vt.abs() > vs.abs() {
                             vt
                         } else {
@@ -64,8 +65,11 @@ pub fn right_hand_side(
                         }
                     }
                 };
-                b[(k, c)] += v + if boundary { fq[c] } else { 0.0 };
+                row[c] += v + if boundary { f64::from(fq[c]) } else { 0.0 };
             }
+        }
+        for (c, v) in row.into_iter().enumerate() {
+            b[(k, c)] = v;
         }
     }
     b

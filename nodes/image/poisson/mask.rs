@@ -18,14 +18,23 @@ pub struct MaskShape {
     pub index: Vec<u32>,
 }
 
-/// The shape of Ω up to translation: the inside pixels relative to their bounding box's
-/// top-left corner, and a hash of them. Two masks with equal keys give the same matrix.
+/// The shape of Ω up to translation. Two masks with equal keys give the same matrix.
 #[derive(Clone, Debug, PartialEq, Eq)]
-pub struct ShapeKey {
-    /// Hash of `cells` (compared first).
-    pub hash: u64,
-    /// Inside pixels relative to the bounding box, row-major.
-    pub cells: Vec<[u32; 2]>,
+pub enum ShapeKey {
+    /// Ω is a whole `w x h` rectangle (solved by the fast sine-transform solver).
+    Rect {
+        /// Width in pixels.
+        w: u32,
+        /// Height in pixels.
+        h: u32,
+    },
+    /// Any other Ω: its inside pixels relative to the bounding box's top-left corner.
+    Cells {
+        /// Hash of `cells` (compared first).
+        hash: u64,
+        /// Inside pixels relative to the bounding box, row-major.
+        cells: Vec<[u32; 2]>,
+    },
 }
 
 impl MaskShape {
@@ -105,13 +114,23 @@ impl MaskShape {
         (xr[0] <= xr[1] && yr[0] <= yr[1]).then_some([xr, yr])
     }
 
+    /// The size `[w, h]` of Ω when it fills its bounding box, `None` otherwise.
+    pub fn rectangle(&self) -> Option<[u32; 2]> {
+        let [x0, y0, x1, y1] = self.bbox()?;
+        let (w, h) = (x1 - x0 + 1, y1 - y0 + 1);
+        (w as usize * h as usize == self.len()).then_some([w, h])
+    }
+
     /// The cache key of this shape (translation-invariant).
     pub fn key(&self) -> ShapeKey {
+        if let Some([w, h]) = self.rectangle() {
+            return ShapeKey::Rect { w, h };
+        }
         let [x0, y0, ..] = self.bbox().unwrap_or([0; 4]);
         let cells: Vec<[u32; 2]> = self.inside.iter().map(|&[x, y]| [x - x0, y - y0]).collect();
         let mut h = std::collections::hash_map::DefaultHasher::new();
         cells.hash(&mut h);
-        ShapeKey {
+        ShapeKey::Cells {
             hash: h.finish(),
             cells,
         }
@@ -153,6 +172,12 @@ mod tests {
         let c = square(8, 8, 1, 1, 4);
         assert_eq!(a.key(), b.key());
         assert_ne!(a.key(), c.key());
+        assert_eq!(a.key(), ShapeKey::Rect { w: 3, h: 3 });
+        // an L is not a rectangle
+        let mut l = a.clone();
+        l.inside.pop();
+        assert_eq!(l.rectangle(), None);
+        assert!(matches!(l.key(), ShapeKey::Cells { .. }));
     }
 
     #[test]

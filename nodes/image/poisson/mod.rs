@@ -2,14 +2,16 @@
 //! guidance field pasted into the target over a masked region Ω, solving the discrete
 //! Poisson equation (eq. 7) with the target as Dirichlet values on ∂Ω.
 //!
-//! `mask.rs` holds Ω and its numbering, `system.rs` the matrix, `guidance.rs` the
+//! `mask.rs` holds Ω and its numbering, `system.rs` the matrix and its sparse Cholesky
+//! factor, `rect.rs` the fast sine-transform solver for a rectangular Ω, `guidance.rs` the
 //! right-hand side; this file the factorization cache and the solve. The matrix depends only
-//! on the shape of Ω, so its sparse Cholesky factor is kept in a small process-wide cache
-//! keyed by the shape up to translation: a sequence of pastes that only moves the offset (the
-//! course's interactive dragging) or changes the images solves without refactoring.
+//! on the shape of Ω, so its factorization is kept in a small process-wide cache keyed by the
+//! shape up to translation: a sequence of pastes that only moves the offset (the course's
+//! interactive dragging) or changes the images solves without refactoring.
 
 pub mod guidance;
 pub mod mask;
+pub mod rect;
 pub mod system;
 
 pub use guidance::Mode;
@@ -17,6 +19,9 @@ pub use mask::{MaskShape, ShapeKey};
 
 use crate::nodes::linalg::SpdFactor;
 use crate::types::Image;
+use faer::reborrow::ReborrowMut;
+use rayon::prelude::*;
+use rect::RectSolver;
 use faer::Mat;
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
@@ -24,12 +29,58 @@ use std::time::Instant;
 /// How many factorizations the cache keeps (least recently used dropped first).
 pub const CACHE_SLOTS: usize = 4;
 
-type Cache = Vec<(ShapeKey, Arc<SpdFactor>)>;
+/// The factorization of one shape's Poisson matrix.
+pub enum Factor {
+    /// Sparse Cholesky (faer, AMD ordering): any Ω.
+    Cholesky(Box<SpdFactor>),
+    /// Sine transform along rows and tridiagonal pivots down columns: a rectangular Ω.
+    Rect(RectSolver),
+}
+
+impl Factor {
+    /// Factors the Poisson matrix of `shape`: the fast solver for a rectangle, else Cholesky.
+    pub fn new(shape: &MaskShape) -> Result<Factor, String> {
+        Ok(match shape.rectangle() {
+            Some([w, h]) => Factor::Rect(RectSolver::new(w as usize, h as usize)),
+            None => Factor::Cholesky(Box::new(system::factor(shape)?)),
+        })
+    }
+
+    /// Solves `A X = B` in place, every column of `x` (one per channel).
+    pub fn solve_in_place(&self, mut x: faer::MatMut<'_, f64>) {
+        match self {
+            Factor::Cholesky(f) => f.solve_in_place(x),
+            Factor::Rect(f) => {
+                // the channels are independent: one per task
+                let mut cols: Vec<_> = x.as_mut().col_iter_mut().collect();
+                cols.par_iter_mut().for_each(|col| match col.rb_mut().try_as_col_major_mut() {
+                    Some(col) => f.solve_in_place(col.as_slice_mut()),
+                    None => {
+                        // a strided view: solve a contiguous copy
+                        let mut v: Vec<f64> = col.as_ref().iter().copied().collect();
+                        f.solve_in_place(&mut v);
+                        col.rb_mut().iter_mut().zip(v).for_each(|(d, s)| *d = s);
+                    }
+                });
+            }
+        }
+    }
+
+    /// Which solver this is, for the table (`cholesky` or `sine_transform`).
+    pub fn name(&self) -> &'static str {
+        match self {
+            Factor::Cholesky(_) => "cholesky",
+            Factor::Rect(_) => "sine_transform",
+        }
+    }
+}
+
+type Cache = Vec<(ShapeKey, Arc<Factor>)>;
 static CACHE: Mutex<Cache> = Mutex::new(Vec::new());
 
-/// The factor of `shape`'s Poisson matrix, from the cache when a mask of the same shape was
-/// factored recently; the flag says whether it was reused.
-pub fn cached_factor(shape: &MaskShape) -> Result<(Arc<SpdFactor>, bool), String> {
+/// The factorization of `shape`'s Poisson matrix, from the cache when a mask of the same
+/// shape was factored recently; the flag says whether it was reused.
+pub fn cached_factor(shape: &MaskShape) -> Result<(Arc<Factor>, bool), String> {
     let key = shape.key();
     {
         let mut cache = CACHE.lock().unwrap_or_else(|e| e.into_inner());
@@ -42,7 +93,7 @@ pub fn cached_factor(shape: &MaskShape) -> Result<(Arc<SpdFactor>, bool), String
         }
     }
     // factored outside the lock: another paste may run meanwhile
-    let f = Arc::new(system::factor(shape)?);
+    let f = Arc::new(Factor::new(shape)?);
     let mut cache = CACHE.lock().unwrap_or_else(|e| e.into_inner());
     if !cache.iter().any(|(k, _)| *k == key) {
         if cache.len() >= CACHE_SLOTS {
@@ -62,6 +113,8 @@ pub struct Solution {
     pub residual: f64,
     /// Whether the factorization came from the cache.
     pub reused: bool,
+    /// Which solver ran (`Factor::name`).
+    pub solver: &'static str,
     /// Wall time of the solve (right-hand side, factorization or lookup, solve, residual).
     pub millis: f64,
 }
@@ -90,17 +143,14 @@ pub fn solve(
     let (factor, reused) = cached_factor(shape)?;
     let mut x = b.clone();
     factor.solve_in_place(x.as_mut());
-    let r = system::apply(shape, x.as_ref()) - &b;
+    let r = system::residual_norm(shape, x.as_ref(), b.as_ref());
     let bn = b.norm_l2();
-    let residual = if bn > 0.0 {
-        r.norm_l2() / bn
-    } else {
-        r.norm_l2()
-    };
+    let residual = if bn > 0.0 { r / bn } else { r };
     Ok(Solution {
         values: x,
         residual,
         reused,
+        solver: factor.name(),
         millis: t0.elapsed().as_secs_f64() * 1e3,
     })
 }
@@ -109,13 +159,13 @@ pub fn solve(
 /// Values are not clamped (the image is linear; `image_save` clamps when it encodes).
 pub fn compose(target: &Image, shape: &MaskShape, offset: [i64; 2], values: &Mat<f64>) -> Image {
     let mut out = target.clone();
+    let tw = target.width as i64;
     for (k, &[x, y]) in shape.inside.iter().enumerate() {
-        let (tx, ty) = ((x as i64 + offset[0]) as u32, (y as i64 + offset[1]) as u32);
-        let mut p = out.get(tx, ty);
-        for c in 0..3 {
-            p[c] = values[(k, c)] as f32;
+        let i = ((y as i64 + offset[1]) * tw + x as i64 + offset[0]) as usize;
+        let p = &mut out.pixels[i];
+        for (c, v) in p.iter_mut().take(3).enumerate() {
+            *v = values[(k, c)] as f32;
         }
-        out.set(tx, ty, p);
     }
     out
 }

@@ -40,16 +40,66 @@ pub fn factor(shape: &MaskShape) -> Result<SpdFactor, String> {
 
 /// `A x` for the Poisson matrix of `shape`, every column of `x` (for residuals).
 pub fn apply(shape: &MaskShape, x: MatRef<'_, f64>) -> Mat<f64> {
-    Mat::from_fn(x.nrows(), x.ncols(), |k, c| {
-        let [px, py] = shape.inside[k];
-        let mut v = 4.0 * x[(k, c)];
-        for (dx, dy) in [(1, 0), (-1, 0), (0, 1), (0, -1)] {
-            if let Some(q) = shape.unknown(px as i64 + dx, py as i64 + dy) {
-                v -= x[(q, c)];
+    let mut out = Mat::zeros(x.nrows(), x.ncols());
+    for_each_row(shape, x, |k, c, v| out[(k, c)] = v);
+    out
+}
+
+/// `||b - A x||` (Frobenius over the columns), without forming `A x`.
+pub fn residual_norm(shape: &MaskShape, x: MatRef<'_, f64>, b: MatRef<'_, f64>) -> f64 {
+    if let Some([w, h]) = shape.rectangle() {
+        return rect_residual_norm(w as usize, h as usize, x, b);
+    }
+    let mut sum = 0.0;
+    for_each_row(shape, x, |k, c, v| {
+        let r = b[(k, c)] - v;
+        sum += r * r;
+    });
+    sum.sqrt()
+}
+
+/// `residual_norm` for a whole `w x h` rectangle: the stencil on row-major columns, without
+/// looking up the numbering.
+fn rect_residual_norm(w: usize, h: usize, x: MatRef<'_, f64>, b: MatRef<'_, f64>) -> f64 {
+    let mut sum = 0.0;
+    for c in 0..x.ncols() {
+        let (xc, bc) = (x.col(c), b.col(c));
+        for y in 0..h {
+            for i in y * w..(y + 1) * w {
+                let mut v = 4.0 * xc[i];
+                if i % w > 0 {
+                    v -= xc[i - 1];
+                }
+                if i % w + 1 < w {
+                    v -= xc[i + 1];
+                }
+                if y > 0 {
+                    v -= xc[i - w];
+                }
+                if y + 1 < h {
+                    v -= xc[i + w];
+                }
+                let r = bc[i] - v;
+                sum += r * r;
             }
         }
-        v
-    })
+    }
+    sum.sqrt()
+}
+
+/// Calls `f(k, c, (A x)[k, c])` for every unknown and column.
+fn for_each_row(shape: &MaskShape, x: MatRef<'_, f64>, mut f: impl FnMut(usize, usize, f64)) {
+    for (k, &[px, py]) in shape.inside.iter().enumerate() {
+        let (px, py) = (px as i64, py as i64);
+        let nb = [(1, 0), (-1, 0), (0, 1), (0, -1)].map(|(dx, dy)| shape.unknown(px + dx, py + dy));
+        for c in 0..x.ncols() {
+            let mut v = 4.0 * x[(k, c)];
+            for q in nb.iter().flatten() {
+                v -= x[(*q, c)];
+            }
+            f(k, c, v);
+        }
+    }
 }
 
 #[cfg(test)]

@@ -116,9 +116,14 @@ impl Idw {
 
 impl WarpMap for Idw {
     fn eval(&self, x: [f64; 2]) -> [f64; 2] {
-        // A small stack of weights per call; the maps have a handful of points.
-        let mut w = Vec::with_capacity(self.p.len());
-        if let Some(i) = weights(&self.p, x, self.mu, &mut w) {
+        super::with_weights(|w| self.eval_with(x, w))
+    }
+}
+
+impl Idw {
+    /// `eval` with a scratch vector for the weights.
+    fn eval_with(&self, x: [f64; 2], w: &mut Vec<f64>) -> [f64; 2] {
+        if let Some(i) = weights(&self.p, x, self.mu, w) {
             return self.q[i];
         }
         let (mut sx, mut sy, mut sw) = (0.0, 0.0, 0.0);

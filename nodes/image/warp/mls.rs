@@ -47,8 +47,13 @@ impl Mls {
 
 impl WarpMap for Mls {
     fn eval(&self, v: [f64; 2]) -> [f64; 2] {
-        let n = self.p.len();
-        let mut w = Vec::with_capacity(n);
+        super::with_weights(|w| self.eval_with(v, w))
+    }
+}
+
+impl Mls {
+    /// `eval` with a scratch vector (empty) for the weights.
+    fn eval_with(&self, v: [f64; 2], w: &mut Vec<f64>) -> [f64; 2] {
         let mut dmin = f64::INFINITY;
         for (i, p) in self.p.iter().enumerate() {
             let d2 = (v[0] - p[0]).powi(2) + (v[1] - p[1]).powi(2);

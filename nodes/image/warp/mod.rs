@@ -24,6 +24,18 @@ pub trait WarpMap: Sync {
     fn eval(&self, x: [f64; 2]) -> [f64; 2];
 }
 
+/// Runs `f` with this thread's scratch vector for per-point weights (cleared), so that
+/// evaluating a map at every pixel does not allocate per pixel.
+pub(crate) fn with_weights<R>(f: impl FnOnce(&mut Vec<f64>) -> R) -> R {
+    thread_local! {
+        static WEIGHTS: std::cell::RefCell<Vec<f64>> = const { std::cell::RefCell::new(Vec::new()) };
+    }
+    WEIGHTS.with_borrow_mut(|w| {
+        w.clear();
+        f(w)
+    })
+}
+
 /// Which method fits the map.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Method {

@@ -3,6 +3,6 @@
 
 crate::node_domain! {
     category: "image",
-    nodes: [image_compare, image_load, image_save, image_svd, image_warp, poisson_blend, rpca],
+    nodes: [image_compare, image_load, image_save, image_svd, image_warp, poisson_blend, rpca, seam_carve],
     modules: [srgb, warp],
 }

@@ -122,7 +122,7 @@ fn declare(b: &mut NodeBuilder) {
         .doc("S as a table for a matrix input; empty for an image.");
     b.add_output::<Table>("log").doc(
         "One row per iteration and channel: channel, iteration, primal, dual, rank (of L), \
-         nonzeros (of S).",
+         nonzeros (of S), time_ms (since the channel's start).",
     );
 }
 
@@ -159,6 +159,7 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
         "dual",
         "rank",
         "nonzeros",
+        "time_ms",
     ]);
     for (c, d) in res.iter().enumerate() {
         for (k, s) in d.log.iter().enumerate() {
@@ -169,6 +170,7 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
                 s.dual,
                 s.rank as f64,
                 s.nonzeros as f64,
+                s.seconds * 1e3,
             ]);
         }
         if !d.converged {

@@ -37,6 +37,8 @@ pub struct Step {
     pub rank: usize,
     /// Non-zero entries of S.
     pub nonzeros: usize,
+    /// Seconds since the decomposition started, at the end of this iteration.
+    pub seconds: f64,
 }
 
 /// The decomposition and how it was reached.
@@ -117,6 +119,7 @@ pub fn rpca(m: MatRef<'_, f64>, p: Params) -> Result<Decomposition, String> {
     if norm == 0.0 {
         return Ok(out);
     }
+    let t0 = std::time::Instant::now();
     let mut y: Mat<f64> = Mat::zeros(rows, cols);
     let (s_tau, inv_rho) = (lambda / rho, 1.0 / rho);
     for _ in 0..p.max_iterations {
@@ -146,6 +149,7 @@ pub fn rpca(m: MatRef<'_, f64>, p: Params) -> Result<Decomposition, String> {
             dual: rho * ds.sqrt() / norm,
             rank,
             nonzeros,
+            seconds: t0.elapsed().as_secs_f64(),
         };
         out.log.push(step);
         if step.primal < p.tolerance && step.dual < p.tolerance {

@@ -2,8 +2,12 @@
 //! with Sobel derivatives and the border pixels repeated (what scipy's `sobel` with mode
 //! `reflect` computes, as the `seam-carving` peer does).
 
-/// Rec. 709 luminance of linear RGB.
+/// Rec. 709 luminance of linear RGB; a grey pixel's own value exactly (the weights sum to
+/// one, but their rounding would make equal greys differ in the last bit).
 pub fn luminance(p: [f32; 4]) -> f64 {
+    if p[0] == p[1] && p[1] == p[2] {
+        return p[0] as f64;
+    }
     0.2126 * p[0] as f64 + 0.7152 * p[1] as f64 + 0.0722 * p[2] as f64
 }
 

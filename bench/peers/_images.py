@@ -102,14 +102,16 @@ def png_write(path, arr):
 
 
 def run_graph(d, nodes):
-    """Runs a graph of `nodes` in folder `d` (outputs in d/out); returns the output folder."""
+    """Runs a graph of `nodes` in folder `d` (outputs in d/out), on one thread (`--threads 1`:
+    one node at a time, and faer's kernels, which run in the executor's rayon pool, on one
+    thread too); returns the output folder."""
     import json
 
     g = os.path.join(d, "g.json")
     with open(g, "w") as f:
         json.dump({"format": "cgnodes-graph", "version": 1, "nodes": nodes}, f)
     out = os.path.join(d, "out")
-    subprocess.run([cgnodes_bin(), "run", g, "--out", out], check=True, capture_output=True)
+    subprocess.run([cgnodes_bin(), "run", g, "--out", out, "--threads", "1"], check=True, capture_output=True)
     return out
 
 

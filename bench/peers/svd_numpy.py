@@ -6,7 +6,9 @@ so the matrix is full rank, written as an 8-bit grey PNG and read by both sides 
 Rank 50 by cgnodes' full SVD (faer's thin SVD), cgnodes' randomized SVD (Halko et al. 2011,
 oversampling 10, 2 power iterations) and numpy's thin SVD; times are medians of three runs:
 cgnodes' the node's own `time_ms` (channel extraction, SVD, reconstruction, PSNR), numpy's the
-`svd` call plus the rank-50 reconstruction. Both sides use every core.
+`svd` call plus the rank-50 reconstruction. cgnodes runs on one thread (`--threads 1`, which
+also holds faer's kernels to one thread); numpy uses its BLAS's threads (every core) unless
+OPENBLAS_NUM_THREADS=1 is set.
 
     python3 bench/peers/svd_numpy.py      # needs target/release/cgnodes (or $CGNODES)
 

@@ -36,18 +36,20 @@ pub struct Compressed {
     pub channels: Vec<ChannelResult>,
 }
 
-/// The channel matrices of `img` (height x width): R, G, B, or its luminance.
+/// The channel matrices of `img`, transposed (width x height, so that the column-major
+/// matrix walks the row-major pixels in order; the SVD of A^T is that of A transposed, with
+/// the same singular values): R, G, B, or its luminance.
 pub fn channel_matrices(img: &Image, grayscale: bool) -> Vec<Mat<f64>> {
     let (w, h) = (img.width as usize, img.height as usize);
-    let px = |i: usize, j: usize| img.pixels[i * w + j];
+    let px = |x: usize, y: usize| img.pixels[y * w + x];
     if grayscale {
-        vec![Mat::from_fn(h, w, |i, j| {
-            let p = px(i, j);
+        vec![Mat::from_fn(w, h, |x, y| {
+            let p = px(x, y);
             (0..3).map(|c| LUMA[c] * p[c] as f64).sum()
         })]
     } else {
         (0..3)
-            .map(|c| Mat::from_fn(h, w, |i, j| px(i, j)[c] as f64))
+            .map(|c| Mat::from_fn(w, h, |x, y| px(x, y)[c] as f64))
             .collect()
     }
 }
@@ -87,8 +89,9 @@ pub fn image_svd(
             storage_ratio: ((m + n + 1) * approx.rank) as f64 / (m * n) as f64,
             singular_values: approx.singular_values,
         });
+        let col = |y: usize| approx.matrix.col(y);
         for (k, p) in out.pixels.iter_mut().enumerate() {
-            let v = approx.matrix[(k / n, k % n)] as f32;
+            let v = col(k / n)[k % n] as f32;
             if grayscale {
                 p[0] = v;
                 p[1] = v;

@@ -37,7 +37,9 @@ pub fn parse_matrix_csv(text: &str) -> Result<Mat<f64>, String> {
     Ok(Mat::from_fn(all.len(), n, |i, j| values[i * n + j]))
 }
 
-/// The RGB channel matrices of `img` (height x width); one when the image is gray
+/// The RGB channel matrices of `img`, transposed (width x height: the column-major matrix
+/// walks the row-major pixels in order; RPCA of M^T is RPCA of M transposed, λ and ρ alike);
+/// one when the image is gray
 /// (R = G = B everywhere), since the three decompositions would be equal.
 pub fn image_channels(img: &Image) -> Result<Vec<Mat<f64>>, NodeError> {
     let (w, h) = (img.width as usize, img.height as usize);
@@ -53,20 +55,26 @@ pub fn image_channels(img: &Image) -> Result<Vec<Mat<f64>>, NodeError> {
     let gray = img.pixels.iter().all(|p| p[0] == p[1] && p[1] == p[2]);
     let count = if gray { 1 } else { 3 };
     Ok((0..count)
-        .map(|c| Mat::from_fn(h, w, |i, j| img.pixels[i * w + j][c] as f64))
+        .map(|c| Mat::from_fn(w, h, |x, y| img.pixels[y * w + x][c] as f64))
         .collect())
 }
 
-/// An image of the channel matrices (one matrix: gray), alpha 1.
+/// An image of the transposed channel matrices (`image_channels`' layout; one matrix:
+/// gray), alpha 1.
 pub fn to_image(channels: &[Mat<f64>]) -> Image {
-    let (h, w) = channels[0].shape();
+    let (w, h) = channels[0].shape();
     let mut img = Image::new(w as u32, h as u32, [0.0, 0.0, 0.0, 1.0]);
     for (k, p) in img.pixels.iter_mut().enumerate() {
         for (c, v) in p.iter_mut().take(3).enumerate() {
-            *v = channels[c.min(channels.len() - 1)][(k / w, k % w)] as f32;
+            *v = channels[c.min(channels.len() - 1)][(k % w, k / w)] as f32;
         }
     }
     img
+}
+
+/// A matrix as an image (gray), for a CSV input: row i of the matrix is row i of the image.
+pub fn matrix_image(m: &Mat<f64>) -> Image {
+    to_image(&[m.transpose().to_owned()])
 }
 
 /// A matrix as a table: columns c1, c2, ...
@@ -194,8 +202,13 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     } else {
         (Table::default(), Table::default())
     };
-    ctx.set_output("low_rank", to_image(&lows));
-    ctx.set_output("sparse", to_image(&sparses));
+    if from_matrix {
+        ctx.set_output("low_rank", matrix_image(&lows[0]));
+        ctx.set_output("sparse", matrix_image(&sparses[0]));
+    } else {
+        ctx.set_output("low_rank", to_image(&lows));
+        ctx.set_output("sparse", to_image(&sparses));
+    }
     ctx.set_output("low_rank_matrix", lt);
     ctx.set_output("sparse_matrix", st);
     ctx.set_output("log", log);
@@ -322,7 +335,7 @@ mod tests {
         img.set(1, 2, [0.9, 0.1, 0.2, 1.0]);
         let ch = image_channels(&img).unwrap();
         assert_eq!(ch.len(), 3);
-        assert_eq!(ch[0][(2, 1)], 0.9f32 as f64);
+        assert_eq!(ch[0][(1, 2)], 0.9f32 as f64);
         assert_eq!(to_image(&ch), img);
         img.set(0, 3, [f32::NAN, 0.0, 0.0, 1.0]);
         let e = image_channels(&img).unwrap_err();

@@ -138,17 +138,14 @@ impl Grid {
     /// seam[y] + 2 of the narrower grid see new neighbours.
     pub fn remove_seam(&mut self, seam: &[usize]) {
         let (w, h) = (self.w, self.h);
+        // row y's pixels before the seam move left by y, those after it by y + 1
         fn compact<T: Copy>(v: &mut Vec<T>, w: usize, seam: &[usize]) {
-            let mut k = 0;
             for (y, &s) in seam.iter().enumerate() {
-                for x in 0..w {
-                    if x != s {
-                        v[k] = v[y * w + x];
-                        k += 1;
-                    }
-                }
+                let (row, dst) = (y * w, y * (w - 1));
+                v.copy_within(row..row + s, dst);
+                v.copy_within(row + s + 1..row + w, dst + s);
             }
-            v.truncate(k);
+            v.truncate(seam.len() * (w - 1));
         }
         compact(&mut self.color, w, seam);
         compact(&mut self.gray, w, seam);

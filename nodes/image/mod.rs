@@ -1,5 +1,6 @@
 //! Image nodes: reading and writing image files (linear RGBA inside, sRGB-encoded 8-bit
-//! files), the sRGB transfer functions, and comparing an image against a reference.
+//! files), the sRGB transfer functions, comparing an image against a reference, warping,
+//! Poisson editing, seam carving, SVD compression and Robust PCA.
 
 crate::node_domain! {
     category: "image",

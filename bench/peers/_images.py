@@ -104,14 +104,14 @@ def png_write(path, arr):
 def run_graph(d, nodes):
     """Runs a graph of `nodes` in folder `d` (outputs in d/out), on one thread (`--threads 1`:
     one node at a time, and faer's kernels, which run in the executor's rayon pool, on one
-    thread too); returns the output folder."""
+    thread too) or on $CGNODES_THREADS threads; returns the output folder."""
     import json
 
     g = os.path.join(d, "g.json")
     with open(g, "w") as f:
         json.dump({"format": "cgnodes-graph", "version": 1, "nodes": nodes}, f)
     out = os.path.join(d, "out")
-    subprocess.run([cgnodes_bin(), "run", g, "--out", out, "--threads", "1"], check=True, capture_output=True)
+    subprocess.run([cgnodes_bin(), "run", g, "--out", out, "--threads", os.environ.get("CGNODES_THREADS", "1")], check=True, capture_output=True)
     return out
 
 

@@ -333,6 +333,12 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
             return Err(NodeError::invalid(name, format!("{name} must not be negative")));
         }
     }
+    // the grid (44 bytes per pixel) and its copy while inserting, at the larger of the input
+    // and the target size in each dimension
+    let (w, h) = (dims[0].max(img.width as i64) as u64, dims[1].max(img.height as i64) as u64);
+    let what = format!("seam carving at {w}x{h} pixels");
+    let socket = if dims[0] > img.width as i64 { "width" } else { "height" };
+    ctx.reserve_bytes(socket, &what, crate::node::bytes_of(&[w, h, 2 * 44]))?;
     let req = Request {
         width: dims[0] as usize,
         height: dims[1] as usize,

@@ -1,8 +1,9 @@
 //! Image nodes: reading and writing image files (linear RGBA inside, sRGB-encoded 8-bit
-//! files), the sRGB transfer functions, and comparing an image against a reference.
+//! files), the sRGB transfer functions, comparing an image against a reference, warping,
+//! Poisson editing, seam carving, SVD compression and Robust PCA.
 
 crate::node_domain! {
     category: "image",
-    nodes: [image_compare, image_load, image_save, image_warp, poisson_blend],
+    nodes: [image_compare, image_load, image_save, image_svd, image_warp, poisson_blend, rpca, seam_carve],
     modules: [srgb, warp],
 }

@@ -10,6 +10,7 @@ mod cache_semantics;
 mod f3d;
 mod graphs;
 mod hostile;
+mod image_lowrank;
 mod image_warp;
 mod loader_bounds;
 mod mass_spring;

@@ -3,6 +3,7 @@
 //! algorithm itself in a plain function that Rust users can call without the runtime.
 
 pub mod basic;
+pub mod curve;
 pub mod image;
 pub mod linalg;
 pub mod mesh;
@@ -24,6 +25,7 @@ pub fn builtin_registry() -> Registry {
 /// Registers every built-in node.
 pub fn register_all(r: &mut Registry) {
     basic::register(r);
+    curve::register(r);
     image::register(r);
     mesh::register(r);
     metrics::register(r);

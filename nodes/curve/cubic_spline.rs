@@ -149,6 +149,11 @@ impl<const D: usize> CubicSpline<D> {
 
     /// The value (`order` 0) or the first or second derivative at `x`.
     pub fn derivative(&self, x: f64, order: u8) -> [f64; D] {
+        let n = self.t.len();
+        if order == 0 && x == self.t[n - 1] {
+            // The last knot ends a piece (u = h): its value exactly, not rounded through the cubic.
+            return self.f[n - 1];
+        }
         let i = self.piece(x);
         let u = x - self.t[i];
         let c = self.coefficients(i);

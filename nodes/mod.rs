@@ -5,6 +5,7 @@
 pub mod basic;
 pub mod curve;
 pub mod image;
+pub mod learn;
 pub mod linalg;
 pub mod mesh;
 pub mod metrics;
@@ -27,6 +28,7 @@ pub fn register_all(r: &mut Registry) {
     basic::register(r);
     curve::register(r);
     image::register(r);
+    learn::register(r);
     mesh::register(r);
     metrics::register(r);
     param::register(r);

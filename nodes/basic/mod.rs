@@ -3,5 +3,5 @@
 
 crate::node_domain! {
     category: "basic",
-    nodes: [frame, math, points_load, print, table_load, table_write, value],
+    nodes: [frame, math, points_load, print, table_load, table_slice, table_write, value],
 }

@@ -52,6 +52,8 @@ pub struct PlotSeries {
     pub points: Vec<[f64; 2]>,
     /// How to draw them.
     pub style: Style,
+    /// A class label per point: markers coloured by class, one legend entry per class.
+    pub classes: Option<Vec<i64>>,
 }
 
 /// What to draw.
@@ -69,6 +71,8 @@ pub struct Plot {
     pub axes: Axes,
     /// Size in pixels.
     pub size: (u32, u32),
+    /// A classifier of two features whose decision regions fill the background.
+    pub regions: Option<Arc<Model>>,
 }
 
 /// The output formats.
@@ -170,6 +174,15 @@ where
     let mut ctx = builder(root)
         .build_cartesian_2d(x.0..x.1, y.0..y.1)
         .map_err(e)?;
+    if let Some(m) = &plot.regions {
+        let (pw, ph) = ctx.plotting_area().dim_in_pixel();
+        let rects = region_runs(m, x, y, (pw / 3).max(1) as usize, (ph / 3).max(1) as usize)?;
+        ctx.draw_series(rects.into_iter().map(|(k, a, b)| {
+            let (r, g, bl) = COLORS[k % COLORS.len()];
+            Rectangle::new([a, b], RGBColor(r, g, bl).mix(0.22).filled())
+        }))
+        .map_err(e)?;
+    }
     ctx.configure_mesh()
         .x_desc(plot.x_label.as_str())
         .y_desc(plot.y_label.as_str())
@@ -187,6 +200,24 @@ where
             .filter(|p| p[0].is_finite() && p[1].is_finite())
             .map(|p| (p[0], p[1]))
             .collect();
+        if let Some(labels) = &s.classes {
+            let classes = class_list(plot.regions.as_deref(), labels);
+            for (k, c) in classes.iter().enumerate() {
+                let (r, g, b) = COLORS[k % COLORS.len()];
+                let color = RGBColor(r, g, b);
+                let group = s
+                    .points
+                    .iter()
+                    .zip(labels)
+                    .filter(|(p, l)| *l == c && p[0].is_finite() && p[1].is_finite())
+                    .map(|(p, _)| Circle::new((p[0], p[1]), 4, color.filled()));
+                let a = ctx.draw_series(group).map_err(e)?;
+                any_label = true;
+                a.label(format!("{} {c}", s.label).trim().to_string())
+                    .legend(move |(x, y)| Circle::new((x + 10, y), 4, color.filled()));
+            }
+            continue;
+        }
         let line = matches!(s.style, Style::Line | Style::LineMarkers);
         let markers = matches!(s.style, Style::Markers | Style::LineMarkers);
         if line {
@@ -221,6 +252,65 @@ where
             .map_err(e)?;
     }
     Ok(())
+}
+
+/// The classes whose colours are used: the model's output classes, else the labels' distinct
+/// values in increasing order.
+fn class_list(model: Option<&Model>, labels: &[i64]) -> Vec<i64> {
+    match model {
+        Some(m) => m.classes.clone(),
+        None => {
+            let mut c = labels.to_vec();
+            c.sort_unstable();
+            c.dedup();
+            c
+        }
+    }
+}
+
+/// Runs of equal predicted class along the rows of an `nx` x `ny` grid over the box
+/// `x` x `y`: (class index, one corner, the opposite corner), so a region costs a few
+/// rectangles per row rather than one per cell.
+type Run = (usize, (f64, f64), (f64, f64));
+
+fn region_runs(
+    m: &Model,
+    x: (f64, f64),
+    y: (f64, f64),
+    nx: usize,
+    ny: usize,
+) -> Result<Vec<Run>, String> {
+    if m.features.len() != 2 {
+        return Err(format!(
+            "decision regions need a model of 2 features, this one has {}",
+            m.features.len()
+        ));
+    }
+    let (dx, dy) = ((x.1 - x.0) / nx as f64, (y.1 - y.0) / ny as f64);
+    let cells: Vec<Vec<f64>> = (0..ny)
+        .flat_map(|j| {
+            (0..nx).map(move |i| vec![x.0 + (i as f64 + 0.5) * dx, y.0 + (j as f64 + 0.5) * dy])
+        })
+        .collect();
+    let pred = crate::nodes::learn::dataset::predict(m, &cells)?;
+    let index = |v: i64| m.classes.iter().position(|c| *c == v).unwrap_or(0);
+    let mut runs = Vec::new();
+    for j in 0..ny {
+        let row = &pred[j * nx..(j + 1) * nx];
+        let mut start = 0;
+        for i in 1..=nx {
+            if i == nx || row[i] != row[start] {
+                let (y0, y1) = (y.0 + j as f64 * dy, y.0 + (j + 1) as f64 * dy);
+                runs.push((
+                    index(row[start]),
+                    (x.0 + start as f64 * dx, y0),
+                    (x.0 + i as f64 * dx, y1),
+                ));
+                start = i;
+            }
+        }
+    }
+    Ok(runs)
 }
 
 /// Draws `plot` as file bytes in `format`.
@@ -262,6 +352,12 @@ fn declare(b: &mut NodeBuilder) {
         b.add_choice::<Style>(&format!("style_{k}"))
             .doc("line, markers or line_markers.");
     }
+    b.add_input::<Vec<i64>>("classes_1")
+        .optional()
+        .doc("A class label per point of series_1: markers coloured by class.");
+    b.add_input::<Model>("model")
+        .optional()
+        .doc("A classifier of two features: its decision regions fill the background.");
     b.add_input::<String>("title").default("");
     b.add_input::<String>("x_label").default("x");
     b.add_input::<String>("y_label").default("y");
@@ -282,7 +378,19 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
                 label: ctx.input(&format!("label_{k}"))?,
                 points,
                 style: ctx.choice(&format!("style_{k}"))?,
+                classes: None,
             });
+        }
+    }
+    if let Some(c) = ctx.input_opt::<Vec<i64>>("classes_1")? {
+        match series.first_mut() {
+            Some(s) if s.points.len() == c.len() => s.classes = Some(c),
+            _ => {
+                return Err(NodeError::invalid(
+                    "classes_1",
+                    "needs series_1 with one label per point",
+                ))
+            }
         }
     }
     if series.is_empty() {
@@ -301,12 +409,16 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
         series,
         axes: ctx.choice("axes")?,
         size: (dim("width", ctx.input("width")?)?, dim("height", ctx.input("height")?)?),
+        regions: ctx.input_opt("model")?,
     };
     let p: String = ctx.input("path")?;
     let path = ctx.output_path("path", &p)?;
     let format = PlotFormat::from_path(&path)
         .ok_or_else(|| NodeError::invalid("path", format!("'{p}' should end in .png or .svg")))?;
-    let bytes = render_plot(&plot, format).map_err(|e| NodeError::invalid("path", e))?;
+    let bytes = render_plot(&plot, format).map_err(|e| {
+        let socket = if e.contains("decision regions") { "model" } else { "path" };
+        NodeError::invalid(socket, e)
+    })?;
     ctx.write_file(&path, &bytes)
 }
 
@@ -334,16 +446,53 @@ mod tests {
                         })
                         .collect(),
                     style: Style::Line,
+                    classes: None,
                 },
                 PlotSeries {
                     label: "points".into(),
                     points: vec![[0.0, 0.0], [1.0, 0.5]],
                     style: Style::Markers,
+                    classes: None,
                 },
             ],
             axes,
             size: (400, 300),
+            regions: None,
         }
+    }
+
+    #[test]
+    fn decision_regions_come_in_runs_of_one_class() {
+        // logits (x, -x): class 0 where x > 0, class 1 where x < 0.
+        let m = Model {
+            kind: "mlp".into(),
+            activation: "relu".into(),
+            layers: vec![DenseLayer {
+                inputs: 2,
+                outputs: 2,
+                weights: vec![1.0, 0.0, -1.0, 0.0],
+                bias: vec![0.0, 0.0],
+            }],
+            features: vec!["a".into(), "b".into()],
+            label: "c".into(),
+            classes: vec![0, 1],
+            mean: vec![0.0, 0.0],
+            scale: vec![1.0, 1.0],
+        };
+        let runs = region_runs(&m, (-1.0, 1.0), (0.0, 1.0), 4, 2).unwrap();
+        assert_eq!(runs.len(), 4);
+        assert_eq!(runs[0], (1, (-1.0, 0.0), (0.0, 0.5)));
+        assert_eq!(runs[1], (0, (0.0, 0.0), (1.0, 0.5)));
+        let mut p = plot(Axes::Free);
+        p.series[1].classes = Some(vec![0, 1]);
+        p.regions = Some(Arc::new(m.clone()));
+        let svg = String::from_utf8(render_plot(&p, PlotFormat::Svg).unwrap()).unwrap();
+        assert!(svg.contains("points 1"), "one legend entry per class");
+        let three = Model {
+            features: vec!["a".into(), "b".into(), "c".into()],
+            ..m
+        };
+        assert!(region_runs(&three, (0.0, 1.0), (0.0, 1.0), 2, 2).is_err());
     }
 
     #[test]

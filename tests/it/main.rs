@@ -12,6 +12,7 @@ mod f3d;
 mod graphs;
 mod hostile;
 mod image_warp;
+mod learn;
 mod loader_bounds;
 mod mass_spring;
 mod mass_spring_node;

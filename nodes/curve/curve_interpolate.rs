@@ -1,11 +1,12 @@
 //! `curve_interpolate`: a curve through a sequence of points at parameter values t (GAMES102
 //! homework 2 / study book §3.3): the polynomial (barycentric form), cubic splines with four
-//! end conditions, RBF, one Bézier curve on the points as control polygon, or a C1 Bézier
-//! spline. The algorithms are in the sibling files; this one checks input and samples.
+//! end conditions, RBF, one Bézier curve on the points as control polygon, a C1 Bézier
+//! spline, or a small network fitted to the points (`mlp`, an approximation). The algorithms are in the sibling files; this one checks input and samples.
 
 use super::barycentric::Barycentric;
 use super::bezier::{de_casteljau, BezierSpline};
 use super::cubic_spline::{CubicSpline, EndCondition};
+use super::curve_mlp::CurveMlp;
 use super::curve_parameterize::{parameterize, Parameterization};
 use super::rbf::{RbfCurve, RbfKernel};
 use crate::prelude::*;
@@ -23,6 +24,8 @@ pub enum Method {
     Bezier,
     /// A C1 piecewise cubic Bézier curve through the points.
     BezierSpline,
+    /// A small network t -> (x, y) trained on the points (approximates them).
+    Mlp,
 }
 
 impl Choice for Method {
@@ -32,6 +35,7 @@ impl Choice for Method {
         ("rbf", Method::Rbf),
         ("bezier", Method::Bezier),
         ("bezier_spline", Method::BezierSpline),
+        ("mlp", Method::Mlp),
     ];
 }
 
@@ -58,7 +62,7 @@ impl Choice for SplineEnd {
 }
 
 /// A method with its parameters.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum Interpolation {
     /// See `Method::Polynomial`.
     Polynomial,
@@ -70,6 +74,8 @@ pub enum Interpolation {
     Bezier,
     /// See `Method::BezierSpline`.
     BezierSpline,
+    /// See `Method::Mlp`: hidden layer sizes, epochs, seed.
+    Mlp(Vec<usize>, usize, u64),
 }
 
 /// A fitted curve: t -> (x, y) over [t_0, t_{n-1}] (for `Bezier`, [0, 1]).
@@ -77,6 +83,8 @@ pub struct Interpolant {
     f: Box<dyn Fn(f64) -> [f64; 2] + Send + Sync>,
     /// The parameter interval.
     pub domain: (f64, f64),
+    /// For `mlp`: the training loss after every epoch (empty otherwise).
+    pub losses: Vec<f64>,
 }
 
 impl Interpolant {
@@ -147,14 +155,28 @@ pub fn interpolate(p: &[[f64; 2]], t: &[f64], how: Interpolation) -> Result<Inte
             return Ok(Interpolant {
                 f: Box::new(move |u| de_casteljau(&c, u)),
                 domain: (0.0, 1.0),
+                losses: Vec::new(),
             });
         }
         Interpolation::BezierSpline => {
             let s = BezierSpline::new(t, p);
             Box::new(move |x| s.eval(x))
         }
+        Interpolation::Mlp(hidden, epochs, seed) => {
+            let c = CurveMlp::fit(p, t, &hidden, epochs, seed);
+            let losses = c.losses.clone();
+            return Ok(Interpolant {
+                f: Box::new(move |x| c.eval(x)),
+                domain,
+                losses,
+            });
+        }
     };
-    Ok(Interpolant { f, domain })
+    Ok(Interpolant {
+        f,
+        domain,
+        losses: Vec::new(),
+    })
 }
 
 fn declare(b: &mut NodeBuilder) {
@@ -164,7 +186,7 @@ fn declare(b: &mut NodeBuilder) {
         .optional()
         .doc("Parameter values, one per point, increasing (default: chordal, from curve_parameterize).");
     b.add_choice::<Method>("method")
-        .doc("cubic_spline, polynomial (barycentric Lagrange), rbf, bezier (control polygon), bezier_spline (C1).");
+        .doc("cubic_spline, polynomial (barycentric Lagrange), rbf, bezier (control polygon), bezier_spline (C1), mlp (a network t -> (x, y), approximates).");
     b.add_choice::<SplineEnd>("end")
         .doc("cubic_spline end condition; periodic closes the polygon (appends the first point when t is not given).");
     b.add_input::<[f64; 2]>("start_tangent")
@@ -178,6 +200,14 @@ fn declare(b: &mut NodeBuilder) {
         .default(0.2)
         .range(1e-9, 1e9)
         .doc("rbf: phi(|t - t_j| / scale) (scipy's epsilon = 1 / scale), in units of t.");
+    b.add_input::<Vec<i64>>("hidden")
+        .default(Value::from(vec![32i64, 32]))
+        .doc("mlp: hidden layer sizes (tanh).");
+    b.add_input::<i64>("epochs")
+        .default(3000)
+        .range(1.0, 1e7)
+        .doc("mlp: training steps (Adam, learning rate 0.01, all points per step).");
+    b.add_input::<i64>("seed").default(0).min(0.0).doc("mlp: the initialization's seed.");
     b.add_input::<i64>("samples")
         .default(200)
         .range(2.0, 1e7)
@@ -231,6 +261,22 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
         Method::Rbf => Interpolation::Rbf(ctx.choice("kernel")?, ctx.input("scale")?),
         Method::Bezier => Interpolation::Bezier,
         Method::BezierSpline => Interpolation::BezierSpline,
+        Method::Mlp => {
+            let hidden: Vec<i64> = ctx.input("hidden")?;
+            let hidden = hidden
+                .iter()
+                .map(|&h| usize::try_from(h).ok().filter(|h| (1..=1024).contains(h)))
+                .collect::<Option<Vec<usize>>>()
+                .filter(|h| !h.is_empty())
+                .ok_or_else(|| NodeError::invalid("hidden", "one to many sizes between 1 and 1024"))?;
+            let epochs = usize::try_from(ctx.input::<i64>("epochs")?)
+                .ok()
+                .filter(|e| *e >= 1)
+                .ok_or_else(|| NodeError::invalid("epochs", "must be at least 1"))?;
+            let seed = u64::try_from(ctx.input::<i64>("seed")?)
+                .map_err(|_| NodeError::invalid("seed", "must be >= 0"))?;
+            Interpolation::Mlp(hidden, epochs, seed)
+        }
     };
     let f = interpolate(&p, &t, how).map_err(|(s, e)| NodeError::invalid(s, e))?;
     // The interpolation residual: at every point (only the ends for a Bézier curve).
@@ -251,6 +297,10 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
         table.push_row(&[*x, v[0], v[1]]);
     }
     table.meta.insert("residual".into(), format!("{residual:e}"));
+    if let (Some(a), Some(b)) = (f.losses.first(), f.losses.last()) {
+        table.meta.insert("loss_first_epoch".into(), format!("{a:e}"));
+        table.meta.insert("loss_last_epoch".into(), format!("{b:e}"));
+    }
     ctx.set_output("curve", s.into_iter().map(|(_, v)| v).collect::<Vec<_>>());
     ctx.set_output("table", table);
     Ok(())
@@ -298,7 +348,7 @@ mod tests {
             (Interpolation::BezierSpline, &p, &t),
         ];
         for (how, p, t) in cases {
-            let f = interpolate(p, t, how).unwrap();
+            let f = interpolate(p, t, how.clone()).unwrap();
             for (x, q) in t.iter().zip(p.iter()) {
                 let v = f.eval(*x);
                 let e = (v[0] - q[0]).abs().max((v[1] - q[1]).abs());

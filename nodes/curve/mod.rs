@@ -6,5 +6,5 @@
 crate::node_domain! {
     category: "curve",
     nodes: [curve_interpolate, curve_parameterize, data_fit, plot],
-    modules: [barycentric, bezier, cubic_spline, lstsq, rbf],
+    modules: [barycentric, bezier, cubic_spline, curve_mlp, lstsq, rbf],
 }

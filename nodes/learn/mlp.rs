@@ -173,26 +173,58 @@ impl Mlp {
         ys: &[usize],
         grads: &mut [(Vec<f64>, Vec<f64>)],
     ) -> f64 {
+        let b = xs.len() as f64;
+        self.backprop(xs, grads, |k, logits| {
+            let y = ys[k];
+            let m = logits.iter().fold(f64::NEG_INFINITY, |a, &v| a.max(v));
+            let sum: f64 = logits.iter().map(|v| (v - m).exp()).sum();
+            let dz = logits
+                .iter()
+                .enumerate()
+                .map(|(j, v)| ((v - m).exp() / sum - f64::from(u8::from(j == y))) / b)
+                .collect();
+            (m + sum.ln() - logits[y], dz)
+        })
+    }
+
+    /// Mean over the batch of 1/2 |f(x) - y|^2 (a regression head: the last layer's outputs
+    /// as they are) and its gradient, accumulated into `grads`.
+    pub fn squared_error_and_gradient(
+        &self,
+        xs: &[&[f64]],
+        ys: &[&[f64]],
+        grads: &mut [(Vec<f64>, Vec<f64>)],
+    ) -> f64 {
+        let b = xs.len() as f64;
+        self.backprop(xs, grads, |k, out| {
+            let r: Vec<f64> = out.iter().zip(ys[k]).map(|(o, y)| o - y).collect();
+            (
+                0.5 * r.iter().map(|v| v * v).sum::<f64>(),
+                r.iter().map(|v| v / b).collect(),
+            )
+        })
+    }
+
+    /// Forward and backward passes over the batch; `head(k, outputs)` gives sample k's loss
+    /// and the gradient of the batch loss with respect to the last layer's outputs.
+    fn backprop(
+        &self,
+        xs: &[&[f64]],
+        grads: &mut [(Vec<f64>, Vec<f64>)],
+        mut head: impl FnMut(usize, &[f64]) -> (f64, Vec<f64>),
+    ) -> f64 {
         for (g, l) in grads.iter_mut().zip(&self.layers) {
             g.0.clear();
             g.0.resize(l.weights.len(), 0.0);
             g.1.clear();
             g.1.resize(l.bias.len(), 0.0);
         }
-        let b = xs.len() as f64;
         let (mut zs, mut acts) = (Vec::new(), Vec::new());
         let mut loss = 0.0;
-        for (x, &y) in xs.iter().zip(ys) {
+        for (k, x) in xs.iter().enumerate() {
             self.forward_all(x, &mut zs, &mut acts);
-            let logits = acts.last().expect("at least one layer");
-            let m = logits.iter().fold(f64::NEG_INFINITY, |a, &v| a.max(v));
-            let sum: f64 = logits.iter().map(|v| (v - m).exp()).sum();
-            loss += m + sum.ln() - logits[y];
-            let mut dz: Vec<f64> = logits
-                .iter()
-                .enumerate()
-                .map(|(k, v)| ((v - m).exp() / sum - f64::from(u8::from(k == y))) / b)
-                .collect();
+            let (l_k, mut dz) = head(k, acts.last().expect("at least one layer"));
+            loss += l_k;
             for l in (0..self.layers.len()).rev() {
                 let layer = &self.layers[l];
                 let a_prev = &acts[l];
@@ -221,7 +253,7 @@ impl Mlp {
                 }
             }
         }
-        loss / b
+        loss / xs.len().max(1) as f64
     }
 }
 
@@ -275,20 +307,17 @@ pub fn accuracy(net: &Mlp, xs: &[Vec<f64>], ys: &[usize]) -> f64 {
     ok as f64 / xs.len() as f64
 }
 
-/// Trains a network with `classes` outputs on (xs, ys), ys in 0..classes; `test` is
-/// evaluated after every epoch.
-pub fn train(
-    xs: &[Vec<f64>],
-    ys: &[usize],
-    classes: usize,
-    test: Option<(&[Vec<f64>], &[usize])>,
+/// Minibatch optimization of `net` over `n` samples: `batch_loss(net, indices, grads)`
+/// returns a batch's loss and fills its gradient, `after_epoch(net, mean loss)` runs after
+/// every pass. The samples are reshuffled every epoch (Fisher-Yates) with `rng`.
+pub fn optimize(
+    net: &mut Mlp,
+    n: usize,
     p: &TrainParams,
-) -> (Mlp, Vec<EpochLog>) {
-    let mut rng = Pcg32::new(p.seed, 26);
-    let mut sizes = vec![xs.first().map_or(0, Vec::len)];
-    sizes.extend(&p.hidden);
-    sizes.push(classes);
-    let mut net = Mlp::new(&sizes, p.activation, &mut rng);
+    rng: &mut Pcg32,
+    mut batch_loss: impl FnMut(&Mlp, &[usize], &mut [(Vec<f64>, Vec<f64>)]) -> f64,
+    mut after_epoch: impl FnMut(&Mlp, f64),
+) {
     let mut grads: Vec<(Vec<f64>, Vec<f64>)> = vec![(Vec::new(), Vec::new()); net.layers.len()];
     // Adam's moments, one (weights, biases) pair per layer for m and for v.
     let zeros = |net: &Mlp| -> Vec<(Vec<f64>, Vec<f64>)> {
@@ -297,25 +326,21 @@ pub fn train(
             .map(|l| (vec![0.0; l.weights.len()], vec![0.0; l.bias.len()]))
             .collect()
     };
-    let (mut m, mut v) = (zeros(&net), zeros(&net));
+    let (mut m, mut v) = (zeros(net), zeros(net));
     let (b1, b2, eps) = (0.9f64, 0.999f64, 1e-8);
     let mut step = 0i32;
-    let mut order: Vec<usize> = (0..xs.len()).collect();
-    let mut log = Vec::with_capacity(p.epochs);
+    let mut order: Vec<usize> = (0..n).collect();
     let bs = p.batch_size.max(1);
     for _ in 0..p.epochs {
-        // Fisher-Yates shuffle.
         for i in (1..order.len()).rev() {
-            let j = (uniform(&mut rng) * (i + 1) as f64) as usize;
+            let j = (uniform(rng) * (i + 1) as f64) as usize;
             order.swap(i, j.min(i));
         }
         let (mut total, mut batches) = (0.0, 0usize);
         for chunk in order.chunks(bs) {
-            let bx: Vec<&[f64]> = chunk.iter().map(|&i| xs[i].as_slice()).collect();
-            let by: Vec<usize> = chunk.iter().map(|&i| ys[i]).collect();
-            total += net.loss_and_gradient(&bx, &by, &mut grads);
+            total += batch_loss(net, chunk, &mut grads);
             batches += 1;
-            step += 1;
+            step = step.saturating_add(1);
             let (c1, c2) = (1.0 - b1.powi(step), 1.0 - b2.powi(step));
             for (l, layer) in net.layers.iter_mut().enumerate() {
                 let params = [&mut layer.weights, &mut layer.bias];
@@ -339,13 +364,68 @@ pub fn train(
                 }
             }
         }
-        log.push(EpochLog {
-            loss: total / batches.max(1) as f64,
-            train_accuracy: accuracy(&net, xs, ys),
-            test_accuracy: test.map_or(f64::NAN, |(tx, ty)| accuracy(&net, tx, ty)),
-        });
+        after_epoch(net, total / batches.max(1) as f64);
     }
+}
+
+/// Trains a network with `classes` outputs on (xs, ys), ys in 0..classes; `test` is
+/// evaluated after every epoch.
+pub fn train(
+    xs: &[Vec<f64>],
+    ys: &[usize],
+    classes: usize,
+    test: Option<(&[Vec<f64>], &[usize])>,
+    p: &TrainParams,
+) -> (Mlp, Vec<EpochLog>) {
+    let mut rng = Pcg32::new(p.seed, 26);
+    let mut sizes = vec![xs.first().map_or(0, Vec::len)];
+    sizes.extend(&p.hidden);
+    sizes.push(classes);
+    let mut net = Mlp::new(&sizes, p.activation, &mut rng);
+    let mut log = Vec::with_capacity(p.epochs);
+    optimize(
+        &mut net,
+        xs.len(),
+        p,
+        &mut rng,
+        |net, idx, grads| {
+            let bx: Vec<&[f64]> = idx.iter().map(|&i| xs[i].as_slice()).collect();
+            let by: Vec<usize> = idx.iter().map(|&i| ys[i]).collect();
+            net.loss_and_gradient(&bx, &by, grads)
+        },
+        |net, loss| {
+            log.push(EpochLog {
+                loss,
+                train_accuracy: accuracy(net, xs, ys),
+                test_accuracy: test.map_or(f64::NAN, |(tx, ty)| accuracy(net, tx, ty)),
+            })
+        },
+    );
     (net, log)
+}
+
+/// Fits a regression network xs -> ys (squared error); returns it and the mean loss of
+/// every epoch.
+pub fn fit_regression(xs: &[Vec<f64>], ys: &[Vec<f64>], p: &TrainParams) -> (Mlp, Vec<f64>) {
+    let mut rng = Pcg32::new(p.seed, 26);
+    let mut sizes = vec![xs.first().map_or(0, Vec::len)];
+    sizes.extend(&p.hidden);
+    sizes.push(ys.first().map_or(0, Vec::len));
+    let mut net = Mlp::new(&sizes, p.activation, &mut rng);
+    let mut losses = Vec::with_capacity(p.epochs);
+    optimize(
+        &mut net,
+        xs.len(),
+        p,
+        &mut rng,
+        |net, idx, grads| {
+            let bx: Vec<&[f64]> = idx.iter().map(|&i| xs[i].as_slice()).collect();
+            let by: Vec<&[f64]> = idx.iter().map(|&i| ys[i].as_slice()).collect();
+            net.squared_error_and_gradient(&bx, &by, grads)
+        },
+        |_, loss| losses.push(loss),
+    );
+    (net, losses)
 }
 
 #[cfg(test)]
@@ -412,6 +492,28 @@ mod tests {
                     }
                 }
             }
+        }
+    }
+
+    #[test]
+    fn squared_error_gradient_matches_finite_differences() {
+        let mut rng = Pcg32::new(9, 2);
+        let net = Mlp::new(&[1, 6, 2], Activation::Tanh, &mut rng);
+        let xs = [[0.1], [0.5], [0.9]];
+        let ys = [[1.0, -1.0], [0.0, 2.0], [0.5, 0.5]];
+        let bx: Vec<&[f64]> = xs.iter().map(|x| x.as_slice()).collect();
+        let by: Vec<&[f64]> = ys.iter().map(|y| y.as_slice()).collect();
+        let mut g = vec![(Vec::new(), Vec::new()); 2];
+        net.squared_error_and_gradient(&bx, &by, &mut g);
+        let mut scratch = g.clone();
+        for i in 0..net.layers[0].weights.len() {
+            let mut at = |d: f64| {
+                let mut q = net.clone();
+                q.layers[0].weights[i] += d;
+                q.squared_error_and_gradient(&bx, &by, &mut scratch)
+            };
+            let fd = (at(1e-6) - at(-1e-6)) / 2e-6;
+            assert!((fd - g[0].0[i]).abs() < 1e-7 * (1.0 + fd.abs()), "{fd} {}", g[0].0[i]);
         }
     }
 

@@ -1,10 +1,24 @@
-//! `classifier_train`: trains a multilayer perceptron classifier on a table (the modeling
-//! course's insect classification, homework 3): every column but the label column is a
-//! feature. The network and its training are in `mlp.rs`.
+//! `classifier_train`: trains a multilayer perceptron or an Elman RNN classifier on a table
+//! (the modeling course's insect classification, homework 3): every column but the label
+//! column is a feature. The networks and their training are in `mlp.rs` and `rnn.rs`.
 
 use super::dataset::{self, features, int_labels, label_index, standardization};
 use super::mlp::{train, Activation, Optimizer, TrainParams};
 use crate::prelude::*;
+
+/// The network (the `model` input).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Architecture {
+    /// A multilayer perceptron (`mlp.rs`).
+    Mlp,
+    /// An Elman network reading the features as a sequence (`rnn.rs`).
+    Rnn,
+}
+
+impl Choice for Architecture {
+    const CHOICES: &'static [(&'static str, Self)] =
+        &[("mlp", Architecture::Mlp), ("rnn", Architecture::Rnn)];
+}
 
 fn declare(b: &mut NodeBuilder) {
     b.doc("Trains an MLP classifier (softmax cross-entropy, SGD or Adam) on a table with an integer label column.");
@@ -15,9 +29,11 @@ fn declare(b: &mut NodeBuilder) {
     b.add_input::<String>("label_column")
         .default("")
         .doc("The label column: a header name or a 0-based index; empty = the last column.");
+    b.add_choice::<Architecture>("model")
+        .doc("mlp, or rnn (an Elman network reading the features one by one as a sequence).");
     b.add_input::<Vec<i64>>("hidden")
         .default(Value::from(vec![16i64, 16]))
-        .doc("Hidden layer sizes, e.g. [16, 16].");
+        .doc("Hidden layer sizes, e.g. [16, 16]; rnn: one size, its state.");
     b.add_choice::<Activation>("activation").doc("relu, sigmoid or tanh.");
     b.add_choice::<Optimizer>("optimizer").doc("adam or sgd.");
     b.add_input::<f64>("learning_rate").default(1e-3).range(1e-9, 10.0);
@@ -132,13 +148,18 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
         seed: u64::try_from(ctx.input::<i64>("seed")?)
             .map_err(|_| NodeError::invalid("seed", "must be >= 0"))?,
     };
-    let (net, log) = train(
-        &x,
-        &yi,
-        classes.len(),
-        test.as_ref().map(|(a, b)| (a.as_slice(), b.as_slice())),
-        &p,
-    );
+    let arch: Architecture = ctx.choice("model")?;
+    if arch == Architecture::Rnn && p.hidden.len() != 1 {
+        return Err(NodeError::invalid(
+            "hidden",
+            "an rnn has one hidden size (its state), e.g. [16]",
+        ));
+    }
+    let test = test.as_ref().map(|(a, b)| (a.as_slice(), b.as_slice()));
+    let (net, log) = match arch {
+        Architecture::Mlp => train(&x, &yi, classes.len(), test, &p),
+        Architecture::Rnn => super::rnn::train(&x, &yi, classes.len(), test, &p),
+    };
     if log.iter().any(|l| !l.loss.is_finite()) {
         return Err(NodeError::unstable(
             "the training loss is not finite: lower learning_rate",
@@ -153,7 +174,11 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
         format!("{}", t0.elapsed().as_secs_f64()),
     );
     let model = Model {
-        kind: "mlp".into(),
+        kind: match arch {
+            Architecture::Mlp => "mlp",
+            Architecture::Rnn => "rnn",
+        }
+        .into(),
         activation: net.activation.name().into(),
         layers: net.layers,
         features: names,

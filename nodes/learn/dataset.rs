@@ -107,17 +107,26 @@ pub fn apply_standardization(x: &mut [Vec<f64>], mean: &[f64], scale: &[f64]) {
     }
 }
 
-/// The network of a model value, checked for consistent sizes.
+/// The network of a model value, checked for consistent sizes (an `rnn` is stored as its
+/// cell [W_x | W_h] and output layers, `rnn.rs`).
 pub fn network(m: &Model) -> Result<Mlp, String> {
     let activation = Activation::from_name(&m.activation)
         .ok_or_else(|| format!("unknown activation '{}'", m.activation))?;
-    if m.kind != "mlp" {
-        return Err(format!("unknown model kind '{}'", m.kind));
-    }
-    let mut n = m.features.len();
-    if m.layers.is_empty() || m.mean.len() != n || m.scale.len() != n {
+    let n_f = m.features.len();
+    if m.layers.is_empty() || m.mean.len() != n_f || m.scale.len() != n_f {
         return Err("the model's layers or standardization do not fit its features".into());
     }
+    let mut n = match m.kind.as_str() {
+        "mlp" => n_f,
+        "rnn" => {
+            let h = m.layers[0].outputs;
+            if m.layers.len() != 2 || m.layers[0].inputs != 1 + h {
+                return Err("an rnn has a cell of 1 + h inputs and h outputs, then one output layer".into());
+            }
+            1 + h
+        }
+        other => return Err(format!("unknown model kind '{other}'")),
+    };
     for (i, l) in m.layers.iter().enumerate() {
         if l.inputs != n || l.weights.len() != l.inputs * l.outputs || l.bias.len() != l.outputs
         {
@@ -139,5 +148,16 @@ pub fn predict(m: &Model, x: &[Vec<f64>]) -> Result<Vec<i64>, String> {
     let net = network(m)?;
     let mut x = x.to_vec();
     apply_standardization(&mut x, &m.mean, &m.scale);
-    Ok(x.iter().map(|r| m.classes[net.predict(r)]).collect())
+    let rnn = m.kind == "rnn";
+    Ok(x
+        .iter()
+        .map(|r| {
+            let k = if rnn {
+                super::rnn::predict(&net, r)
+            } else {
+                net.predict(r)
+            };
+            m.classes[k]
+        })
+        .collect())
 }

@@ -3,7 +3,9 @@
 //! algorithm itself in a plain function that Rust users can call without the runtime.
 
 pub mod basic;
+pub mod curve;
 pub mod image;
+pub mod learn;
 pub mod linalg;
 pub mod mesh;
 pub mod metrics;
@@ -24,7 +26,9 @@ pub fn builtin_registry() -> Registry {
 /// Registers every built-in node.
 pub fn register_all(r: &mut Registry) {
     basic::register(r);
+    curve::register(r);
     image::register(r);
+    learn::register(r);
     mesh::register(r);
     metrics::register(r);
     param::register(r);

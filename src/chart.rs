@@ -33,19 +33,9 @@ pub struct Chart {
     pub log_y: bool,
 }
 
-const FONT: &[u8] = include_bytes!("../assets/fonts/DejaVuSans.ttf");
-
-fn register_font() {
-    static ONCE: std::sync::Once = std::sync::Once::new();
-    ONCE.call_once(|| {
-        // The font is shipped with the crate, so this cannot fail for a valid build.
-        let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, FONT);
-    });
-}
-
 /// Draws `chart` to `path` (`.svg` or `.png`), written atomically.
 pub fn draw(chart: &Chart, path: &Path) -> Result<(), String> {
-    register_font();
+    crate::io::register_plot_font();
     let ext = path
         .extension()
         .and_then(|e| e.to_str())

@@ -1,6 +1,7 @@
-//! Basic nodes: constants, arithmetic, the frame number, printing and writing tables.
+//! Basic nodes: constants, arithmetic, the frame number, printing, reading and writing tables
+//! and point lists.
 
 crate::node_domain! {
     category: "basic",
-    nodes: [frame, math, print, table_write, value],
+    nodes: [frame, math, points_load, print, table_load, table_slice, table_write, value],
 }

@@ -45,6 +45,19 @@ pub fn write_atomic(
     Ok(())
 }
 
+const FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
+
+/// Registers the shipped DejaVu Sans as plotters' "sans-serif" (once), so charts and the
+/// `plot` node draw text without depending on the system's fonts.
+pub fn register_plot_font() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        // The font is shipped with the crate, so this cannot fail for a valid build.
+        let _ =
+            plotters::style::register_font("sans-serif", plotters::style::FontStyle::Normal, FONT);
+    });
+}
+
 /// Encodes 8-bit pixels as PNG file bytes: `channels` is 3 (RGB) or 4 (RGBA), rows top to
 /// bottom, `width * height * channels` bytes. The one PNG writer shared by the image nodes
 /// and the charts.

@@ -6,6 +6,7 @@
 mod image_ops;
 mod mesh;
 mod misc;
+mod model;
 mod scene;
 mod topology;
 mod value;
@@ -15,6 +16,7 @@ pub mod vec3;
 pub use image_ops::TRANSPARENT;
 pub use mesh::{Attribute, AttributeData, Domain, Mesh, MeshError};
 pub use misc::{Curve, Image, Joint, Points, Skeleton, Table};
+pub use model::{DenseLayer, Model};
 pub use scene::{Camera, FovAxis, Light, LookAt, Material, MaterialKind, Scene, SceneObject};
 pub use topology::{grid_triangles, grid_triangles_with, Topology};
 pub use value::{Color, FromValue, SocketType, Typed, Value};

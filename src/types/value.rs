@@ -24,6 +24,8 @@ pub enum SocketType {
     Curve,
     Skeleton,
     Table,
+    /// A trained classifier.
+    Model,
     /// A list of values of one type; a list input accepts several links.
     List(Box<SocketType>),
     /// Accepts any value (used by `print` and `table_write`).
@@ -85,6 +87,7 @@ pub enum Value {
     Curve(Arc<Curve>),
     Skeleton(Arc<Skeleton>),
     Table(Arc<Table>),
+    Model(Arc<Model>),
     List(Arc<Vec<Value>>),
 }
 
@@ -110,6 +113,7 @@ impl Value {
             Value::Curve(_) => T::Curve,
             Value::Skeleton(_) => T::Skeleton,
             Value::Table(_) => T::Table,
+            Value::Model(_) => T::Model,
             Value::List(items) => T::List(Box::new(
                 items.first().map(|v| v.socket_type()).unwrap_or(T::Any),
             )),
@@ -246,6 +250,12 @@ impl Value {
             ),
             Value::Image(i) => format!("image: {}x{}", i.width, i.height),
             Value::Points(p) => format!("points: {} ({}-D)", p.positions.len(), p.dim),
+            Value::Model(m) => format!(
+                "model: {}, layers {:?}, classes {:?}",
+                m.kind,
+                m.layers.iter().map(|l| l.outputs).collect::<Vec<_>>(),
+                m.classes
+            ),
             Value::Table(t) => {
                 let mut s = String::new();
                 for (name, col) in &t.columns {
@@ -373,6 +383,7 @@ shared!(Scene);
 shared!(Curve);
 shared!(Skeleton);
 shared!(Table);
+shared!(Model);
 
 impl<T: Typed> Typed for Vec<T> {
     fn socket_type() -> SocketType {

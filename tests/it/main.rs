@@ -7,11 +7,13 @@ mod support;
 
 mod arap;
 mod cache_semantics;
+mod curve;
 mod f3d;
 mod graphs;
 mod hostile;
 mod image_lowrank;
 mod image_warp;
+mod learn;
 mod loader_bounds;
 mod mass_spring;
 mod mass_spring_node;

@@ -184,6 +184,7 @@ impl Reader<'_> {
             T::Light => Value::Light(Arc::new(from_serde(j, ty)?)),
             T::Material => Value::Material(Arc::new(from_serde(j, ty)?)),
             T::Skeleton => Value::Skeleton(Arc::new(from_serde(j, ty)?)),
+            T::Model => Value::Model(Arc::new(from_serde(j, ty)?)),
             T::Scene => return Err("plugins cannot return scenes".into()),
             T::List(inner) => {
                 let items = j

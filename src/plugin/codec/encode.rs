@@ -73,6 +73,7 @@ impl Writer<'_> {
             Value::Light(l) => serde(&**l)?,
             Value::Material(m) => serde(&**m)?,
             Value::Skeleton(s) => serde(&**s)?,
+            Value::Model(m) => serde(&**m)?,
             Value::Scene(_) => return Err("scenes cannot be sent to plugins".into()),
             Value::List(items) => J::Array(
                 items

@@ -275,10 +275,8 @@ mod tests {
         recovers(200, 10);
     }
 
-    /// The 500 x 500, rank 25 case (about 60 SVDs of 500 x 500): run with
-    /// `cargo test --release --lib rpca -- --ignored`.
+    /// The 500 x 500, rank 25 case (about 60 SVDs of 500 x 500, about 10 s).
     #[test]
-    #[ignore]
     fn recovers_the_candes_synthetic_case_500() {
         recovers(500, 25);
     }

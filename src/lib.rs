@@ -22,6 +22,7 @@ pub mod io;
 pub mod node;
 pub mod plugin;
 pub mod registry;
+pub mod shard;
 pub mod sweep;
 pub mod types;
 pub mod validate;

@@ -24,6 +24,7 @@ pub mod plugin;
 pub mod registry;
 pub mod shard;
 pub mod sweep;
+pub mod sweep_merge;
 pub mod types;
 pub mod validate;
 

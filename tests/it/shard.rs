@@ -288,3 +288,84 @@ fn two_processes_writing_the_same_cache_entries_both_succeed() {
         assert!(csv.contains("12.566370614359"), "{csv}");
     }
 }
+
+#[test]
+fn kubernetes_manifests_are_batch_v1_jobs_that_shard_and_merge() {
+    let job = |name: &str| -> serde_json::Value {
+        let p = asset(&format!("examples/k8s/{name}"));
+        serde_json::from_str(&std::fs::read_to_string(&p).unwrap())
+            .unwrap_or_else(|e| panic!("{}: {e}", p.display()))
+    };
+    for (file, indexed) in [("sweep-job.json", true), ("merge-job.json", false)] {
+        let j = job(file);
+        assert_eq!(j["apiVersion"], "batch/v1", "{file}");
+        assert_eq!(j["kind"], "Job", "{file}");
+        assert!(j["metadata"]["name"]
+            .as_str()
+            .is_some_and(|n| !n.is_empty()));
+        let spec = &j["spec"];
+        let completions = spec["completions"].as_u64().unwrap();
+        assert!(spec["parallelism"].as_u64().unwrap() <= completions);
+        let pod = &spec["template"]["spec"];
+        // The Job API accepts only Never or OnFailure for a Job's pods.
+        assert!(["Never", "OnFailure"].contains(&pod["restartPolicy"].as_str().unwrap()));
+        let containers = pod["containers"].as_array().unwrap();
+        assert!(!containers.is_empty());
+        let volumes: Vec<&str> = pod["volumes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v["name"].as_str().unwrap())
+            .collect();
+        for c in containers {
+            assert!(c["name"].is_string() && c["image"].is_string(), "{file}");
+            let words: Vec<&str> = c["command"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .chain(c["args"].as_array().unwrap())
+                .map(|a| a.as_str().unwrap())
+                .collect();
+            for m in c["volumeMounts"].as_array().unwrap() {
+                assert!(volumes.contains(&m["name"].as_str().unwrap()), "{file}");
+            }
+            let line = words.join(" ");
+            if indexed {
+                assert_eq!(spec["completionMode"], "Indexed");
+                // Each pod reads its index and the shard count the Job runs.
+                let shards = format!("--shard auto --shards {completions}");
+                assert!(line.contains(&shards), "{line}");
+                assert!(line.contains("part-$(JOB_COMPLETION_INDEX).csv"), "{line}");
+                assert_eq!(words[..2], ["cgnodes", "sweep"]);
+            } else {
+                assert!(line.contains("cgnodes sweep-merge"), "{line}");
+            }
+        }
+    }
+    // The sweep the ConfigMap carries parses as a sweep file.
+    let s = std::fs::read_to_string(asset("examples/k8s/sweep.json")).unwrap();
+    let spec: cgnodes::sweep::SweepSpec = serde_json::from_str(&s).unwrap();
+    assert!(spec.graph.is_absolute());
+}
+
+#[test]
+fn slurm_scripts_parse_and_chain_the_merge_after_the_array() {
+    let dir = asset("examples/slurm");
+    for f in std::fs::read_dir(&dir).unwrap() {
+        let p = f.unwrap().path();
+        let o = Command::new("bash").arg("-n").arg(&p).output().unwrap();
+        assert!(o.status.success(), "{}: {}", p.display(), stderr(&o));
+    }
+    for (submit, task) in [
+        ("submit_sweep.sh", "sweep.sbatch"),
+        ("submit_frames.sh", "frames.sbatch"),
+    ] {
+        let s = std::fs::read_to_string(dir.join(submit)).unwrap();
+        assert!(
+            s.contains("--array=0-") && s.contains("--dependency=afterok:"),
+            "{submit}"
+        );
+        let t = std::fs::read_to_string(dir.join(task)).unwrap();
+        assert!(t.contains("--shard auto"), "{task}");
+    }
+}

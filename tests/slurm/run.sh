@@ -9,7 +9,8 @@
 # Exits non-zero, saying which step, if anything fails.
 #
 # Usage: tests/slurm/run.sh   (CGNODES=path/to/cgnodes, default $CARGO_TARGET_DIR or target,
-# release build; SHARDS=4)
+# release build; SHARDS=4). With BENCH="SWEEP.json ..." it then runs each sweep file as a
+# 1-, 2- and 4-task array on the same cluster and prints the table of docs/cluster.md.
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/../.." && pwd)
 BIN=${CGNODES:-${CARGO_TARGET_DIR:-$ROOT/target}/release/cgnodes}
@@ -128,14 +129,14 @@ export CGNODES=$BIN CGNODES_ROOT=$ROOT SWEEP=$TMP/sweep.json PARTS=$TMP/parts OU
 export CHART="--x radius.value --y pi_r2.value --series pi_r2.op"
 step "sbatch --wait --array=0-$((SHARDS - 1)) examples/slurm/sweep.sbatch"
 A0=$(date +%s.%N)
-ARRAY=$(sbatch --parsable --wait --array=0-$((SHARDS - 1)) --export=ALL \
+ARRAY=$(sbatch --parsable --wait --array=0-$((SHARDS - 1)) --export=ALL --cpus-per-task=1 \
     --output="$TMP/job-%A_%a.out" "$ROOT/examples/slurm/sweep.sbatch") \
     || fail "the job array failed (sbatch --wait exit status)"
 A1=$(date +%s.%N)
 ARRAY=${ARRAY%%;*}
 n=$(ls "$PARTS"/part-*.csv 2>/dev/null | wc -l)
 [ "$n" = "$SHARDS" ] || fail "$n parts in $PARTS, expected $SHARDS"
-step "array $ARRAY done in $(echo "$A1 - $A0" | bc) s; merge with --dependency=afterok:$ARRAY"
+step "array $ARRAY done in $(awk -v a="$A0" -v b="$A1" 'BEGIN { printf "%.1f", b - a }') s; merge with --dependency=afterok:$ARRAY"
 sbatch --parsable --wait --dependency=afterok:"$ARRAY" --kill-on-invalid-dep=yes --export=ALL \
     --output="$TMP/job-merge.out" "$ROOT/examples/slurm/merge.sbatch" >/dev/null \
     || fail "the merge job failed"
@@ -154,3 +155,23 @@ results "$TMP/whole.csv" >"$TMP/whole.results"
 [ "$(wc -l <"$TMP/whole.results")" = 21 ] || fail "the unsharded sweep has $(wc -l <"$TMP/whole.results") lines, expected 21"
 diff "$TMP/whole.results" "$TMP/merged.results" >&2 || fail "merged CSV differs from the unsharded run"
 step "passed: $SHARDS-task array merged equals the unsharded sweep (total $(($(date +%s) - T0)) s)"
+
+# Measurements (optional): per sweep and shard count, the array's wall time (first task start
+# to last task end, from the tasks' own clocks), the sum of the tasks' times, and the overhead
+# per shard against the 1-shard run: (sum - time of 1 shard) / shards.
+[ -n "${BENCH:-}" ] || exit 0
+echo "| sweep | shards | array wall (s) | sum of shard times (s) | overhead per shard (s) |"
+echo "|---|---|---|---|---|"
+for sweep in $BENCH; do
+    one=
+    for n in 1 2 4; do
+        rm -rf "$TMP/b"; mkdir -p "$TMP/b"
+        sbatch --wait --array=0-$((n - 1)) --cpus-per-task=1 --output="$TMP/job-b-%a.out" \
+            --wrap "s=\$(date +%s.%N); '$BIN' sweep '$ROOT/$sweep' --shard auto --threads 1 --csv \"$TMP/b/part-\$SLURM_ARRAY_TASK_ID.csv\" || exit 1; echo \$s \$(date +%s.%N) > \"$TMP/b/t-\$SLURM_ARRAY_TASK_ID\"" \
+            >/dev/null || fail "bench array $sweep $n"
+        "$BIN" sweep-merge "$TMP"/b/part-*.csv --csv "$TMP/b/all.csv" 2>/dev/null || fail "bench merge $sweep $n"
+        read -r wall sum < <(cat "$TMP"/b/t-* | awk '{ if (NR == 1 || $1 < a) a = $1; if (NR == 1 || $2 > b) b = $2; s += $2 - $1 } END { printf "%.1f %.1f\n", b - a, s }')
+        [ -n "$one" ] || one=$sum
+        echo "| $(basename "$sweep" .json) | $n | $wall | $sum | $(awk -v s="$sum" -v o="$one" -v n="$n" 'BEGIN { printf "%.2f", (s - o) / n }') |"
+    done
+done

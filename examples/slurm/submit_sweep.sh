@@ -1,7 +1,7 @@
 #!/bin/bash
 # Submits a sweep as an N-task Slurm job array and its merge as a job that starts only when
 # every task succeeded. Usage: examples/slurm/submit_sweep.sh [N] (default 4), from the
-# project folder; SWEEP, PARTS, OUT, CHART and CGNODES are passed on to the jobs.
+# project folder; SWEEP, PARTS, OUT, CHART (extra chart options for the merge) and CGNODES are passed on to the jobs.
 set -euo pipefail
 N=${1:-4}
 here=$(dirname "$0")

@@ -152,6 +152,10 @@ struct SweepMergeArgs {
     /// Chart to write (.svg or .png).
     #[arg(long)]
     plot: Option<PathBuf>,
+    /// The sweep file the parts ran: its chart options (x, y, series, log axes, title) are
+    /// the defaults, and the parts' varied parameters and measures must be its own.
+    #[arg(long, value_name = "SPEC")]
+    sweep: Option<PathBuf>,
     /// X axis: time, time:NODE, a measure or a varied parameter.
     #[arg(long)]
     x: Option<String>,

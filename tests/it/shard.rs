@@ -179,6 +179,44 @@ fn sweep_merge_names_missing_duplicated_and_mismatched_parts() {
     let e = merge(&["whole.csv"]);
     assert!(e.contains("not a part of a sharded sweep"), "{e}");
     assert!(!d.path().join("m.csv").exists());
+    // The sweep file the parts ran gives the chart options and must match their columns.
+    let spec = |measure: &str| {
+        format!(
+            r#"{{"graph": "g.json", "vary": [{{"param": "d.b", "values": [0, 1, 2, 4]}},
+            {{"param": "d.op", "values": ["div", "mul"]}}], "repeat": 2,
+            "measure": ["{measure}"], "x": "d.b", "log_y": true}}"#
+        )
+    };
+    std::fs::write(d.path().join("s.json"), spec("e.value")).unwrap();
+    let o = cgnodes(
+        d.path(),
+        &[
+            "sweep-merge",
+            "p0.csv",
+            "p1.csv",
+            "p2.csv",
+            "--sweep",
+            "s.json",
+            "--plot",
+            "s.svg",
+        ],
+    );
+    ok(&o);
+    assert!(d.path().join("s.svg").exists());
+    std::fs::write(d.path().join("t.json"), spec("d.value")).unwrap();
+    let o = cgnodes(
+        d.path(),
+        &[
+            "sweep-merge",
+            "p0.csv",
+            "p1.csv",
+            "p2.csv",
+            "--sweep",
+            "t.json",
+        ],
+    );
+    assert_eq!(o.status.code(), Some(3));
+    assert!(stderr(&o).contains("mismatched columns"), "{}", stderr(&o));
 }
 
 /// Every file below `dir` with its bytes, by relative path.

@@ -126,7 +126,7 @@ cat >"$TMP/sweep.json" <<JSON
 }
 JSON
 export CGNODES=$BIN CGNODES_ROOT=$ROOT SWEEP=$TMP/sweep.json PARTS=$TMP/parts OUT=$TMP/merged
-export CHART="--x radius.value --y pi_r2.value --series pi_r2.op"
+export CHART="--x radius.value"
 step "sbatch --wait --array=0-$((SHARDS - 1)) examples/slurm/sweep.sbatch"
 A0=$(date +%s.%N)
 ARRAY=$(sbatch --parsable --wait --array=0-$((SHARDS - 1)) --export=ALL --cpus-per-task=1 \

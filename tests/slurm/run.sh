@@ -5,7 +5,8 @@
 # with a configuration generated in a temporary folder, submits examples/slurm/sweep.sbatch
 # as a 4-task job array of a small sweep with `sbatch --wait`, then examples/slurm/merge.sbatch
 # behind it (`--dependency=afterok`), and compares the merged CSV with an unsharded run of the
-# same sweep (equal except the timing columns). Stops the daemons it started by process id.
+# same sweep (equal except the timing columns); then the same for a frame range
+# (examples/slurm/frames.sbatch, outputs compared file by file). Stops the daemons it started by process id.
 # Exits non-zero, saying which step, if anything fails.
 #
 # Usage: tests/slurm/run.sh   (CGNODES=path/to/cgnodes, default $CARGO_TARGET_DIR or target,
@@ -154,7 +155,22 @@ results "$OUT.csv" >"$TMP/merged.results"
 results "$TMP/whole.csv" >"$TMP/whole.results"
 [ "$(wc -l <"$TMP/whole.results")" = 21 ] || fail "the unsharded sweep has $(wc -l <"$TMP/whole.results") lines, expected 21"
 diff "$TMP/whole.results" "$TMP/merged.results" >&2 || fail "merged CSV differs from the unsharded run"
-step "passed: $SHARDS-task array merged equals the unsharded sweep (total $(($(date +%s) - T0)) s)"
+step "passed: $SHARDS-task array merged equals the unsharded sweep"
+
+# A frame range: examples/slurm/frames.sbatch as an array sharing one --out and one --cache,
+# frames_done.sbatch behind it; the files equal those of one unsharded run.
+export GRAPH=$ROOT/graphs/frames_counter.json FRAMES=0..9 OUT=$TMP/frames CACHE=$TMP/cache
+step "sbatch --wait --array=0-$((SHARDS - 1)) examples/slurm/frames.sbatch ($FRAMES)"
+FARRAY=$(sbatch --parsable --wait --array=0-$((SHARDS - 1)) --export=ALL --cpus-per-task=1 \
+    --output="$TMP/job-f%A_%a.out" "$ROOT/examples/slurm/frames.sbatch") \
+    || fail "the frame array failed"
+sbatch --parsable --wait --dependency=afterok:"${FARRAY%%;*}" --kill-on-invalid-dep=yes \
+    --export=ALL --output="$TMP/job-frames-done.out" "$ROOT/examples/slurm/frames_done.sbatch" \
+    >/dev/null || fail "the frames check job failed"
+"$BIN" run "$GRAPH" --frames "$FRAMES" --out "$TMP/frames_whole" -q || fail "the unsharded frame run"
+[ "$(ls "$TMP/frames_whole" | wc -l)" = 10 ] || fail "the unsharded run wrote $(ls "$TMP/frames_whole" | wc -l) files, expected 10"
+diff -r "$TMP/frames_whole" "$TMP/frames" >&2 || fail "sharded frames differ from the unsharded run"
+step "passed: $SHARDS-task frame array wrote the unsharded run's files (total $(($(date +%s) - T0)) s)"
 
 # Measurements (optional): per sweep and shard count, the array's wall time (first task start
 # to last task end, from the tasks' own clocks), the sum of the tasks' times, and the overhead

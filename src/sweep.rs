@@ -70,6 +70,10 @@ pub struct SweepSpec {
     /// else half the physical memory).
     #[serde(default)]
     pub max_memory: Option<u64>,
+    /// Run only this shard's combinations (`--shard I/N`, round robin); the CSV then starts
+    /// with the columns `shard`, `combination`, `combinations` that `cgnodes sweep-merge` reads.
+    #[serde(skip)]
+    pub shard: Option<crate::shard::Shard>,
 }
 
 fn one() -> usize {
@@ -89,6 +93,8 @@ pub struct Vary {
 /// One run of a sweep.
 #[derive(Clone, Debug)]
 pub struct SweepRow {
+    /// Index of the combination in the whole grid (first varied parameter slowest).
+    pub combination: usize,
     /// The varied values, in `vary` order.
     pub values: Vec<serde_json::Value>,
     /// Repeat index.
@@ -262,7 +268,11 @@ pub fn run(
             .collect();
     }
     let mut rows = Vec::new();
-    for combo in &combos {
+    let shard = spec.shard.unwrap_or_default();
+    for (ci, combo) in combos.iter().enumerate() {
+        if !shard.takes(ci) {
+            continue;
+        }
         for rep in 0..spec.repeat.max(1) {
             let mut g = graph0.clone();
             let mut sets = spec.set.clone();
@@ -270,6 +280,7 @@ pub fn run(
                 sets.push(format!("{}={}", v.param, value_text(x)));
             }
             let mut row = SweepRow {
+                combination: ci,
                 values: combo.clone(),
                 repeat: rep,
                 ok: true,
@@ -373,12 +384,21 @@ pub fn to_csv(spec: &SweepSpec, rows: &[SweepRow]) -> String {
         .first()
         .map(|r| r.node_ms.keys().cloned().collect())
         .unwrap_or_default();
-    let mut head: Vec<String> = spec.vary.iter().map(|v| v.param.clone()).collect();
+    let shard_head = spec
+        .shard
+        .map(|_| ["shard", "combination", "combinations"].map(String::from));
+    let total: usize = spec.vary.iter().map(|v| v.values.len()).product();
+    let mut head: Vec<String> = shard_head.into_iter().flatten().collect();
+    head.extend(spec.vary.iter().map(|v| v.param.clone()));
     head.extend(["repeat", "status", "error_kind", "error", "total_ms"].map(String::from));
     head.extend(nodes.iter().map(|n| format!("ms:{n}")));
     head.extend(spec.measure.iter().cloned());
     let records = rows.iter().map(|r| {
-        let mut f: Vec<String> = r.values.iter().map(value_text).collect();
+        let mut f: Vec<String> = match spec.shard {
+            Some(s) => vec![s.to_string(), r.combination.to_string(), total.to_string()],
+            None => Vec::new(),
+        };
+        f.extend(r.values.iter().map(value_text));
         f.push(r.repeat.to_string());
         f.push(if r.ok { "ok".into() } else { "failed".into() });
         f.push(r.error_kind.clone());
@@ -400,7 +420,7 @@ pub fn to_csv(spec: &SweepSpec, rows: &[SweepRow]) -> String {
 }
 
 /// A varied value as text: strings as they are, anything else as JSON.
-fn value_text(v: &serde_json::Value) -> String {
+pub fn value_text(v: &serde_json::Value) -> String {
     match v {
         serde_json::Value::String(s) => s.clone(),
         other => other.to_string(),

@@ -13,6 +13,7 @@ mod nodes;
 mod run;
 mod schema;
 mod sweep;
+mod sweep_merge;
 mod validate;
 
 use crate::registry::Registry;
@@ -69,6 +70,9 @@ enum Cmd {
     Dot(GraphArgs),
     /// Run a graph for every combination of parameter values; write a CSV and a chart.
     Sweep(SweepArgs),
+    /// Merge the CSV parts of a sharded sweep (`sweep --shard I/N`) into the CSV and chart of
+    /// the whole sweep, checking that every combination is present exactly once.
+    SweepMerge(SweepMergeArgs),
     /// Chart columns of one or more CSV files (for example a sweep beside a peer's results).
     Chart(ChartArgs),
     /// Convert a Framework3D saved node tree to a cgnodes graph.
@@ -110,6 +114,66 @@ struct ChartArgs {
     /// Logarithmic y axis.
     #[arg(long)]
     log_y: bool,
+}
+
+/// `--shard` and `--shards`, shared by `run` (frame blocks) and `sweep` (combinations).
+#[derive(clap::Args)]
+struct ShardArgs {
+    /// Run only shard I of N (I from 0): a block of the frames for `run`, every Nth
+    /// combination for `sweep`; `auto` reads it from a Slurm job array or a Kubernetes
+    /// Indexed Job (see docs/cluster.md).
+    #[arg(long, value_name = "I/N|auto")]
+    shard: Option<String>,
+    /// Number of shards for `--shard auto` in a Kubernetes Indexed Job (default:
+    /// CGNODES_SHARDS); the Job's `completions`.
+    #[arg(long, value_name = "N")]
+    shards: Option<usize>,
+}
+
+impl ShardArgs {
+    /// The shard asked for, from the command line and the process environment.
+    fn resolve(&self) -> Result<Option<crate::shard::Shard>, String> {
+        match (&self.shard, self.shards) {
+            (None, None) => Ok(None),
+            (None, Some(_)) => Err("--shards needs --shard auto (or --shard I/N)".into()),
+            (Some(s), n) => crate::shard::Shard::resolve(s, n, |k| std::env::var(k).ok()).map(Some),
+        }
+    }
+}
+
+#[derive(clap::Args)]
+struct SweepMergeArgs {
+    /// CSV parts written by `cgnodes sweep --shard I/N --csv ...`.
+    #[arg(required = true)]
+    parts: Vec<PathBuf>,
+    /// CSV file to write (default: stdout).
+    #[arg(long)]
+    csv: Option<PathBuf>,
+    /// Chart to write (.svg or .png).
+    #[arg(long)]
+    plot: Option<PathBuf>,
+    /// The sweep file the parts ran: its chart options (x, y, series, log axes, title) are
+    /// the defaults, and the parts' varied parameters and measures must be its own.
+    #[arg(long, value_name = "SPEC")]
+    sweep: Option<PathBuf>,
+    /// X axis: time, time:NODE, a measure or a varied parameter.
+    #[arg(long)]
+    x: Option<String>,
+    /// Y axis: a measure (default: the first).
+    #[arg(long)]
+    y: Option<String>,
+    /// Varied parameter whose values name the series.
+    #[arg(long)]
+    series: Option<String>,
+    /// Logarithmic x axis.
+    #[arg(long)]
+    log_x: bool,
+    /// Logarithmic y axis.
+    #[arg(long)]
+    log_y: bool,
+    /// Chart title.
+    #[arg(long)]
+    title: Option<String>,
 }
 
 #[derive(clap::Args)]
@@ -165,6 +229,8 @@ struct SweepArgs {
     /// else half the physical memory).
     #[arg(long = "max-memory", value_name = "SIZE", value_parser = crate::node::parse_size)]
     max_memory: Option<u64>,
+    #[command(flatten)]
+    shard: ShardArgs,
 }
 
 /// What `run`, `validate` and `dot` share: the graph and how it is loaded, so the three
@@ -223,6 +289,8 @@ struct RunArgs {
     /// else half the physical memory).
     #[arg(long = "max-memory", value_name = "SIZE", value_parser = crate::node::parse_size)]
     max_memory: Option<u64>,
+    #[command(flatten)]
+    shard: ShardArgs,
 }
 
 /// Runs the command line with `registry` (`nodes::builtin_registry()` plus anything a crate
@@ -252,6 +320,7 @@ pub fn main_with(registry: Registry) -> i32 {
         Cmd::Schema => schema::cmd(),
         Cmd::Dot(args) => dot::cmd(&registry, &args),
         Cmd::Sweep(args) => sweep::cmd(&registry, args),
+        Cmd::SweepMerge(args) => sweep_merge::cmd(&args),
         Cmd::Chart(args) => chart::cmd(&args),
         Cmd::ImportF3d {
             input,

@@ -33,6 +33,11 @@ pub(super) fn cmd(registry: &Registry, args: RunArgs) -> i32 {
             return EXIT_USAGE;
         }
     };
+    let (f0, f1) = match shard_frames(&graph, &args, (f0, f1)) {
+        Ok(Some(r)) => r,
+        Ok(None) => return 0,
+        Err(c) => return c,
+    };
     let exec = match Executor::new(args.threads, args.cache.as_deref()) {
         Ok(e) => e,
         Err(e) => {
@@ -120,6 +125,40 @@ pub(super) fn cmd(registry: &Registry, args: RunArgs) -> i32 {
         }
     }
     code
+}
+
+/// This process's frames under `--shard I/N` (a contiguous block of `f0..=f1`), `None` when
+/// the shard has no frames (more shards than frames), or the exit code of a refusal: a graph
+/// with a node that keeps state between frames cannot be split by frames.
+fn shard_frames(
+    graph: &crate::validate::ValidGraph,
+    args: &RunArgs,
+    (f0, f1): (i64, i64),
+) -> Result<Option<(i64, i64)>, i32> {
+    let shard = match args.shard.resolve() {
+        Ok(Some(s)) => s,
+        Ok(None) => return Ok(Some((f0, f1))),
+        Err(e) => {
+            eprintln!("error: {e}");
+            return Err(EXIT_USAGE);
+        }
+    };
+    if shard.count > 1 {
+        if let Some(n) = graph.nodes.iter().find(|n| n.decl.stateful) {
+            eprintln!(
+                "error: --shard {shard}: {}: node '{}' ({}) keeps state between frames, so each frame needs the ones before it and the frames cannot be split between processes. Run the whole range in one process, or shard a sweep over this graph instead (cgnodes sweep ... --shard I/N), which splits whole runs",
+                graph.file.display(),
+                n.id,
+                n.decl.type_name
+            );
+            return Err(EXIT_USAGE);
+        }
+    }
+    let r = shard.frames(f0, f1);
+    if r.is_none() && !args.quiet {
+        eprintln!("shard {shard}: no frames of {f0}..{f1} (more shards than frames)");
+    }
+    Ok(r)
 }
 
 /// Parses `--cache-size`: a size as `node::parse_size` reads it (`500MiB`, `2G`), or `0` for

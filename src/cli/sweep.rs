@@ -57,8 +57,15 @@ pub(super) fn cmd(registry: &Registry, a: SweepArgs) -> i32 {
             p
         }
     };
+    // A shard writes only the part it is given on the command line: the sweep file's CSV
+    // and chart are the merge's (`cgnodes sweep-merge`), and shards must not all write them.
+    let sharded = a.shard.shard.is_some();
+    if sharded && a.csv.is_none() {
+        eprintln!("error: --shard: give --csv PART.csv, one file per shard (cgnodes sweep-merge joins them)");
+        return EXIT_USAGE;
+    }
     spec.csv = a.csv.map(here).or(spec.csv);
-    spec.plot = a.plot.map(here).or(spec.plot);
+    spec.plot = a.plot.map(here).or(spec.plot.filter(|_| !sharded));
     spec.out = a.out.map(here).or(spec.out);
     spec.x = a.x.or(spec.x);
     spec.y = a.y.or(spec.y);
@@ -68,10 +75,20 @@ pub(super) fn cmd(registry: &Registry, a: SweepArgs) -> i32 {
     spec.log_x |= a.log_x;
     spec.log_y |= a.log_y;
     spec.max_memory = a.max_memory.or(spec.max_memory);
+    spec.shard = match a.shard.resolve() {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return EXIT_USAGE;
+        }
+    };
     match run_and_write(&spec, &base, registry, a.threads) {
         Ok(rows) => {
             let failed = rows.iter().filter(|r| !r.ok).count();
-            eprintln!("{} runs, {} failed", rows.len(), failed);
+            match spec.shard {
+                Some(s) => eprintln!("shard {s}: {} runs, {} failed", rows.len(), failed),
+                None => eprintln!("{} runs, {} failed", rows.len(), failed),
+            }
             if spec.csv.is_none() {
                 print!("{}", to_csv(&spec, &rows));
             }

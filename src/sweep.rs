@@ -74,6 +74,11 @@ pub struct SweepSpec {
     /// with the columns `shard`, `combination`, `combinations` that `cgnodes sweep-merge` reads.
     #[serde(skip)]
     pub shard: Option<crate::shard::Shard>,
+    /// A result cache folder on disk (`--cache DIR`), which the shards of a sweep may share:
+    /// an upstream result one shard computed is read by the others. Without it, results are
+    /// reused only between the combinations of one process.
+    #[serde(skip)]
+    pub cache: Option<PathBuf>,
 }
 
 fn one() -> usize {
@@ -247,7 +252,7 @@ pub fn run(
         .as_ref()
         .map(|o| base.join(o))
         .unwrap_or_else(|| tmp.path().to_path_buf());
-    let exec = Executor::new(threads, None)?;
+    let exec = Executor::new(threads, spec.cache.as_deref())?;
     let varied_nodes: Vec<String> = spec
         .vary
         .iter()

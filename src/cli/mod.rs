@@ -229,6 +229,10 @@ struct SweepArgs {
     /// else half the physical memory).
     #[arg(long = "max-memory", value_name = "SIZE", value_parser = crate::node::parse_size)]
     max_memory: Option<u64>,
+    /// Result cache folder on disk, which shards may share (without it, results are reused
+    /// only within this process).
+    #[arg(long)]
+    cache: Option<PathBuf>,
     #[command(flatten)]
     shard: ShardArgs,
 }

@@ -82,6 +82,7 @@ pub(super) fn cmd(registry: &Registry, a: SweepArgs) -> i32 {
             return EXIT_USAGE;
         }
     };
+    spec.cache = a.cache;
     match run_and_write(&spec, &base, registry, a.threads) {
         Ok(rows) => {
             let failed = rows.iter().filter(|r| !r.ok).count();

@@ -407,3 +407,77 @@ fn slurm_scripts_parse_and_chain_the_merge_after_the_array() {
         assert!(t.contains("--shard auto"), "{task}");
     }
 }
+
+/// The `ms:p` column of a sweep CSV (the wall time of node `p`, 0 when it was cached).
+fn ms_p(path: &Path) -> Vec<f64> {
+    let text = std::fs::read_to_string(path).unwrap();
+    let csv = cgnodes::io::csv::read(&text, false, false)
+        .unwrap()
+        .unwrap();
+    let col = csv.header.iter().position(|h| h == "ms:p").unwrap();
+    csv.rows.iter().map(|r| r[col].parse().unwrap()).collect()
+}
+
+#[test]
+fn sweep_shards_share_a_cache_folder() {
+    // `p` does not depend on the varied parameter: with a shared --cache, the second shard
+    // (another process) reads it from the folder the first one wrote, even in its first run.
+    let d = tempfile::tempdir().unwrap();
+    let graph = r#"{"format":"cgnodes-graph","version":1,"nodes":{
+ "p":{"type":"mesh_plane","params":{"subdivisions":100}},
+ "i":{"type":"mesh_info","inputs":{"mesh":"p.mesh"}},
+ "d":{"type":"math","params":{"op":"mul","a":3,"b":1}}}}"#;
+    std::fs::write(d.path().join("g.json"), graph).unwrap();
+    let sweep = |shard: &str, csv: &str, cache: &str| {
+        ok(&cgnodes(
+            d.path(),
+            &[
+                "sweep",
+                "g.json",
+                "--vary",
+                "d.b=1,2,3,4",
+                "--measure=d.value",
+                "--measure=i.table:vertices",
+                "--shard",
+                shard,
+                "--csv",
+                csv,
+                "--cache",
+                cache,
+            ],
+        ));
+    };
+    sweep("0/2", "p0.csv", "shared");
+    sweep("1/2", "p1.csv", "shared");
+    let (first, second) = (
+        ms_p(&d.path().join("p0.csv")),
+        ms_p(&d.path().join("p1.csv")),
+    );
+    assert!(first[0] > 0.0, "{first:?}");
+    assert!(second.iter().all(|&t| t == 0.0), "{second:?}");
+    // Control: the same shard with a folder of its own computes `p` in its first run.
+    sweep("1/2", "p1_alone.csv", "own");
+    assert!(ms_p(&d.path().join("p1_alone.csv"))[0] > 0.0);
+    // and the shared-cache parts merge into the unsharded sweep
+    ok(&cgnodes(
+        d.path(),
+        &["sweep-merge", "p0.csv", "p1.csv", "--csv", "merged.csv"],
+    ));
+    ok(&cgnodes(
+        d.path(),
+        &[
+            "sweep",
+            "g.json",
+            "--vary",
+            "d.b=1,2,3,4",
+            "--measure=d.value",
+            "--measure=i.table:vertices",
+            "--csv",
+            "all.csv",
+        ],
+    ));
+    assert_eq!(
+        results(&d.path().join("merged.csv")),
+        results(&d.path().join("all.csv"))
+    );
+}

@@ -1,5 +1,6 @@
-"""Shared helpers of the image peers (seam_carving_peer.py, svd_numpy.py, rpca_numpy.py): the
-peers' virtual environment, the cgnodes binary, and a PNG reader and writer with only `zlib`
+"""Shared helpers of the peer scripts (the image peers, curves_scipy.py, insects_sklearn.py,
+warp_skimage.py, poisson_opencv.py): the peers' virtual environment, the cgnodes binary, and,
+for the image peers, a PNG reader and writer with only `zlib`
 and `struct` (8-bit grey, RGB or RGBA, non-interlaced), so that no imaging library is needed
 to hand both sides the same pixels."""
 import os
@@ -33,10 +34,14 @@ def ensure(modules, packages, script, flag):
 
 
 def cgnodes_bin():
+    """$CGNODES, else the release binary of $CARGO_TARGET_DIR or target/; exits when missing."""
     if os.environ.get("CGNODES"):
         return os.environ["CGNODES"]
     target = os.environ.get("CARGO_TARGET_DIR", os.path.join(ROOT, "target"))
-    return os.path.join(target, "release", "cgnodes")
+    path = os.path.join(target, "release", "cgnodes")
+    if not os.path.exists(path):
+        sys.exit(f"no cgnodes binary at {path}: build with cargo build --release or set CGNODES")
+    return path
 
 
 def png_read(path):

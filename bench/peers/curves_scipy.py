@@ -31,35 +31,9 @@ import tempfile
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.abspath(os.path.join(HERE, "..", ".."))
-VENV = os.path.join(ROOT, "target", "peers-venv")
+sys.path.insert(0, HERE)
+import _images  # noqa: E402  (the peers' virtual environment and the cgnodes binary)
 TOL = 1e-9
-
-
-def ensure_peers():
-    try:
-        import numpy  # noqa: F401
-        import scipy  # noqa: F401
-        import sklearn  # noqa: F401
-        return
-    except ImportError:
-        pass
-    if os.environ.get("CURVES_SCIPY_REEXEC"):
-        sys.exit("numpy, scipy or scikit-learn could not be imported after installing them")
-    py = os.path.join(VENV, "bin", "python")
-    if not os.path.exists(py):
-        subprocess.check_call([sys.executable, "-m", "venv", VENV])
-    subprocess.check_call([py, "-m", "pip", "install", "--quiet", "numpy", "scipy", "scikit-learn"])
-    env = dict(os.environ, CURVES_SCIPY_REEXEC="1")
-    os.execve(py, [py, os.path.abspath(__file__)] + sys.argv[1:], env)
-
-
-def find_cgnodes():
-    if len(sys.argv) > 1:
-        return sys.argv[1]
-    for d in [os.environ.get("CARGO_TARGET_DIR"), os.path.join(ROOT, "target")]:
-        if d and os.path.exists(os.path.join(d, "release", "cgnodes")):
-            return os.path.join(d, "release", "cgnodes")
-    sys.exit("no cgnodes binary: build with cargo build --release or pass its path")
 
 
 CURVES = {
@@ -106,14 +80,14 @@ def graph(points, samples):
 
 
 def main():
-    ensure_peers()
+    _images.ensure(["numpy", "scipy", "sklearn"], ["numpy", "scipy", "scikit-learn"], __file__, "CURVES_SCIPY_REEXEC")
     import numpy as np
     import scipy
     import sklearn
     from scipy.interpolate import BarycentricInterpolator, CubicSpline, RBFInterpolator
     from sklearn.linear_model import Ridge
 
-    cg = find_cgnodes()
+    cg = sys.argv[1] if len(sys.argv) > 1 else _images.cgnodes_bin()
     pts_file = os.path.join(ROOT, "assets/curves/points12.txt")
     P = np.loadtxt(pts_file)
     diag = np.hypot(*(P.max(axis=0) - P.min(axis=0)))

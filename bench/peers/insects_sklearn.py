@@ -26,34 +26,9 @@ import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.abspath(os.path.join(HERE, "..", ".."))
-VENV = os.path.join(ROOT, "target", "peers-venv")
+sys.path.insert(0, HERE)
+import _images  # noqa: E402  (the peers' virtual environment and the cgnodes binary)
 HIDDEN, LR, EPOCHS, BATCH = [16, 16], 0.01, 200, 32
-
-
-def ensure_peers():
-    try:
-        import numpy  # noqa: F401
-        import sklearn  # noqa: F401
-        return
-    except ImportError:
-        pass
-    if os.environ.get("INSECTS_SKLEARN_REEXEC"):
-        sys.exit("numpy or scikit-learn could not be imported after installing them")
-    py = os.path.join(VENV, "bin", "python")
-    if not os.path.exists(py):
-        subprocess.check_call([sys.executable, "-m", "venv", VENV])
-    subprocess.check_call([py, "-m", "pip", "install", "--quiet", "numpy", "scikit-learn"])
-    env = dict(os.environ, INSECTS_SKLEARN_REEXEC="1")
-    os.execve(py, [py, os.path.abspath(__file__)] + sys.argv[1:], env)
-
-
-def find_cgnodes():
-    if len(sys.argv) > 1:
-        return sys.argv[1]
-    for d in [os.environ.get("CARGO_TARGET_DIR"), os.path.join(ROOT, "target")]:
-        if d and os.path.exists(os.path.join(d, "release", "cgnodes")):
-            return os.path.join(d, "release", "cgnodes")
-    sys.exit("no cgnodes binary: build with cargo build --release or pass its path")
 
 
 def graph(seed):
@@ -75,7 +50,7 @@ def graph(seed):
 
 
 def main():
-    ensure_peers()
+    _images.ensure(["numpy", "sklearn"], ["numpy", "scikit-learn"], __file__, "INSECTS_SKLEARN_REEXEC")
     import warnings
 
     import numpy as np
@@ -87,7 +62,7 @@ def main():
     warnings.filterwarnings("ignore", category=ConvergenceWarning)
     from sklearn.preprocessing import StandardScaler
 
-    cg = find_cgnodes()
+    cg = sys.argv[1] if len(sys.argv) > 1 else _images.cgnodes_bin()
     seeds = int(sys.argv[2]) if len(sys.argv) > 2 else 5
     tr = np.loadtxt(os.path.join(ROOT, "assets/insects/insects-training.txt"))
     te = np.loadtxt(os.path.join(ROOT, "assets/insects/insects-testing.txt"))

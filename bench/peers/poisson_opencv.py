@@ -27,31 +27,8 @@ import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.abspath(os.path.join(HERE, "..", ".."))
-VENV = os.path.join(ROOT, "target", "peers-venv")
-
-
-def ensure_cv2():
-    try:
-        import cv2  # noqa: F401
-        import numpy  # noqa: F401
-        return
-    except ImportError:
-        pass
-    if os.environ.get("POISSON_OPENCV_REEXEC"):
-        sys.exit("opencv-python-headless could not be imported after installing it")
-    py = os.path.join(VENV, "bin", "python")
-    if not os.path.exists(py):
-        subprocess.check_call([sys.executable, "-m", "venv", VENV])
-    subprocess.check_call([py, "-m", "pip", "install", "--quiet", "opencv-python-headless", "numpy"])
-    env = dict(os.environ, POISSON_OPENCV_REEXEC="1")
-    os.execve(py, [py, os.path.abspath(__file__)] + sys.argv[1:], env)
-
-
-def cgnodes_bin():
-    if os.environ.get("CGNODES"):
-        return os.environ["CGNODES"]
-    target = os.environ.get("CARGO_TARGET_DIR", os.path.join(ROOT, "target"))
-    return os.path.join(target, "release", "cgnodes")
+sys.path.insert(0, HERE)
+import _images  # noqa: E402  (the peers' virtual environment and the cgnodes binary)
 
 
 def cases(cv2, np):
@@ -104,7 +81,7 @@ def cgnodes_pastes(cv2, d, target, source, mask, offsets, mode):
     with open(g, "w") as f:
         json.dump({"format": "cgnodes-graph", "version": 1, "nodes": nodes}, f)
     out = os.path.join(d, "out")
-    subprocess.run([cgnodes_bin(), "run", g, "--out", out, "--threads", "1"], check=True, capture_output=True)
+    subprocess.run([_images.cgnodes_bin(), "run", g, "--out", out, "--threads", "1"], check=True, capture_output=True)
     rows = []
     for i in range(len(offsets)):
         with open(os.path.join(out, f"t{i}.csv")) as f:
@@ -115,11 +92,11 @@ def cgnodes_pastes(cv2, d, target, source, mask, offsets, mode):
 
 
 def main():
-    ensure_cv2()
+    _images.ensure(["cv2", "numpy"], ["opencv-python-headless", "numpy"], __file__, "POISSON_OPENCV_REEXEC")
     import cv2
     import numpy as np
 
-    print(f"OpenCV {cv2.__version__} ({cv2.getNumThreads()} threads), cgnodes {cgnodes_bin()} (1 thread), {os.cpu_count()} cores\n")
+    print(f"OpenCV {cv2.__version__} ({cv2.getNumThreads()} threads), cgnodes {_images.cgnodes_bin()} (1 thread), {os.cpu_count()} cores\n")
     print("| case | mode | pixels | cgnodes solver | cgnodes first ms | cgnodes reused ms | OpenCV ms | first / OpenCV | reused / OpenCV | mean diff (8-bit) | residual |")
     print("|---|---|---|---|---|---|---|---|---|---|---|")
     for name, target, source, mask, offsets in cases(cv2, np):

@@ -29,42 +29,18 @@ import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.abspath(os.path.join(HERE, "..", ".."))
-VENV = os.path.join(ROOT, "target", "peers-venv")
-
-
-def ensure_skimage():
-    try:
-        import skimage  # noqa: F401
-        return
-    except ImportError:
-        pass
-    if os.environ.get("WARP_SKIMAGE_REEXEC"):
-        sys.exit("scikit-image could not be imported after installing it")
-    py = os.path.join(VENV, "bin", "python")
-    if not os.path.exists(py):
-        subprocess.check_call([sys.executable, "-m", "venv", VENV])
-    subprocess.check_call([py, "-m", "pip", "install", "--quiet", "scikit-image", "numpy"])
-    env = dict(os.environ, WARP_SKIMAGE_REEXEC="1")
-    os.execve(py, [py, os.path.abspath(__file__)] + sys.argv[1:], env)
-
-
-def find_cgnodes():
-    if len(sys.argv) > 1:
-        return sys.argv[1]
-    for d in [os.environ.get("CARGO_TARGET_DIR"), os.path.join(ROOT, "target")]:
-        if d and os.path.exists(os.path.join(d, "release", "cgnodes")):
-            return os.path.join(d, "release", "cgnodes")
-    sys.exit("no cgnodes binary: build with cargo build --release or pass its path")
+sys.path.insert(0, HERE)
+import _images  # noqa: E402  (the peers' virtual environment and the cgnodes binary)
 
 
 def main():
-    ensure_skimage()
+    _images.ensure(["skimage", "numpy"], ["scikit-image", "numpy"], __file__, "WARP_SKIMAGE_REEXEC")
     import numpy as np
     import skimage
     from skimage import io
     from skimage.transform import ThinPlateSplineTransform, warp
 
-    cg = find_cgnodes()
+    cg = sys.argv[1] if len(sys.argv) > 1 else _images.cgnodes_bin()
     runs = int(sys.argv[2]) if len(sys.argv) > 2 else 5
     n, size = 32, 1024
     rng = np.random.default_rng(24)

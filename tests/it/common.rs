@@ -1,8 +1,10 @@
 //! Helpers every test module uses: where the project's files are, and running a graph.
 
 use cgnodes::exec::{Executor, RunOptions, RunReport};
-use cgnodes::node::FileEnv;
+use cgnodes::node::{ExecContext, FileEnv};
 use cgnodes::registry::Registry;
+use cgnodes::types::Value;
+use std::collections::BTreeMap;
 use std::ops::RangeInclusive;
 use std::path::{Path, PathBuf};
 
@@ -75,4 +77,27 @@ pub fn pid_alive(pid: u32) -> bool {
             .and_then(|(_, rest)| rest.split_whitespace().next())
             .is_some_and(|state| state != "Z" && state != "X"),
     }
+}
+
+/// Outputs of a node run alone, and its log lines.
+pub type NodeOutputs = (BTreeMap<String, Value>, Vec<String>);
+
+/// Runs built-in node `name` outside a graph, with `files` for its paths: its outputs and
+/// log lines, or the error text.
+pub fn run_node(
+    name: &str,
+    inputs: Vec<(&str, Value)>,
+    files: &FileEnv,
+) -> Result<NodeOutputs, String> {
+    let r = cgnodes::nodes::builtin_registry();
+    let decl = r.get(name).unwrap();
+    let mut state = None;
+    let ins = inputs
+        .into_iter()
+        .map(|(k, v)| (k.to_string(), v))
+        .collect();
+    let mut ctx = ExecContext::standalone(decl, ins, &mut state, files, 0);
+    (decl.exec.as_ref().unwrap())(&mut ctx).map_err(|e| e.to_string())?;
+    let logs = ctx.logs().to_vec();
+    Ok((ctx.take_outputs(), logs))
 }

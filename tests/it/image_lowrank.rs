@@ -1,26 +1,14 @@
 //! `seam_carve`, `image_svd` and `rpca` through the node interface: tables, warnings (rank
 //! clamped, RPCA not converged), the CSV matrix input, and errors naming their socket.
 
-use cgnodes::node::{ExecContext, FileEnv};
+use crate::common::{run_node, NodeOutputs};
+use cgnodes::node::FileEnv;
 use cgnodes::types::{Image, Table, Value};
 use std::collections::BTreeMap;
 
-type Outputs = (BTreeMap<String, Value>, Vec<String>);
-
 /// Runs node `name` outside a graph: its outputs and log lines, or the error text.
-fn run(name: &str, inputs: Vec<(&str, Value)>) -> Result<Outputs, String> {
-    let r = cgnodes::nodes::builtin_registry();
-    let decl = r.get(name).unwrap();
-    let mut state = None;
-    let files = FileEnv::default();
-    let ins = inputs
-        .into_iter()
-        .map(|(k, v)| (k.to_string(), v))
-        .collect();
-    let mut ctx = ExecContext::standalone(decl, ins, &mut state, &files, 0);
-    (decl.exec.as_ref().unwrap())(&mut ctx).map_err(|e| e.to_string())?;
-    let logs = ctx.logs().to_vec();
-    Ok((ctx.take_outputs(), logs))
+fn run(name: &str, inputs: Vec<(&str, Value)>) -> Result<NodeOutputs, String> {
+    run_node(name, inputs, &FileEnv::default())
 }
 
 fn table(out: &BTreeMap<String, Value>, socket: &str) -> Table {

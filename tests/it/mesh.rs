@@ -249,27 +249,18 @@ fn non_manifold_meshes_load_and_are_flagged() {
     assert_eq!(t.nonmanifold_edges.len(), 1);
 }
 
-/// Runs one node outside a graph; returns its outputs and the output directory.
+/// Runs one node outside a graph, its paths relative to the assets and `out`; its outputs.
 fn run_node(
     name: &str,
     inputs: Vec<(&str, cgnodes::types::Value)>,
     out: &Path,
 ) -> Result<std::collections::BTreeMap<String, cgnodes::types::Value>, String> {
-    let r = cgnodes::nodes::builtin_registry();
-    let decl = r.get(name).unwrap();
-    let mut state = None;
     let files = cgnodes::node::FileEnv {
         graph_dir: asset(""),
         out_dir: out.to_path_buf(),
         ..Default::default()
     };
-    let ins = inputs
-        .into_iter()
-        .map(|(k, v)| (k.to_string(), v))
-        .collect();
-    let mut ctx = cgnodes::node::ExecContext::standalone(decl, ins, &mut state, &files, 0);
-    (decl.exec.as_ref().unwrap())(&mut ctx).map_err(|e| e.to_string())?;
-    Ok(ctx.take_outputs())
+    crate::common::run_node(name, inputs, &files).map(|(outputs, _)| outputs)
 }
 
 #[test]

@@ -1,24 +1,14 @@
 //! `poisson_blend` through the node interface: the table's facts (pixels, residual, reuse of
 //! the factorization), the empty-mask warning, and errors naming their socket.
 
-use cgnodes::node::{ExecContext, FileEnv};
+use crate::common::{run_node, NodeOutputs};
+use cgnodes::node::FileEnv;
 use cgnodes::types::{Image, Table, Value};
 use std::collections::BTreeMap;
 
 /// Runs `poisson_blend` outside a graph: its outputs and log lines, or the error text.
-fn blend(inputs: Vec<(&str, Value)>) -> Result<(BTreeMap<String, Value>, Vec<String>), String> {
-    let r = cgnodes::nodes::builtin_registry();
-    let decl = r.get("poisson_blend").unwrap();
-    let mut state = None;
-    let files = FileEnv::default();
-    let ins = inputs
-        .into_iter()
-        .map(|(k, v)| (k.to_string(), v))
-        .collect();
-    let mut ctx = ExecContext::standalone(decl, ins, &mut state, &files, 0);
-    (decl.exec.as_ref().unwrap())(&mut ctx).map_err(|e| e.to_string())?;
-    let logs = ctx.logs().to_vec();
-    Ok((ctx.take_outputs(), logs))
+fn blend(inputs: Vec<(&str, Value)>) -> Result<NodeOutputs, String> {
+    run_node("poisson_blend", inputs, &FileEnv::default())
 }
 
 fn table(out: &BTreeMap<String, Value>) -> Table {

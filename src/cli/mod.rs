@@ -64,8 +64,13 @@ enum Cmd {
         /// Node type.
         node_type: String,
     },
-    /// Print the JSON Schema of the graph format.
-    Schema,
+    /// Print the JSON Schema of the graph format, every node type's parameters typed (with
+    /// `--plugins`, the plugins' too), for editors: name it in a graph's `"$schema"`.
+    Schema {
+        /// Only the file's structure, parameters untyped.
+        #[arg(long)]
+        untyped: bool,
+    },
     /// Print a graph as Graphviz dot.
     Dot(GraphArgs),
     /// Run a graph for every combination of parameter values; write a CSV and a chart.
@@ -321,7 +326,7 @@ pub fn main_with(registry: Registry) -> i32 {
         Cmd::Validate(args) => validate::cmd(&registry, &args),
         Cmd::Nodes { json } => nodes::cmd(&registry, json),
         Cmd::Describe { node_type } => describe::cmd(&registry, &node_type),
-        Cmd::Schema => schema::cmd(),
+        Cmd::Schema { untyped } => schema::cmd(&registry, untyped),
         Cmd::Dot(args) => dot::cmd(&registry, &args),
         Cmd::Sweep(args) => sweep::cmd(&registry, args),
         Cmd::SweepMerge(args) => sweep_merge::cmd(&args),

@@ -1,10 +1,14 @@
-//! `cgnodes schema`: the JSON Schema of the graph format.
+//! `cgnodes schema`: the JSON Schema of the graph format, typed by the registry.
 
-/// `cgnodes schema`.
-pub(super) fn cmd() -> i32 {
-    println!(
-        "{}",
-        serde_json::to_string_pretty(&crate::graph::schema()).unwrap_or_default()
-    );
+use crate::registry::Registry;
+
+/// `cgnodes schema [--untyped]`.
+pub(super) fn cmd(registry: &Registry, untyped: bool) -> i32 {
+    let s = if untyped {
+        crate::graph::schema()
+    } else {
+        crate::graph::typed_schema(registry)
+    };
+    println!("{}", serde_json::to_string_pretty(&s).unwrap_or_default());
     0
 }

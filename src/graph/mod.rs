@@ -8,9 +8,11 @@
 pub mod format;
 pub mod load;
 pub mod overrides;
+pub mod typed_schema;
 
 pub use format::{
     migrate, schema, split_link, Graph, GraphFile, LinkSpec, NodeSpec, FORMAT, VERSION,
 };
 pub use load::{load, load_with, parse, parse_with, LoadError};
 pub use overrides::{apply_sets, parse_frames};
+pub use typed_schema::typed_schema;

@@ -25,6 +25,7 @@ mod poisson;
 mod render;
 mod run_semantics;
 mod runtime;
+mod schema;
 mod shard;
 mod sph;
 mod sweep;

@@ -32,11 +32,26 @@ pub const EXIT_USAGE: i32 = 2;
 /// Exit code: the graph could not be loaded or is invalid.
 pub const EXIT_INVALID: i32 = 3;
 
+/// Exit codes, shown at the end of `cgnodes --help`.
+const EXIT_CODES: &str = "Exit codes:
+  0    everything asked for ran (or was answered from the cache)
+  1    a node failed; the rest of the graph ran and the report says what could not
+  2    bad command line (unknown option, bad --set or --frames value, plugin folder error)
+  3    the graph could not be loaded or is invalid (JSON, unknown node type, type mismatch,
+       cycle, missing link), or sweep-merge found parts missing or repeated
+  130  interrupted (Ctrl-C or SIGTERM): plugin processes killed, temporaries removed
+
+Examples:
+  cgnodes run graphs/tutte_cotangent_circle.json --out out
+  cgnodes nodes
+  cgnodes describe arap";
+
 #[derive(Parser)]
 #[command(
     name = "cgnodes",
     version,
-    about = "Run computer-graphics node graphs from JSON files."
+    about = "Run computer-graphics node graphs from JSON files.",
+    after_help = EXIT_CODES
 )]
 struct Cli {
     #[command(subcommand)]
@@ -50,37 +65,59 @@ struct Cli {
 #[derive(Subcommand)]
 enum Cmd {
     /// Validate and run a graph.
+    #[command(
+        after_help = "Example: cgnodes run graphs/arap_camelhead.json --out out --set arap.iterations=20 --profile"
+    )]
     Run(RunArgs),
     /// Check a graph without running it.
+    #[command(after_help = "Example: cgnodes validate graphs/cloth_sphere.json")]
     Validate(GraphArgs),
     /// List every node type with its sockets.
+    #[command(after_help = "Example: cgnodes nodes --json > nodes.json")]
     Nodes {
         /// Print the declarations as JSON.
         #[arg(long)]
         json: bool,
     },
     /// Show one node type.
+    #[command(after_help = "Example: cgnodes describe mass_spring")]
     Describe {
         /// Node type.
         node_type: String,
     },
     /// Print the JSON Schema of the graph format, every node type's parameters typed (with
     /// `--plugins`, the plugins' too), for editors: name it in a graph's `"$schema"`.
+    #[command(
+        after_help = "Example: cgnodes schema > graph.schema.json, then \"$schema\": \"graph.schema.json\" in a graph"
+    )]
     Schema {
         /// Only the file's structure, parameters untyped.
         #[arg(long)]
         untyped: bool,
     },
     /// Print a graph as Graphviz dot.
+    #[command(
+        after_help = "Example: cgnodes dot graphs/tutte_cotangent_circle.json | dot -Tsvg > graph.svg"
+    )]
     Dot(GraphArgs),
     /// Run a graph for every combination of parameter values; write a CSV and a chart.
+    #[command(
+        after_help = "Example: cgnodes sweep bench/sweeps/image_svd_rank.json --csv svd.csv --plot svd.svg"
+    )]
     Sweep(SweepArgs),
     /// Merge the CSV parts of a sharded sweep (`sweep --shard I/N`) into the CSV and chart of
     /// the whole sweep, checking that every combination is present exactly once.
+    #[command(
+        after_help = "Example: cgnodes sweep-merge part-*.csv --csv all.csv --plot all.svg (see docs/cluster.md)"
+    )]
     SweepMerge(SweepMergeArgs),
     /// Chart columns of one or more CSV files (for example a sweep beside a peer's results).
+    #[command(
+        after_help = "Example: cgnodes chart svd.csv --x svd50.rank --y svd50.table:psnr:mean --series svd50.method --plot psnr.svg"
+    )]
     Chart(ChartArgs),
     /// Convert a Framework3D saved node tree to a cgnodes graph.
+    #[command(after_help = "Example: cgnodes import-f3d GeoNodeSystem.json -o graph.json")]
     ImportF3d {
         /// Framework3D JSON file.
         input: PathBuf,
@@ -90,6 +127,14 @@ enum Cmd {
         /// JSON file mapping custom Framework3D node names onto cgnodes nodes.
         #[arg(long = "f3d-aliases")]
         aliases: Option<PathBuf>,
+    },
+    /// Print a shell completion script (bash, zsh, fish, elvish or powershell).
+    #[command(
+        after_help = "Example: cgnodes completions bash > ~/.local/share/bash-completion/completions/cgnodes"
+    )]
+    Completions {
+        /// The shell.
+        shell: clap_complete::Shell,
     },
 }
 
@@ -336,5 +381,15 @@ pub fn main_with(registry: Registry) -> i32 {
             output,
             aliases,
         } => import_f3d::cmd(&registry, &input, &output, aliases.as_deref()),
+        Cmd::Completions { shell } => {
+            use clap::CommandFactory;
+            clap_complete::generate(
+                shell,
+                &mut Cli::command(),
+                "cgnodes",
+                &mut std::io::stdout(),
+            );
+            0
+        }
     }
 }

@@ -12,7 +12,7 @@
 //! Layout: `lexer` (tokens) -> `layer` (the prim tree) -> `access` (typed values, prim
 //! lookup) and `transform` (xformOps), used by `read` (Mesh prims) and `skel` (UsdSkel: skeletons,
 //! animations, a mesh's skinning binding);
-//! `write` emits a layer.
+//! `write` emits a layer, `write_anim` one with the points of many frames as `timeSamples`.
 
 pub mod access;
 pub mod layer;
@@ -21,6 +21,7 @@ pub mod read;
 pub mod skel;
 pub mod transform;
 pub mod write;
+pub mod write_anim;
 
 pub use access::mesh_paths;
 pub use layer::{parse_usda, UsdAttr, UsdLayer, UsdPrim, UsdValue};

@@ -2,6 +2,7 @@
 //! reads as declaration (`declare`), then execution (`execute`), then its tests, with the
 //! algorithm itself in a plain function that Rust users can call without the runtime.
 
+pub mod anim;
 pub mod basic;
 pub mod curve;
 pub mod image;
@@ -25,6 +26,7 @@ pub fn builtin_registry() -> Registry {
 
 /// Registers every built-in node.
 pub fn register_all(r: &mut Registry) {
+    anim::register(r);
     basic::register(r);
     curve::register(r);
     image::register(r);

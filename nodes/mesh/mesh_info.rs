@@ -22,6 +22,25 @@ fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
     ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
 }
 
+/// The signed volume enclosed by a closed, outward-oriented mesh (divergence theorem over a
+/// fan triangulation of each face: `V = Σ p0 · (p1 × p2) / 6`); meaningless for an open mesh.
+pub fn signed_volume(mesh: &Mesh) -> f64 {
+    use crate::types::vec3::{cross, dot};
+    mesh.faces()
+        .map(|f| {
+            let p0 = mesh.positions[f[0] as usize];
+            (1..f.len() - 1)
+                .map(|k| {
+                    let p1 = mesh.positions[f[k] as usize];
+                    let p2 = mesh.positions[f[k + 1] as usize];
+                    dot(p0, cross(p1, p2))
+                })
+                .sum::<f64>()
+        })
+        .sum::<f64>()
+        / 6.0
+}
+
 /// The facts `mesh_info` reports, as a one-row table. Loop sizes and lengths go into `meta`
 /// (`boundary_loop_sizes`, `boundary_loop_lengths`), as does `manifold_problems` when the
 /// mesh is not manifold. `genus` is -1 when undefined (non-manifold or several components).
@@ -80,6 +99,7 @@ pub fn mesh_info(mesh: &Mesh) -> Table {
         ("degenerate_faces", degenerate as f64),
         ("has_uvs", bool_f(mesh.uvs.is_some())),
         ("has_normals", bool_f(mesh.normals.is_some())),
+        ("volume", signed_volume(mesh)),
     ]);
     let join = |v: Vec<String>| v.join(" ");
     table.meta.insert(

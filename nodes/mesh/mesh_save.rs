@@ -30,6 +30,9 @@ fn declare(b: &mut NodeBuilder) {
     b.add_input::<String>("prim")
         .default("/mesh/mesh")
         .doc("USDA only: prim path of the Mesh (parents become Xforms).");
+    b.add_input::<bool>("animated")
+        .default(false)
+        .doc("USDA only: one file for all frames, points (and normals) as timeSamples at the frame number.");
     b.add_input::<bool>("binary")
         .default(false)
         .doc("PLY only: binary little endian instead of ASCII.");
@@ -40,6 +43,7 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let p: String = ctx.input("path")?;
     let prim: String = ctx.input("prim")?;
     let binary: bool = ctx.input("binary")?;
+    let animated: bool = ctx.input("animated")?;
     let path = ctx.output_path("path", &p)?;
     let ext = path
         .extension()
@@ -49,6 +53,7 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     match ext.as_str() {
         "obj" => save_obj(ctx, &mesh, &path),
         "ply" => ctx.write_with(&path, |w| super::ply::write_ply(&mesh, binary, w)),
+        "usda" | "usd" if animated => save_animated(ctx, &mesh, &p, &path, &prim),
         "usda" | "usd" => ctx.write_with(&path, |w| super::usda::write_usda(&mesh, &prim, w)),
         "off" => ctx.write_with(&path, |w| super::off::write_off(&mesh, w)),
         other => Err(NodeError::invalid(
@@ -56,6 +61,42 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
             format!("unknown mesh format '.{other}' (obj, ply, usda, off are written)"),
         )),
     }
+}
+
+/// Adds this frame's points (and normals) to the animated layer at `path` (see
+/// `usda::write_anim`), starting a new one when the file is absent or holds another mesh.
+fn save_animated(
+    ctx: &mut ExecContext,
+    mesh: &Mesh,
+    raw: &str,
+    path: &Path,
+    prim: &str,
+) -> Result<(), NodeError> {
+    use super::usda::write_anim::{read_samples, write_animated};
+    if raw.contains("{frame}") {
+        return Err(NodeError::invalid(
+            "path",
+            "animated writes every frame into one file; remove {frame} from the path",
+        ));
+    }
+    let old = std::fs::read_to_string(path).ok();
+    let mut samples = old
+        .as_deref()
+        .and_then(|t| read_samples(t, prim, mesh))
+        .unwrap_or_default();
+    if old.is_some() && samples.times.is_empty() {
+        ctx.log(format!(
+            "{}: not an animated layer of this mesh; starting a new one",
+            path.display()
+        ));
+    }
+    let normals = mesh
+        .normals
+        .as_ref()
+        .filter(|n| n.domain == Domain::Vertex || n.domain == Domain::Corner)
+        .map(|n| n.values.clone());
+    samples.insert(ctx.frame() as f64, mesh.positions.clone(), normals);
+    ctx.write_with(path, |w| write_animated(mesh, prim, &samples, w))
 }
 
 fn save_obj(ctx: &mut ExecContext, mesh: &Mesh, path: &Path) -> Result<(), NodeError> {

@@ -77,6 +77,10 @@ pub struct Mesh {
     pub attributes: BTreeMap<String, AttributeData>,
     /// A material attached by `texture_map` or a loader (written as MTL + image by `mesh_save`).
     pub material: Option<Arc<Material>>,
+    /// The skeleton binding of a skinned mesh (joint indices and weights per vertex), kept by
+    /// `mesh_load` from a UsdSkel-bound `.usda` mesh and used by `skin` and `animate_mesh`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub skin: Option<Arc<super::SkinBinding>>,
     #[serde(skip)]
     topology: OnceLock<Arc<Topology>>,
 }

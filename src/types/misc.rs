@@ -124,23 +124,3 @@ pub struct Curve {
     /// Whether the last point joins the first.
     pub closed: bool,
 }
-
-/// A joint of a skeleton.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Joint {
-    /// Joint name.
-    pub name: String,
-    /// Index of the parent joint, `None` for a root.
-    pub parent: Option<usize>,
-    /// Rest transform relative to the parent, column-major 4x4.
-    pub rest_local: [f64; 16],
-    /// Posed transform relative to the parent, column-major 4x4.
-    pub pose_local: [f64; 16],
-}
-
-/// A joint hierarchy for skinning.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct Skeleton {
-    /// Joints, parents before children.
-    pub joints: Vec<Joint>,
-}

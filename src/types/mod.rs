@@ -8,6 +8,7 @@ mod mesh;
 mod misc;
 mod model;
 mod scene;
+mod skeleton;
 mod topology;
 mod value;
 
@@ -15,9 +16,12 @@ pub mod vec3;
 
 pub use image_ops::TRANSPARENT;
 pub use mesh::{Attribute, AttributeData, Domain, Mesh, MeshError};
-pub use misc::{Curve, Image, Joint, Points, Skeleton, Table};
+pub use misc::{Curve, Image, Points, Table};
 pub use model::{DenseLayer, Model};
 pub use scene::{Camera, FovAxis, Light, LookAt, Material, MaterialKind, Scene, SceneObject};
+pub use skeleton::{
+    Joint, RowMatrix, SkelAnimation, Skeleton, SkinBinding, Track, IDENTITY as IDENTITY_MATRIX,
+};
 pub use topology::{grid_triangles, grid_triangles_with, Topology};
 pub use value::{Color, FromValue, SocketType, Typed, Value};
 

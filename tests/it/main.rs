@@ -5,6 +5,7 @@
 mod common;
 mod support;
 
+mod anim;
 mod arap;
 mod cache_semantics;
 mod cli_help;

@@ -122,6 +122,10 @@ fn parse_value(lx: &mut Lexer) -> Result<UsdValue, String> {
         Tok::Punct(b'{') => {
             lx.enter(line)?;
             let mut items = Vec::new();
+            if matches!(lx.peek()?, Some((Tok::Ident(_), _))) {
+                // A typed dictionary (`customData = { dictionary Blender = { bool generated = 1 } }`).
+                return parse_typed_dict(lx);
+            }
             loop {
                 if lx.is_punct(b'}')? {
                     lx.next()?;
@@ -274,6 +278,39 @@ fn parse_prim(
     }
     lx.leave();
     Ok(prim)
+}
+
+/// The entries of a typed dictionary after its `{`, as `(name, value)` pairs:
+/// `type name = value` items (`dictionary` values nest), separated by newlines or `;`.
+fn parse_typed_dict(lx: &mut Lexer) -> Result<UsdValue, String> {
+    let mut items = Vec::new();
+    loop {
+        if lx.is_punct(b'}')? {
+            lx.next()?;
+            break;
+        }
+        if lx.is_punct(b';')? {
+            lx.next()?;
+            continue;
+        }
+        let (t, l) = lx.expect_next("a dictionary entry type")?;
+        let Tok::Ident(_) = t else {
+            return Err(err(l, format!("expected a dictionary entry type, found {}", show(&t))));
+        };
+        if lx.is_punct(b'[')? {
+            lx.next()?;
+            lx.expect_punct(b']')?;
+        }
+        let (k, l) = lx.expect_next("a dictionary key")?;
+        let key = match k {
+            Tok::Ident(s) | Tok::Str(s) => UsdValue::Str(s),
+            other => return Err(err(l, format!("expected a dictionary key, found {}", show(&other)))),
+        };
+        lx.expect_punct(b'=')?;
+        items.push((key, parse_value(lx)?));
+    }
+    lx.leave();
+    Ok(UsdValue::Dict(items))
 }
 
 fn parse_property(lx: &mut Lexer, first: String, line: usize) -> Result<UsdAttr, String> {

@@ -10,20 +10,23 @@
 //! it does not understand is an error with the line number, never a guess.
 //!
 //! Layout: `lexer` (tokens) -> `layer` (the prim tree) -> `access` (typed values, prim
-//! lookup) and `transform` (xformOps), used by `read` (Mesh prims; a reader of another schema,
-//! such as skeletons, would sit beside it);
-//! `write` emits a layer.
+//! lookup) and `transform` (xformOps), used by `read` (Mesh prims) and `skel` (UsdSkel: skeletons,
+//! animations, a mesh's skinning binding);
+//! `write` emits a layer, `write_anim` one with the points of many frames as `timeSamples`.
 
 pub mod access;
 pub mod layer;
 mod lexer;
 pub mod read;
+pub mod skel;
 pub mod transform;
 pub mod write;
+pub mod write_anim;
 
 pub use access::mesh_paths;
 pub use layer::{parse_usda, UsdAttr, UsdLayer, UsdPrim, UsdValue};
 pub use read::{read_usda, reverse_faces};
+pub use skel::read_skeleton;
 pub use write::{usd_identifier, write_usda};
 
 #[cfg(test)]

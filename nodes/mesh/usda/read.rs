@@ -241,6 +241,7 @@ pub fn read_usda(text: &str, prim_path: &str, apply_transform: bool) -> Result<M
             continue;
         };
         if name.ends_with(":indices")
+            || name.starts_with("skel:") // the skeleton binding, read below
             || ua.is_some_and(|u| std::ptr::eq(u, a))
             || na.is_some_and(|u| std::ptr::eq(u, a))
             || name == "displayColor"
@@ -283,9 +284,11 @@ pub fn read_usda(text: &str, prim_path: &str, apply_transform: bool) -> Result<M
         .attr("orientation")
         .and_then(|a| a.value.as_ref())
         .is_some_and(|v| matches!(v, UsdValue::Str(s) | UsdValue::Ident(s) if s == "leftHanded"));
+    let mut applied = None;
     if apply_transform {
         let m = world_transform(&chain)?;
         if m != Mat4::identity() {
+            applied = Some(m);
             transform_points(&m, &mut positions);
             if let Some(n) = normals.as_mut() {
                 transform_normals(&m, &mut n.values)
@@ -301,6 +304,8 @@ pub fn read_usda(text: &str, prim_path: &str, apply_transform: bool) -> Result<M
     mesh.uvs = uvs;
     mesh.colors = colors;
     mesh.attributes = attributes;
+    mesh.skin = super::skel::read_binding(&layer, &chain, nv, applied.as_ref(), apply_transform)?
+        .map(std::sync::Arc::new);
     if left {
         reverse_faces(&mut mesh);
     }

@@ -11,7 +11,8 @@ use nalgebra::{Matrix3, Matrix4, RowVector3, RowVector4};
 /// matrix as written in the file, and a point transforms as `p' = p * m`.
 pub type Mat4 = Matrix4<f64>;
 
-fn matrix(v: &UsdValue, line: usize, name: &str) -> Result<Mat4, String> {
+/// A `matrix4d` value (four 4-tuples), rows as written.
+pub fn matrix(v: &UsdValue, line: usize, name: &str) -> Result<Mat4, String> {
     match v {
         UsdValue::Tuple(rows) if rows.len() == 4 => {
             let mut m = Mat4::zeros();

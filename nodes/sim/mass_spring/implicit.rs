@@ -13,10 +13,10 @@
 //! The Newton system is solved either by sparse Cholesky (`newton_direct.rs`: symbolic
 //! analysis once per model, one numeric factorization and one solve per Newton step) or,
 //! above `PCG_MIN_UNKNOWNS` unknowns, matrix-free by block-Jacobi preconditioned conjugate
-//! gradients to a relative residual `cg_tol` (`newton_pcg.rs`): at 128x128 a Newton iteration
-//! then costs about 20x less than a numeric factorization and solve (docs/mass_spring.md). The projection of
-//! each spring's Hessian onto PSD keeps `H` positive definite with either solver; nothing is
-//! refactored to fix definiteness.
+//! gradients to a relative residual `cg_tol` (`newton_pcg.rs`): at 128x128 a Newton
+//! iteration then costs about 20x less than a numeric factorization and solve
+//! (docs/mass_spring.md). The projection of each spring's Hessian onto PSD keeps `H`
+//! positive definite with either solver; nothing is refactored to fix definiteness.
 
 use super::newton_direct::HessianCholesky;
 use super::newton_pcg::HessianPcg;

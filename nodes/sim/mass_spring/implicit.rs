@@ -511,7 +511,7 @@ mod tests {
     fn auto_uses_pcg_from_the_threshold_on() {
         let small = cloth(8).0; // 62 free vertices
         let large = cloth(19).0; // 359 free vertices
-        assert!(3 * 62 < PCG_MIN_UNKNOWNS && 3 * 359 >= PCG_MIN_UNKNOWNS);
+        const { assert!(3 * 62 < PCG_MIN_UNKNOWNS && 3 * 359 >= PCG_MIN_UNKNOWNS) };
         let opts = NewtonOptions::default();
         assert!(!Implicit::new(&small, opts).uses_pcg());
         assert!(Implicit::new(&large, opts).uses_pcg());

@@ -9,10 +9,18 @@
 //! no per-spring dashpot (Warp's kd = 10); damping is off here. Reported: ms/frame for
 //! `semi_implicit` (the same symplectic Euler as Warp's), and for `implicit` (one backward Euler
 //! step per frame, h = 1/60) Newton steps per second and ms/frame; `projective` likewise.
+//! Grids 32^2 to 256^2 (Warp's own script stops at 128^2; `cloth_warp.py` calls its
+//! `run_benchmark` for 256^2 too); `implicit` with both Newton solvers (PCG, the default at
+//! these sizes, and the sparse Cholesky, not run at 256^2), the per-phase time of one Newton
+//! iteration at 128^2, and the chart `target/cloth_scaling.svg` (ms/frame against grid size;
+//! copied to docs/mass_spring_scaling.svg). `--sizes 32,64` limits the grids; `--cg-tol`
+//! compares PCG at several CG tolerances with the Cholesky's exact Newton steps instead.
 
+use cgnodes::chart::{draw, Chart, Series};
 use cgnodes::nodes::mesh::mesh_grid::grid_mesh;
 use cgnodes::nodes::sim::mass_spring::{
-    springs_from_mesh, Method, Model, Simulator, SolverOptions, SpringKinds,
+    springs_from_mesh, LinearSolver, Method, Model, NewtonOptions, NewtonProfile, Simulator,
+    SolverOptions, SpringKinds,
 };
 use std::time::Instant;
 
@@ -44,19 +52,49 @@ fn median(mut v: Vec<f64>) -> f64 {
     v[v.len() / 2]
 }
 
+/// What one benchmark run measured.
+struct Run {
+    /// Milliseconds per frame.
+    ms: Vec<f64>,
+    /// Iterations (Newton or local/global) over all steps.
+    iters: usize,
+    springs: usize,
+    /// The implicit solver's per-phase profile.
+    profile: Option<NewtonProfile>,
+}
+
 /// Runs `frames` frames of `substeps` steps, checking energy every step (as the node does,
-/// for its log) or once per frame; returns per-frame ms and total iterations.
-fn run(
+/// for its log) or once per frame.
+fn run(method: Method, n: usize, frames: usize, substeps: usize, per_step_energy: bool) -> Run {
+    run_with(
+        method,
+        n,
+        frames,
+        substeps,
+        per_step_energy,
+        LinearSolver::Auto,
+    )
+}
+
+fn run_with(
     method: Method,
     n: usize,
     frames: usize,
     substeps: usize,
     per_step_energy: bool,
-) -> (Vec<f64>, usize, usize) {
+    solver: LinearSolver,
+) -> Run {
     let (model, x0) = warp_model(n);
     let springs = model.springs.len();
     let h = 1.0 / 60.0 / substeps as f64;
-    let mut sim = Simulator::new(model, x0, None, method, h, SolverOptions::default()).unwrap();
+    let opts = SolverOptions {
+        newton: NewtonOptions {
+            solver,
+            ..NewtonOptions::default()
+        },
+        ..SolverOptions::default()
+    };
+    let mut sim = Simulator::new(model, x0, None, method, h, opts).unwrap();
     let mut ms = Vec::new();
     let mut iters = 0;
     for _ in 0..frames {
@@ -73,16 +111,31 @@ fn run(
         }
         ms.push(t.elapsed().as_secs_f64() * 1e3);
     }
-    (ms, iters, springs)
+    let profile = sim.newton_profile();
+    Run {
+        ms,
+        iters,
+        springs,
+        profile,
+    }
 }
 
-fn warp() -> Option<serde_json::Value> {
+fn warp(dims: &[usize]) -> Option<serde_json::Value> {
     if std::env::var_os("CLOTH_SKIP_WARP").is_some() {
         return None;
     }
     let py = std::env::var("CLOTH_PYTHON").unwrap_or_else(|_| "python3".into());
     let script = concat!(env!("CARGO_MANIFEST_DIR"), "/bench/peers/cloth_warp.py");
-    let out = std::process::Command::new(py).arg(script).output().ok()?;
+    let out = std::process::Command::new(py)
+        .arg(script)
+        .arg(
+            dims.iter()
+                .map(|d| d.to_string())
+                .collect::<Vec<_>>()
+                .join(","),
+        )
+        .output()
+        .ok()?;
     if !out.status.success() {
         eprintln!(
             "warp benchmark failed: {}",
@@ -259,17 +312,94 @@ fn chart(series: &[Vec<(f64, Option<f64>)>], names: &[&str]) -> String {
     s
 }
 
+/// The inexact Newton forcing term: PCG at several `cg_tol` against the Cholesky's exact
+/// Newton steps on an n x n cloth over `frames` steps of h = 1/60.
+fn cg_tol_sweep(n: usize, frames: usize) {
+    let (model, x0) = warp_model(n);
+    let h = 1.0 / 60.0;
+    let sim = |solver: LinearSolver, cg_tol: f64| {
+        let opts = SolverOptions {
+            newton: NewtonOptions {
+                solver,
+                cg_tol,
+                ..NewtonOptions::default()
+            },
+            ..SolverOptions::default()
+        };
+        let mut s =
+            Simulator::new(model.clone(), x0.clone(), None, Method::Implicit, h, opts).unwrap();
+        let mut xs = Vec::new();
+        let mut its = Vec::new();
+        let t = Instant::now();
+        for _ in 0..frames {
+            its.push(s.advance(None).expect("stable"));
+            xs.push(s.state.x.clone());
+        }
+        let ms = t.elapsed().as_secs_f64() * 1e3 / frames as f64;
+        (xs, its, s.newton_profile().unwrap_or_default(), ms)
+    };
+    let (xr, itr, _, msr) = sim(LinearSolver::Cholesky, 0.0);
+    println!();
+    println!("PCG forcing term on {n}x{n}, {frames} steps of h = 1/60 against the Cholesky ({msr:.1} ms/step, Newton iterations per step {itr:?})");
+    println!("| cg_tol | CG iterations / Newton | Newton iterations per step | steps whose Newton count differs | max position difference | ms/step |");
+    println!("|---|---|---|---|---|---|");
+    for tol in [1e-2, 1e-3, 1e-4, 1e-6, 1e-8] {
+        let (xs, its, p, ms) = sim(LinearSolver::Pcg, tol);
+        let diff = (xs.iter().zip(&xr))
+            .flat_map(|(a, b)| a.iter().zip(b))
+            .flat_map(|(p, q)| (0..3).map(move |k| (p[k] - q[k]).abs()))
+            .fold(0.0, f64::max);
+        let differ = its.iter().zip(&itr).filter(|(a, b)| a != b).count();
+        println!(
+            "| {tol:e} | {:.1} | {:.2} | {differ} | {diff:.1e} | {ms:.1} |",
+            p.cg_iterations as f64 / p.iterations.max(1) as f64,
+            its.iter().sum::<usize>() as f64 / frames as f64,
+        );
+    }
+}
+
+/// Per-phase milliseconds per Newton iteration (the first factorization apart).
+fn phases(label: &str, p: &NewtonProfile) {
+    let it = p.iterations.max(1) as f64;
+    let ms = |s: f64| s * 1e3 / it;
+    println!(
+        "| {label} | {} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.0} | {:.1} |",
+        p.iterations,
+        ms(p.gradient),
+        ms(p.assemble),
+        p.first_factor * 1e3,
+        ms(p.factor),
+        ms(p.solve),
+        ms(p.line_search),
+        ms(p.gradient + p.assemble + p.first_factor + p.factor + p.solve + p.line_search),
+        p.cg_iterations as f64 / it,
+    );
+}
+
 fn main() {
     if std::env::args().any(|a| a == "--sweep") {
         sweep();
         return;
     }
+    let args: Vec<String> = std::env::args().collect();
+    if args.iter().any(|a| a == "--cg-tol") {
+        cg_tol_sweep(64, 20);
+        return;
+    }
+    let sizes: Vec<usize> = args
+        .iter()
+        .position(|a| a == "--sizes")
+        .and_then(|i| args.get(i + 1))
+        .map(|s| s.split(',').filter_map(|t| t.parse().ok()).collect())
+        .unwrap_or_else(|| vec![32, 64, 128, 256]);
     let threads = rayon::current_num_threads();
     println!("cgnodes mass_spring, {threads} rayon threads; Warp CPU cloth benchmark settings");
-    let w = warp();
+    let w = warp(&sizes);
     if let Some(w) = &w {
         println!("warp-lang {}", w["version"]);
     }
+    let warp_min = |n: usize| w.as_ref().and_then(|w| w[n.to_string()]["min"].as_f64());
+    let f = |x: Option<f64>| x.map(|x| format!("{x:.2}")).unwrap_or("-".into());
     println!(
         "| grid | springs | semi_implicit ms/frame, energy per frame (per step) | same, 1 thread | warp ms/frame (min / avg) | warp min / cgnodes 1 thread |"
     );
@@ -278,24 +408,18 @@ fn main() {
         .num_threads(1)
         .build()
         .unwrap();
-    for n in [32usize, 64, 128] {
-        let (ms, _, springs) = run(Method::SemiImplicit, n, 60, 16, false);
-        let pool = median(ms);
+    let mut chart = vec![Vec::new(); 5];
+    for &n in &sizes {
+        let frames = if n >= 256 { 20 } else { 60 };
+        let r = run(Method::SemiImplicit, n, frames, 16, false);
+        let (pool, springs) = (median(r.ms), r.springs);
         let ours = median(
-            one.install(|| run(Method::SemiImplicit, n, 60, 16, false))
-                .0,
+            one.install(|| run(Method::SemiImplicit, n, frames, 16, false))
+                .ms,
         );
-        let logged = median(run(Method::SemiImplicit, n, 60, 16, true).0);
-        let (wmin, wavg) = w
-            .as_ref()
-            .map(|w| {
-                (
-                    w[n.to_string()]["min"].as_f64(),
-                    w[n.to_string()]["avg"].as_f64(),
-                )
-            })
-            .unwrap_or((None, None));
-        let f = |x: Option<f64>| x.map(|x| format!("{x:.2}")).unwrap_or("-".into());
+        let logged = median(run(Method::SemiImplicit, n, frames, 16, true).ms);
+        let wmin = warp_min(n);
+        let wavg = w.as_ref().and_then(|w| w[n.to_string()]["avg"].as_f64());
         let ratio = wmin
             .map(|m| format!("{:.2}", m / ours))
             .unwrap_or("-".into());
@@ -304,24 +428,94 @@ fn main() {
             f(wmin),
             f(wavg)
         );
+        chart[0].push((n as f64, pool));
+        if let Some(m) = wmin {
+            chart[4].push((n as f64, m));
+        }
     }
     println!();
-    println!("| grid | integrator | h | ms/frame (median) | iterations/step | Newton steps/s |");
-    println!("|---|---|---|---|---|---|");
-    for n in [32usize, 64, 128] {
-        for method in [Method::Implicit, Method::Projective] {
-            let frames = if n == 128 { 5 } else { 10 };
-            let (ms, iters, _) = run(method, n, frames, 1, true);
-            let total: f64 = ms.iter().sum::<f64>() / 1e3;
-            let per = iters as f64 / frames as f64;
-            let rate = match method {
-                Method::Implicit => format!("{:.1}", iters as f64 / total),
-                _ => "-".into(),
+    println!("One backward Euler step per frame (h = 1/60), energy checked every step; implicit: Newton to 1e-7");
+    println!("| grid | integrator | ms/frame (median) | iterations/step | CG iterations/Newton | ms/Newton iteration | warp min / cgnodes |");
+    println!("|---|---|---|---|---|---|---|");
+    let mut profiles = Vec::new();
+    for &n in &sizes {
+        let cases = [
+            (Method::Implicit, LinearSolver::Pcg, "implicit (PCG)", 1),
+            (
+                Method::Implicit,
+                LinearSolver::Cholesky,
+                "implicit (Cholesky)",
+                2,
+            ),
+            (Method::Projective, LinearSolver::Auto, "projective", 3),
+        ];
+        for (method, solver, label, series) in cases {
+            if solver == LinearSolver::Cholesky && n > 128 {
+                println!("| {n}x{n} | {label} | not run (2D factorization flops grow ~8x per doubling of n) | | | | |");
+                continue;
+            }
+            let frames = match (n, solver) {
+                (128, LinearSolver::Cholesky) => 3,
+                (256.., _) => 5,
+                _ => 10,
             };
-            println!(
-                "| {n}x{n} | {method:?} | 1/60 | {:.1} | {per:.1} | {rate} |",
-                median(ms)
-            );
+            let r = run_with(method, n, frames, 1, true, solver);
+            let total: f64 = r.ms.iter().sum();
+            let per = r.iters as f64 / frames as f64;
+            let med = median(r.ms.clone());
+            let (cg, per_newton) = match &r.profile {
+                Some(p) => (
+                    format!("{:.1}", p.cg_iterations as f64 / p.iterations.max(1) as f64),
+                    format!("{:.1}", total / r.iters.max(1) as f64),
+                ),
+                None => ("-".into(), "-".into()),
+            };
+            let ratio = warp_min(n)
+                .map(|m| format!("{:.3}", m / med))
+                .unwrap_or("-".into());
+            println!("| {n}x{n} | {label} | {med:.1} | {per:.1} | {cg} | {per_newton} | {ratio} |");
+            chart[series].push((n as f64, med));
+            if n == 128 {
+                if let Some(p) = r.profile {
+                    profiles.push((label, p));
+                }
+            }
         }
+    }
+    if !profiles.is_empty() {
+        println!();
+        println!("Implicit at 128x128, ms per Newton iteration by phase (first factorization: total ms, once)");
+        println!("| solver | Newton iterations | gradient | Hessian | first factorization (symbolic + numeric) | numeric factorization | solve (CG or triangular) | line search | total | CG iterations |");
+        println!("|---|---|---|---|---|---|---|---|---|---|");
+        for (label, p) in &profiles {
+            phases(label, p);
+        }
+    }
+    let names = [
+        "semi_implicit (16 substeps)",
+        "implicit, PCG (1 step)",
+        "implicit, Cholesky (1 step)",
+        "projective (1 step)",
+        "Warp CPU (16 substeps)",
+    ];
+    let c = Chart {
+        title: format!("Cloth ms/frame against grid size ({threads} threads, 60 fps frames)"),
+        x_label: "grid side n (n x n vertices)".into(),
+        y_label: "ms per frame (median)".into(),
+        series: (names.iter().zip(chart))
+            .filter(|(_, p)| !p.is_empty())
+            .map(|(l, points)| Series {
+                label: l.to_string(),
+                points,
+            })
+            .collect(),
+        failures: Vec::new(),
+        log_x: true,
+        log_y: true,
+    };
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/target/cloth_scaling.svg");
+    match draw(&c, std::path::Path::new(path)) {
+        Ok(()) => println!("chart: {path}"),
+        Err(e) => eprintln!("chart: {e}"),
     }
 }

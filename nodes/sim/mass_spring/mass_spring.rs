@@ -236,6 +236,7 @@ fn build(
         newton: NewtonOptions {
             max_iters: ctx.input::<i64>("newton_iters")?.max(1) as usize,
             tol: ctx.input("newton_tol")?,
+            ..NewtonOptions::default()
         },
         pd_iterations: ctx.input::<i64>("pd_iters")?.max(1) as usize,
         blowup_factor: ctx.input("blowup_factor")?,

@@ -17,12 +17,14 @@ pub mod keyframes;
 // The node lives in a file named after its node type, which is also this domain's name.
 #[allow(clippy::module_inception)]
 pub mod mass_spring;
+pub mod newton_direct;
+pub mod newton_pcg;
 pub mod projective;
 pub mod semi_implicit;
 pub mod simulator;
 pub mod springs;
 
-pub use implicit::{Implicit, NewtonError, NewtonOptions};
+pub use implicit::{Implicit, LinearSolver, NewtonError, NewtonOptions, NewtonProfile};
 pub use keyframes::{keyframed_center, parse_keyframes};
 pub use mass_spring::LOG_COLUMNS;
 pub use projective::Projective;

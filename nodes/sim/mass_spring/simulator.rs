@@ -3,7 +3,7 @@
 //! infinity or runaway energy against the model's energy scale). Plain data in, plain data
 //! out: the `mass_spring` node and the tests and benchmarks drive it directly.
 
-use super::implicit::{Implicit, NewtonError, NewtonOptions};
+use super::implicit::{Implicit, NewtonError, NewtonOptions, NewtonProfile};
 use super::projective::Projective;
 use super::semi_implicit::SemiImplicit;
 use super::springs::{self, energy, Energy, Model, Sphere, State};
@@ -194,6 +194,14 @@ impl Simulator {
     pub fn factorizations(&self) -> Option<(usize, usize)> {
         match &self.solver {
             Solver::Implicit(s) => Some((s.symbolic_count, s.numeric_count)),
+            _ => None,
+        }
+    }
+
+    /// Where the implicit solver's time went, per phase (implicit only).
+    pub fn newton_profile(&self) -> Option<NewtonProfile> {
+        match &self.solver {
+            Solver::Implicit(s) => Some(s.profile),
             _ => None,
         }
     }

@@ -1,7 +1,8 @@
 //! ARAP parameterization beside libigl, in the same run.
 //!
 //! `cargo bench --bench arap [-- ITERATIONS [MESH.obj ...]]` (default 100 iterations, the
-//! `arap` node's default, on camel_b, camelhead, nefertiti_front and igea_front; the fold-free
+//! `arap` node's default, on camel_b, camelhead, nefertiti_front, bunny_base, bunny_open (the
+//! hard inputs of issue 29, `bench/peers/arap_meshes.py`) and igea_front; the fold-free
 //! mode front-loads its refactorizations, so its time per iteration depends on the run length:
 //! `-- 30` is the shorter run measured in `docs/arap.md`). For each mesh: ours plain and
 //! fold-free from the default Tutte start (mean-value weights, circle), and libigl's
@@ -66,6 +67,8 @@ fn main() {
             root.join("assets/meshes/camel_b.obj"),
             root.join("assets/meshes/camelhead.obj"),
             root.join("assets/meshes/nefertiti_front.obj"),
+            root.join("assets/meshes/bunny_base.obj"),
+            root.join("assets/meshes/bunny_open.obj"),
             root.join("../../shared/assets/meshes/igea_front.obj"),
             PathBuf::from("/work/shared/assets/meshes/igea_front.obj"),
         ];

@@ -8,7 +8,8 @@
 use super::frames::TriangleFrames;
 use super::line_search::Directional;
 use super::options::{
-    ArapOptions, RefactorSchedule, MAX_WEIGHT, MIN_STEP, REWEIGHT_FACTOR, STEP_SAFETY,
+    ArapOptions, RefactorSchedule, LOCAL_MAX_FRACTION, MAX_WEIGHT, MIN_STEP, REWEIGHT_FACTOR,
+    STEP_SAFETY,
 };
 use crate::nodes::linalg::SpdFactor;
 use faer::sparse::{SparseColMat, SymbolicSparseColMat};
@@ -100,6 +101,7 @@ impl FoldFree {
             limits,
             best_step,
             rings,
+            (LOCAL_MAX_FRACTION * gradient.nrows() as f64) as usize,
             row_of,
             gradient,
             &self.adjacency,
@@ -120,7 +122,9 @@ impl FoldFree {
 /// does there and spares computing an ordering. The blocking
 /// triangles then move almost rigidly with their surroundings instead of cutting the step for
 /// the whole mesh, without refactoring the global Laplacian. Returns the number of vertices
-/// re-solved; `touched` receives the triangles whose direction changed. `adjacency` lists each
+/// re-solved, or `Err` when the region holds more than `max_region` vertices (see
+/// `LOCAL_MAX_FRACTION`: a refactorization of the whole Laplacian then costs about as much and
+/// does better), `d` then unchanged; `touched` receives the triangles whose direction changed. `adjacency` lists each
 /// vertex's triangles (compressed rows); `mark` and `seen` are scratch (all `u32::MAX` and
 /// `false` on entry and exit).
 #[allow(clippy::too_many_arguments)]
@@ -130,6 +134,7 @@ pub(super) fn local_resolve(
     limits: &[f64],
     best_step: f64,
     rings: usize,
+    max_region: usize,
     row_of: &[u32],
     gradient: &Mat<f64>,
     adjacency: &(Vec<usize>, Vec<u32>),
@@ -179,6 +184,9 @@ pub(super) fn local_resolve(
     let result = (|| {
         if r == 0 {
             return Err("no free vertex to re-solve".to_string());
+        }
+        if r > max_region {
+            return Err(format!("region of {r} vertices: refactor instead"));
         }
         // Δ_W restricted to the region (upper triangle in compressed columns, assembled column
         // by column in the region's order) and -g - Δ_W,RO d_O
@@ -358,6 +366,27 @@ mod tests {
             .fold(0.0, f64::max);
         assert!(dmax > 1e-3);
 
+        // a region larger than the cap is refused, the direction left as it was
+        let mut d0 = d.clone();
+        let refused = local_resolve(
+            &frames,
+            &vec![10.0; m],
+            &limits,
+            1.0,
+            2,
+            6,
+            &row_of,
+            &g,
+            &adjacency,
+            &mut mark,
+            &mut seen,
+            &mut touched,
+            &mut d0,
+        );
+        assert!(refused.is_err());
+        assert_eq!(d0, d);
+        assert!(mark.iter().all(|&x| x == u32::MAX) && seen.iter().all(|&x| !x));
+
         let mut resolve = |w: &[f64], d: &mut [[f64; 2]]| {
             let r = local_resolve(
                 &frames,
@@ -365,6 +394,7 @@ mod tests {
                 &limits,
                 1.0,
                 2,
+                n,
                 &row_of,
                 &g,
                 &adjacency,

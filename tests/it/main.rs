@@ -7,6 +7,7 @@ mod support;
 
 mod arap;
 mod cache_semantics;
+mod course_graphs;
 mod curve;
 mod f3d;
 mod graphs;

@@ -46,7 +46,7 @@ pub fn pairs_from_list(
     n_cloth: usize,
     n_body: usize,
 ) -> Result<Vec<(usize, usize)>, String> {
-    if list.len() % 2 != 0 {
+    if !list.len().is_multiple_of(2) {
         return Err(format!(
             "{} numbers; pairs need an even count (cloth, body, cloth, body, ...)",
             list.len()

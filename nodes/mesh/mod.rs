@@ -3,6 +3,6 @@
 
 crate::node_domain! {
     category: "mesh",
-    nodes: [buffer, mesh_compose, mesh_grid, mesh_info, mesh_load, mesh_plane, mesh_save, mesh_triangulate],
+    nodes: [buffer, mesh_compose, mesh_grid, mesh_info, mesh_load, mesh_plane, mesh_save, mesh_transform, mesh_triangulate, points_to_mesh, set_vert_color],
     modules: [obj, off, ply, usda, vertex_select],
 }

@@ -87,6 +87,13 @@ pub fn cache_keys(
             continue;
         }
         let d = &node.decl;
+        // A writer whose output path names the frame writes a file per frame: it depends on
+        // time even when its inputs do not change (a still arm is written every frame).
+        let per_frame_file = node.inputs.iter().any(|(name, src)| {
+            matches!(src, InputSource::Literal(v) | InputSource::Default(v)
+                if d.input(name).is_some_and(|s| s.file == FileRole::Output)
+                    && path_strings(v).iter().any(|p| p.contains("{frame")))
+        });
         let mut h = blake3::Hasher::new();
         h.update(&identity);
         h.update(d.type_name.as_bytes());
@@ -120,7 +127,7 @@ pub fn cache_keys(
             }
             h.update(b"\0");
         }
-        if d.time_dependent || d.stateful {
+        if d.time_dependent || d.stateful || per_frame_file {
             h.update(b"frame");
             h.update(&frame.to_le_bytes());
         }

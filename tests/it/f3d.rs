@@ -392,3 +392,77 @@ fn socket_order_is_numeric_not_textual() {
     assert_eq!(n.params["value"], json!(10.0));
     let _ = Path::new(".");
 }
+
+/// Read USD -> Apply Transform -> Mass Spring with the given switch values.
+fn switches_tree(integrator: i64, liu13: i64) -> Value {
+    let mut t = Tree::new();
+    let geo = "SocketGeometry";
+    let (_, read) = t.node(
+        "geom_read_usd",
+        &[
+            ("File Name", "SocketString", json!("grid10x10.usda")),
+            ("Prim Path", "SocketString", json!("/Grid/Grid")),
+        ],
+        &[("Geometry", geo)],
+    );
+    let (xin, xout) = t.node(
+        "geom_apply_transform_geom",
+        &[
+            ("Geometry", geo, Value::Null),
+            ("Translate Y", "SocketFloat", json!(2.0)),
+            ("Rotate Z", "SocketFloat", json!(90.0)),
+            ("Scale X", "SocketFloat", json!(3.0)),
+        ],
+        &[("Geometry", geo)],
+    );
+    t.link(read[0], xin[0]);
+    let (min, _) = t.node(
+        "geom_mass_spring",
+        &[
+            ("Mesh", geo, Value::Null),
+            ("time integrator type", "SocketInt", json!(integrator)),
+            ("enable damping", "SocketInt", json!(1)),
+            ("enable debug output", "SocketInt", json!(1)),
+            ("enable Liu13", "SocketInt", json!(liu13)),
+        ],
+        &[("Output Mesh", geo)],
+    );
+    t.link(xout[0], min[0]);
+    t.json()
+}
+
+#[test]
+fn switches_and_vector_components_translate() {
+    let r = builtin_registry();
+    let node = |g: &cgnodes::graph::GraphFile, ty: &str| {
+        g.nodes
+            .values()
+            .find(|n| n.node_type == ty)
+            .unwrap()
+            .params
+            .clone()
+    };
+    for (ti, liu, want) in [
+        (0, 0, "implicit"),
+        (1, 0, "semi_implicit"),
+        (0, 1, "projective"),
+        (1, 1, "projective"),
+    ] {
+        let g = import(&switches_tree(ti, liu), &Aliases::default(), &r).unwrap();
+        let p = node(&g, "mass_spring");
+        assert_eq!(p["integrator"], json!(want), "type {ti}, Liu13 {liu}");
+        assert_eq!(p["damped"], json!(true));
+        assert_eq!(p["debug"], json!(true));
+        let x = node(&g, "mesh_transform");
+        assert_eq!(x["translate"], json!([0.0, 2.0, 0.0]));
+        assert_eq!(x["rotate"], json!([0.0, 0.0, 90.0]));
+        assert_eq!(x["scale"], json!([3.0, 1.0, 1.0]));
+    }
+    let e = import(&switches_tree(5, 0), &Aliases::default(), &r)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("'time integrator type' = 5") && e.contains("known: 0, 1"),
+        "{e}"
+    );
+}

@@ -9,6 +9,7 @@ mod anim;
 mod arap;
 mod cache_semantics;
 mod cli_help;
+mod course_graphs;
 mod curve;
 mod f3d;
 mod graphs;

@@ -122,3 +122,87 @@ fn bad_fixed_selection_is_an_input_error() {
         assert_eq!(e.kind, ErrorKind::InvalidInput, "{sel}: {e}");
     }
 }
+
+const CONTROL: &str = r#"{
+  "format": "cgnodes-graph", "version": 1,
+  "nodes": {
+    "grid": {"type": "mesh_grid", "params": {"cells_u": 6, "cells_v": 6}},
+    "t": {"type": "frame"},
+    "d": {"type": "math", "params": {"op": "mul", "b": SPEED}, "inputs": {"a": "t.time"}},
+    "body": {"type": "mesh_transform", "inputs": {"mesh": "grid.mesh", "translate": "d.value"}},
+    "sim": {"type": "mass_spring", "inputs": {"mesh": "grid.mesh" CONTROL_LINK},
+            "params": {"integrator": "INTEGRATOR", "substeps": 3, "fixed": "top_corners"}}
+  }
+}"#;
+
+fn control_graph(integrator: &str, speed: f64, linked: bool) -> String {
+    CONTROL
+        .replace("INTEGRATOR", integrator)
+        .replace("SPEED", &speed.to_string())
+        .replace(
+            "CONTROL_LINK",
+            if linked {
+                r#", "control_mesh": "body.mesh""#
+            } else {
+                ""
+            },
+        )
+}
+
+/// Control points: the fixed corners pair with themselves on a body that starts as the
+/// cloth, then follow it exactly while it moves (all three integrators); a body that stays
+/// put gives the same run as plain fixed vertices.
+#[test]
+fn fixed_vertices_follow_the_control_mesh() {
+    for integrator in ["implicit", "semi_implicit", "projective"] {
+        let plain = run_graph(&control_graph(integrator, 0.05, false), 0..=3);
+        // Frame 0 is the rest state: the grid itself.
+        let grid = output_mesh(&plain[0]);
+        let still = run_graph(&control_graph(integrator, 0.0, true), 0..=3);
+        let moving = run_graph(&control_graph(integrator, 0.05, true), 0..=3);
+        let last = output_mesh(&plain[3]);
+        let fixed: Vec<usize> = (0..grid.positions.len())
+            .filter(|&i| last.positions[i] == grid.positions[i])
+            .collect();
+        assert_eq!(fixed.len(), 2, "{integrator}: top corners");
+        for f in 0..=3usize {
+            assert!(moving[f].ok(), "{:?}", moving[f].errors());
+            assert_eq!(
+                output_mesh(&still[f]).positions,
+                output_mesh(&plain[f]).positions,
+                "{integrator} frame {f}: a still body changes nothing"
+            );
+            let m = output_mesh(&moving[f]);
+            for &i in &fixed {
+                let want: [f64; 3] =
+                    std::array::from_fn(|c| grid.positions[i][c] + f as f64 * 0.05);
+                let d = (0..3)
+                    .map(|c| (m.positions[i][c] - want[c]).abs())
+                    .fold(0.0, f64::max);
+                assert!(d < 1e-12, "{integrator} frame {f} vertex {i}: off by {d}");
+            }
+            // The free cloth is dragged along: its centre moves towards +x, +y, +z too.
+            if f == 3 {
+                let c = |p: &[[f64; 3]]| p.iter().map(|x| x[0]).sum::<f64>() / p.len() as f64;
+                assert!(c(&m.positions) > c(&output_mesh(&plain[f]).positions));
+            }
+        }
+    }
+}
+
+#[test]
+fn control_pairs_need_a_control_mesh_and_valid_indices() {
+    let bad = CONTROL
+        .replace("INTEGRATOR", "implicit")
+        .replace("SPEED", "0.1")
+        .replace("CONTROL_LINK", "")
+        .replace(r#""fixed": "top_corners""#, r#""control_pairs": [0, 0]"#);
+    let r = run_graph(&bad, 0..=0);
+    let e = format!("{:?}", r[0].errors());
+    assert!(e.contains("control_pairs"), "{e}");
+    let bad = control_graph("implicit", 0.1, true)
+        .replace(r#""fixed": "top_corners""#, r#""control_pairs": [0, 49]"#);
+    let r = run_graph(&bad, 0..=0);
+    let e = format!("{:?}", r[0].errors());
+    assert!(e.contains("body vertex 49"), "{e}");
+}

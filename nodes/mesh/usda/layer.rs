@@ -135,6 +135,24 @@ fn parse_value(lx: &mut Lexer) -> Result<UsdValue, String> {
                 let key = match k {
                     Tok::Num(v) => UsdValue::Num(v),
                     Tok::Str(s) => UsdValue::Str(s),
+                    // A dictionary entry `TYPE NAME = VALUE` (Blender's `customData`).
+                    Tok::Ident(_) => match lx.expect_next("a dictionary key")? {
+                        (Tok::Ident(s) | Tok::Str(s), _) => {
+                            lx.expect_punct(b'=')?;
+                            let v = parse_value(lx)?;
+                            items.push((UsdValue::Str(s), v));
+                            if lx.is_punct(b',')? || lx.is_punct(b';')? {
+                                lx.next()?;
+                            }
+                            continue;
+                        }
+                        (other, l) => {
+                            return Err(err(
+                                l,
+                                format!("expected a dictionary key, found {}", show(&other)),
+                            ))
+                        }
+                    },
                     other => {
                         return Err(err(
                             l,

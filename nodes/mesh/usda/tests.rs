@@ -182,3 +182,31 @@ fn hostile_face_counts_are_errors() {
     let e = read_usda(&bad, "", true).unwrap_err();
     assert!(e.contains("add up to 3 but faceVertexIndices has 4 entries"), "{e}");
 }
+
+#[test]
+fn blender_custom_data_dictionaries_are_read() {
+    // As in the course's arm_with_cloth.usda (Blender 4.1 export).
+    let text = r#"#usda 1.0
+def Xform "root" (
+    customData = {
+        dictionary Blender = {
+            bool generated = 1
+            string name = "x"
+        }
+    }
+)
+{
+    def Mesh "M"
+    {
+        int[] faceVertexCounts = [3]
+        int[] faceVertexIndices = [0, 1, 2]
+        point3f[] points = [(0, 0, 0), (1, 0, 0), (0, 1, 0)]
+    }
+}
+"#;
+    let m = read_usda(text, "/root/M", true).unwrap();
+    assert_eq!(m.positions[1], [1.0, 0.0, 0.0]);
+    // A dictionary that does not close is still an error with its line.
+    let bad = text.replace("string name = \"x\"", "string name = ");
+    assert!(read_usda(&bad, "/root/M", true).unwrap_err().contains("line"));
+}

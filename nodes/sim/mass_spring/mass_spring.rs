@@ -3,6 +3,7 @@
 //! may move along keyframes, stepped frame by frame. The simulator is kept in the node's
 //! state between frames and restarts when the mesh or any parameter changes.
 
+use super::control::{control_targets, pair_nearest, pairs_from_list};
 use super::implicit::NewtonOptions;
 use super::keyframes::{keyframed_center, parse_keyframes};
 use super::simulator::{Method, SetupError, SimError, Simulator, SolverOptions};
@@ -38,6 +39,8 @@ struct NodeState {
     key: u64,
     frame: i64,
     start_frame: i64,
+    /// The body's positions at `frame` (control points), when a control mesh is linked.
+    control_prev: Vec<[f64; 3]>,
 }
 
 /// Columns of the `log` table.
@@ -91,6 +94,24 @@ fn declare(b: &mut NodeBuilder) {
     b.add_input::<Vec<i64>>("fixed_indices")
         .optional()
         .doc("More fixed vertex indices.");
+    b.add_input::<bool>("damped")
+        .default(true)
+        .doc("Apply `damping` (Framework3D's enable damping); off = undamped.");
+    b.add_input::<Mesh>("control_mesh").optional().doc(
+        "A moving body (e.g. the skinned arm), each frame: the fixed vertices follow its vertices (control points).",
+    );
+    b.add_input::<String>("control_select").default("").doc(
+        "Body vertices the fixed vertices may pair with (selection as in `fixed`, e.g. attr:ControlPoints); empty = all.",
+    );
+    b.add_input::<Vec<i64>>("control_pairs").optional().doc(
+        "Explicit pairs cloth, body, cloth, body, ... (these cloth vertices become fixed); else each fixed vertex pairs with the nearest selected body vertex at the start.",
+    );
+    b.add_input::<bool>("profile")
+        .default(false)
+        .doc("Logs each frame's wall time (Framework3D's enable time profiling).");
+    b.add_input::<bool>("debug")
+        .default(false)
+        .doc("Logs each frame's energies and iterations (Framework3D's enable debug output).");
     b.add_input::<bool>("sphere")
         .default(false)
         .doc("Enable the sphere collider.");
@@ -134,12 +155,15 @@ struct Params {
     substeps: usize,
     sphere: Option<Sphere>,
     keys: Vec<(f64, [f64; 3])>,
+    /// (cloth vertex, body vertex) control pairs.
+    pairs: Vec<(usize, usize)>,
 }
 
 /// Reads the parameters; builds the simulator (springs, factorizations) only when `with_sim`.
 fn build(
     ctx: &ExecContext,
     mesh: &Mesh,
+    control: Option<&Mesh>,
     with_sim: bool,
 ) -> Result<(Option<Simulator>, Params), NodeError> {
     let method = ctx.choice::<Method>("integrator")?;
@@ -199,6 +223,43 @@ fn build(
             fixed[i as usize] = true;
         }
     }
+    // Control points: pairs with the body, whose cloth vertices are fixed and start on it.
+    let mut x0 = mesh.positions.clone();
+    let list = ctx.input_opt::<Vec<i64>>("control_pairs")?;
+    let pairs = match (control, list) {
+        (None, Some(_)) => {
+            return Err(NodeError::invalid(
+                "control_pairs",
+                "pairs need a control_mesh to follow",
+            ))
+        }
+        (None, None) => Vec::new(),
+        (Some(body), Some(list)) => {
+            let p = pairs_from_list(&list, n, body.num_vertices())
+                .map_err(|e| NodeError::invalid("control_pairs", e))?;
+            for &(i, _) in &p {
+                fixed[i] = true;
+            }
+            p
+        }
+        (Some(body), None) => {
+            let csel: String = ctx.input("control_select")?;
+            let selected = if csel.trim().is_empty() {
+                (0..body.num_vertices()).collect()
+            } else {
+                select_vertices(body, &csel, down)
+                    .map_err(|e| NodeError::invalid("control_select", e))?
+            };
+            let fixed_list: Vec<usize> = (0..n).filter(|&i| fixed[i]).collect();
+            pair_nearest(&mesh.positions, &fixed_list, &body.positions, &selected)
+                .map_err(|e| NodeError::invalid("control_select", e))?
+        }
+    };
+    if let Some(body) = control {
+        for &(i, j) in &pairs {
+            x0[i] = body.positions[j];
+        }
+    }
     let mut gravity = [0.0; 3];
     gravity[axis] = g;
     let model = Model {
@@ -208,7 +269,11 @@ fn build(
         gravity,
         // The course applies `damping` once per step of h = 0.01; scaling it to the step keeps
         // the same decay per second whatever h and substeps are.
-        damping: damping.powf(h / 0.01),
+        damping: if ctx.input::<bool>("damped")? {
+            damping.powf(h / 0.01)
+        } else {
+            1.0
+        },
     };
     let sphere = if ctx.input::<bool>("sphere")? {
         let r: f64 = ctx.input("sphere_radius")?;
@@ -243,7 +308,7 @@ fn build(
     };
     let sim = if with_sim {
         Some(
-            Simulator::new(model, mesh.positions.clone(), None, method, h, opts).map_err(|e| {
+            Simulator::new(model, x0, None, method, h, opts).map_err(|e| {
                 match e {
                     SetupError::NotPositiveDefinite(m) => NodeError::singular(m),
                     SetupError::Invalid(m) => NodeError::invalid("mesh", m),
@@ -261,6 +326,7 @@ fn build(
             substeps: substeps.max(1) as usize,
             sphere,
             keys,
+            pairs,
         },
     ))
 }
@@ -275,8 +341,9 @@ fn input_key(ctx: &ExecContext, mesh: &Mesh) -> u64 {
     }
     mesh.face_counts().hash(&mut h);
     mesh.face_indices().hash(&mut h);
+    // The body moves every frame and the logging switches change nothing: neither restarts.
     for s in &ctx.decl.inputs {
-        if s.name != "mesh" {
+        if !["mesh", "control_mesh", "profile", "debug"].contains(&s.name.as_str()) {
             s.name.hash(&mut h);
             if let Some(v) = ctx.input_value(&s.name) {
                 v.to_json().map(|j| j.to_string()).hash(&mut h);
@@ -287,14 +354,17 @@ fn input_key(ctx: &ExecContext, mesh: &Mesh) -> u64 {
 }
 
 fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
+    let started = std::time::Instant::now();
     let mesh: Arc<Mesh> = ctx.input("mesh")?;
+    let control = ctx.input_opt::<Arc<Mesh>>("control_mesh")?;
     let key = input_key(ctx, &mesh);
     let frame = ctx.frame();
     let restart = {
         let st = ctx.state::<NodeState>()?;
         st.sim.is_none() || st.key != key || frame <= st.frame
     };
-    let (sim0, params) = build(ctx, &mesh, restart)?;
+    let (sim0, params) = build(ctx, &mesh, control.as_deref(), restart)?;
+    let (profile, debug): (bool, bool) = (ctx.input("profile")?, ctx.input("debug")?);
     let st = ctx.state::<NodeState>()?;
     let mut log = Table::with_columns(&LOG_COLUMNS);
     if let Some(sim0) = sim0 {
@@ -314,16 +384,43 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
         st.key = key;
         st.frame = frame;
         st.start_frame = frame;
+        st.control_prev = control.as_ref().map(|c| c.positions.clone()).unwrap_or_default();
     }
+    let cur: Vec<[f64; 3]> = match &control {
+        Some(c) => {
+            if c.num_vertices() != st.control_prev.len() {
+                return Err(NodeError::invalid(
+                    "control_mesh",
+                    format!(
+                        "{} vertices; it had {} when the simulation started",
+                        c.num_vertices(),
+                        st.control_prev.len()
+                    ),
+                ));
+            }
+            c.positions.clone()
+        }
+        None => Vec::new(),
+    };
     let start = st.start_frame;
     let frames = (frame - st.frame).max(0) as usize;
     let last = st.frame;
     let result = {
         let sim = st.sim.as_mut().expect("set above");
         let mut err = None;
+        let total = (frames * params.substeps).max(1) as f64;
         'outer: for df in 0..frames {
             let f = last + df as i64; // frame being advanced from
             for s in 0..params.substeps {
+                if !params.pairs.is_empty() {
+                    // The body's pose at the end of this step, between the frames' poses.
+                    let k = (df * params.substeps + s + 1) as f64 / total;
+                    let targets = control_targets(&params.pairs, &st.control_prev, &cur, k);
+                    if let Err(e) = sim.move_fixed(&targets) {
+                        err = Some(NodeError::invalid("control_mesh", e));
+                        break 'outer;
+                    }
+                }
                 let frac = (f - start) as f64 + (s + 1) as f64 / params.substeps as f64;
                 let sphere = params.sphere.map(|mut sp| {
                     if let Some(c) = keyframed_center(&params.keys, start as f64 + frac) {
@@ -372,6 +469,9 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
         }
     };
     st.frame = frame;
+    if control.is_some() {
+        st.control_prev = cur;
+    }
     let mut out = (*mesh).clone();
     out.positions = state.x;
     out.attributes.insert(
@@ -383,6 +483,24 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     );
     log.meta
         .insert("integrator".into(), format!("{:?}", params.method));
+    if debug {
+        let row = log.num_rows().saturating_sub(1);
+        let col = |c: &str| log.column(c).and_then(|v| v.get(row).copied()).unwrap_or(0.0);
+        let line = format!(
+            "frame {frame}: kinetic {:.4e}, potential {:.4e}, max strain {:.3e}, iterations {}",
+            col("kinetic"),
+            col("potential"),
+            col("max_strain"),
+            col("iterations")
+        );
+        ctx.log(line);
+    }
+    if profile {
+        ctx.log(format!(
+            "frame took {:.1} ms",
+            started.elapsed().as_secs_f64() * 1e3
+        ));
+    }
     ctx.set_output("mesh", out);
     ctx.set_output("log", log);
     Ok(())

@@ -12,6 +12,7 @@
 // vertex; index loops read closer to the formulas than zipped iterators.
 #![allow(clippy::needless_range_loop)]
 
+pub mod control;
 pub mod implicit;
 pub mod keyframes;
 // The node lives in a file named after its node type, which is also this domain's name.

@@ -185,6 +185,23 @@ impl Simulator {
         })
     }
 
+    /// Moves fixed vertices to new positions (control points following a body) before the
+    /// next step; their velocity stays zero, as the integrators keep it for fixed vertices.
+    /// `Err` names a vertex that is out of range or not fixed.
+    pub fn move_fixed(&mut self, targets: &[(usize, [f64; 3])]) -> Result<(), String> {
+        for &(i, p) in targets {
+            if !self.model.fixed.get(i).copied().unwrap_or(false) {
+                return Err(format!("vertex {i} is not a fixed vertex of the model"));
+            }
+            if p.iter().any(|c| !c.is_finite()) {
+                return Err(format!("target of vertex {i} is not finite"));
+            }
+            self.state.x[i] = p;
+            self.state.v[i] = [0.0; 3];
+        }
+        Ok(())
+    }
+
     /// Energy of the current state.
     pub fn energy(&self, sphere: Option<&Sphere>) -> Energy {
         energy(&self.model, &self.state, &self.x_ref, sphere)

@@ -203,8 +203,17 @@ fn declare(b: &mut NodeBuilder) {
     b.add_input::<i64>("image_width")
         .default(256i64)
         .range(8.0, 4096.0);
+    b.add_input::<bool>("profile")
+        .default(false)
+        .doc("Logs the frame's wall time (Framework3D's enable time profiling).");
+    b.add_input::<bool>("debug")
+        .default(false)
+        .doc("Logs density errors and energy each frame (Framework3D's enable debug output).");
     b.add_output::<Points>("points")
         .doc("Particles with velocity, density, pressure, speed and color.");
+    b.add_output::<Vec<[f64; 3]>>("colors").doc(
+        "Speed through the jet colour map, normalized to this frame's slowest and fastest particle as the course's get_vel_color_jet does.",
+    );
     b.add_output::<Image>("image")
         .doc("Particles splatted on the x/up plane, coloured by speed.");
     b.add_output::<Table>("log").doc("One row per frame since the start: frame, time, steps, iterations, max_density_error, avg_density_error, kinetic_energy, front, height, capped_solves (DFSPH solves so far stopped by max_iterations unconverged).");
@@ -342,6 +351,8 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let what = format!("a {width}x{height} image");
     let bytes = crate::node::bytes_of(&[width as u64, height, 16]);
     ctx.reserve_bytes("image_width", &what, bytes)?;
+    let started = std::time::Instant::now();
+    let (profile, debug): (bool, bool) = (ctx.input("profile")?, ctx.input("debug")?);
     let st = ctx.state::<SphState>()?;
     if st.fluid.is_none() || st.key != key || frame <= st.last_frame {
         let mut f = Fluid::block(prm.clone(), pmin, pmax, counts)
@@ -387,6 +398,13 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let img = splat(f, width, vref);
     let (log, front) = (st.log.clone(), st.front.clone());
     let capped = f.capped_solves;
+    let debug_line = debug.then(|| {
+        let (emax, eavg) = f.density_error();
+        format!(
+            "density error max {emax:.3e} avg {eavg:.3e}, kinetic energy {:.4e}",
+            f.kinetic_energy()
+        )
+    });
     let msg = format!(
         "t = {:.4} s, {} steps, {} particles",
         f.time,
@@ -401,6 +419,20 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
             capped, prm.max_iterations
         ));
     }
+    if let Some(line) = debug_line {
+        ctx.log(line);
+    }
+    if profile {
+        ctx.log(format!(
+            "frame took {:.1} ms",
+            started.elapsed().as_secs_f64() * 1e3
+        ));
+    }
+    let speeds = pts.scalars.get("speed").cloned().unwrap_or_default();
+    ctx.set_output(
+        "colors",
+        crate::nodes::mesh::set_vert_color::jet_colors(&speeds, None),
+    );
     ctx.set_output("points", pts);
     ctx.set_output("image", img);
     ctx.set_output("log", log);

@@ -15,6 +15,10 @@ use crate::types::SocketType;
 use serde::Deserialize;
 use std::collections::BTreeMap;
 
+mod builtin;
+mod names;
+use names::{write_usd_path, write_usd_paths};
+
 /// User aliases mapping Framework3D `id_name`s onto cgnodes nodes (`--f3d-aliases FILE`):
 /// `{"<id_name>": <NodeMap>, ...}`; keys starting with `_` (comments) are ignored.
 #[derive(Clone, Debug, Default, serde::Deserialize)]
@@ -46,82 +50,49 @@ pub struct NodeMap {
     /// Framework3D output identifier -> cgnodes output.
     #[serde(default)]
     pub outputs: BTreeMap<String, Option<String>>,
+    /// Widget value translations by Framework3D input identifier: the widget's value (as text:
+    /// `0`, `1`, `0.5`, a string) -> the cgnodes literal, or `null` to leave the socket alone
+    /// (e.g. `"enable Liu13": {"0": null, "1": "projective"}` into `integrator`).
+    #[serde(default)]
+    pub values: BTreeMap<String, BTreeMap<String, serde_json::Value>>,
+    /// cgnodes inputs fed by a helper node of their own, `"socket": "type:output"` (e.g.
+    /// `"time": "frame:time"` for a node whose Framework3D version reads the global time).
+    #[serde(default)]
+    pub feeds: BTreeMap<String, String>,
     /// Why the map is as it is (kept in the node's meta).
     #[serde(default)]
     pub note: Option<String>,
 }
 
-/// The built-in maps for the 2024 homework nodes.
-pub const BUILTIN: &str = r#"{
-  "geom_read_usd": {"type": "mesh_load",
-    "inputs": {"File Name": "path", "Prim Path": "prim", "Time Code": null},
-    "outputs": {"Geometry": "mesh"}},
-  "geom_write_usd": {"type": "mesh_save",
-    "inputs": {"Geometry": "mesh", "File Name": "path", "Prim Path": "prim", "Time Code": null}},
-  "geom_map_boundary_to_circle": {"type": "boundary_map", "params": {"shape": "circle"},
-    "inputs": {"Input": "mesh"}, "outputs": {"Output": "mesh"}},
-  "geom_map_boundary_to_square": {"type": "boundary_map", "params": {"shape": "square"},
-    "inputs": {"Input": "mesh"}, "outputs": {"Output": "mesh"}},
-  "geom_min_surf": {"type": "minimal_surface",
-    "inputs": {"Input": "mesh", "Weight": "weights"}, "outputs": {"Output": "mesh"}},
-  "geom_arap": {"type": "arap",
-    "inputs": {"Input": "mesh", "Initialization": "init"},
-    "outputs": {"OutputUV": "mesh>mesh_decompose.mesh:texcoords", "Output": "flat", "Runtime": null}},
-  "geom_mesh_decompose": {"type": "mesh_decompose",
-    "inputs": {"Mesh": "mesh"},
-    "outputs": {"Vertices": "vertices", "FaceVertexCounts": "face_counts",
-      "FaceVertexIndices": "face_indices", "Normals": "normals", "Texcoords": "texcoords"}},
-  "geom_mesh_compose": {"type": "mesh_compose",
-    "inputs": {"Vertices": "vertices", "FaceVertexCounts": "face_counts",
-      "FaceVertexIndices": "face_indices", "Normals": "normals", "Texcoords": "texcoords"},
-    "outputs": {"Mesh": "mesh"}},
-  "geom_set_texture": {"type": "texture_map",
-    "inputs": {"Geometry": "mesh", "Texture Name": "image<image_load.path:image"},
-    "outputs": {"Geometry": "mesh"}},
-  "func_buffer_decompose3f": {"type": "buffer_decompose3",
-    "inputs": {"Buffer": "buffer"}, "outputs": {"X": "x", "Y": "y", "Z": "z", "Size": "size"}},
-  "func_buffer_decompose2f": {"type": "buffer_decompose2",
-    "inputs": {"Buffer": "buffer"}, "outputs": {"X": "x", "Y": "y", "Size": "size"}},
-  "func_buffer_compose3f": {"type": "buffer_compose3",
-    "inputs": {"X": "x", "Y": "y", "Z": "z"}, "outputs": {"Buffer": "buffer"}},
-  "func_buffer_compose2f": {"type": "buffer_compose2",
-    "inputs": {"X": "x", "Y": "y"}, "outputs": {"Buffer": "buffer"}},
-  "func_create_float3f": {"type": "buffer_compose3",
-    "inputs": {"X": "x", "Y": "y", "Z": "z"}, "outputs": {"Buffer": "buffer"}},
-  "func_create_float2f": {"type": "buffer_compose2",
-    "inputs": {"X": "x", "Y": "y"}, "outputs": {"Buffer": "buffer"}},
-  "func_value_float": {"type": "value_float", "inputs": {"value": "value"}, "outputs": {"value": "value"}},
-  "func_value_int": {"type": "value_int", "inputs": {"value": "value"}, "outputs": {"value": "value"}},
-  "func_value_string": {"type": "value_string", "inputs": {"value": "value"}, "outputs": {"value": "value"}},
-  "geom_mass_spring": {"type": "mass_spring",
-    "inputs": {"Mesh": "mesh", "Mass Spring": null, "stiffness": "stiffness", "h": "h",
-      "damping": "damping", "gravity": "gravity", "collision penalty_k": "penalty_k",
-      "collision scale factor": "collision_scale", "sphere radius": "sphere_radius",
-      "sphere center": "sphere_center", "time integrator type": null,
-      "enable damping": null, "enable sphere collision": "sphere", "enable Liu13": null,
-      "time_code": null},
-    "outputs": {"Mass Spring Class": null, "Output Mesh": "mesh"}},
-  "geom_mass_spring_with_control_points": {"type": "mass_spring",
-    "inputs": {"Mesh": "mesh", "Mass Spring": null, "stiffness": "stiffness", "h": "h",
-      "damping": "damping", "gravity": "gravity", "time integrator type": null,
-      "enable damping": null, "enable Liu13": null, "time_code": null},
-    "outputs": {"Mass Spring Class": null, "Output Mesh": "mesh"}},
-  "geom_sph_fluid": {"type": "sph_fluid",
-    "inputs": {"SPH Class": null, "sim box min": "sim_box_min", "sim box max": "sim_box_max",
-      "particle box min": "particle_box_min", "particle box max": "particle_box_max",
-      "num particle per axis": "num_particle_per_axis", "dt": "dt", "viscosity": "viscosity",
-      "gravity": "gravity", "stiffness": "stiffness", "exponent": "exponent",
-      "enable time profiling": null, "enable debug output": null, "enable IISPH": null,
-      "time_code": null},
-    "outputs": {"SPH Class": null, "Points": "points", "Point Colors": null}},
-  "geom_animate_mesh": {"type": "animate_mesh",
-    "inputs": {"Animator": null, "Geometry": "mesh", "time_code": null},
-    "outputs": {"Animator": null, "Output Geometry": "mesh"}},
-  "geom_time_code": {"type": "frame", "outputs": {"time": "time", "Time": "time"}},
-  "geom_storage_in": {"note": "the frame executor keeps state between frames"},
-  "geom_storage_out": {"note": "the frame executor keeps state between frames"},
-  "geom_time_gain": {"note": "frames are numbered by the executor (--frames)"}
-}"#;
+pub use builtin::BUILTIN;
+
+/// Splits a feed spec `type:out`.
+fn feed(spec: &str) -> Result<(&str, &str), ImportError> {
+    spec.split_once(':')
+        .ok_or_else(|| ImportError(format!("feed '{spec}' should read 'type:output'")))
+}
+
+/// A widget value as the text `NodeMap::values` keys it by: integers without a fraction
+/// (`1.0` -> `1`), other numbers as Rust prints them, strings as they are.
+fn value_key(v: &serde_json::Value) -> String {
+    match v {
+        serde_json::Value::Number(n) => match n.as_f64() {
+            Some(x) if x.fract() == 0.0 && x.abs() < 1e15 => format!("{}", x as i64),
+            Some(x) => format!("{x}"),
+            None => n.to_string(),
+        },
+        serde_json::Value::Bool(b) => (if *b { "1" } else { "0" }).to_string(),
+        serde_json::Value::String(t) => t.clone(),
+        other => other.to_string(),
+    }
+}
+
+/// A target `socket[k]`: component `k` of a vector socket, as (`socket`, `k`).
+fn component(target: &str) -> Option<(&str, usize)> {
+    let (base, rest) = target.split_once('[')?;
+    let k = rest.strip_suffix(']')?.parse().ok()?;
+    Some((base, k))
+}
 
 /// Splits a helper spec `type.in:out`.
 fn helper(spec: &str) -> Result<(&str, &str, &str), ImportError> {
@@ -301,6 +272,9 @@ fn convert(
                 need.push(helper(h)?.0);
             }
         }
+        for f in m.feeds.values() {
+            need.push(feed(f)?.0);
+        }
         for t in need {
             if registry.get(t).is_none() {
                 missing.push(format!("{} (node {}) needs '{t}'", n.id_name, n.id));
@@ -334,6 +308,11 @@ fn convert(
             n.id_name, n.id
         ))
     };
+    let link_ends: std::collections::BTreeSet<i64> = obj("links_info")?
+        .values()
+        .filter_map(|l| l.get("EndPinID").and_then(|v| v.as_i64()))
+        .collect();
+    let usd_paths = write_usd_paths(&nodes, &sockets, &|s| link_ends.contains(&s));
     let mut out_nodes: BTreeMap<String, NodeSpec> = BTreeMap::new();
     for n in &nodes {
         let m = &maps[&n.id_name];
@@ -363,10 +342,7 @@ fn convert(
                     n.id, n.id_name
                 ))
             })?;
-            let linked = obj("links_info")?
-                .values()
-                .any(|l| l.get("EndPinID").and_then(|v| v.as_i64()) == Some(s));
-            if linked {
+            if link_ends.contains(&s) {
                 continue;
             }
             let Some(v) = &sock.value else { continue };
@@ -374,6 +350,54 @@ fn convert(
                 Some(Some(t)) => t.clone(),
                 _ => continue, // dropped or unmapped: the widget value is not used
             };
+            // A translated widget value (a switch choosing an integrator, ...).
+            let translated;
+            let v = match m.values.get(&sock.identifier) {
+                None => v,
+                Some(table) => match table.get(&value_key(v)) {
+                    Some(serde_json::Value::Null) => continue,
+                    Some(t) => {
+                        translated = t.clone();
+                        &translated
+                    }
+                    None => {
+                        return Err(ImportError(format!(
+                        "{} (node {}) has '{}' = {} which cgnodes does not translate (known: {})",
+                        n.id_name,
+                        n.id,
+                        sock.identifier,
+                        value_key(v),
+                        table.keys().cloned().collect::<Vec<_>>().join(", ")
+                    )))
+                    }
+                },
+            };
+            // One component of a vector socket (Translate X -> translate[0]).
+            if let Some((base, k)) = component(&target) {
+                let x = v.as_f64().ok_or_else(|| {
+                    ImportError(format!(
+                        "{} (node {}) has '{}' = {v}, not a number",
+                        n.id_name, n.id, sock.identifier
+                    ))
+                })?;
+                let start = spec.params.get(base).cloned().or_else(|| {
+                    decl(n)
+                        .and_then(|d| d.input(base))
+                        .and_then(|s| s.default_value())
+                        .and_then(|v| v.to_json())
+                });
+                let mut arr = match start {
+                    Some(serde_json::Value::Array(a)) => a,
+                    _ => vec![serde_json::json!(0.0); 3],
+                };
+                if k >= arr.len() {
+                    return Err(sock_err(n, "input", &sock.identifier));
+                }
+                arr[k] = serde_json::json!(x);
+                spec.params
+                    .insert(base.to_string(), serde_json::Value::Array(arr));
+                continue;
+            }
             if let Some((sock_name, helper_spec)) = target.split_once('<') {
                 let (htype, hin, hout) = helper(helper_spec)?;
                 let hid = format!("{}_{}", node_id(n), htype);
@@ -403,7 +427,10 @@ fn convert(
             };
             let mut lit = literal(v, ty.as_ref()).unwrap_or(v.clone());
             if n.id_name == "geom_write_usd" && target == "path" {
-                lit = serde_json::json!(write_usd_path(lit.as_str().unwrap_or("")));
+                lit = serde_json::json!(usd_paths
+                    .get(&n.id)
+                    .cloned()
+                    .unwrap_or_else(|| write_usd_path(lit.as_str().unwrap_or(""))));
             }
             spec.params.insert(target, lit);
         }
@@ -509,6 +536,34 @@ fn convert(
             }
         }
     }
+    // Inputs fed by a helper of their own, unless a widget or link already set them.
+    for n in &nodes {
+        let m = &maps[&n.id_name];
+        let id = node_id(n);
+        for (sock, f) in &m.feeds {
+            let (htype, hout) = feed(f)?;
+            let Some(spec) = out_nodes.get(&id) else {
+                continue;
+            };
+            if spec.params.contains_key(sock) || spec.inputs.contains_key(sock) {
+                continue;
+            }
+            let hid = format!("{id}_{htype}");
+            out_nodes.insert(
+                hid.clone(),
+                NodeSpec {
+                    node_type: htype.to_string(),
+                    params: BTreeMap::new(),
+                    inputs: BTreeMap::new(),
+                    meta: None,
+                },
+            );
+            if let Some(spec) = out_nodes.get_mut(&id) {
+                spec.inputs
+                    .insert(sock.clone(), LinkSpec::One(format!("{hid}.{hout}")));
+            }
+        }
+    }
     let graph = GraphFile {
         schema: None,
         format: FORMAT.to_string(),
@@ -520,23 +575,4 @@ fn convert(
         })),
     };
     Ok((graph, missing))
-}
-
-/// Framework3D's `File Name` of Write USD as a path under the output directory: the file
-/// name only, with `.usda` added when it has no mesh extension.
-fn write_usd_path(p: &str) -> String {
-    let name = std::path::Path::new(p)
-        .file_name()
-        .and_then(|s| s.to_str())
-        .unwrap_or("output")
-        .to_string();
-    let lower = name.to_ascii_lowercase();
-    if [".usda", ".usd", ".obj", ".ply", ".off"]
-        .iter()
-        .any(|e| lower.ends_with(e))
-    {
-        name
-    } else {
-        format!("{name}.usda")
-    }
 }

@@ -79,7 +79,8 @@ pub struct Mesh {
     pub material: Option<Arc<Material>>,
     /// The skeleton binding of a skinned mesh (joint indices and weights per vertex), kept by
     /// `mesh_load` from a UsdSkel-bound `.usda` mesh and used by `skin` and `animate_mesh`.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    // Always serialized: the disk cache uses postcard, which cannot skip fields.
+    #[serde(default)]
     pub skin: Option<Arc<super::SkinBinding>>,
     #[serde(skip)]
     topology: OnceLock<Arc<Topology>>,

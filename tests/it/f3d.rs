@@ -285,8 +285,9 @@ fn buffer_pattern_runs_end_to_end() {
     };
     let r = Executor::new(Some(1), None).unwrap().run(&valid, &opts, 0);
     assert!(r.ok(), "{:?}", r.errors());
-    // Write USD's File Name lands in the output directory, as USDA.
-    let written = out.join("uv.usda");
+    // Write USD's File Name lands in the output directory, as USDA; its Time Code is linked,
+    // so the frame number (0 in a single run) is part of the name.
+    let written = out.join("uv_0000.usda");
     let m = cgnodes::nodes::mesh::mesh_load::load_mesh(
         &written,
         &cgnodes::nodes::mesh::mesh_load::LoadOptions {

@@ -93,9 +93,12 @@ fn usda_uvs_normals_and_transform() {
         e.contains("not a Mesh") && e.contains("/Balls/Balls"),
         "{e}"
     );
-    // arm: skinning weights come through as a vertex attribute
+    // arm: the skinning weights come through as the mesh's skeleton binding, one set of
+    // influences per vertex
     let arm = load("assets/course/arm.usda");
-    assert!(arm.attributes.contains_key("skel:jointWeights"));
+    let skin = arm.skin.as_ref().expect("arm.usda is bound to a skeleton");
+    assert_eq!(skin.num_vertices(), arm.num_vertices());
+    assert_eq!(skin.joint_weights.len(), skin.joint_indices.len());
 }
 
 #[test]

@@ -56,7 +56,7 @@ pub(super) fn write_usd_paths(
             let mut name = stem.to_string();
             if shared {
                 name.push('_');
-                name.push_str(&&file_part(prim));
+                name.push_str(&file_part(prim));
             }
             if *timed {
                 name.push_str("_{frame:04}");

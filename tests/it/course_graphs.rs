@@ -208,11 +208,7 @@ fn hw9_runs_and_writes_coloured_points() {
             let colors = usda_tuples(&text, "color3f[] primvars:displayColor");
             assert_eq!(colors.len(), pts.len());
             // Jet colours: at least the slowest particle is the table's first entry.
-            assert!(
-                colors.iter().any(|c| *c == [0.0, 0.0, 0.5]),
-                "{:?}",
-                &colors[..3]
-            );
+            assert!(colors.contains(&[0.0, 0.0, 0.5]), "{:?}", &colors[..3]);
         }
     }
 }

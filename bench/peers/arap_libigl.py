@@ -21,9 +21,10 @@ import igl
 import numpy as np
 
 
-def arap_metric(V, F, U, scaled=True):
-    """ARAP energy sum A((s1-1)^2+(s2-1)^2)/sum A after scaling UV area to 3D area, and flips
-    against the majority orientation (as shared/reference/PEERS.md)."""
+def stretches(V, F, U, scaled=True):
+    """Per triangle: 3-D area, singular values s1 >= s2 of the map's Jacobian (s2 negative on
+    a triangle flipped against the majority orientation), and the counts of positive and
+    negative UV orientations. `scaled` first scales the UVs to the 3-D area."""
     p0, p1, p2 = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
     e1, e2 = p1 - p0, p2 - p0
     l1 = np.linalg.norm(e1, axis=1)
@@ -45,9 +46,15 @@ def arap_metric(V, F, U, scaled=True):
     E, H = 0.5 * (a + d), 0.5 * (c - b)
     Fm, G = 0.5 * (a - d), 0.5 * (c + b)
     q, r = np.hypot(E, H), np.hypot(Fm, G)
-    pos, neg = (det_uv > 0).sum(), (det_uv < 0).sum()
+    pos, neg = int((det_uv > 0).sum()), int((det_uv < 0).sum())
     maj = 1.0 if pos >= neg else -1.0
-    s1, s2 = q + r, (q - r) * maj
+    return a3, q + r, (q - r) * maj, pos, neg
+
+
+def arap_metric(V, F, U, scaled=True):
+    """ARAP energy sum A((s1-1)^2+(s2-1)^2)/sum A after scaling UV area to 3D area, and flips
+    against the majority orientation (as shared/reference/PEERS.md)."""
+    a3, s1, s2, pos, neg = stretches(V, F, U, scaled)
     energy = float((a3 * ((s1 - 1) ** 2 + (s2 - 1) ** 2)).sum() / a3.sum())
     flips = int(len(F) - max(pos, neg))
     return energy, flips

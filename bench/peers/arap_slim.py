@@ -17,34 +17,20 @@ triangle (largest s1/s2 over triangles; inf when one is flipped or degenerate) a
 methods: method, iteration, ms, arap_energy, worst_ratio, flips. Needs `pip install libigl`.
 """
 import json
+import os
 import sys
 import time
 
 import igl
 import numpy as np
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from arap_libigl import stretches  # noqa: E402
+
 
 def metrics(V, F, U):
-    p0, p1, p2 = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
-    e1, e2 = p1 - p0, p2 - p0
-    l1 = np.linalg.norm(e1, axis=1)
-    cr = np.linalg.norm(np.cross(e1, e2), axis=1)
-    x2 = np.einsum("ij,ij->i", e1, e2) / l1
-    y2 = cr / l1
-    a3 = 0.5 * cr
-    u0, u1, u2 = U[F[:, 0]], U[F[:, 1]], U[F[:, 2]]
-    du1, du2 = u1 - u0, u2 - u0
-    det_uv = du1[:, 0] * du2[:, 1] - du1[:, 1] * du2[:, 0]
-    a = du1[:, 0] / l1
-    c = du1[:, 1] / l1
-    b = (du2[:, 0] - a * x2) / y2
-    d = (du2[:, 1] - c * x2) / y2
-    E, H = 0.5 * (a + d), 0.5 * (c - b)
-    Fm, G = 0.5 * (a - d), 0.5 * (c + b)
-    q, r = np.hypot(E, H), np.hypot(Fm, G)
-    pos, neg = int((det_uv > 0).sum()), int((det_uv < 0).sum())
-    maj = 1.0 if pos >= neg else -1.0
-    s1, s2 = q + r, (q - r) * maj
+    """ARAP energy (UVs unscaled), worst triangle s1/s2 (inf if flipped or degenerate), flips."""
+    a3, s1, s2, pos, neg = stretches(V, F, U, scaled=False)
     energy = float((a3 * ((s1 - 1) ** 2 + (s2 - 1) ** 2)).sum() / a3.sum())
     with np.errstate(divide="ignore", invalid="ignore"):
         ratio = np.where(s2 > 0, s1 / s2, np.inf)

@@ -4,7 +4,12 @@ a constant scale on one joint and a geometry bind transform. The test asset for 
 `skin` with usd-core's UsdSkel (tests/it/anim.rs). Plain Python, no USD library needed:
 `python3 tests/data/make_skin_cylinder.py > tests/data/skin_cylinder.usda`."""
 import math
+import os
 import random
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from _skinned_tube import tube_mesh  # noqa: E402
 
 random.seed(7)
 RINGS, SEG, R, L = 9, 12, 0.5, 6.0
@@ -67,13 +72,6 @@ for t, v in samples.items():
 w("            }\n")
 w("            half3[] scales = [(1, 1, 1), (1, 1, 1), (1.25, 1, 1), (1, 1, 1)]\n")
 w("        }\n    }\n\n")
-w('    def Mesh "Tube" (\n        prepend apiSchemas = ["SkelBindingAPI"]\n    )\n    {\n')
-w("        int[] faceVertexCounts = [%s]\n" % ", ".join(map(str, counts)))
-w("        int[] faceVertexIndices = [%s]\n" % ", ".join(map(str, faces)))
-w("        point3f[] points = [%s]\n" % ", ".join("(%r, %r, %r)" % p for p in pts))
-w("        rel skel:skeleton = </Model/Skel>\n")
-w("        int[] primvars:skel:jointIndices = [%s] (\n            elementSize = 4\n            interpolation = \"vertex\"\n        )\n" % ", ".join(map(str, idx)))
-w("        float[] primvars:skel:jointWeights = [%s] (\n            elementSize = 4\n            interpolation = \"vertex\"\n        )\n" % ", ".join("%.9g" % x for x in wts))
-w("        matrix4d primvars:skel:geomBindTransform = ((1, 0, 0, 0), (0, 1, 0, 0), (0, 0, 1, 0), (0.05, -0.1, 0.2, 1))\n")
-w("    }\n}\n")
+tube_mesh(w, counts, faces, ", ".join("(%r, %r, %r)" % p for p in pts), idx, wts, 4,
+          "((1, 0, 0, 0), (0, 1, 0, 0), (0, 0, 1, 0), (0.05, -0.1, 0.2, 1))")
 print("".join(out), end="")

@@ -5,6 +5,11 @@ slerp between the identity and the half turn is a rotation by exactly time/180 o
 candy-wrapper test of DQS against LBS (tests/it/anim.rs, bench/sweeps/skin_twist.json).
 `python3 tests/data/make_twist_cylinder.py > tests/data/twist_cylinder.usda`."""
 import math
+import os
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from _skinned_tube import tube_mesh  # noqa: E402
 
 RINGS, SEG, R, L = 25, 24, 0.5, 4.0
 pts, idx, wts = [], [], []
@@ -51,12 +56,5 @@ w('            uniform token[] joints = ["A/B"]\n')
 w("            float3[] translations = [(0, 0, 2)]\n")
 w("            quatf[] rotations.timeSamples = {\n                0: [(1, 0, 0, 0)],\n                180: [(0, 0, 0, 1)],\n            }\n")
 w("        }\n    }\n\n")
-w('    def Mesh "Tube" (\n        prepend apiSchemas = ["SkelBindingAPI"]\n    )\n    {\n')
-w("        int[] faceVertexCounts = [%s]\n" % ", ".join(map(str, counts)))
-w("        int[] faceVertexIndices = [%s]\n" % ", ".join(map(str, faces)))
-w("        point3f[] points = [%s]\n" % ", ".join("(%.9g, %.9g, %.9g)" % p for p in pts))
-w("        rel skel:skeleton = </Model/Skel>\n")
-w("        int[] primvars:skel:jointIndices = [%s] (\n            elementSize = 2\n            interpolation = \"vertex\"\n        )\n" % ", ".join(map(str, idx)))
-w("        float[] primvars:skel:jointWeights = [%s] (\n            elementSize = 2\n            interpolation = \"vertex\"\n        )\n" % ", ".join("%.9g" % x for x in wts))
-w("    }\n}\n")
+tube_mesh(w, counts, faces, ", ".join("(%.9g, %.9g, %.9g)" % p for p in pts), idx, wts, 2)
 print("".join(out), end="")

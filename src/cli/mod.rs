@@ -206,6 +206,13 @@ struct SweepMergeArgs {
     /// the defaults, and the parts' varied parameters and measures must be its own.
     #[arg(long, value_name = "SPEC")]
     sweep: Option<PathBuf>,
+    #[command(flatten)]
+    chart: SweepChartArgs,
+}
+
+/// The chart options `sweep` and `sweep-merge` share; given ones override the sweep file's.
+#[derive(clap::Args)]
+struct SweepChartArgs {
     /// X axis: time, time:NODE, a measure or a varied parameter.
     #[arg(long)]
     x: Option<String>,
@@ -224,6 +231,19 @@ struct SweepMergeArgs {
     /// Chart title.
     #[arg(long)]
     title: Option<String>,
+}
+
+impl SweepChartArgs {
+    /// Sets `spec`'s chart options: each given option, else `defaults`' (a sweep file's).
+    fn apply(&self, spec: &mut crate::sweep::SweepSpec, defaults: &crate::sweep::SweepSpec) {
+        let pick = |a: &Option<String>, b: &Option<String>| a.clone().or_else(|| b.clone());
+        spec.x = pick(&self.x, &defaults.x);
+        spec.y = pick(&self.y, &defaults.y);
+        spec.series = pick(&self.series, &defaults.series);
+        spec.title = pick(&self.title, &defaults.title);
+        spec.log_x = self.log_x || defaults.log_x;
+        spec.log_y = self.log_y || defaults.log_y;
+    }
 }
 
 #[derive(clap::Args)]
@@ -248,24 +268,8 @@ struct SweepArgs {
     /// Chart to write (.svg or .png).
     #[arg(long)]
     plot: Option<PathBuf>,
-    /// X axis: time, time:NODE, a measure or a varied parameter.
-    #[arg(long)]
-    x: Option<String>,
-    /// Y axis: a measure (default: the first).
-    #[arg(long)]
-    y: Option<String>,
-    /// Varied parameter whose values name the series.
-    #[arg(long)]
-    series: Option<String>,
-    /// Logarithmic x axis.
-    #[arg(long)]
-    log_x: bool,
-    /// Logarithmic y axis.
-    #[arg(long)]
-    log_y: bool,
-    /// Chart title.
-    #[arg(long)]
-    title: Option<String>,
+    #[command(flatten)]
+    chart: SweepChartArgs,
     /// Frame range A..B per run.
     #[arg(long)]
     frames: Option<String>,

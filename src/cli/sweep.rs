@@ -67,13 +67,9 @@ pub(super) fn cmd(registry: &Registry, a: SweepArgs) -> i32 {
     spec.csv = a.csv.map(here).or(spec.csv);
     spec.plot = a.plot.map(here).or(spec.plot.filter(|_| !sharded));
     spec.out = a.out.map(here).or(spec.out);
-    spec.x = a.x.or(spec.x);
-    spec.y = a.y.or(spec.y);
-    spec.series = a.series.or(spec.series);
-    spec.title = a.title.or(spec.title);
+    let file = spec.clone();
+    a.chart.apply(&mut spec, &file);
     spec.frames = a.frames.or(spec.frames);
-    spec.log_x |= a.log_x;
-    spec.log_y |= a.log_y;
     spec.max_memory = a.max_memory.or(spec.max_memory);
     spec.shard = match a.shard.resolve() {
         Ok(s) => s,

@@ -36,12 +36,7 @@ fn merge(a: &SweepMergeArgs) -> Result<(), String> {
         }
         None => SweepSpec::default(),
     };
-    spec.x = a.x.clone().or(file.x);
-    spec.y = a.y.clone().or(file.y);
-    spec.series = a.series.clone().or(file.series);
-    spec.title = a.title.clone().or(file.title);
-    spec.log_x = a.log_x || file.log_x;
-    spec.log_y = a.log_y || file.log_y;
+    a.chart.apply(&mut spec, &file);
     let text = to_csv(&spec, &rows);
     match &a.csv {
         Some(p) => crate::io::write_atomic(p, |w| w.write_all(text.as_bytes()))

@@ -79,6 +79,19 @@ pub struct SweepSpec {
     /// reused only between the combinations of one process.
     #[serde(skip)]
     pub cache: Option<PathBuf>,
+    /// Told after each run (runs done, runs in total) for `cgnodes sweep`'s progress bar.
+    #[serde(skip)]
+    pub progress: Option<SweepProgress>,
+}
+
+/// A callback told after each run of a sweep: (runs done, runs in total).
+#[derive(Clone)]
+pub struct SweepProgress(pub std::sync::Arc<dyn Fn(usize, usize) + Send + Sync>);
+
+impl std::fmt::Debug for SweepProgress {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("SweepProgress")
+    }
 }
 
 fn one() -> usize {
@@ -274,6 +287,13 @@ pub fn run(
     }
     let mut rows = Vec::new();
     let shard = spec.shard.unwrap_or_default();
+    let total_runs = (0..combos.len()).filter(|&ci| shard.takes(ci)).count() * spec.repeat.max(1);
+    let tell = |done: usize| {
+        if let Some(p) = &spec.progress {
+            (p.0)(done, total_runs);
+        }
+    };
+    tell(0);
     for (ci, combo) in combos.iter().enumerate() {
         if !shard.takes(ci) {
             continue;
@@ -305,6 +325,7 @@ pub fn run(
                     row.error_kind = "invalid".into();
                     row.error = e;
                     rows.push(row);
+                    tell(rows.len());
                     continue;
                 }
             };
@@ -377,6 +398,7 @@ pub fn run(
                 }
             }
             rows.push(row);
+            tell(rows.len());
         }
     }
     Ok(rows)

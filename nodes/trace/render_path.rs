@@ -16,7 +16,7 @@
 
 use super::render_scene::{prepare, PinholeCamera, RenderScene};
 use super::sampling::{add, dot, length, max_comp, mul, power_heuristic, scale, sub, Pcg32, V3};
-use super::tracer_node::{progress_reporter, reserve_image, trace_error};
+use super::tracer_node::{reserve_image, trace_error};
 use crate::prelude::*;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -508,7 +508,7 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     // Per pixel: the f64 accumulator (32 bytes), colour and variance images (16 each), the
     // tiles' splat margins and variances (about 40).
     reserve_image(ctx, &scene, camera.as_deref(), 104)?;
-    let report = progress_reporter(ctx);
+    let report = ctx.progress_fn();
     let t0 = std::time::Instant::now();
     let (color, variance) =
         render_path(&scene, camera.as_deref(), &s, &report).map_err(trace_error)?;

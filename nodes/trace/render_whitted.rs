@@ -15,7 +15,7 @@
 use super::bsdf::{fresnel_dielectric, reflect, Bsdf};
 use super::render_scene::{prepare, PinholeCamera, RenderScene};
 use super::sampling::{add, dot, max_comp, mul, normalize, scale, sub, uniform_triangle, v3, V3};
-use super::tracer_node::{progress_reporter, reserve_image, trace_error};
+use super::tracer_node::{reserve_image, trace_error};
 use crate::prelude::*;
 use rayon::prelude::*;
 use std::f32::consts::FRAC_1_PI;
@@ -327,7 +327,7 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     };
     // Per pixel: the rows and the flattened image (16 bytes each).
     reserve_image(ctx, &scene, camera.as_deref(), 32)?;
-    let report = progress_reporter(ctx);
+    let report = ctx.progress_fn();
     let img = render_whitted(&scene, camera.as_deref(), &s, &report).map_err(trace_error)?;
     ctx.set_output("color", img);
     Ok(())

@@ -1,19 +1,7 @@
 //! What the tracer nodes (`render_path`, `render_whitted`) share around the renderers:
-//! progress reporting and the mapping of a renderer's error to the socket it concerns.
+//! the image-size check and the mapping of a renderer's error to the socket it concerns.
 
 use crate::prelude::*;
-
-/// A progress callback (fraction done, 0 to 1) that forwards to the context's progress
-/// sink under the node's id; does nothing when the run has no sink.
-pub fn progress_reporter(ctx: &ExecContext) -> impl Fn(f64) + Sync {
-    let prog = ctx.progress.clone();
-    let id = ctx.node_id.to_string();
-    move |f: f64| {
-        if let Some(p) = &prog {
-            p(&id, f);
-        }
-    }
-}
 
 /// Checks that a tracer's image buffers, `bytes_per_pixel` for every pixel of the camera's
 /// image (the linked `camera`, else the scene's), fit under the run's memory limit before

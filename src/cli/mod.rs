@@ -10,6 +10,7 @@ mod describe;
 mod dot;
 mod import_f3d;
 mod nodes;
+mod progress;
 mod run;
 mod schema;
 mod sweep;
@@ -343,6 +344,9 @@ struct RunArgs {
     /// Print only errors.
     #[arg(long, short)]
     quiet: bool,
+    /// Also print each node's status and time, and nodes' debug lines.
+    #[arg(long, short)]
+    verbose: bool,
     /// Most memory one node's buffers may take, e.g. 4G or 512MiB (default: CGNODES_MAX_MEMORY,
     /// else half the physical memory).
     #[arg(long = "max-memory", value_name = "SIZE", value_parser = crate::node::parse_size)]

@@ -1,14 +1,13 @@
 //! `cgnodes run`: validates a graph and runs it over a frame range, with progress bars,
 //! a run report per frame, and an optional profile (`--profile`, `--profile-json`).
 
+use super::progress::{Monitor, Verbosity};
 use super::validate::load_args;
 use super::{RunArgs, EXIT_NODE_FAILED, EXIT_USAGE};
 use crate::exec::{Executor, NodeStatus, RunOptions, RunReport};
 use crate::graph::parse_frames;
-use crate::node::{FileEnv, ProgressFn};
+use crate::node::FileEnv;
 use crate::registry::Registry;
-use std::io::IsTerminal;
-use std::sync::Arc;
 
 /// `cgnodes run GRAPH ...`: runs the graph once per frame; exit code 1 when a node failed.
 pub(super) fn cmd(registry: &Registry, args: RunArgs) -> i32 {
@@ -45,31 +44,7 @@ pub(super) fn cmd(registry: &Registry, args: RunArgs) -> i32 {
             return EXIT_USAGE;
         }
     };
-    let show_progress =
-        !args.quiet && std::io::stderr().is_terminal() && std::env::var_os("CI").is_none();
-    let bars = show_progress.then(indicatif::MultiProgress::new);
-    let progress: Option<ProgressFn> = bars.as_ref().map(|mp| {
-        let mp = mp.clone();
-        let map: Arc<std::sync::Mutex<std::collections::HashMap<String, indicatif::ProgressBar>>> =
-            Arc::default();
-        Arc::new(move |node: &str, f: f64| {
-            let mut m = map.lock().unwrap_or_else(|p| p.into_inner());
-            let bar = m.entry(node.to_string()).or_insert_with(|| {
-                let b = mp.add(indicatif::ProgressBar::new(1000));
-                if let Ok(st) = indicatif::ProgressStyle::with_template(
-                    "{prefix:>16} {bar:30} {percent:>3}% {elapsed}",
-                ) {
-                    b.set_style(st);
-                }
-                b.set_prefix(node.to_string());
-                b
-            });
-            bar.set_position((f * 1000.0) as u64);
-            if f >= 1.0 {
-                bar.finish_and_clear();
-            }
-        }) as ProgressFn
-    });
+    let monitor = Monitor::new(Verbosity::from_flags(args.quiet, args.verbose));
     let opts = RunOptions {
         targets: (!args.target.is_empty()).then(|| args.target.clone()),
         files: FileEnv {
@@ -78,7 +53,8 @@ pub(super) fn cmd(registry: &Registry, args: RunArgs) -> i32 {
             out_dir: args.out.clone(),
             allow_write_anywhere: args.allow_write_anywhere,
         },
-        progress,
+        progress: monitor.progress_fn(),
+        log: monitor.log_fn(),
         measure_memory: args.profile || args.profile_json.is_some(),
         recompute: Vec::new(),
         // The command line reads no outputs after the run: writers are the targets.
@@ -88,20 +64,27 @@ pub(super) fn cmd(registry: &Registry, args: RunArgs) -> i32 {
     };
     let mut code = 0;
     let mut profile = Vec::new();
+    monitor.start_frames(f0, f1);
     for frame in f0..=f1 {
+        if f1 > f0 {
+            monitor.set_prefix(format!("[frame {frame}] "));
+        }
         let report = exec.run(&graph, &opts, frame);
-        if !args.quiet {
-            print_report(&report, f1 > f0);
-        }
-        for e in report.errors() {
-            eprintln!("error: {e}");
-        }
-        if frame < f1 {
-            print_stops(&exec, &report, f1);
-        }
-        if args.profile {
-            print_profile(&report);
-        }
+        monitor.suspend(|| {
+            if !args.quiet {
+                print_report(&report, f1 > f0, monitor.level());
+            }
+            for e in report.errors() {
+                eprintln!("error: {e}");
+            }
+            if frame < f1 {
+                print_stops(&exec, &report, f1);
+            }
+            if args.profile {
+                print_profile(&report);
+            }
+        });
+        monitor.frame_done(f0, f1, frame);
         if !report.ok() {
             code = EXIT_NODE_FAILED;
         }
@@ -189,15 +172,30 @@ fn print_stops(exec: &Executor, r: &RunReport, last: i64) {
     }
 }
 
-fn print_report(r: &RunReport, frames: bool) {
+/// Prints what a frame did. The log lines of nodes that ran were printed live (`Monitor`);
+/// those of cached nodes are replayed here.
+fn print_report(r: &RunReport, frames: bool, level: Verbosity) {
     let prefix = if frames {
         format!("[frame {}] ", r.frame)
     } else {
         String::new()
     };
     for n in &r.nodes {
-        for l in &n.logs {
-            eprintln!("{prefix}{}: {l}", n.id);
+        if level == Verbosity::Verbose {
+            let what = match &n.status {
+                NodeStatus::Ran => format!("ran in {:.2} ms", n.ms),
+                NodeStatus::Cached => "cached".to_string(),
+                NodeStatus::Skipped => "skipped (no requested output needs it)".to_string(),
+                NodeStatus::Failed(_) => format!("failed after {:.2} ms", n.ms),
+                NodeStatus::Blocked { by } => format!("blocked by '{by}'"),
+                NodeStatus::Stopped { since } => format!("stopped since frame {since}"),
+            };
+            eprintln!("{prefix}{} ({}): {what}", n.id, n.node_type);
+        }
+        if matches!(n.status, NodeStatus::Cached) {
+            for l in &n.logs {
+                eprintln!("{prefix}{}: {l}", n.id);
+            }
         }
         for w in &n.written {
             if matches!(n.status, NodeStatus::Ran) {

@@ -79,6 +79,8 @@ pub(super) fn cmd(registry: &Registry, a: SweepArgs) -> i32 {
         }
     };
     spec.cache = a.cache;
+    let monitor = super::progress::Monitor::new(super::progress::Verbosity::Normal);
+    spec.progress = monitor.sweep_progress();
     match run_and_write(&spec, &base, registry, a.threads) {
         Ok(rows) => {
             let failed = rows.iter().filter(|r| !r.ok).count();

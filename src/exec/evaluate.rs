@@ -143,10 +143,13 @@ impl Executor {
             logs: Vec::new(),
             written: Vec::new(),
             progress: sh.opts.progress.clone(),
+            log_sink: sh.opts.log.clone(),
             wanted: wanted.cloned(),
             memory_limit: sh.opts.memory_limit(),
         };
         let res = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| exec(&mut ctx)));
+        // Ends the node's progress bar, if it started one, whether it succeeded or not.
+        ctx.progress(1.0);
         let outputs = std::mem::take(&mut ctx.outputs);
         report.logs = std::mem::take(&mut ctx.logs);
         report.written = std::mem::take(&mut ctx.written);

@@ -10,7 +10,7 @@ pub use plan::cache_keys;
 pub use report::{NodeReport, NodeStatus, RunReport};
 
 use crate::cache::{DiskCache, Evicted, Key, MemoryCache};
-use crate::node::{FileEnv, ProgressFn};
+use crate::node::{FileEnv, LogFn, ProgressFn};
 use crate::types::Value;
 use crate::validate::ValidGraph;
 use report::read_status_kib;
@@ -29,6 +29,8 @@ pub struct RunOptions {
     pub files: FileEnv,
     /// Progress callback for long nodes.
     pub progress: Option<ProgressFn>,
+    /// Receives node log lines as they are written (the run report keeps them too).
+    pub log: Option<LogFn>,
     /// Record resident memory after each node (for `--profile`; costs a /proc read per node).
     pub measure_memory: bool,
     /// Node ids that must run even when cached, with everything downstream of them

@@ -12,6 +12,41 @@ use std::sync::Arc;
 /// Reports a node's progress (fraction in 0..=1).
 pub type ProgressFn = Arc<dyn Fn(&str, f64) + Send + Sync>;
 
+/// How much a log line matters: `-q` shows only errors, the default warnings and info, `-v`
+/// debug detail too.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum LogLevel {
+    /// Detail for `-v` (per-step numbers, solver internals).
+    Debug,
+    /// What a node did (`ctx.log`).
+    Info,
+    /// Something the user should look at (`ctx.log("warning: ...")`).
+    Warning,
+}
+
+impl LogLevel {
+    /// The level of a `ctx.log` line: lines starting with `warning` are warnings.
+    pub fn of(line: &str) -> LogLevel {
+        if line
+            .trim_start()
+            .to_ascii_lowercase()
+            .starts_with("warning")
+        {
+            LogLevel::Warning
+        } else {
+            LogLevel::Info
+        }
+    }
+}
+
+/// Receives a node's log lines as they are written (node id, level, line), so a long node's
+/// messages appear while it runs rather than at the end of the frame.
+pub type LogFn = Arc<dyn Fn(&str, LogLevel, &str) + Send + Sync>;
+
+/// `ExecContext::progress` with this value means "running, fraction unknown" (a spinner with
+/// the elapsed time: plugins).
+pub const PROGRESS_UNKNOWN: f64 = -1.0;
+
 /// Everything a node sees while it runs: its inputs, its outputs, the frame, its state
 /// between frames, and the file environment.
 pub struct ExecContext<'a> {
@@ -27,6 +62,7 @@ pub struct ExecContext<'a> {
     pub(crate) logs: Vec<String>,
     pub(crate) written: Vec<PathBuf>,
     pub(crate) progress: Option<ProgressFn>,
+    pub(crate) log_sink: Option<LogFn>,
     /// The outputs someone will read; `None` = all of them.
     pub(crate) wanted: Option<BTreeSet<String>>,
     /// The most bytes one buffer request may take (`reserve_bytes`).
@@ -59,6 +95,7 @@ impl<'a> ExecContext<'a> {
             logs: Vec::new(),
             written: Vec::new(),
             progress: None,
+            log_sink: None,
             wanted: None,
             memory_limit: super::default_memory_limit(),
         }
@@ -194,7 +231,18 @@ impl<'a> ExecContext<'a> {
 
     /// Adds a line to the run log.
     pub fn log(&mut self, msg: impl Into<String>) {
-        self.logs.push(msg.into());
+        let msg = msg.into();
+        if let Some(sink) = &self.log_sink {
+            sink(self.node_id, LogLevel::of(&msg), &msg);
+        }
+        self.logs.push(msg);
+    }
+
+    /// A detail line shown only with `-v`; not kept in the run report.
+    pub fn debug(&self, msg: impl FnOnce() -> String) {
+        if let Some(sink) = &self.log_sink {
+            sink(self.node_id, LogLevel::Debug, &msg());
+        }
     }
 
     /// The log lines so far.
@@ -206,6 +254,26 @@ impl<'a> ExecContext<'a> {
     pub fn progress(&self, fraction: f64) {
         if let Some(p) = &self.progress {
             p(self.node_id, fraction.clamp(0.0, 1.0));
+        }
+    }
+
+    /// Reports that the node is busy for an unknown time (a spinner with the elapsed time);
+    /// `progress(1.0)` ends it.
+    pub fn progress_unknown(&self) {
+        if let Some(p) = &self.progress {
+            p(self.node_id, PROGRESS_UNKNOWN);
+        }
+    }
+
+    /// A progress callback for loops that run on other threads or inside plain algorithm
+    /// functions (fraction 0 to 1).
+    pub fn progress_fn(&self) -> impl Fn(f64) + Send + Sync + 'static {
+        let prog = self.progress.clone();
+        let id = self.node_id.to_string();
+        move |f: f64| {
+            if let Some(p) = &prog {
+                p(&id, f.clamp(0.0, 1.0));
+            }
         }
     }
 

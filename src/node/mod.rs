@@ -33,7 +33,7 @@ mod memory;
 
 pub use builder::{NodeBuilder, SocketBuilder};
 pub use choice::{parse_choice, Choice};
-pub use context::{ExecContext, ProgressFn};
+pub use context::{ExecContext, LogFn, LogLevel, ProgressFn, PROGRESS_UNKNOWN};
 pub use decl::{ExecFn, FileRole, NodeDecl, SocketDecl};
 pub use error::{ErrorKind, NodeError};
 pub use files::{substitute_frame, FileEnv};

@@ -91,7 +91,10 @@ pub(super) fn execute(
     } else {
         None
     };
-    let res = call(r, decl, &inputs, ctx.frame(), state, timeout)?;
+    ctx.progress_unknown();
+    let res = call(r, decl, &inputs, ctx.frame(), state, timeout);
+    ctx.progress(1.0);
+    let res = res?;
     if decl.stateful {
         ctx.state::<PluginState>()?.0 = res.state;
     }

@@ -4,7 +4,7 @@
 //! (`ArapError`) are reported as `NodeError`s, with the socket at fault.
 
 use super::error::ArapError;
-use super::local_global::arap_parameterize;
+use super::local_global::arap_parameterize_progress;
 use super::options::ArapOptions;
 use super::{init_uvs, uv_outputs};
 use crate::prelude::*;
@@ -99,7 +99,13 @@ fn execute_with(ctx: &mut ExecContext, lambda: Option<f64>) -> Result<(), NodeEr
         lambda,
         ..Default::default()
     };
-    let res = arap_parameterize(&tri_mesh.positions, &triangles, &uv0, &opts)?;
+    let res = arap_parameterize_progress(
+        &tri_mesh.positions,
+        &triangles,
+        &uv0,
+        &opts,
+        &ctx.progress_fn(),
+    )?;
     let mut table = Table::with_columns(&super::LOG_COLUMNS);
     for r in &res.log {
         table.push_row(&[

@@ -90,7 +90,19 @@ pub fn arap_parameterize(
     // The loop runs several short parallel passes per iteration. Run from a thread outside
     // rayon's pool, each pass is injected into the pool and waited for, a round trip through
     // the OS per pass; on a pool thread the passes are split in place (timings: docs/arap.md).
-    rayon::scope(|_| iterate(positions, triangles, init_uv, opts))
+    arap_parameterize_progress(positions, triangles, init_uv, opts, &|_| {})
+}
+
+/// `arap_parameterize` reporting the fraction of `opts.iterations` done after each iteration
+/// (for progress bars).
+pub fn arap_parameterize_progress(
+    positions: &[[f64; 3]],
+    triangles: &[[u32; 3]],
+    init_uv: &[[f64; 2]],
+    opts: &ArapOptions,
+    progress: &(dyn Fn(f64) + Sync),
+) -> Result<ArapResult, ArapError> {
+    rayon::scope(|_| iterate(positions, triangles, init_uv, opts, progress))
 }
 
 /// Local step for every triangle at `uv` (targets written to `targets`), returning the

@@ -28,7 +28,8 @@ mod system;
 
 pub use asap::{asap_parameterize, AsapResult};
 pub use error::ArapError;
-pub use local_global::{arap_parameterize, ArapIteration, ArapResult, LOG_COLUMNS};
+pub use local_global::{
+    arap_parameterize, arap_parameterize_progress, ArapIteration, ArapResult, LOG_COLUMNS};
 pub use options::{ArapOptions, RefactorSchedule, LOCAL_RINGS};
 
 use super::tutte::{tutte_parameterize, BoundaryShape, TutteWeights};

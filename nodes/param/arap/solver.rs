@@ -30,9 +30,11 @@ pub(super) fn iterate(
     triangles: &[[u32; 3]],
     init_uv: &[[f64; 2]],
     opts: &ArapOptions,
+    progress: &(dyn Fn(f64) + Sync),
 ) -> Result<ArapResult, ArapError> {
     let mut s = Solver::new(positions, triangles, init_uv, opts)?;
     while s.it < opts.iterations {
+        progress(s.it as f64 / opts.iterations as f64);
         if s.factor.is_none() {
             s.stop = StopReason::Tolerance;
             break;

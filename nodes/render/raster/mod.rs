@@ -39,6 +39,16 @@ pub use options::{AntiAliasing, Passes, RasterOptions, RenderOutput};
 /// Renders a scene through a camera (see the module doc). Fails on an unusable camera or
 /// non-finite geometry. Only the passes in `opts.passes` are produced.
 pub fn render(scene: &Scene, cam: &Camera, opts: &RasterOptions) -> Result<RenderOutput, String> {
+    render_progress(scene, cam, opts, &|_| {})
+}
+
+/// `render`, reporting the fraction of image bands resolved (for progress bars).
+pub fn render_progress(
+    scene: &Scene,
+    cam: &Camera,
+    opts: &RasterOptions,
+    progress: &(dyn Fn(f64) + Sync),
+) -> Result<RenderOutput, String> {
     cam.check()?;
     let s = opts.samples_per_axis.clamp(1, 8);
     let lit = opts.passes.color;
@@ -60,6 +70,7 @@ pub fn render(scene: &Scene, cam: &Camera, opts: &RasterOptions) -> Result<Rende
         eye: cam.eye,
         forward: cam.frame()?[2],
         opts,
+        progress,
     };
     Ok(resolve::resolve_bands(&sh, &bins, cam, s, opts, triangles))
 }

@@ -2,7 +2,7 @@
 //! renders only the passes someone reads, and sets them as outputs.
 
 use super::options::{AntiAliasing, Passes, RasterOptions};
-use super::{raster_bytes, render};
+use super::{raster_bytes, render_progress};
 use super::shadow::ShadowParams;
 use super::texture::Wrap;
 use crate::prelude::*;
@@ -159,7 +159,7 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
         cam.width, cam.height, samples
     );
     ctx.reserve_bytes("camera", &what, raster_bytes(&cam, &opts, scene.lights.len()))?;
-    let out = render(&scene, &cam, &opts).map_err(|e| NodeError::invalid("scene", e))?;
+    let out = render_progress(&scene, &cam, &opts, &ctx.progress_fn()).map_err(|e| NodeError::invalid("scene", e))?;
     ctx.log(format!(
         "{}x{} with {} samples: {} triangles, {} shading evaluations",
         cam.width, cam.height, samples, out.triangles, out.shaded

@@ -79,6 +79,7 @@ pub(super) fn resolve_bands(
         let bands: Vec<[Option<&mut [Px]>; 6]> = (0..nbands)
             .map(|_| std::array::from_fn(|k| chunks[k].next().flatten()))
             .collect();
+        let bands_done = std::sync::atomic::AtomicUsize::new(0);
         bands.into_par_iter().enumerate().for_each_init(
             || {
                 // (triangle, covered samples, sum of sample x, sum of sample y, min depth)
@@ -202,6 +203,8 @@ pub(super) fn resolve_bands(
                     }
                 }
                 shaded.fetch_add(count, Ordering::Relaxed);
+                let k = bands_done.fetch_add(1, Ordering::Relaxed) + 1;
+                (sh.progress)(k as f64 / nbands as f64);
             },
         );
     }

@@ -57,6 +57,8 @@ pub(super) struct Shader<'a> {
     pub(super) eye: [f64; 3],
     pub(super) forward: [f64; 3],
     pub(super) opts: &'a RasterOptions,
+    /// Called with the fraction of bands resolved.
+    pub(super) progress: &'a (dyn Fn(f64) + Sync),
 }
 
 impl Shader<'_> {

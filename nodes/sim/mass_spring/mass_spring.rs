@@ -365,6 +365,7 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     };
     let (sim0, params) = build(ctx, &mesh, control.as_deref(), restart)?;
     let (profile, debug): (bool, bool) = (ctx.input("profile")?, ctx.input("debug")?);
+    let progress = ctx.progress_fn();
     let st = ctx.state::<NodeState>()?;
     let mut log = Table::with_columns(&LOG_COLUMNS);
     if let Some(sim0) = sim0 {
@@ -428,6 +429,7 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
                     }
                     sp
                 });
+                progress((df * params.substeps + s) as f64 / total);
                 match sim.step(sphere.as_ref()) {
                     Ok(l) => log.push_row(&[
                         (f + 1) as f64,

@@ -353,6 +353,7 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     ctx.reserve_bytes("image_width", &what, bytes)?;
     let started = std::time::Instant::now();
     let (profile, debug): (bool, bool) = (ctx.input("profile")?, ctx.input("debug")?);
+    let progress = ctx.progress_fn();
     let st = ctx.state::<SphState>()?;
     if st.fluid.is_none() || st.key != key || frame <= st.last_frame {
         let mut f = Fluid::block(prm.clone(), pmin, pmax, counts)
@@ -382,7 +383,9 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
         st.record(frame - 1);
     }
     let f = st.fluid.as_mut().expect("initialised above");
-    let res = f.advance(frame_dt).and_then(|_| f.refresh());
+    let res = f
+        .advance_progress(frame_dt, &progress)
+        .and_then(|_| f.refresh());
     if let Err(e) = res {
         st.fluid = None;
         return Err(NodeError::unstable(format!(

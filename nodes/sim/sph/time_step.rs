@@ -55,9 +55,19 @@ impl Fluid {
 
     /// Advances by `duration` in steps of `step_size()`; `Err` names the step that blew up.
     pub fn advance(&mut self, duration: f64) -> Result<usize, String> {
+        self.advance_progress(duration, &|_| {})
+    }
+
+    /// `advance`, reporting the fraction of `duration` simulated after each step.
+    pub fn advance_progress(
+        &mut self,
+        duration: f64,
+        progress: &dyn Fn(f64),
+    ) -> Result<usize, String> {
         let mut left = duration;
         let mut n = 0;
         while left > 1e-12 * duration.max(1e-12) {
+            progress(1.0 - left / duration);
             let mut dt = self.step_size().min(left);
             // Avoid a sliver of a last step.
             if left - dt < 0.2 * dt {

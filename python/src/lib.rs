@@ -68,7 +68,13 @@ fn run_job(job: &Job) -> Result<Outputs, Failure> {
     let mut g = if job.is_path {
         graph::load_with(Path::new(&job.source), &aliases, reg)
     } else {
-        graph::parse_with(&job.source, Path::new("<dict>"), &job.base_dir, &aliases, reg)
+        graph::parse_with(
+            &job.source,
+            Path::new("<dict>"),
+            &job.base_dir,
+            &aliases,
+            reg,
+        )
     }
     .map_err(|e| graph_problem(e.to_string()))?;
     apply_sets(&mut g, &job.sets).map_err(graph_problem)?;
@@ -139,7 +145,11 @@ fn run_job(job: &Job) -> Result<Outputs, Failure> {
             .iter()
             .flat_map(|n| n.logs.iter().map(|l| (n.id.clone(), l.clone())))
             .collect(),
-        written: report.nodes.iter().flat_map(|n| n.written.clone()).collect(),
+        written: report
+            .nodes
+            .iter()
+            .flat_map(|n| n.written.clone())
+            .collect(),
     })
 }
 
@@ -242,12 +252,7 @@ fn image<'py>(py: Python<'py>, im: &Image) -> PyResult<Bound<'py, PyDict>> {
         .iter()
         .flat_map(|p| p.iter().flat_map(|x| x.to_le_bytes()))
         .collect();
-    array(
-        py,
-        &b,
-        "<f4",
-        &[im.height as usize, im.width as usize, 4],
-    )
+    array(py, &b, "<f4", &[im.height as usize, im.width as usize, 4])
 }
 
 /// A table as `{"__table__": {column: [values]}, "meta": {...}}`.
@@ -361,11 +366,7 @@ fn run<'py>(
             }
             d.set_item("outputs", outs)?;
             d.set_item("logs", o.logs)?;
-            let written: Vec<String> = o
-                .written
-                .iter()
-                .map(|p| p.display().to_string())
-                .collect();
+            let written: Vec<String> = o.written.iter().map(|p| p.display().to_string()).collect();
             d.set_item("written", written)?;
         }
         Err(Failure::Graph(errs)) => {

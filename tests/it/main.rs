@@ -25,6 +25,7 @@ mod node_bounds;
 mod param;
 mod plugins;
 mod poisson;
+mod provenance;
 mod render;
 mod run_semantics;
 mod runtime;

@@ -169,9 +169,12 @@ fn png_extract(bytes: &[u8]) -> Option<String> {
     None
 }
 
+/// An OpenEXR header attribute: name, type name, and where its value lies in the file.
+type ExrAttr = (String, String, std::ops::Range<usize>);
+
 /// The end of a single-part OpenEXR header (the index of its terminating null byte) and the
 /// attributes before it as (name, type, value range).
-fn exr_header(bytes: &[u8]) -> Option<(usize, Vec<(String, String, std::ops::Range<usize>)>)> {
+fn exr_header(bytes: &[u8]) -> Option<(usize, Vec<ExrAttr>)> {
     if bytes.get(..4)? != [0x76, 0x2f, 0x31, 0x01] {
         return None;
     }
@@ -278,10 +281,10 @@ fn usda_embed(bytes: &[u8], record: &str) -> Option<Vec<u8>> {
     );
     let rest = &text[first_eol..];
     let mut out = text[..first_eol].to_string();
-    if rest.starts_with("(\n") {
+    if let Some(after) = rest.strip_prefix("(\n") {
         out.push_str("(\n");
         out.push_str(&entry);
-        out.push_str(&rest[2..]);
+        out.push_str(after);
     } else {
         out.push_str(&format!("(\n{entry})\n"));
         out.push_str(rest);

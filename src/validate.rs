@@ -191,6 +191,8 @@ pub struct ValidGraph {
     pub index: HashMap<String, usize>,
     /// The nodes the graph asks for (`outputs`, or every sink).
     pub targets: Vec<usize>,
+    /// The graph's hash (`Graph::hash`), recorded in every file the run writes.
+    pub hash: String,
 }
 
 /// Validates `graph` against `registry`, applying `--set` overrides (node, socket, JSON value)
@@ -489,6 +491,7 @@ pub fn validate_with(
         nodes,
         index,
         targets,
+        hash: graph.hash.clone(),
     })
 }
 

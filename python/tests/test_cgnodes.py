@@ -144,3 +144,24 @@ def test_nodes_and_describe_follow_the_declarations():
     assert [s["name"] for s in d["outputs"]] == ["mesh"]
     with pytest.raises(KeyError, match="mesh_grid"):
         cgnodes.describe("mesh_gird")
+
+
+def test_written_files_record_the_dict_graph_node_and_params(tmp_path):
+    g = graph(
+        {
+            "v": {"type": "value_float", "params": {"value": 1.5}},
+            "save": {"type": "table_write", "params": {"path": "v.csv"}, "inputs": {"value": "v.value"}},
+        }
+    )
+    cgnodes.run(g, out=tmp_path, frame=4)
+    import json
+
+    rec = json.loads((tmp_path / "v.csv.provenance.json").read_text())
+    assert (rec["graph"], rec["node"], rec["node_type"], rec["frame"]) == ("<dict>", "save", "table_write", 4)
+    assert rec["params"] == {"path": "v.csv"} and rec["graph_hash"].startswith("blake3:")
+    # The hash is of the canonical JSON: the same graph with its keys in another order
+    # records the same hash.
+    g2 = dict(reversed(list(g.items())))
+    cgnodes.run(g2, out=tmp_path / "b", frame=4)
+    rec2 = json.loads((tmp_path / "b" / "v.csv.provenance.json").read_text())
+    assert rec2["graph_hash"] == rec["graph_hash"]

@@ -11,6 +11,7 @@ mod dot;
 mod import_f3d;
 mod nodes;
 mod progress;
+mod provenance;
 mod run;
 mod schema;
 mod sweep;
@@ -128,6 +129,15 @@ enum Cmd {
         /// JSON file mapping custom Framework3D node names onto cgnodes nodes.
         #[arg(long = "f3d-aliases")]
         aliases: Option<PathBuf>,
+    },
+    /// Print what made a file cgnodes wrote: version, graph hash, node, parameters, frame.
+    #[command(after_help = "Example: cgnodes provenance out/arap_cow/layout.png --json")]
+    Provenance {
+        /// A file written by a cgnodes run.
+        file: PathBuf,
+        /// Print the record as JSON.
+        #[arg(long)]
+        json: bool,
     },
     /// Print a shell completion script (bash, zsh, fish, elvish or powershell).
     #[command(
@@ -389,6 +399,7 @@ pub fn main_with(registry: Registry) -> i32 {
             output,
             aliases,
         } => import_f3d::cmd(&registry, &input, &output, aliases.as_deref()),
+        Cmd::Provenance { file, json } => provenance::cmd(&file, json),
         Cmd::Completions { shell } => {
             use clap::CommandFactory;
             clap_complete::generate(

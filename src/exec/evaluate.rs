@@ -146,6 +146,7 @@ impl Executor {
             log_sink: sh.opts.log.clone(),
             wanted: wanted.cloned(),
             memory_limit: sh.opts.memory_limit(),
+            provenance: Some(Arc::new(provenance(sh, node))),
         };
         let res = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| exec(&mut ctx)));
         // Ends the node's progress bar, if it started one, whether it succeeded or not.
@@ -300,5 +301,27 @@ fn complete_key(sh: &Shared, i: usize) -> Key {
             h.update(&sh.keys[i]);
             *h.finalize().as_bytes()
         }
+    }
+}
+
+/// What the files `node` writes record: this build, the graph's hash, the node and its
+/// literal parameters, the frame.
+fn provenance(sh: &Shared, node: &crate::validate::ValidNode) -> crate::node::Provenance {
+    let params = node
+        .inputs
+        .iter()
+        .filter_map(|(name, src)| match src {
+            InputSource::Literal(v) => Some((name.clone(), v.to_json()?)),
+            _ => None,
+        })
+        .collect();
+    crate::node::Provenance {
+        cgnodes: env!("CARGO_PKG_VERSION").to_string(),
+        graph: sh.graph.file.display().to_string(),
+        graph_hash: sh.graph.hash.clone(),
+        node: node.id.clone(),
+        node_type: node.decl.type_name.clone(),
+        params,
+        frame: sh.frame,
     }
 }

@@ -81,6 +81,8 @@ pub struct Graph {
     pub dir: PathBuf,
     /// The graph itself.
     pub spec: GraphFile,
+    /// `blake3:HEX` of the bytes the graph was read from (`node::Provenance::graph_hash`).
+    pub hash: String,
 }
 
 /// Migrates a raw graph of an older version to the current one, one version at a time.

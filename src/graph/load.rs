@@ -113,6 +113,7 @@ fn parse_any(
             file: file.to_path_buf(),
             dir: dir.to_path_buf(),
             spec,
+            hash: crate::node::Provenance::hash_graph(text.as_bytes()),
         });
     }
     match obj.get("format").and_then(|f| f.as_str()) {
@@ -143,6 +144,7 @@ fn parse_any(
         file: file.to_path_buf(),
         dir: dir.to_path_buf(),
         spec,
+        hash: crate::node::Provenance::hash_graph(text.as_bytes()),
     })
 }
 

@@ -1,8 +1,10 @@
 //! File helpers shared by the runtime and the writer nodes: atomic writes, CSV (`csv`), and
-//! the cleanup of temporaries and plugin processes on Ctrl-C (`interrupt`).
+//! the cleanup of temporaries and plugin processes on Ctrl-C (`interrupt`), and provenance
+//! records inside written files (`provenance`).
 
 pub mod csv;
 pub mod interrupt;
+pub mod provenance;
 
 use std::io::{BufWriter, Write};
 use std::path::Path;

@@ -1,7 +1,7 @@
 //! `ExecContext`: everything a node sees while it runs (inputs, outputs, frame, state
 //! between frames, file environment, log and progress).
 
-use super::{ErrorKind, FileEnv, NodeDecl, NodeError};
+use super::{ErrorKind, FileEnv, NodeDecl, NodeError, Provenance};
 use crate::types::{FromValue, Value};
 use std::any::Any;
 use std::collections::{BTreeMap, BTreeSet};
@@ -67,6 +67,9 @@ pub struct ExecContext<'a> {
     pub(crate) wanted: Option<BTreeSet<String>>,
     /// The most bytes one buffer request may take (`reserve_bytes`).
     pub(crate) memory_limit: u64,
+    /// What the files this node writes record about their origin; `None` (standalone use)
+    /// writes them unchanged.
+    pub(crate) provenance: Option<Arc<Provenance>>,
 }
 
 impl<'a> ExecContext<'a> {
@@ -98,7 +101,19 @@ impl<'a> ExecContext<'a> {
             log_sink: None,
             wanted: None,
             memory_limit: super::default_memory_limit(),
+            provenance: None,
         }
+    }
+
+    /// Sets the provenance recorded in the files this context writes (standalone use; a run
+    /// fills it from the graph).
+    pub fn set_provenance(&mut self, p: Provenance) {
+        self.provenance = Some(Arc::new(p));
+    }
+
+    /// The provenance recorded in the files this node writes, if any.
+    pub fn provenance(&self) -> Option<&Provenance> {
+        self.provenance.as_deref()
     }
 
     /// Sets the memory limit `reserve_bytes` checks against (standalone use; a run takes it
@@ -203,25 +218,64 @@ impl<'a> ExecContext<'a> {
             .map_err(|e| NodeError::invalid(socket, e))
     }
 
-    /// Writes a file atomically (temporary file in the same folder, then rename).
+    /// Writes a file atomically (temporary file in the same folder, then rename), with the
+    /// provenance record embedded or beside it.
     pub fn write_file(&mut self, path: &Path, bytes: &[u8]) -> Result<(), NodeError> {
-        self.write_with(path, |w| w.write_all(bytes))
+        let Some(p) = self.provenance.clone() else {
+            crate::io::write_atomic(path, |w| w.write_all(bytes))
+                .map_err(|e| NodeError::io(path, e))?;
+            self.written.push(path.to_path_buf());
+            return Ok(());
+        };
+        let embedded = crate::io::provenance::embed(path, bytes, &p.to_line());
+        crate::io::write_atomic(path, |w| w.write_all(embedded.as_deref().unwrap_or(bytes)))
+            .map_err(|e| NodeError::io(path, e))?;
+        self.written.push(path.to_path_buf());
+        if embedded.is_none() {
+            self.write_sidecar(path, &p)?;
+        }
+        Ok(())
     }
 
-    /// Writes a file atomically through a writer; on error nothing is left behind.
+    /// Writes a file atomically through a writer; on error nothing is left behind. With a
+    /// provenance, the bytes are collected first so the record can be embedded.
     pub fn write_with(
         &mut self,
         path: &Path,
         f: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
     ) -> Result<(), NodeError> {
-        crate::io::write_atomic(path, f).map_err(|e| NodeError::io(path, e))?;
-        self.written.push(path.to_path_buf());
-        Ok(())
+        if self.provenance.is_none() {
+            crate::io::write_atomic(path, f).map_err(|e| NodeError::io(path, e))?;
+            self.written.push(path.to_path_buf());
+            return Ok(());
+        }
+        let mut buf = Vec::new();
+        f(&mut buf).map_err(|e| NodeError::io(path, e))?;
+        self.write_file(path, &buf)
     }
 
-    /// Records a file written by other means (already atomically), so the cache knows it.
+    /// Records a file written by other means (already atomically), so the cache knows it,
+    /// and adds the provenance record to it.
     pub fn record_written(&mut self, path: &Path) {
         self.written.push(path.to_path_buf());
+        if let Some(p) = self.provenance.clone() {
+            let ok = std::fs::read(path).ok().and_then(|bytes| {
+                let b = crate::io::provenance::embed(path, &bytes, &p.to_line())?;
+                crate::io::write_atomic(path, |w| w.write_all(&b)).ok()
+            });
+            if ok.is_none() {
+                let _ = self.write_sidecar(path, &p);
+            }
+        }
+    }
+
+    /// Writes `FILE.provenance.json` beside `path`. It is not listed among the written files
+    /// (run reports, the cache): it belongs to `path`.
+    fn write_sidecar(&mut self, path: &Path, p: &Provenance) -> Result<(), NodeError> {
+        let side = crate::io::provenance::sidecar_path(path);
+        let text = serde_json::to_string_pretty(p).unwrap_or_default() + "\n";
+        crate::io::write_atomic(&side, |w| w.write_all(text.as_bytes()))
+            .map_err(|e| NodeError::io(&side, e))
     }
 
     /// The files written so far.

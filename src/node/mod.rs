@@ -30,6 +30,7 @@ mod decl;
 mod error;
 mod files;
 mod memory;
+mod provenance;
 
 pub use builder::{NodeBuilder, SocketBuilder};
 pub use choice::{parse_choice, Choice};
@@ -41,3 +42,4 @@ pub use memory::{
     bytes_of, default_memory_limit, format_size, parse_size, physical_memory,
     FALLBACK_MEMORY_LIMIT, MAX_MEMORY_ENV,
 };
+pub use provenance::Provenance;

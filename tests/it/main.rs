@@ -26,6 +26,7 @@ mod param;
 mod plugins;
 mod poisson;
 mod progress;
+mod provenance;
 mod render;
 mod run_semantics;
 mod runtime;

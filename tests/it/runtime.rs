@@ -493,11 +493,19 @@ fn a_failing_writer_leaves_no_partial_file_and_the_rest_still_runs() {
         errs.contains("node 'bad' (bad_writer) failed [io]") && errs.contains("disk on fire"),
         "{errs}"
     );
-    let files: Vec<_> = std::fs::read_dir(out.path())
+    let mut files: Vec<_> = std::fs::read_dir(out.path())
         .unwrap()
         .map(|e| e.unwrap().file_name())
         .collect();
-    assert_eq!(files, vec![std::ffi::OsString::from("good.csv")]);
+    files.sort();
+    // The CSV and its provenance sidecar (docs/provenance.md).
+    assert_eq!(
+        files,
+        vec![
+            std::ffi::OsString::from("good.csv"),
+            std::ffi::OsString::from("good.csv.provenance.json")
+        ]
+    );
 }
 
 #[test]

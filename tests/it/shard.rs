@@ -245,7 +245,8 @@ fn frame_shards_write_exactly_the_unsharded_outputs() {
         &["run", g, "--frames", "0..9", "--out", "whole", "-q"],
     ));
     let want = files(&d.path().join("whole"));
-    assert_eq!(want.len(), 10);
+    // Ten JSON tables, each with its provenance sidecar (the same in every shard).
+    assert_eq!(want.len(), 20);
     // 4 shards of 10 frames, sharing one --out; then 12 shards, some with no frames.
     for n in [4, 12] {
         let out = format!("shared{n}");

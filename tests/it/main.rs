@@ -34,3 +34,4 @@ mod shard;
 mod sph;
 mod sweep;
 mod trace;
+mod trace_shading;

@@ -235,4 +235,19 @@ mod tests {
         inp.insert("intensity".into(), Value::Float(-1.0));
         assert!(run("light_point", inp).is_err());
     }
+
+    #[test]
+    fn environment_light_checks_its_image() {
+        let l = run("light_environment", BTreeMap::new()).unwrap();
+        assert!(matches!(l, Light::Environment { image: None, intensity, .. } if intensity == 1.0));
+        let mut img = Image::new(4, 2, [1.0; 4]);
+        img.set(3, 1, [0.5, -1.0, 0.0, 1.0]);
+        let mut inp = BTreeMap::new();
+        inp.insert("image".into(), Value::from(img));
+        let e = run("light_environment", inp).unwrap_err();
+        assert!(e.to_string().contains("(3, 1)"), "{e}");
+        let mut inp = BTreeMap::new();
+        inp.insert("rotation".into(), Value::Float(f64::NAN));
+        assert!(run("light_environment", inp).is_err());
+    }
 }

@@ -97,7 +97,7 @@ pub fn environment_nee(sc: &RenderScene, v: &Vertex, u: [f32; 2], mis: bool) -> 
     let Some(es) = env.sample(u) else {
         return [0.0; 3];
     };
-    if !(es.pdf > 0.0) || max_comp(es.le) <= 0.0 {
+    if es.pdf.is_nan() || es.pdf <= 0.0 || max_comp(es.le) <= 0.0 {
         return [0.0; 3];
     }
     let f = v.f(es.wi);

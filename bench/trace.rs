@@ -195,6 +195,7 @@ fn main() {
         seed,
         filter: Filter::Box,
         strategy: Strategy::Mis,
+        ..Default::default()
     };
     let threads = rayon::current_num_threads();
     let run = |spp: u32, seed: u64| {

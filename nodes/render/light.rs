@@ -1,8 +1,10 @@
-//! `light_point` and `light_directional`: the scene's light sources.
+//! `light_point`, `light_directional` and `light_environment`: the scene's light sources.
 //!
 //! A point light radiates `color * intensity` (W/sr per channel) in every direction, so the
 //! irradiance it gives a surface at distance d facing it is `color * intensity / d^2`; a
-//! directional light gives irradiance `color * intensity` on a surface facing it.
+//! directional light gives irradiance `color * intensity` on a surface facing it. An
+//! environment light (tracers only) is radiance arriving from infinitely far in every
+//! direction, from an equirectangular image or a constant colour.
 
 use crate::prelude::*;
 
@@ -108,8 +110,78 @@ fn execute_directional(ctx: &mut ExecContext) -> Result<(), NodeError> {
     Ok(())
 }
 
-/// Registers `light_point` and `light_directional`.
+/// An environment light; fails on non-finite or negative values (in the image too) or a
+/// non-finite rotation. Errors name the socket.
+pub fn environment_light(
+    image: Option<Arc<Image>>,
+    color: [f64; 3],
+    intensity: f64,
+    rotation_deg: f64,
+) -> Result<Light, NodeError> {
+    check(&[0.0; 3], &color, intensity).map_err(|e| NodeError::invalid("intensity", e))?;
+    if !rotation_deg.is_finite() {
+        return Err(NodeError::invalid("rotation", "rotation must be finite"));
+    }
+    if let Some(img) = &image {
+        if img.width == 0 || img.height == 0 || img.pixels.len() != (img.width * img.height) as usize {
+            return Err(NodeError::invalid("image", "the image is empty"));
+        }
+        if let Some(i) = img
+            .pixels
+            .iter()
+            .position(|p| p[..3].iter().any(|c| !c.is_finite() || *c < 0.0))
+        {
+            return Err(NodeError::invalid(
+                "image",
+                format!(
+                    "pixel ({}, {}) is negative or not finite; radiance must be finite and >= 0",
+                    i as u32 % img.width,
+                    i as u32 / img.width
+                ),
+            ));
+        }
+    }
+    Ok(Light::Environment {
+        image,
+        color,
+        intensity,
+        rotation_deg,
+    })
+}
+
+fn declare_environment(b: &mut NodeBuilder) {
+    b.doc("Light from every direction for the tracers: an equirectangular radiance image (HDR/EXR) times color * intensity, or a constant sky.");
+    b.add_input::<Image>("image").optional().doc(
+        "Equirectangular radiance (linear; load EXR/HDR with color_space = raw): row 0 looks straight up (+y), the image centre along -z, u grows towards +x. Without it the sky is the constant colour.",
+    );
+    b.add_input::<Color>("color")
+        .default(Color([1.0, 1.0, 1.0]))
+        .doc("Linear RGB radiance (multiplies the image).");
+    b.add_input::<f64>("intensity")
+        .default(1.0)
+        .min(0.0)
+        .doc("Scale of the radiance.");
+    b.add_input::<f64>("rotation")
+        .default(0.0)
+        .doc("Turns the environment about +y, in degrees (counter-clockwise seen from above).");
+    b.add_output::<Light>("light");
+}
+
+fn execute_environment(ctx: &mut ExecContext) -> Result<(), NodeError> {
+    let c: Color = ctx.input("color")?;
+    let l = environment_light(
+        ctx.input_opt("image")?,
+        c.0,
+        ctx.input("intensity")?,
+        ctx.input("rotation")?,
+    )?;
+    ctx.set_output("light", l);
+    Ok(())
+}
+
+/// Registers `light_point`, `light_directional` and `light_environment`.
 pub fn register(r: &mut Registry) {
+    r.add("light_environment", declare_environment, execute_environment);
     r.add("light_point", declare_point, execute_point);
     r.add(
         "light_directional",
@@ -162,5 +234,20 @@ mod tests {
         let mut inp = BTreeMap::new();
         inp.insert("intensity".into(), Value::Float(-1.0));
         assert!(run("light_point", inp).is_err());
+    }
+
+    #[test]
+    fn environment_light_checks_its_image() {
+        let l = run("light_environment", BTreeMap::new()).unwrap();
+        assert!(matches!(l, Light::Environment { image: None, intensity, .. } if intensity == 1.0));
+        let mut img = Image::new(4, 2, [1.0; 4]);
+        img.set(3, 1, [0.5, -1.0, 0.0, 1.0]);
+        let mut inp = BTreeMap::new();
+        inp.insert("image".into(), Value::from(img));
+        let e = run("light_environment", inp).unwrap_err();
+        assert!(e.to_string().contains("(3, 1)"), "{e}");
+        let mut inp = BTreeMap::new();
+        inp.insert("rotation".into(), Value::Float(f64::NAN));
+        assert!(run("light_environment", inp).is_err());
     }
 }

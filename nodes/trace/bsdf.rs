@@ -5,6 +5,18 @@
 //! "Sampling the GGX Distribution of Visible Normals", JCGT 7(4)).
 //!
 //! `weight` of a sample is f cos / pdf, the factor the path throughput is multiplied by.
+//!
+//! Shading normals (Veach 1997, section 5.3): the lobes are laid out around the shading
+//! normal `ns` (interpolated, normal-mapped) while the geometric normal `ng` decides which
+//! side of the surface a direction is on. For radiance transport (paths from the camera)
+//! Veach's adjoint-consistent BSDF is `f_s(wi, wo) = f(wi, wo) |wi.ns| / |wi.ng|` (eq.
+//! 5.19), so the scattering integrand `f_s |wi.ng|` is `f |wi.ns|`: eval returns f cos with
+//! the shading cosine, and sampling about `ns` gives weights `f |wi.ns| / pdf`. Against
+//! light leaks, a reflected direction must lie on `wo`'s side of the geometric surface and
+//! a refracted one on the other side: reflections that the shading normal would send below
+//! the surface fall back to the geometric normal (mirror, glass), diffuse and rough samples
+//! there are discarded, and eval is zero there. When `wo` itself is below the shading
+//! hemisphere (grazing view of a strongly bent normal) the geometric normal is used.
 
 use super::sampling::{add, cosine_hemisphere, dot, normalize, onb, scale, sub, V3};
 use std::f32::consts::{FRAC_1_PI, PI};
@@ -131,13 +143,15 @@ impl Bsdf {
     }
 
     /// f cos for directions `wo` (toward the viewer) and `wi` (toward the light) at a
-    /// surface with unit geometric normal `ng`; zero for delta lobes.
+    /// surface with unit geometric normal `ng` and unit shading normal `ns` (on `ng`'s
+    /// side); zero for delta lobes.
     #[inline]
-    pub fn eval(&self, albedo: V3, ng: V3, wo: V3, wi: V3) -> V3 {
-        let co = dot(ng, wo);
-        let n = if co < 0.0 { scale(ng, -1.0) } else { ng };
+    pub fn eval(&self, albedo: V3, ng: V3, ns: V3, wo: V3, wi: V3) -> V3 {
+        let Some((g, n)) = sides(ng, ns, wo) else {
+            return [0.0; 3];
+        };
         let ci = dot(n, wi);
-        if ci <= 0.0 || co == 0.0 {
+        if ci <= 0.0 || dot(g, wi) <= 0.0 {
             return [0.0; 3];
         }
         match *self {
@@ -158,11 +172,12 @@ impl Bsdf {
 
     /// Solid-angle density with which `sample` returns `wi`; zero for delta lobes.
     #[inline]
-    pub fn pdf(&self, ng: V3, wo: V3, wi: V3) -> f32 {
-        let co = dot(ng, wo);
-        let n = if co < 0.0 { scale(ng, -1.0) } else { ng };
+    pub fn pdf(&self, ng: V3, ns: V3, wo: V3, wi: V3) -> f32 {
+        let Some((g, n)) = sides(ng, ns, wo) else {
+            return 0.0;
+        };
         let ci = dot(n, wi);
-        if ci <= 0.0 || co == 0.0 {
+        if ci <= 0.0 || dot(g, wi) <= 0.0 {
             return 0.0;
         }
         match *self {
@@ -180,20 +195,24 @@ impl Bsdf {
         }
     }
 
-    /// Samples a direction given `wo` (unit, toward the viewer), the unit geometric normal
-    /// `ng`, and three uniform numbers.
+    /// Samples a direction given `wo` (unit, toward the viewer), the unit geometric and
+    /// shading normals `ng` and `ns`, and three uniform numbers.
     #[inline]
-    pub fn sample(&self, albedo: V3, ng: V3, wo: V3, u: f32, uv: [f32; 2]) -> Option<BsdfSample> {
-        let co = dot(ng, wo);
-        if co == 0.0 {
-            return None;
-        }
-        let n = if co < 0.0 { scale(ng, -1.0) } else { ng };
+    pub fn sample(
+        &self,
+        albedo: V3,
+        ng: V3,
+        ns: V3,
+        wo: V3,
+        u: f32,
+        uv: [f32; 2],
+    ) -> Option<BsdfSample> {
+        let (g, n) = sides(ng, ns, wo)?;
         match *self {
             Bsdf::Diffuse => {
                 let wi = cosine_hemisphere(n, uv);
                 let ci = dot(n, wi);
-                if ci <= 0.0 {
+                if ci <= 0.0 || dot(g, wi) <= 0.0 {
                     return None;
                 }
                 Some(BsdfSample {
@@ -204,40 +223,27 @@ impl Bsdf {
                     eta: 1.0,
                 })
             }
-            Bsdf::Mirror => Some(BsdfSample {
-                wi: reflect(wo, n),
-                weight: albedo,
-                pdf: 1.0,
-                delta: true,
-                eta: 1.0,
-            }),
+            Bsdf::Mirror => {
+                let mut wi = reflect(wo, n);
+                if dot(g, wi) <= 0.0 {
+                    wi = reflect(wo, g);
+                }
+                Some(BsdfSample {
+                    wi,
+                    weight: albedo,
+                    pdf: 1.0,
+                    delta: true,
+                    eta: 1.0,
+                })
+            }
             Bsdf::Dielectric { eta } => {
-                let entering = co > 0.0;
-                let eta_rel = if entering { eta } else { 1.0 / eta };
-                let cos_i = co.abs();
-                let (f, cos_t) = fresnel_dielectric(cos_i, eta_rel);
-                if u < f {
-                    Some(BsdfSample {
-                        wi: reflect(wo, n),
-                        weight: [1.0; 3],
-                        pdf: f,
-                        delta: true,
-                        eta: 1.0,
-                    })
+                let eta_rel = if dot(ng, wo) > 0.0 { eta } else { 1.0 / eta };
+                let s = sample_dielectric(wo, n, eta_rel, u);
+                // Reflection must stay on wo's side of the surface, refraction cross it.
+                if (dot(g, s.wi) > 0.0) == (s.eta == 1.0) {
+                    Some(s)
                 } else {
-                    // Snell: wi = -wo / eta + (cos_i / eta - cos_t) n.
-                    let wi = normalize(add(
-                        scale(wo, -1.0 / eta_rel),
-                        scale(n, cos_i / eta_rel - cos_t),
-                    ));
-                    let s = 1.0 / (eta_rel * eta_rel);
-                    Some(BsdfSample {
-                        wi,
-                        weight: [s; 3],
-                        pdf: 1.0 - f,
-                        delta: true,
-                        eta: eta_rel,
-                    })
+                    Some(sample_dielectric(wo, g, eta_rel, u))
                 }
             }
             Bsdf::Conductor { alpha } => {
@@ -245,20 +251,68 @@ impl Bsdf {
                 let lo = to_local(wo, t, b, n);
                 let h = sample_vndf(lo, alpha, uv);
                 let li = sub(scale(h, 2.0 * dot(lo, h)), lo);
-                if li[2] <= 0.0 {
+                let wi = to_world(li, t, b, n);
+                if li[2] <= 0.0 || dot(g, wi) <= 0.0 {
                     return None;
                 }
                 let g1o = 1.0 / (1.0 + ggx_lambda(lo, alpha));
                 let g2 = 1.0 / (1.0 + ggx_lambda(lo, alpha) + ggx_lambda(li, alpha));
                 let f = schlick(albedo, dot(li, h));
                 Some(BsdfSample {
-                    wi: to_world(li, t, b, n),
+                    wi,
                     weight: scale(f, g2 / g1o),
                     pdf: g1o * ggx_d(h, alpha) / (4.0 * lo[2]),
                     delta: false,
                     eta: 1.0,
                 })
             }
+        }
+    }
+}
+
+/// The geometric normal flipped to `wo`'s side and the shading normal with it; the shading
+/// normal is replaced by the geometric one when `wo` is below its hemisphere. `None` when
+/// `wo` grazes the surface.
+#[inline]
+fn sides(ng: V3, ns: V3, wo: V3) -> Option<(V3, V3)> {
+    let co = dot(ng, wo);
+    if co == 0.0 || !co.is_finite() {
+        return None;
+    }
+    let s = if co < 0.0 { -1.0 } else { 1.0 };
+    let g = scale(ng, s);
+    let n = scale(ns, s);
+    Some(if dot(n, wo) <= 1e-4 { (g, g) } else { (g, n) })
+}
+
+/// Smooth dielectric sampling about unit normal `n` on `wo`'s side, relative index
+/// `eta_rel` (transmitted over incident): Fresnel-weighted choice between reflection and
+/// refraction, the refracted radiance scaled by 1/eta^2.
+#[inline]
+fn sample_dielectric(wo: V3, n: V3, eta_rel: f32, u: f32) -> BsdfSample {
+    let cos_i = dot(n, wo).abs();
+    let (f, cos_t) = fresnel_dielectric(cos_i, eta_rel);
+    if u < f {
+        BsdfSample {
+            wi: reflect(wo, n),
+            weight: [1.0; 3],
+            pdf: f,
+            delta: true,
+            eta: 1.0,
+        }
+    } else {
+        // Snell: wi = -wo / eta + (cos_i / eta - cos_t) n.
+        let wi = normalize(add(
+            scale(wo, -1.0 / eta_rel),
+            scale(n, cos_i / eta_rel - cos_t),
+        ));
+        let s = 1.0 / (eta_rel * eta_rel);
+        BsdfSample {
+            wi,
+            weight: [s; 3],
+            pdf: 1.0 - f,
+            delta: true,
+            eta: eta_rel,
         }
     }
 }
@@ -291,10 +345,10 @@ mod tests {
         let alb = [0.9, 0.6, 0.3];
         let mut r = Pcg32::new(1, 1);
         for _ in 0..1000 {
-            if let Some(s) = m.sample(alb, ng, wo, r.next_f32(), r.next_2d()) {
+            if let Some(s) = m.sample(alb, ng, ng, wo, r.next_f32(), r.next_2d()) {
                 assert!((length(s.wi) - 1.0).abs() < 1e-4);
-                let f = m.eval(alb, ng, wo, s.wi);
-                let p = m.pdf(ng, wo, s.wi);
+                let f = m.eval(alb, ng, ng, wo, s.wi);
+                let p = m.pdf(ng, ng, wo, s.wi);
                 for (k, fk) in f.iter().enumerate() {
                     assert!((fk / p - s.weight[k]).abs() < 1e-3 * (1.0 + s.weight[k]));
                 }
@@ -307,7 +361,7 @@ mod tests {
             let z = u[0];
             let s = (1.0 - z * z).sqrt();
             let wi = [s * (2.0 * PI * u[1]).cos(), s * (2.0 * PI * u[1]).sin(), z];
-            integral += (m.pdf(ng, wo, wi) * 2.0 * PI) as f64;
+            integral += (m.pdf(ng, ng, wo, wi) * 2.0 * PI) as f64;
         }
         let integral = integral / k as f64;
         assert!(
@@ -321,7 +375,7 @@ mod tests {
         let ng = [0.0, 0.0, 1.0];
         let wo = normalize([0.5, 0.0, 1.0]);
         let m = Bsdf::Dielectric { eta: 1.5 };
-        let s = m.sample([1.0; 3], ng, wo, 0.99, [0.0, 0.0]).unwrap();
+        let s = m.sample([1.0; 3], ng, ng, wo, 0.99, [0.0, 0.0]).unwrap();
         let sin_i = (1.0 - wo[2] * wo[2]).sqrt();
         let sin_t = (1.0 - s.wi[2] * s.wi[2]).sqrt();
         assert!(s.wi[2] < 0.0);

@@ -1,8 +1,9 @@
 //! Ray and path tracing: a binned-SAH BVH with watertight intersection, sampling
-//! routines, BSDFs, an OBJ + MTL scene loader, a Whitted ray tracer and a path tracer.
+//! routines, BSDFs, an environment light, an OBJ + MTL scene loader, a Whitted ray tracer
+//! and a path tracer.
 
 crate::node_domain! {
     category: "trace",
     nodes: [render_path, render_whitted, scene_load],
-    modules: [bsdf, bvh, render_scene, sampling, tracer_node, v3],
+    modules: [bsdf, bvh, direct, environment, render_scene, sampling, tracer_node, v3],
 }

@@ -14,9 +14,10 @@
 //! per-pixel average) or Mitsuba's Gaussian (stddev 0.5 px, radius 2 px), whose samples are
 //! splatted into the neighbouring pixels and normalised by the summed filter weights.
 
+use super::direct::{delta_lights, environment_nee, Vertex};
 use super::render_scene::{prepare, PinholeCamera, RenderScene};
-use super::sampling::{add, dot, length, max_comp, mul, power_heuristic, scale, sub, Pcg32, V3};
-use super::tracer_node::{reserve_image, trace_error};
+use super::sampling::{add, dot, max_comp, mul, power_heuristic, scale, sub, Pcg32, V3};
+use super::tracer_node::{crease_input, declare_crease, reserve_image, trace_error};
 use crate::prelude::*;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -71,6 +72,8 @@ pub struct PathSettings {
     pub filter: Filter,
     /// Sampling strategies.
     pub strategy: Strategy,
+    /// Crease angle in degrees for computed vertex normals (0 = flat shading).
+    pub crease_deg: f64,
 }
 
 impl Default for PathSettings {
@@ -82,6 +85,7 @@ impl Default for PathSettings {
             seed: 0,
             filter: Filter::Gaussian,
             strategy: Strategy::Mis,
+            crease_deg: super::render_scene::DEFAULT_CREASE_DEG,
         }
     }
 }
@@ -102,8 +106,23 @@ pub fn radiance(
     let mut prev_delta = true;
     let mut depth = 0u32;
     let (mut org, mut dir, mut tmax) = (org, dir, tmax);
-    // No environment: a ray that escapes ends the path and carries nothing.
-    while let Some(hit) = sc.intersect(org, dir, tmax) {
+    loop {
+        let Some(hit) = sc.intersect(org, dir, tmax) else {
+            // The ray escapes: the environment's radiance, weighted like an emitter hit.
+            if let Some(env) = &sc.env {
+                let w = if depth == 0 || prev_delta {
+                    1.0
+                } else {
+                    match s.strategy {
+                        Strategy::Bsdf => 1.0,
+                        Strategy::Nee => 0.0,
+                        Strategy::Mis => power_heuristic(prev_pdf, env.pdf(dir)),
+                    }
+                };
+                l = add(l, scale(mul(thr, env.eval(dir)), w));
+            }
+            break;
+        };
         let tri = hit.prim;
         let ng = sc.normals[tri as usize];
         let mat = sc.material(tri);
@@ -134,6 +153,8 @@ pub fn radiance(
             break;
         }
         let bsdf = mat.bsdf;
+        let sp = sc.surface(&hit);
+        let (ns, albedo) = (sp.ns, sp.albedo);
         if !bsdf.is_delta() {
             // Next-event estimation on the area emitters.
             if s.strategy != Strategy::Bsdf {
@@ -148,7 +169,7 @@ pub fn radiance(
                         let le = sc.emitted(ls.tri, scale(wi, -1.0));
                         let cos_l = dot(ls.n, wi).abs();
                         if max_comp(le) > 0.0 && cos_l > 0.0 {
-                            let f = bsdf.eval(mat.albedo, ng, wo, wi);
+                            let f = bsdf.eval(albedo, ng, ns, wo, wi);
                             if max_comp(f) > 0.0 {
                                 let side = if dot(ng, wi) > 0.0 {
                                     ng
@@ -159,7 +180,7 @@ pub fn radiance(
                                 if !sc.bvh.occluded(o, sub(ls.p, o), 1.0 - 1e-4) {
                                     let p_light = ls.pdf_area * dist2 / cos_l;
                                     let w = if s.strategy == Strategy::Mis {
-                                        power_heuristic(p_light, bsdf.pdf(ng, wo, wi))
+                                        power_heuristic(p_light, bsdf.pdf(ng, ns, wo, wi))
                                     } else {
                                         1.0
                                     };
@@ -170,66 +191,25 @@ pub fn radiance(
                     }
                 }
             }
-            // Point and directional lights (delta lights: only shadow rays reach them).
-            for light in &sc.lights {
-                let (wi, e, tmax_l) = match light {
-                    Light::Point {
-                        position,
-                        color,
-                        intensity,
-                    } => {
-                        let d = sub(super::sampling::v3(*position), p);
-                        let r2 = dot(d, d);
-                        if r2 <= 0.0 {
-                            continue;
-                        }
-                        let i = scale(super::sampling::v3(*color), *intensity as f32 / r2);
-                        (scale(d, 1.0 / r2.sqrt()), i, 1.0 - 1e-4)
-                    }
-                    Light::Directional {
-                        direction,
-                        color,
-                        intensity,
-                    } => {
-                        let d = super::sampling::v3(*direction);
-                        let wi = scale(d, -1.0 / length(d));
-                        (
-                            wi,
-                            scale(super::sampling::v3(*color), *intensity as f32),
-                            f32::INFINITY,
-                        )
-                    }
-                };
-                let f = bsdf.eval(mat.albedo, ng, wo, wi);
-                if max_comp(f) <= 0.0 {
-                    continue;
-                }
-                let side = if dot(ng, wi) > 0.0 {
-                    ng
-                } else {
-                    scale(ng, -1.0)
-                };
-                let o = sc.offset(p, side);
-                let dir_l = if tmax_l.is_finite() {
-                    sub(
-                        match light {
-                            Light::Point { position, .. } => super::sampling::v3(*position),
-                            _ => unreachable!(),
-                        },
-                        o,
-                    )
-                } else {
-                    wi
-                };
-                if !sc.bvh.occluded(o, dir_l, tmax_l) {
-                    l = add(l, mul(thr, mul(f, e)));
-                }
+            // Point and directional lights (delta lights: only shadow rays reach them),
+            // and one environment sample.
+            let v = Vertex {
+                p,
+                wo,
+                sp: &sp,
+                bsdf,
+            };
+            l = add(l, mul(thr, delta_lights(sc, &v)));
+            if sc.env.is_some() && s.strategy != Strategy::Bsdf {
+                let u = rng.next_2d();
+                let le = environment_nee(sc, &v, u, s.strategy == Strategy::Mis);
+                l = add(l, mul(thr, le));
             }
         }
         // BSDF sampling for the next segment.
         let u = rng.next_f32();
         let uv = rng.next_2d();
-        let Some(bs) = bsdf.sample(mat.albedo, ng, wo, u, uv) else {
+        let Some(bs) = bsdf.sample(albedo, ng, ns, wo, u, uv) else {
             break;
         };
         thr = mul(thr, bs.weight);
@@ -434,7 +414,7 @@ pub fn render_path(
     s: &PathSettings,
     progress: &(dyn Fn(f64) + Sync),
 ) -> Result<(Image, Image), String> {
-    let (sc, cam) = prepare(scene, camera)?;
+    let (sc, cam) = prepare(scene, camera, s.crease_deg)?;
     Ok(render(&sc, &cam, s, progress))
 }
 
@@ -461,6 +441,7 @@ fn declare(b: &mut NodeBuilder) {
         .doc("Reconstruction filter: Mitsuba's gaussian (stddev 0.5 px, radius 2 px) or a one-pixel box.");
     b.add_choice::<Strategy>("strategy")
         .doc("Emitter + BSDF sampling with the power heuristic, or either alone.");
+    declare_crease(b);
     b.add_output::<Image>("color").doc("Linear radiance.");
     b.add_output::<Image>("variance")
         .doc("Variance of each pixel's estimate (its own samples, unfiltered).");
@@ -475,6 +456,7 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let seed: i64 = ctx.input("seed")?;
     let filter = ctx.choice::<Filter>("filter")?;
     let strategy = ctx.choice::<Strategy>("strategy")?;
+    let crease_deg = crease_input(ctx)?;
     if !(1..=1_000_000).contains(&spp) {
         return Err(NodeError::invalid(
             "spp",
@@ -504,6 +486,7 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
         seed: seed as u64,
         filter,
         strategy,
+        crease_deg,
     };
     // Per pixel: the f64 accumulator (32 bytes), colour and variance images (16 each), the
     // tiles' splat margins and variances (about 40).

@@ -4,11 +4,14 @@
 //! camera that turns film positions into rays. Shared by `render_path` and `render_whitted`.
 
 use super::bsdf::Bsdf;
+use super::environment::Environment;
 use super::bvh::{triangle_normal, Bvh, Hit};
 use super::sampling::{
     add, dot, length, luminance, max_comp, normalize, scale, sub, uniform_triangle, v3,
     Distribution1D, V3,
 };
+use crate::nodes::render::raster::geometry::{normal_mapped, scene_geometry_creased};
+use crate::nodes::render::raster::texture::{MipTexture, Wrap};
 use crate::types::{Camera, Light, LookAt, Material, MaterialKind, Scene};
 
 /// A material reduced to what the tracers evaluate.
@@ -92,6 +95,31 @@ impl RMaterial {
     pub fn is_emitter(&self) -> bool {
         max_comp(self.emission) > 0.0
     }
+}
+
+/// The crease angle (degrees) below which computed vertex normals smooth across an edge:
+/// a tessellated sphere shades smooth, a box keeps its edges.
+pub const DEFAULT_CREASE_DEG: f64 = 60.0;
+
+/// A material's textures, sampled bilinearly through the mesh's UVs (repeating), as the
+/// rasterizer samples them when magnified.
+#[derive(Clone, Debug, Default)]
+pub struct Textures {
+    /// Base colour, multiplying the albedo.
+    pub base: Option<MipTexture>,
+    /// Tangent-space normal map.
+    pub normal: Option<MipTexture>,
+}
+
+/// The surface at a hit as the shaders see it.
+#[derive(Clone, Copy, Debug)]
+pub struct SurfacePoint {
+    /// Unit geometric normal (counter-clockwise side).
+    pub ng: V3,
+    /// Unit shading normal (interpolated, normal-mapped), on the side of `ng`.
+    pub ns: V3,
+    /// Albedo times the texture.
+    pub albedo: V3,
 }
 
 /// A point on an emissive triangle sampled for next-event estimation.
@@ -188,6 +216,15 @@ pub struct RenderScene {
     pub tris: Vec<[V3; 3]>,
     /// Unit geometric normal per triangle (counter-clockwise winding).
     pub normals: Vec<V3>,
+    /// Unit shading normals at each triangle's corners.
+    pub corner_normals: Vec<[V3; 3]>,
+    /// UVs at each triangle's corners (NaN when its mesh has none).
+    pub corner_uvs: Vec<[[f32; 2]; 3]>,
+    /// Tangents with handedness at each triangle's corners (empty when no material has a
+    /// normal map).
+    pub corner_tangents: Vec<[[f64; 4]; 3]>,
+    /// Textures per material.
+    pub textures: Vec<Textures>,
     /// Material index per triangle.
     pub tri_mat: Vec<u32>,
     /// Materials.
@@ -200,26 +237,25 @@ pub struct RenderScene {
     pub light_pdf_area: Vec<f32>,
     /// Point and directional lights.
     pub lights: Vec<Light>,
+    /// The environment light (the scene's first), if any.
+    pub env: Option<Environment>,
     /// Ray offset length for leaving a surface (relative to the scene's size).
     pub eps: f32,
 }
 
 impl RenderScene {
+    /// Flattens `scene` with the default crease angle (`DEFAULT_CREASE_DEG`).
+    pub fn new(scene: &Scene) -> Result<RenderScene, String> {
+        RenderScene::with_crease(scene, DEFAULT_CREASE_DEG)
+    }
+
     /// Flattens `scene`: triangulates every object, resolves materials (the object's, else
     /// the mesh's, else the default grey diffuse) and builds the BVH and emitter table.
-    pub fn new(scene: &Scene) -> Result<RenderScene, String> {
-        let mut tris = Vec::new();
-        let mut tri_mat = Vec::new();
-        let mut materials = Vec::new();
+    /// Corner normals, UVs and tangents come from the rasterizer's flattening
+    /// (`scene_geometry_creased`): the mesh's own normals, else normals smoothed across
+    /// edges whose dihedral angle is below `crease_deg` (0 = flat shading).
+    pub fn with_crease(scene: &Scene, crease_deg: f64) -> Result<RenderScene, String> {
         for (oi, obj) in scene.objects.iter().enumerate() {
-            let mat = obj
-                .material
-                .as_deref()
-                .or(obj.mesh.material.as_deref())
-                .cloned()
-                .unwrap_or_default();
-            let mi = materials.len() as u32;
-            materials.push(RMaterial::from_material(&mat));
             let mesh = &obj.mesh;
             for (vi, p) in mesh.positions.iter().enumerate() {
                 if !p.iter().all(|x| x.is_finite()) {
@@ -230,12 +266,38 @@ impl RenderScene {
             if mesh.faces().any(|f| f.len() < 3 || f.iter().any(|&i| i >= n)) {
                 return Err(format!("object {oi}: a face has a bad vertex index"));
             }
-            // Fan triangulation (faces are planar convex polygons in practice).
-            for t in mesh.fan_triangles() {
-                tris.push(t.map(|i| v3(mesh.positions[i as usize])));
-                tri_mat.push(mi);
-            }
         }
+        if !(0.0..=180.0).contains(&crease_deg) {
+            return Err(format!("crease angle {crease_deg} must be in 0..=180 degrees"));
+        }
+        let g = scene_geometry_creased(scene, crease_deg)?;
+        let tris: Vec<[V3; 3]> = g.pos.iter().map(|t| t.map(v3)).collect();
+        let tri_mat = g.mat;
+        let materials: Vec<RMaterial> = g
+            .materials
+            .iter()
+            .map(|m| RMaterial::from_material(m))
+            .collect();
+        let textures: Vec<Textures> = g
+            .materials
+            .iter()
+            .map(|m| Textures {
+                base: m.base_color_texture.as_deref().map(|i| MipTexture::new(i, false)),
+                normal: m.normal_map.as_deref().map(|i| MipTexture::new(i, false)),
+            })
+            .collect();
+        let any_nmap = textures.iter().any(|t| t.normal.is_some());
+        let corner_normals: Vec<[V3; 3]> = g.nrm.iter().map(|t| t.map(v3)).collect();
+        let corner_uvs: Vec<[[f32; 2]; 3]> = g
+            .uv
+            .iter()
+            .zip(&g.has_uv)
+            .map(|(t, &h)| {
+                // NaN marks a triangle without UVs.
+                t.map(|w| if h { [w[0] as f32, w[1] as f32] } else { [f32::NAN; 2] })
+            })
+            .collect();
+        let corner_tangents = if any_nmap { g.tan } else { Vec::new() };
         let bvh = Bvh::build(&tris);
         let normals: Vec<V3> = tris.iter().map(|t| normalize(triangle_normal(t))).collect();
         let areas: Vec<f32> = tris
@@ -289,19 +351,27 @@ impl RenderScene {
                         return Err("a directional light needs a finite non-zero direction".into());
                     }
                 }
+                // Sampled through `env`, not with the delta lights.
+                Light::Environment { .. } => continue,
             }
             lights.push(l.clone());
         }
+        let env = Environment::from_lights(&scene.lights);
         Ok(RenderScene {
             bvh,
             tris,
             normals,
+            corner_normals,
+            corner_uvs,
+            corner_tangents,
+            textures,
             tri_mat,
             materials,
             emitters,
             emitter_dist,
             light_pdf_area,
             lights,
+            env,
             eps: 1e-5 * diag.max(1e-3),
         })
     }
@@ -316,6 +386,48 @@ impl RenderScene {
     #[inline]
     pub fn material(&self, tri: u32) -> &RMaterial {
         &self.materials[self.tri_mat[tri as usize] as usize]
+    }
+
+    /// The shading normal and textured albedo of the surface at `hit`: the corner normals
+    /// interpolated with the hit's barycentrics (Phong 1975), perturbed by the normal map,
+    /// and kept on the geometric normal's side (a shading normal facing away from the
+    /// geometric one would light the back of the surface).
+    #[inline]
+    pub fn surface(&self, hit: &Hit) -> SurfacePoint {
+        let t = hit.prim as usize;
+        let ng = self.normals[t];
+        let (b1, b2) = (hit.u, hit.v);
+        let b0 = 1.0 - b1 - b2;
+        let c = &self.corner_normals[t];
+        let lerp = |k: usize| b0 * c[0][k] + b1 * c[1][k] + b2 * c[2][k];
+        let mut ns = normalize([lerp(0), lerp(1), lerp(2)]);
+        let m = self.tri_mat[t] as usize;
+        let mut albedo = self.materials[m].albedo;
+        let tx = &self.textures[m];
+        let w = &self.corner_uvs[t];
+        if (tx.base.is_some() || tx.normal.is_some()) && !w[0][0].is_nan() {
+            let u = (b0 * w[0][0] + b1 * w[1][0] + b2 * w[2][0]) as f64;
+            let v = (b0 * w[0][1] + b1 * w[1][1] + b2 * w[2][1]) as f64;
+            if let Some(tex) = &tx.base {
+                let c = tex.bilinear(0, u, v, Wrap::Repeat);
+                albedo = [albedo[0] * c[0], albedo[1] * c[1], albedo[2] * c[2]];
+            }
+            if let (Some(nm), Some(tan)) = (&tx.normal, self.corner_tangents.get(t)) {
+                let c = nm.bilinear(0, u, v, Wrap::Repeat);
+                let n64 = ns.map(|x| x as f64);
+                let b = [b0 as f64, b1 as f64, b2 as f64];
+                if let Some(n) = normal_mapped(n64, tan, b, c) {
+                    ns = v3(n);
+                }
+            }
+        }
+        let d = dot(ns, ng);
+        if !d.is_finite() || (length(ns) - 1.0).abs() > 1e-3 {
+            ns = ng;
+        } else if d < 0.0 {
+            ns = scale(ns, -1.0);
+        }
+        SurfacePoint { ng, ns, albedo }
     }
 
     /// A surface point moved off the surface along `n` (to the side a new ray leaves
@@ -365,16 +477,18 @@ impl RenderScene {
     }
 }
 
-/// Flattens `scene` and builds the camera from `camera`, or the scene's own camera when
-/// `camera` is `None`: what both tracers do before rendering.
+/// Flattens `scene` (normals smoothed below `crease_deg`) and builds the camera from
+/// `camera`, or the scene's own camera when `camera` is `None`: what both tracers do before
+/// rendering.
 pub fn prepare(
     scene: &Scene,
     camera: Option<&Camera>,
+    crease_deg: f64,
 ) -> Result<(RenderScene, PinholeCamera), String> {
     let cam = camera
         .or(scene.camera.as_ref())
         .ok_or("no camera: connect one to `camera` or give the scene one")?;
     let cam = PinholeCamera::new(cam)?;
-    let sc = RenderScene::new(scene)?;
+    let sc = RenderScene::with_crease(scene, crease_deg)?;
     Ok((sc, cam))
 }

@@ -5,6 +5,10 @@
 //! plus recursive perfect reflection (mirrors, tinted by the albedo; conductors) and
 //! refraction weighted by the exact Fresnel term (dielectrics).
 //!
+//! An environment light shows as the background and adds its mean radiance times the
+//! diffuse albedo as ambient light (unshadowed). Shading uses the interpolated (and
+//! normal-mapped) shading normal, on the viewer's side of the geometric one.
+//!
 //! Lights are the scene's point and directional lights, and every emissive triangle,
 //! integrated with a fixed stratified grid of `light_samples` points per triangle (so the
 //! image is deterministic and noise-free, with soft shadows from area lights). Emitters
@@ -15,7 +19,7 @@
 use super::bsdf::{fresnel_dielectric, reflect, Bsdf};
 use super::render_scene::{prepare, PinholeCamera, RenderScene};
 use super::sampling::{add, dot, max_comp, mul, normalize, scale, sub, uniform_triangle, v3, V3};
-use super::tracer_node::{reserve_image, trace_error};
+use super::tracer_node::{crease_input, declare_crease, reserve_image, trace_error};
 use crate::prelude::*;
 use rayon::prelude::*;
 use std::f32::consts::FRAC_1_PI;
@@ -32,6 +36,8 @@ pub struct WhittedSettings {
     pub ambient: f32,
     /// Rays per pixel edge (antialiasing grid `aa x aa`).
     pub aa: u32,
+    /// Crease angle in degrees for computed vertex normals (0 = flat shading).
+    pub crease_deg: f64,
 }
 
 impl Default for WhittedSettings {
@@ -41,6 +47,7 @@ impl Default for WhittedSettings {
             light_samples: 16,
             ambient: 0.0,
             aa: 2,
+            crease_deg: super::render_scene::DEFAULT_CREASE_DEG,
         }
     }
 }
@@ -70,42 +77,60 @@ pub fn trace(
     s: &WhittedSettings,
 ) -> V3 {
     let Some(hit) = sc.intersect(org, dir, f32::INFINITY) else {
-        return [0.0; 3];
+        // The environment shows as the background.
+        return sc.env.as_ref().map_or([0.0; 3], |e| e.eval(dir));
     };
     let tri = hit.prim;
-    let ng = sc.normals[tri as usize];
     let mat = sc.material(tri);
+    let sp = sc.surface(&hit);
+    let ng = sp.ng;
     let wo = scale(dir, -1.0);
     let p = add(org, scale(dir, hit.t));
+    // Geometric normal on the viewer's side (offsets, visibility) and the shading normal
+    // with it (lighting, reflection), replaced by the geometric one when the viewer is
+    // below it; reflections the shading normal sends under the surface use the geometric
+    // normal instead (no light leaks).
     let n = if dot(ng, wo) < 0.0 {
         scale(ng, -1.0)
     } else {
         ng
     };
+    let mut ns = scale(sp.ns, dot(n, ng));
+    if dot(ns, wo) <= 1e-4 {
+        ns = n;
+    }
     let mut l = sc.emitted(tri, wo);
     let recurse = depth < s.max_depth;
     match mat.bsdf {
         Bsdf::Mirror => {
             if recurse {
-                let wi = reflect(wo, n);
+                let mut wi = reflect(wo, ns);
+                if dot(wi, n) <= 0.0 {
+                    wi = reflect(wo, n);
+                }
                 let li = trace(sc, pts, sc.offset(p, n), wi, depth + 1, s);
-                l = add(l, mul(mat.albedo, li));
+                l = add(l, mul(sp.albedo, li));
             }
             return l;
         }
         Bsdf::Dielectric { eta } => {
             if recurse {
-                let cos_i = dot(ng, wo);
-                let eta_rel = if cos_i > 0.0 { eta } else { 1.0 / eta };
-                let cos_i = cos_i.abs();
+                let eta_rel = if dot(ng, wo) > 0.0 { eta } else { 1.0 / eta };
+                let ok = |m: V3| {
+                    let (_, cos_t) = fresnel_dielectric(dot(m, wo), eta_rel);
+                    let wt = add(scale(wo, -1.0 / eta_rel), scale(m, dot(m, wo) / eta_rel - cos_t));
+                    dot(reflect(wo, m), n) > 0.0 && (cos_t == 0.0 || dot(wt, n) < 0.0)
+                };
+                let m = if ok(ns) { ns } else { n };
+                let cos_i = dot(m, wo);
                 let (f, cos_t) = fresnel_dielectric(cos_i, eta_rel);
-                let wr = reflect(wo, n);
+                let wr = reflect(wo, m);
                 let lr = trace(sc, pts, sc.offset(p, n), wr, depth + 1, s);
                 l = add(l, scale(lr, f));
                 if f < 1.0 {
                     let wt = normalize(add(
                         scale(wo, -1.0 / eta_rel),
-                        scale(n, cos_i / eta_rel - cos_t),
+                        scale(m, cos_i / eta_rel - cos_t),
                     ));
                     let lt = trace(sc, pts, sc.offset(p, scale(n, -1.0)), wt, depth + 1, s);
                     // Radiance scales by 1/eta^2 across the interface (Veach 1997, 5.2).
@@ -120,10 +145,10 @@ pub fn trace(
     let kd = if matches!(mat.bsdf, Bsdf::Conductor { .. }) {
         [0.0; 3]
     } else {
-        mat.albedo
+        sp.albedo
     };
     let ks = if matches!(mat.bsdf, Bsdf::Conductor { .. }) {
-        mat.albedo
+        sp.albedo
     } else {
         [mat.specular; 3]
     };
@@ -131,16 +156,19 @@ pub fn trace(
     let norm = (sh + 8.0) / (8.0 * std::f32::consts::PI);
     let o = sc.offset(p, n);
     let shade = |wi: V3, e: V3| -> V3 {
-        let c = dot(n, wi);
-        if c <= 0.0 {
+        let c = dot(ns, wi);
+        if c <= 0.0 || dot(n, wi) <= 0.0 {
             return [0.0; 3];
         }
         let h = normalize(add(wi, wo));
-        let spec = norm * dot(n, h).max(0.0).powf(sh);
+        let spec = norm * dot(ns, h).max(0.0).powf(sh);
         let f = add(scale(kd, FRAC_1_PI), scale(ks, spec));
         scale(mul(f, e), c)
     };
-    l = add(l, scale(kd, s.ambient));
+    // Ambient: the constant term plus the environment's mean radiance (what a Lambertian
+    // surface open to the whole sky reflects, unshadowed).
+    let amb = sc.env.as_ref().map_or([0.0; 3], |e| e.mean());
+    l = add(l, mul(kd, add([s.ambient; 3], amb)));
     for light in &sc.lights {
         match light {
             Light::Point {
@@ -166,6 +194,7 @@ pub fn trace(
                     l = add(l, shade(wi, scale(v3(*color), *intensity as f32)));
                 }
             }
+            Light::Environment { .. } => {}
         }
     }
     // Area emitters: fixed quadrature over each emissive triangle.
@@ -190,7 +219,7 @@ pub fn trace(
             let wi = scale(d, 1.0 / r2.sqrt());
             let le = sc.emitted(e, scale(wi, -1.0));
             let cl = dot(ln, wi).abs();
-            if max_comp(le) <= 0.0 || dot(n, wi) <= 0.0 {
+            if max_comp(le) <= 0.0 || dot(n, wi) <= 0.0 || dot(ns, wi) <= 0.0 {
                 continue;
             }
             if !sc.bvh.occluded(o, sub(q, o), 1.0 - 1e-4) {
@@ -203,8 +232,12 @@ pub fn trace(
             // The smooth part of a conductor: a mirror bounce fading with roughness.
             let k = (1.0 - alpha.sqrt()).max(0.0);
             if k > 0.0 {
-                let li = trace(sc, pts, o, reflect(wo, n), depth + 1, s);
-                l = add(l, scale(mul(mat.albedo, li), k));
+                let mut wi = reflect(wo, ns);
+                if dot(wi, n) <= 0.0 {
+                    wi = reflect(wo, n);
+                }
+                let li = trace(sc, pts, o, wi, depth + 1, s);
+                l = add(l, scale(mul(sp.albedo, li), k));
             }
         }
     }
@@ -260,7 +293,7 @@ pub fn render_whitted(
     s: &WhittedSettings,
     progress: &(dyn Fn(f64) + Sync),
 ) -> Result<Image, String> {
-    let (sc, cam) = prepare(scene, camera)?;
+    let (sc, cam) = prepare(scene, camera, s.crease_deg)?;
     Ok(render(&sc, &cam, s, progress))
 }
 
@@ -288,6 +321,7 @@ fn declare(b: &mut NodeBuilder) {
         .default(2i64)
         .range(1.0, 16.0)
         .doc("Antialiasing: aa x aa rays per pixel.");
+    declare_crease(b);
     b.add_output::<Image>("color").doc("Linear radiance.");
 }
 
@@ -298,6 +332,7 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let light_samples: i64 = ctx.input("light_samples")?;
     let ambient: f64 = ctx.input("ambient")?;
     let aa: i64 = ctx.input("aa")?;
+    let crease_deg = crease_input(ctx)?;
     if !(1..=64).contains(&max_depth) {
         return Err(NodeError::invalid(
             "max_depth",
@@ -324,6 +359,7 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
         light_samples: light_samples as u32,
         ambient: ambient as f32,
         aa: aa as u32,
+        crease_deg,
     };
     // Per pixel: the rows and the flattened image (16 bytes each).
     reserve_image(ctx, &scene, camera.as_deref(), 32)?;

@@ -186,6 +186,17 @@ impl Distribution1D {
         self.pmf[i]
     }
 
+    /// `sample(u)` and `u` remapped to a fresh uniform number within the chosen index's
+    /// cdf interval (PBRT 3, section 13.6.7), for sampling a position inside the cell.
+    #[inline]
+    pub fn sample_remapped(&self, u: f32) -> (usize, f32) {
+        let i = self.sample(u);
+        let lo = if i == 0 { 0.0 } else { self.cdf[i - 1] };
+        let p = self.pmf[i];
+        let r = if p > 0.0 { (u - lo) / p } else { 0.5 };
+        (i, r.clamp(0.0, 1.0 - f32::EPSILON))
+    }
+
     /// An index drawn with probability `pmf(i)` from uniform `u`.
     #[inline]
     pub fn sample(&self, u: f32) -> usize {

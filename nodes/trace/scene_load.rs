@@ -4,7 +4,8 @@
 //! `two_sided_emission`), `illum` 3 or 5 makes a mirror (tinted by `Ks`, else `Kd`),
 //! `illum` 4, 6 or 7 a smooth dielectric with index `Ni` (1.5 if missing), `Ns` sets the
 //! Phong roughness (r = sqrt(2 / (Ns + 2))) and `Ks` the specular weight the Whitted
-//! tracer uses. Textures are not read. The OBJ itself is read by the mesh domain's loader
+//! tracer uses. Normals (`vn`) and UVs (`vt`) are kept for shading; MTL textures are not
+//! read (give a `material` with a `texture` instead). The OBJ itself is read by the mesh domain's loader
 //! (`load_obj_objects`), so its errors carry line numbers.
 
 use crate::nodes::mesh::obj::load_obj_objects;
@@ -67,12 +68,9 @@ pub fn load_obj_scene(path: &Path, two_sided_emission: bool) -> Result<Scene, St
             ),
             None => None,
         };
-        // The tracers shade with geometric normals and take no UVs from the file (yet).
-        let mut mesh = b.mesh;
-        mesh.uvs = None;
-        mesh.normals = None;
+        // Normals (`vn`) and UVs (`vt`) are kept: the tracers shade with them.
         scene.objects.push(SceneObject {
-            mesh: Arc::new(mesh),
+            mesh: Arc::new(b.mesh),
             material,
         });
     }

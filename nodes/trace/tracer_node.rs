@@ -30,3 +30,23 @@ pub fn trace_error(e: String) -> NodeError {
     };
     NodeError::invalid(socket, e)
 }
+
+/// Declares the `crease_angle` input both tracers take.
+pub fn declare_crease(b: &mut NodeBuilder) {
+    b.add_input::<f64>("crease_angle")
+        .default(super::render_scene::DEFAULT_CREASE_DEG)
+        .range(0.0, 180.0)
+        .doc("For meshes without normals: smooth shading across edges whose faces differ by less than this angle in degrees (0 = flat, 180 = all smooth). Normals from the file are used as they are.");
+}
+
+/// Reads and checks `crease_angle`.
+pub fn crease_input(ctx: &ExecContext) -> Result<f64, NodeError> {
+    let c: f64 = ctx.input("crease_angle")?;
+    if !(0.0..=180.0).contains(&c) {
+        return Err(NodeError::invalid(
+            "crease_angle",
+            format!("{c} must be in 0..=180 degrees"),
+        ));
+    }
+    Ok(c)
+}

@@ -269,6 +269,15 @@ pub enum Light {
         color: [f64; 3],
         intensity: f64,
     },
+    /// Light arriving from infinitely far away in every direction (the tracers' sky):
+    /// radiance `color * intensity` times the equirectangular `image` when there is one,
+    /// turned by `rotation_deg` about +y. The rasterizer ignores it.
+    Environment {
+        image: Option<Arc<super::Image>>,
+        color: [f64; 3],
+        intensity: f64,
+        rotation_deg: f64,
+    },
 }
 
 /// How a surface scatters light (used by the ray and path tracers; the rasterizer uses

@@ -35,3 +35,4 @@ mod shard;
 mod sph;
 mod sweep;
 mod trace;
+mod trace_shading;

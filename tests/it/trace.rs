@@ -9,7 +9,7 @@ use std::sync::Arc;
 use crate::common::root;
 
 /// A UV sphere; `inward` flips the winding so the normals face the centre.
-fn sphere(c: [f64; 3], r: f64, n: usize, inward: bool) -> Mesh {
+pub(crate) fn sphere(c: [f64; 3], r: f64, n: usize, inward: bool) -> Mesh {
     let mut pos = vec![[c[0], c[1] + r, c[2]], [c[0], c[1] - r, c[2]]];
     let rings = n;
     let segs = 2 * n;
@@ -98,6 +98,7 @@ fn settings(spp: u32, max_depth: u32, strategy: Strategy, filter: Filter) -> Pat
         seed: 1,
         filter,
         strategy,
+        ..Default::default()
     }
 }
 

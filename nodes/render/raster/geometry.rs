@@ -35,6 +35,14 @@ pub struct SceneGeometry {
 /// Flattens a scene's meshes to triangles (polygons fan-triangulated). Normals come from
 /// the mesh when it has them, else area-weighted vertex normals; tangents from the UVs.
 pub fn scene_geometry(scene: &Scene) -> Result<SceneGeometry, String> {
+    scene_geometry_creased(scene, 180.0)
+}
+
+/// `scene_geometry` where the computed vertex normals (meshes without normals) average only
+/// the faces around a vertex whose normals are within `crease_deg` of the corner's own face
+/// (180 smooths everything, 0 gives flat shading), so the edges of a box stay sharp while a
+/// tessellated sphere shades smooth. The tracers use it with a crease angle.
+pub fn scene_geometry_creased(scene: &Scene, crease_deg: f64) -> Result<SceneGeometry, String> {
     let mut g = SceneGeometry::default();
     let mut lo = [f64::INFINITY; 3];
     let mut hi = [f64::NEG_INFINITY; 3];
@@ -83,6 +91,7 @@ pub fn scene_geometry(scene: &Scene) -> Result<SceneGeometry, String> {
                     })
                 })
                 .collect(),
+            _ if crease_deg < 180.0 => creased_normals(p, &tris, crease_deg),
             _ => {
                 let mut vn = vec![[0.0; 3]; p.len()];
                 for t in &tris {
@@ -193,6 +202,84 @@ pub fn scene_geometry(scene: &Scene) -> Result<SceneGeometry, String> {
     }
     g.bounds = (lo, hi);
     Ok(g)
+}
+
+/// Per-corner normals averaging, area-weighted (the unnormalised cross products), the
+/// faces around the corner's vertex whose unit normals are within `crease_deg` of the
+/// corner's face (the crease-angle smoothing of modelling packages, e.g. Blender's auto
+/// smooth). Degenerate faces take +z.
+pub fn creased_normals(p: &[[f64; 3]], tris: &[[u32; 3]], crease_deg: f64) -> Vec<[[f64; 3]; 3]> {
+    let fnrm: Vec<[f64; 3]> = tris
+        .iter()
+        .map(|t| {
+            cross(
+                sub(p[t[1] as usize], p[t[0] as usize]),
+                sub(p[t[2] as usize], p[t[0] as usize]),
+            )
+        })
+        .collect();
+    let unit: Vec<[f64; 3]> = fnrm
+        .iter()
+        .map(|n| normalize(*n).unwrap_or([0.0, 0.0, 1.0]))
+        .collect();
+    // Faces around each vertex (compressed rows).
+    let mut start = vec![0usize; p.len() + 1];
+    for t in tris {
+        for &v in t {
+            start[v as usize + 1] += 1;
+        }
+    }
+    for i in 0..p.len() {
+        start[i + 1] += start[i];
+    }
+    let mut fill = start.clone();
+    let mut around = vec![0u32; start[p.len()]];
+    for (f, t) in tris.iter().enumerate() {
+        for &v in t {
+            around[fill[v as usize]] = f as u32;
+            fill[v as usize] += 1;
+        }
+    }
+    let cos_c = crease_deg.clamp(0.0, 180.0).to_radians().cos() - 1e-9;
+    (0..tris.len())
+        .into_par_iter()
+        .map(|t| {
+            std::array::from_fn(|k| {
+                let v = tris[t][k] as usize;
+                let mut n = [0.0; 3];
+                for &f in &around[start[v]..start[v + 1]] {
+                    if dot(unit[f as usize], unit[t]) >= cos_c {
+                        for c in 0..3 {
+                            n[c] += fnrm[f as usize][c];
+                        }
+                    }
+                }
+                normalize(n).unwrap_or(unit[t])
+            })
+        })
+        .collect()
+}
+
+/// The normal `n` (unit, at barycentrics `b` of a triangle with corner tangents `tan`)
+/// perturbed by a tangent-space normal-map texel `c` (components in 0..1 encoding -1..1):
+/// `q.x T + q.y B + q.z N` with T the interpolated tangent made orthogonal to `n` and
+/// `B = w N x T`. `None` when the triangle has no tangent frame. Shared by the rasterizer
+/// and the tracers.
+pub fn normal_mapped(
+    n: [f64; 3],
+    tan: &[[f64; 4]; 3],
+    b: [f64; 3],
+    c: [f32; 4],
+) -> Option<[f64; 3]> {
+    let tt: [f64; 3] =
+        std::array::from_fn(|k| b[0] * tan[0][k] + b[1] * tan[1][k] + b[2] * tan[2][k]);
+    let tt = normalize(sub(tt, scale(n, dot(n, tt))))?;
+    let w = if tan[0][3] < 0.0 { -1.0 } else { 1.0 };
+    let bb = scale(cross(n, tt), w);
+    let q = [0, 1, 2].map(|k| 2.0 * c[k] as f64 - 1.0);
+    normalize(std::array::from_fn(|k| {
+        q[0] * tt[k] + q[1] * bb[k] + q[2] * n[k]
+    }))
 }
 
 /// Appends `v` to `dst`, moving it in when `dst` is empty.

@@ -30,19 +30,23 @@ pub(super) fn prepare_lights(
                     color,
                     intensity,
                 } => normalize(*direction).map(|d| (d.map(|c| -c), color.map(|c| c * intensity))),
-                Light::Point { .. } => None,
+                Light::Point { .. } | Light::Environment { .. } => None,
             },
-            map: (lit && opts.shadows && !g.pos.is_empty()).then(|| match l {
-                Light::Directional { direction, .. } => {
-                    directional_shadow_map(&g.pos, *direction, g.bounds, res)
-                }
-                Light::Point { position, .. } => point_shadow_map(
-                    &g.pos,
-                    *position,
-                    (res / 2).max(16),
-                    (1e-5 * diag).max(1e-9),
-                ),
-            }),
+            map: (lit && opts.shadows && !g.pos.is_empty())
+                .then(|| match l {
+                    Light::Directional { direction, .. } => Some(directional_shadow_map(
+                        &g.pos, *direction, g.bounds, res,
+                    )),
+                    Light::Point { position, .. } => Some(point_shadow_map(
+                        &g.pos,
+                        *position,
+                        (res / 2).max(16),
+                        (1e-5 * diag).max(1e-9),
+                    )),
+                    // The rasterizer does not draw environment light.
+                    Light::Environment { .. } => None,
+                })
+                .flatten(),
         })
         .collect::<Vec<_>>()
 }

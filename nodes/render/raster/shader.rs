@@ -3,14 +3,14 @@
 //! pixel over, normal mapping in the tangent frame) and lights it with Blinn-Phong times the
 //! shadow-map visibility of each light.
 
-use super::geometry::SceneGeometry;
+use super::geometry::{normal_mapped, SceneGeometry};
 use super::options::RasterOptions;
 use super::rasterize::{barycentric, TriSetup};
 use super::shading;
 use super::shadow::ShadowMap;
 use super::texture::MipTexture;
 use crate::prelude::*;
-use crate::types::vec3::{cross, dot, normalize_recip as normalize, sub};
+use crate::types::vec3::{dot, normalize_recip as normalize, sub};
 
 /// A material ready for shading.
 pub(super) struct MatPrep {
@@ -108,19 +108,9 @@ impl Shader<'_> {
             ];
         }
         if let (true, Some(nm)) = (has_uv, &m.nmap) {
-            let tan = &g.tan[t];
-            let tt = interp3(b, &[0, 1, 2].map(|k| [tan[k][0], tan[k][1], tan[k][2]]));
-            let tt = sub(tt, n.map(|c| c * dot(n, tt)));
-            if let Some(tt) = normalize(tt) {
-                let w = if tan[0][3] < 0.0 { -1.0 } else { 1.0 };
-                let bb = cross(n, tt).map(|c| c * w);
-                let c = nm.trilinear(uv[0], uv[1], dx, dy, self.opts.wrap);
-                let q = [0, 1, 2].map(|k| 2.0 * c[k] as f64 - 1.0);
-                if let Some(nn) = normalize(std::array::from_fn(|k| {
-                    q[0] * tt[k] + q[1] * bb[k] + q[2] * n[k]
-                })) {
-                    n = nn;
-                }
+            let c = nm.trilinear(uv[0], uv[1], dx, dy, self.opts.wrap);
+            if let Some(nn) = normal_mapped(n, &g.tan[t], b, c) {
+                n = nn;
             }
         }
         let mut color = [0.0; 3];
@@ -146,6 +136,7 @@ impl Shader<'_> {
                             None => continue,
                         }
                     }
+                    Light::Environment { .. } => continue,
                 };
                 let f = shading::blinn_phong(n, l, v, base, m.ks, m.k);
                 if f == [0.0; 3] {

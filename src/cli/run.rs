@@ -88,6 +88,7 @@ pub(super) fn cmd(registry: &Registry, args: RunArgs) -> i32 {
     };
     let mut code = 0;
     let mut profile = Vec::new();
+    let mut collected = crate::report::Collector::default();
     for frame in f0..=f1 {
         let report = exec.run(&graph, &opts, frame);
         if !args.quiet {
@@ -106,6 +107,14 @@ pub(super) fn cmd(registry: &Registry, args: RunArgs) -> i32 {
             code = EXIT_NODE_FAILED;
         }
         profile.push(profile_json(&report));
+        collected.add(&report);
+    }
+    if !args.no_report {
+        match crate::report::write_run_report(&graph, &collected, &args.out) {
+            Ok(p) if !args.quiet => eprintln!("report: {}", p.display()),
+            Ok(_) => {}
+            Err(e) => eprintln!("warning: report not written: {e}"),
+        }
     }
     if let Some(ev) = exec.evict_disk_cache(args.cache_size) {
         if ev.removed > 0 && !args.quiet {

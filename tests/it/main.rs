@@ -6,6 +6,7 @@ mod common;
 mod support;
 
 mod anim;
+mod animation;
 mod arap;
 mod cache_semantics;
 mod cli_help;
@@ -26,6 +27,7 @@ mod param;
 mod plugins;
 mod poisson;
 mod render;
+mod report;
 mod run_semantics;
 mod runtime;
 mod schema;

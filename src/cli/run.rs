@@ -109,7 +109,8 @@ pub(super) fn cmd(registry: &Registry, args: RunArgs) -> i32 {
         profile.push(profile_json(&report));
         collected.add(&report);
     }
-    if !args.no_report {
+    // A shard's report would cover only its frames, and shards share one output folder.
+    if !args.no_report && args.shard.shard.is_none() {
         match crate::report::write_run_report(&graph, &collected, &args.out) {
             Ok(p) if !args.quiet => eprintln!("report: {}", p.display()),
             Ok(_) => {}

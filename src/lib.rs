@@ -8,7 +8,7 @@
 //! Modules depend only on earlier ones, in this order: `io`, `types`, `node`, `registry`,
 //! `plugin` (adds external nodes to a registry), `graph::format`, `f3d` (imports Framework3D
 //! trees against a registry), `graph::load` and `graph::overrides`, `validate`, `cache`,
-//! `exec`, `chart`, `shard`, `sweep`, `sweep_merge`, `cli`. The built-in nodes (`nodes`) use only `io`, `types`,
+//! `exec`, `chart`, `shard`, `sweep`, `sweep_merge`, `report`, `cli`. The built-in nodes (`nodes`) use only `io`, `types`,
 //! `node` and `registry`; `nodes::builtin_registry()` assembles them.
 
 pub mod cache;
@@ -22,6 +22,7 @@ pub mod io;
 pub mod node;
 pub mod plugin;
 pub mod registry;
+pub mod report;
 pub mod shard;
 pub mod sweep;
 pub mod sweep_merge;

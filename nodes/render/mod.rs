@@ -1,9 +1,11 @@
 //! Render nodes: the scene description shared by the rasterizer and the tracers (camera,
-//! lights, materials, scene) and the rasterizer.
+//! lights, materials, scene), the rasterizer, and mesh previews and their animations
+//! (`mesh_preview`, `mesh_sequence`).
 
 crate::node_domain! {
     category: "render",
-    nodes: [camera, light, material, mesh_uv_project, raster, scene],
+    nodes: [camera, light, material, mesh_sequence, mesh_uv_project, raster, scene],
+    modules: [mesh_preview],
 }
 
 /// Runs the render node `name` standalone on `inputs` and returns its outputs (for the

@@ -357,6 +357,9 @@ struct RunArgs {
     /// Also print each node's status and time, and nodes' debug lines.
     #[arg(long, short)]
     verbose: bool,
+    /// Do not write OUT/report.html (the run's graph, statuses, timings and written files).
+    #[arg(long = "no-report")]
+    no_report: bool,
     /// Most memory one node's buffers may take, e.g. 4G or 512MiB (default: CGNODES_MAX_MEMORY,
     /// else half the physical memory).
     #[arg(long = "max-memory", value_name = "SIZE", value_parser = crate::node::parse_size)]

@@ -65,6 +65,7 @@ pub(super) fn cmd(registry: &Registry, args: RunArgs) -> i32 {
     let mut code = 0;
     let mut profile = Vec::new();
     monitor.start_frames(f0, f1);
+    let mut collected = crate::report::Collector::default();
     for frame in f0..=f1 {
         if f1 > f0 {
             monitor.set_prefix(format!("[frame {frame}] "));
@@ -89,6 +90,15 @@ pub(super) fn cmd(registry: &Registry, args: RunArgs) -> i32 {
             code = EXIT_NODE_FAILED;
         }
         profile.push(profile_json(&report));
+        collected.add(&report);
+    }
+    // A shard's report would cover only its frames, and shards share one output folder.
+    if !args.no_report && args.shard.shard.is_none() {
+        match crate::report::write_run_report(&graph, &collected, &args.out) {
+            Ok(p) if !args.quiet => eprintln!("report: {}", p.display()),
+            Ok(_) => {}
+            Err(e) => eprintln!("warning: report not written: {e}"),
+        }
     }
     if let Some(ev) = exec.evict_disk_cache(args.cache_size) {
         if ev.removed > 0 && !args.quiet {

@@ -91,11 +91,38 @@ pub(super) fn cmd(registry: &Registry, a: SweepArgs) -> i32 {
             if spec.csv.is_none() {
                 print!("{}", to_csv(&spec, &rows));
             }
+            if !sharded {
+                sweep_report(&spec, &base, &a.target);
+            }
             0
         }
         Err(e) => {
             eprintln!("error: {e}");
             EXIT_INVALID
         }
+    }
+}
+
+/// Writes `report.html` for a sweep beside its CSV (or in its `out` folder): the chart and
+/// the CSV. Nothing when the sweep writes neither.
+fn sweep_report(spec: &SweepSpec, base: &Path, target: &Path) {
+    let files: Vec<PathBuf> = [&spec.plot, &spec.csv]
+        .into_iter()
+        .flatten()
+        .map(|p| base.join(p))
+        .collect();
+    let dir = match (&spec.out, files.last()) {
+        (Some(o), _) => base.join(o),
+        (None, Some(f)) => f.parent().map(Path::to_path_buf).unwrap_or_default(),
+        (None, None) => return,
+    };
+    let dir = if dir.as_os_str().is_empty() {
+        PathBuf::from(".")
+    } else {
+        dir
+    };
+    match crate::report::write_sweep_report(&target.display().to_string(), &files, &dir) {
+        Ok(p) => eprintln!("report: {}", p.display()),
+        Err(e) => eprintln!("warning: report not written: {e}"),
     }
 }

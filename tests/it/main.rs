@@ -6,6 +6,7 @@ mod common;
 mod support;
 
 mod anim;
+mod animation;
 mod arap;
 mod cache_semantics;
 mod cli_help;
@@ -28,6 +29,7 @@ mod poisson;
 mod progress;
 mod provenance;
 mod render;
+mod report;
 mod run_semantics;
 mod runtime;
 mod schema;

@@ -242,7 +242,16 @@ fn frame_shards_write_exactly_the_unsharded_outputs() {
     let g = g.to_str().unwrap();
     ok(&cgnodes(
         d.path(),
-        &["run", g, "--frames", "0..9", "--out", "whole", "-q"],
+        &[
+            "run",
+            g,
+            "--frames",
+            "0..9",
+            "--out",
+            "whole",
+            "-q",
+            "--no-report",
+        ],
     ));
     let want = files(&d.path().join("whole"));
     // Ten JSON tables, each with its provenance sidecar (the same in every shard).

@@ -18,7 +18,7 @@ pub const BUILTIN: &str = r#"{
   "geom_min_surf": {"type": "minimal_surface",
     "inputs": {"Input": "mesh", "Weight": "weights"}, "outputs": {"Output": "mesh"}},
   "geom_arap": {"type": "arap",
-    "inputs": {"Input": "mesh", "Initialization": "init"},
+    "inputs": {"Input": "mesh", "Initialization": "init", "InitialTexCoords": "init_uv"},
     "outputs": {"OutputUV": "mesh>mesh_decompose.mesh:texcoords", "Output": "flat", "Runtime": null}},
   "geom_mesh_decompose": {"type": "mesh_decompose",
     "inputs": {"Mesh": "mesh"},

@@ -224,3 +224,63 @@ fn hw9_render_and_composition_graphs_import_with_warnings() {
         vec!["the graph is empty (no nodes saved)".to_string()]
     );
 }
+
+/// The course's hw8 pattern: every widget of Mass Spring reaches the cgnodes node, compared
+/// with the values in the file (switches as booleans, the integrator switch as its name);
+/// `func_create_float3f` is one vec3 linked into `sphere_center`.
+#[test]
+fn hw8_mass_spring_widgets_carry_over() {
+    let reg = builtin_registry();
+    let mut tree = read("tests/data/f3d/hw8_mass_spring.json");
+    let widget = |tree: &Value, ident: &str| -> Value {
+        tree["sockets_info"]
+            .as_object()
+            .unwrap()
+            .values()
+            .find(|s| s["identifier"] == json!(ident) && s.get("value").is_some())
+            .map(|s| s["value"].clone())
+            .unwrap()
+    };
+    let g = import(&tree, &Aliases::default(), &reg).unwrap();
+    let p = &g.nodes["mass_spring_20"].params;
+    for (f3d, ours) in [
+        ("stiffness", "stiffness"),
+        ("h", "h"),
+        ("damping", "damping"),
+        ("gravity", "gravity"),
+        ("collision penalty_k", "penalty_k"),
+        ("collision scale factor", "collision_scale"),
+        ("sphere radius", "sphere_radius"),
+    ] {
+        assert_eq!(p[ours], widget(&tree, f3d), "{f3d}");
+    }
+    for (f3d, ours) in [
+        ("enable time profiling", "profile"),
+        ("enable damping", "damped"),
+        ("enable debug output", "debug"),
+        ("enable sphere collision", "sphere"),
+    ] {
+        assert_eq!(p[ours], json!(widget(&tree, f3d) != json!(0)), "{f3d}");
+    }
+    assert_eq!(p["integrator"], json!("semi_implicit"));
+    assert_eq!(
+        g.nodes["mass_spring_20"].inputs["sphere_center"].links()[0].to_string(),
+        "create_float3f_10.value"
+    );
+    assert_eq!(
+        g.nodes["create_float3f_10"].params["value"],
+        json!([0.0, 0.25, -1.5])
+    );
+    assert_eq!(g.nodes["create_float3f_10"].node_type, "value_vec3");
+    // Liu13 switched on selects the projective integrator.
+    for s in tree["sockets_info"].as_object_mut().unwrap().values_mut() {
+        if s["identifier"] == json!("enable Liu13") {
+            s["value"] = json!(1);
+        }
+    }
+    let g = import(&tree, &Aliases::default(), &reg).unwrap();
+    assert_eq!(
+        g.nodes["mass_spring_20"].params["integrator"],
+        json!("projective")
+    );
+}

@@ -18,6 +18,9 @@ pub(super) fn cmd(registry: &Registry, input: &Path, output: &Path, aliases: Opt
         let al = aliases.map(read_aliases).transpose()?.unwrap_or_default();
         let (g, missing) =
             import_lenient(&raw, &al, registry).map_err(|e| format!("{}: {e}", input.display()))?;
+        for w in crate::f3d::warnings(&g) {
+            eprintln!("warning: {}: {w}", input.display());
+        }
         if !missing.is_empty() {
             eprintln!(
                 "warning: {}: the graph was converted, but it will not run until these exist: {}",
@@ -31,6 +34,25 @@ pub(super) fn cmd(registry: &Registry, input: &Path, output: &Path, aliases: Opt
     })();
     match result {
         Ok(()) => 0,
+        Err(e) => {
+            eprintln!("error: {e}");
+            EXIT_INVALID
+        }
+    }
+}
+
+/// `cgnodes import-f3d --list-map [--markdown] [--f3d-aliases FILE]`: prints every node map.
+pub(super) fn list_map(aliases: Option<&Path>, markdown: bool) -> i32 {
+    let result = (|| -> Result<String, String> {
+        let al = aliases.map(read_aliases).transpose()?.unwrap_or_default();
+        let maps = crate::f3d::node_maps(&al).map_err(|e| e.to_string())?;
+        Ok(crate::f3d::table::map_table(&maps, markdown))
+    })();
+    match result {
+        Ok(t) => {
+            print!("{t}");
+            0
+        }
         Err(e) => {
             eprintln!("error: {e}");
             EXIT_INVALID

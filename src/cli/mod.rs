@@ -122,13 +122,20 @@ enum Cmd {
     #[command(after_help = "Example: cgnodes import-f3d GeoNodeSystem.json -o graph.json")]
     ImportF3d {
         /// Framework3D JSON file.
-        input: PathBuf,
+        #[arg(required_unless_present = "list_map")]
+        input: Option<PathBuf>,
         /// Output graph file.
-        #[arg(short = 'o', long = "output")]
-        output: PathBuf,
+        #[arg(short = 'o', long = "output", required_unless_present = "list_map")]
+        output: Option<PathBuf>,
         /// JSON file mapping custom Framework3D node names onto cgnodes nodes.
         #[arg(long = "f3d-aliases")]
         aliases: Option<PathBuf>,
+        /// Print every node map (built-in, then alias overrides) instead of importing.
+        #[arg(long = "list-map", conflicts_with_all = ["input", "output"])]
+        list_map: bool,
+        /// With --list-map: a Markdown table (as in docs/framework3d.md).
+        #[arg(long, requires = "list_map")]
+        markdown: bool,
     },
     /// Print what made a file cgnodes wrote: version, graph hash, node, parameters, frame.
     #[command(after_help = "Example: cgnodes provenance out/arap_cow/layout.png --json")]
@@ -401,7 +408,14 @@ pub fn main_with(registry: Registry) -> i32 {
             input,
             output,
             aliases,
-        } => import_f3d::cmd(&registry, &input, &output, aliases.as_deref()),
+            list_map,
+            markdown,
+        } => match (input, output) {
+            (Some(i), Some(o)) if !list_map => {
+                import_f3d::cmd(&registry, &i, &o, aliases.as_deref())
+            }
+            _ => import_f3d::list_map(aliases.as_deref(), markdown),
+        },
         Cmd::Provenance { file, json } => provenance::cmd(&file, json),
         Cmd::Completions { shell } => {
             use clap::CommandFactory;

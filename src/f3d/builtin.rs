@@ -1,5 +1,8 @@
 //! The built-in node maps (JSON, the shape of `--f3d-aliases` files), one per Framework3D
-//! `id_name` of the 2024 homework graphs.
+//! `id_name` registered by Framework3D 2024 (`Framework3D/source/nodes/nodes/` of
+//! USTC-CG/USTC_CG_24: geometry, functions, composition and render folders), plus two
+//! conveniences (`func_create_float2f`, `func_value_string`) older course graphs use.
+//! `docs/framework3d.md` carries the table `cgnodes import-f3d --list-map --markdown` prints.
 
 /// The built-in maps for the 2024 homework nodes.
 pub const BUILTIN: &str = r#"{
@@ -15,7 +18,7 @@ pub const BUILTIN: &str = r#"{
   "geom_min_surf": {"type": "minimal_surface",
     "inputs": {"Input": "mesh", "Weight": "weights"}, "outputs": {"Output": "mesh"}},
   "geom_arap": {"type": "arap",
-    "inputs": {"Input": "mesh", "Initialization": "init"},
+    "inputs": {"Input": "mesh", "Initialization": "init", "InitialTexCoords": "init_uv"},
     "outputs": {"OutputUV": "mesh>mesh_decompose.mesh:texcoords", "Output": "flat", "Runtime": null}},
   "geom_mesh_decompose": {"type": "mesh_decompose",
     "inputs": {"Mesh": "mesh"},
@@ -102,5 +105,42 @@ pub const BUILTIN: &str = r#"{
   "geom_time_code": {"type": "frame", "outputs": {"time": "time", "Time": "time"}},
   "geom_storage_in": {"note": "the frame executor keeps state between frames"},
   "geom_storage_out": {"note": "the frame executor keeps state between frames"},
-  "geom_time_gain": {"note": "frames are numbered by the executor (--frames)"}
+  "geom_time_gain": {"note": "frames are numbered by the executor (--frames)"},
+  "geom_curvature": {"type": "gaussian_curvature", "inputs": {"Input": "mesh"}, "outputs": {"Output": "curvature"}},
+  "geom_func_color_map": {"type": "signed_color_map", "inputs": {"Vals": "values"}, "outputs": {"Colors": "colors"}},
+  "geom_random_uv_points": {"type": "random_uv_points", "inputs": {"Count": "count", "Seed": "seed", "Width": "width"}, "outputs": {"Points": "points"}, "note": "same distribution, other generator: the points differ from std::default_random_engine's"},
+  "geom_create_grid": {"type": "create_grid", "inputs": {"resolution": "resolution", "size": "size"}, "outputs": {"Geometry": "mesh"}},
+  "geom_create_circle": {"unsupported": "Framework3D 2024 declares no output for it (its body fills a curve with the grid code), so nothing can use it"},
+  "geom_print_debug_info": {"type": "mesh_info", "inputs": {"Geometry": "mesh"}, "note": "Framework3D dumps its global USD stage to current_stage.usda; cgnodes tabulates the linked mesh instead"},
+  "geom_Triangulate": {"type": "mesh_triangulate", "inputs": {"G-IN": "mesh"}, "outputs": {"G-out": "mesh"}, "note": "the node's body is empty in Framework3D 2024; cgnodes triangulates"},
+  "geom_single_spring": {"unsupported": "a one-spring teaching stub whose state the framework passes through storage nodes; cgnodes has no scalar spring node (mass_spring simulates meshes)"},
+  "geom_sample_particle_in_a_box": {"unsupported": "no cgnodes node samples particles on their own (sph_fluid fills its particle box itself)"},
+  "geom_sample_particle_around_box": {"unsupported": "no cgnodes node samples boundary particles on their own (sph_fluid builds its boundary itself)"},
+  "geom_visualize_neighbor_search": {"unsupported": "a debug view colouring one particle's neighbours in the editor"},
+  "comp_read_usd": {"type": "mesh_load", "inputs": {"File Name": "path"}, "outputs": {"Layer": "mesh"}, "note": "the layer becomes the mesh it holds"},
+  "comp_merge_to_global": {"note": "stage assembly (references the layer under /Reference/<Path>); a graph has no global stage, so the node is removed"},
+  "comp_add_point_light": {"type": "light_point", "params": {"intensity": 1.0}, "inputs": {"X": "position[0]", "Y": "position[1]", "Z": "position[2]", "R": "color[0]", "G": "color[1]", "B": "color[2]", "radius": null, "Path": null}, "note": "a UsdLux sphere light (intensity 1, the USD default); cgnodes lights are points, so radius is dropped"},
+  "comp_add_distant_light": {"unsupported": "its direction is a USD xform of Rotate X/Y/Z; no runner converts composition graphs yet"},
+  "comp_add_dome_light": {"unsupported": "an environment light from an image file; cgnodes' rasterizer has no environment lighting yet"},
+  "comp_add_rect_light": {"unsupported": "an area light; cgnodes' rasterizer has point and directional lights only"},
+  "render_shadertoy": {"unsupported": "runs the user's GLSL shader; cgnodes graphs never run shader code"},
+  "render_present": {"unsupported": "shows a texture in the editor's viewport (a GUI view)"},
+  "render_scene_camera": {"unsupported": "a render pass over Framework3D's GPU resources; cgnodes renders a scene in one render_raster node, and no runner translates render graphs yet"},
+  "render_scene_meshes": {"unsupported": "a render pass over Framework3D's GPU resources; cgnodes renders a scene in one render_raster node, and no runner translates render graphs yet"},
+  "render_scene_materials": {"unsupported": "a render pass over Framework3D's GPU resources; cgnodes renders a scene in one render_raster node, and no runner translates render graphs yet"},
+  "render_scene_lights": {"unsupported": "a render pass over Framework3D's GPU resources; cgnodes renders a scene in one render_raster node, and no runner translates render graphs yet"},
+  "render_rasterize_impl": {"unsupported": "a render pass over Framework3D's GPU resources; cgnodes renders a scene in one render_raster node, and no runner translates render graphs yet"},
+  "render_deferred_lighting": {"unsupported": "a render pass over Framework3D's GPU resources; cgnodes renders a scene in one render_raster node, and no runner translates render graphs yet"},
+  "render_shadow_mapping": {"unsupported": "a render pass over Framework3D's GPU resources; cgnodes renders a scene in one render_raster node, and no runner translates render graphs yet"},
+  "render_ssao": {"unsupported": "a render pass over Framework3D's GPU resources; cgnodes renders a scene in one render_raster node, and no runner translates render graphs yet"},
+  "render_environment_pass": {"unsupported": "a render pass over Framework3D's GPU resources; cgnodes renders a scene in one render_raster node, and no runner translates render graphs yet"},
+  "render_transparent_refraction": {"unsupported": "a render pass over Framework3D's GPU resources; cgnodes renders a scene in one render_raster node, and no runner translates render graphs yet"},
+  "func_create_buffer1f": {"unsupported": "no cgnodes node repeats one value into a buffer of Size entries yet"},
+  "func_create_buffer1i": {"unsupported": "no cgnodes node repeats one value into a buffer of Size entries yet"},
+  "func_create_buffer2f": {"unsupported": "no cgnodes node repeats one value into a buffer of Size entries yet"},
+  "func_create_buffer2i": {"unsupported": "no cgnodes node repeats one value into a buffer of Size entries yet"},
+  "func_create_buffer3f": {"unsupported": "no cgnodes node repeats one value into a buffer of Size entries yet"},
+  "func_create_buffer3i": {"unsupported": "no cgnodes node repeats one value into a buffer of Size entries yet"},
+  "func_create_buffer4f": {"unsupported": "no cgnodes node repeats one value into a buffer of Size entries yet"},
+  "func_create_buffer4i": {"unsupported": "no cgnodes node repeats one value into a buffer of Size entries yet"}
 }"#;

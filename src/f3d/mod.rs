@@ -11,13 +11,15 @@
 use crate::graph::format::{GraphFile, LinkSpec, NodeSpec, FORMAT, VERSION};
 use crate::node::NodeDecl;
 use crate::registry::Registry;
-use crate::types::SocketType;
 use serde::Deserialize;
 use std::collections::BTreeMap;
 
 mod builtin;
 mod names;
+pub mod table;
+mod util;
 use names::{write_usd_path, write_usd_paths};
+use util::{component, f3d_id, feed, helper, literal, short_name, sockets_in_order, value_key};
 
 /// User aliases mapping Framework3D `id_name`s onto cgnodes nodes (`--f3d-aliases FILE`):
 /// `{"<id_name>": <NodeMap>, ...}`; keys starting with `_` (comments) are ignored.
@@ -62,45 +64,28 @@ pub struct NodeMap {
     /// Why the map is as it is (kept in the node's meta).
     #[serde(default)]
     pub note: Option<String>,
+    /// Why the node cannot run in a batch (a GUI view, user shader code, ...): the node is
+    /// left out with a warning naming it, and inputs it fed keep their defaults.
+    #[serde(default)]
+    pub unsupported: Option<String>,
+}
+
+/// The warnings an import left in the graph's meta (`f3d_warnings`): nodes left out as
+/// unsupported in a batch run and the inputs they fed.
+pub fn warnings(g: &GraphFile) -> Vec<String> {
+    g.meta
+        .as_ref()
+        .and_then(|m| m.get("f3d_warnings"))
+        .and_then(|w| w.as_array())
+        .map(|a| {
+            a.iter()
+                .filter_map(|s| s.as_str().map(String::from))
+                .collect()
+        })
+        .unwrap_or_default()
 }
 
 pub use builtin::BUILTIN;
-
-/// Splits a feed spec `type:out`.
-fn feed(spec: &str) -> Result<(&str, &str), ImportError> {
-    spec.split_once(':')
-        .ok_or_else(|| ImportError(format!("feed '{spec}' should read 'type:output'")))
-}
-
-/// A widget value as the text `NodeMap::values` keys it by: integers without a fraction
-/// (`1.0` -> `1`), other numbers as Rust prints them, strings as they are.
-fn value_key(v: &serde_json::Value) -> String {
-    match v {
-        serde_json::Value::Number(n) => match n.as_f64() {
-            Some(x) if x.fract() == 0.0 && x.abs() < 1e15 => format!("{}", x as i64),
-            Some(x) => format!("{x}"),
-            None => n.to_string(),
-        },
-        serde_json::Value::Bool(b) => (if *b { "1" } else { "0" }).to_string(),
-        serde_json::Value::String(t) => t.clone(),
-        other => other.to_string(),
-    }
-}
-
-/// A target `socket[k]`: component `k` of a vector socket, as (`socket`, `k`).
-fn component(target: &str) -> Option<(&str, usize)> {
-    let (base, rest) = target.split_once('[')?;
-    let k = rest.strip_suffix(']')?.parse().ok()?;
-    Some((base, k))
-}
-
-/// Splits a helper spec `type.in:out`.
-fn helper(spec: &str) -> Result<(&str, &str, &str), ImportError> {
-    let bad = || ImportError(format!("helper '{spec}' should read 'type.input:output'"));
-    let (t, rest) = spec.split_once('.').ok_or_else(bad)?;
-    let (i, o) = rest.split_once(':').ok_or_else(bad)?;
-    Ok((t, i, o))
-}
 
 /// Why a Framework3D graph could not be imported.
 #[derive(Debug, thiserror::Error)]
@@ -141,39 +126,6 @@ struct F3dNode {
     outputs: Vec<i64>,
 }
 
-fn sockets_in_order(v: Option<&serde_json::Value>) -> Vec<i64> {
-    let mut s: Vec<(i64, i64)> = v
-        .and_then(|v| v.as_object())
-        .map(|o| {
-            o.iter()
-                .filter_map(|(k, id)| Some((k.parse().ok()?, id.as_i64()?)))
-                .collect()
-        })
-        .unwrap_or_default();
-    // keys "0","1",...,"10" are sorted as strings in the file: order by number
-    s.sort();
-    s.into_iter().map(|(_, id)| id).collect()
-}
-
-fn short_name(id_name: &str) -> &str {
-    id_name
-        .strip_prefix("geom_")
-        .or_else(|| id_name.strip_prefix("func_"))
-        .unwrap_or(id_name)
-}
-
-/// A literal for socket `decl` from a Framework3D widget value.
-fn literal(v: &serde_json::Value, ty: Option<&SocketType>) -> Option<serde_json::Value> {
-    use serde_json::json;
-    Some(match (ty, v) {
-        (Some(SocketType::Bool), serde_json::Value::Number(n)) => json!(n.as_f64()? != 0.0),
-        (Some(SocketType::Int), serde_json::Value::Number(n)) => json!(n.as_f64()?.round() as i64),
-        (Some(SocketType::Float), serde_json::Value::Number(n)) => json!(n.as_f64()?),
-        (Some(SocketType::String), serde_json::Value::Number(n)) => json!(n.to_string()),
-        _ => v.clone(),
-    })
-}
-
 fn missing_message(missing: &[String]) -> String {
     format!(
         "cgnodes nodes missing from this build: {}",
@@ -203,14 +155,6 @@ pub fn import_lenient(
     convert(raw, aliases, registry, false)
 }
 
-/// The `ID` of a Framework3D socket or node, else its key in the file.
-fn f3d_id(key: &str, v: &serde_json::Value, what: &str) -> Result<i64, ImportError> {
-    v.get("ID")
-        .and_then(|v| v.as_i64())
-        .or_else(|| key.parse().ok())
-        .ok_or_else(|| ImportError(format!("{what} '{key}' has no ID")))
-}
-
 fn convert(
     raw: &serde_json::Value,
     aliases: &Aliases,
@@ -218,10 +162,13 @@ fn convert(
     strict: bool,
 ) -> Result<(GraphFile, Vec<String>), ImportError> {
     let maps = node_maps(aliases)?;
-    let obj = |k: &str| {
-        raw.get(k)
+    // Framework3D saves `null` for an empty part (no links, no nodes).
+    let empty = serde_json::Map::new();
+    let obj = |k: &str| match raw.get(k) {
+        Some(serde_json::Value::Null) => Ok(&empty),
+        v => v
             .and_then(|v| v.as_object())
-            .ok_or_else(|| ImportError(format!("'{k}' is not an object")))
+            .ok_or_else(|| ImportError(format!("'{k}' is not an object"))),
     };
     let mut sockets: BTreeMap<i64, F3dSocket> = BTreeMap::new();
     for (k, s) in obj("sockets_info")? {
@@ -262,6 +209,14 @@ fn convert(
             unknown.join(", ")
         )));
     }
+    let mut warnings: Vec<String> = Vec::new();
+    if nodes.is_empty() {
+        warnings.push("the graph is empty (no nodes saved)".into());
+    }
+    warnings.extend(nodes.iter().filter_map(|n| {
+        let why = maps[&n.id_name].unsupported.as_ref()?;
+        Some(format!("{} (node {}) is not run: {why}", n.id_name, n.id))
+    }));
     // Missing cgnodes nodes, all at once.
     let mut missing = Vec::new();
     for n in &nodes {
@@ -472,6 +427,13 @@ fn convert(
             Some(Some(t)) => t.clone(),
             None => return Err(sock_err(tnode, "linked input", tsock)),
         };
+        if fmap.unsupported.is_some() {
+            warnings.push(format!(
+                "{} (node {}) input '{tsock}' keeps its default: it was fed by {} (node {}), which is not run",
+                tnode.id_name, tnode.id, fnode.id_name, fnode.id
+            ));
+            continue;
+        }
         if fmap.node_type.is_none() {
             return Err(ImportError(format!(
                 "{} (node {}) input '{tsock}' is fed by {} (node {}), which cgnodes replaces by its frame executor; connect it to the node's own output instead",
@@ -570,9 +532,14 @@ fn convert(
         version: VERSION,
         nodes: out_nodes,
         outputs: None,
-        meta: Some(serde_json::json!({
-            "imported_from": "Framework3D (USTC CG 2024) saved node tree"
-        })),
+        meta: Some(if warnings.is_empty() {
+            serde_json::json!({"imported_from": "Framework3D (USTC CG 2024) saved node tree"})
+        } else {
+            serde_json::json!({
+                "imported_from": "Framework3D (USTC CG 2024) saved node tree",
+                "f3d_warnings": warnings,
+            })
+        }),
     };
     Ok((graph, missing))
 }

@@ -109,6 +109,9 @@ fn parse_any(
             ));
         };
         let spec = f3d::import(&raw, aliases, registry).map_err(|e| ferr(e.to_string()))?;
+        for w in f3d::warnings(&spec) {
+            eprintln!("warning: {}: {w}", file.display());
+        }
         return Ok(Graph {
             file: file.to_path_buf(),
             dir: dir.to_path_buf(),

@@ -289,3 +289,49 @@ fn fold_free_runs_are_bit_identical_on_a_many_chunk_mesh() {
     assert_eq!(runs[0], runs[1]);
     assert_eq!(runs[0], runs[2]);
 }
+
+/// `init_uv` (a UV list, one per vertex, as a Framework3D Float2Buffer) starts ARAP exactly
+/// where an `init` mesh carrying the same UVs does; both at once, or a wrong length, is an
+/// error naming `init_uv`.
+#[test]
+fn init_uv_list_starts_like_an_init_mesh() {
+    use cgnodes::node::FileEnv;
+    use cgnodes::types::{Attribute, Domain, Value};
+    let mut m =
+        cgnodes::nodes::mesh::mesh_grid::grid_mesh(4, 4, [2.0, 2.0], "xy", [0.0; 3], true).unwrap();
+    for p in &mut m.positions {
+        p[2] = 0.3 * (p[0] * p[1]).sin(); // not flat: the start matters
+    }
+    let mesh = Arc::new(m);
+    let uv = tutte_parameterize(&mesh, TutteWeights::Uniform, BoundaryShape::Square, true).unwrap();
+    let mut init = (*mesh).clone();
+    init.uvs = Some(Attribute {
+        domain: Domain::Vertex,
+        values: uv.clone(),
+    });
+    let list =
+        |uv: &[[f64; 2]]| Value::List(Arc::new(uv.iter().map(|&x| Value::from(x)).collect()));
+    let run = |ins: Vec<(&str, Value)>| {
+        let mut all = vec![
+            ("mesh", Value::from(mesh.clone())),
+            ("iterations", Value::from(3i64)),
+        ];
+        all.extend(ins);
+        crate::common::run_node("arap", all, &FileEnv::default())
+    };
+    let flat = |o: &crate::common::NodeOutputs| match &o.0["flat"] {
+        Value::Mesh(m) => m.positions.clone(),
+        _ => panic!("no flat output"),
+    };
+    let a = run(vec![("init", Value::from(init.clone()))]).unwrap();
+    let b = run(vec![("init_uv", list(&uv))]).unwrap();
+    assert_eq!(flat(&a), flat(&b));
+    assert!(b.1.iter().any(|l| l.contains("init_uv")), "{:?}", b.1);
+    let e = run(vec![("init", Value::from(init)), ("init_uv", list(&uv))]).unwrap_err();
+    assert!(e.contains("init_uv"), "{e}");
+    let e = run(vec![("init_uv", list(&uv[1..]))]).unwrap_err();
+    assert!(
+        e.contains("init_uv") && e.contains("24 UVs for 25 vertices"),
+        "{e}"
+    );
+}

@@ -13,6 +13,7 @@ mod cli_help;
 mod course_graphs;
 mod curve;
 mod f3d;
+mod f3d_map;
 mod graphs;
 mod hostile;
 mod image_lowrank;

@@ -6,7 +6,7 @@
 use super::error::ArapError;
 use super::local_global::arap_parameterize_progress;
 use super::options::ArapOptions;
-use super::{init_uvs, uv_outputs};
+use super::{init_uv_list, init_uvs, uv_outputs};
 use crate::prelude::*;
 
 impl From<ArapError> for NodeError {
@@ -35,6 +35,9 @@ fn declare_common(b: &mut NodeBuilder) {
         .doc("Mesh to flatten (triangulated if needed).");
     b.add_input::<Mesh>("init").optional().doc(
         "Mesh carrying the initial UVs (per vertex). Default: Tutte on a circle with mean-value weights, holes filled.",
+    );
+    b.add_input::<Vec<[f64; 2]>>("init_uv").optional().doc(
+        "Or the initial UVs as a list, one per vertex (a Framework3D Float2Buffer such as a student's InitialTexCoords); not together with init.",
     );
     b.add_input::<i64>("iterations")
         .default(100i64)
@@ -89,7 +92,17 @@ fn execute_with(ctx: &mut ExecContext, lambda: Option<f64>) -> Result<(), NodeEr
     let triangles = tri_mesh
         .triangles()
         .ok_or_else(|| NodeError::invalid("mesh", "could not triangulate the mesh"))?;
-    let (uv0, init_note) = init_uvs(&tri_mesh, init.as_deref())?;
+    let init_uv: Option<Vec<[f64; 2]>> = ctx.input_opt("init_uv")?;
+    let (uv0, init_note) = match init_uv {
+        Some(_) if init.is_some() => {
+            return Err(NodeError::invalid(
+                "init_uv",
+                "link either init (a mesh with UVs) or init_uv (a UV list), not both",
+            ))
+        }
+        Some(uv) => init_uv_list(tri_mesh.num_vertices(), uv)?,
+        None => init_uvs(&tri_mesh, init.as_deref())?,
+    };
     ctx.log(init_note);
     let opts = ArapOptions {
         iterations: iterations.max(0) as usize,

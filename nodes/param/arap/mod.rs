@@ -134,6 +134,24 @@ pub fn init_uvs(mesh: &Mesh, init: Option<&Mesh>) -> Result<(Vec<[f64; 2]>, Stri
     }
 }
 
+/// Initial UVs given as a list (the `init_uv` socket): one finite UV per vertex of a mesh
+/// with `n` vertices.
+pub fn init_uv_list(
+    n: usize,
+    uv: Vec<[f64; 2]>,
+) -> Result<(Vec<[f64; 2]>, String), NodeError> {
+    if uv.len() != n {
+        return Err(NodeError::invalid(
+            "init_uv",
+            format!("{} UVs for {n} vertices (one per vertex)", uv.len()),
+        ));
+    }
+    if uv.iter().flatten().any(|x| !x.is_finite()) {
+        return Err(NodeError::invalid("init_uv", "UVs must be finite"));
+    }
+    Ok((uv, "initial UVs from the init_uv list".into()))
+}
+
 fn default_init(mesh: &Mesh) -> Result<(Vec<[f64; 2]>, String), NodeError> {
     let uv = tutte_parameterize(mesh, TutteWeights::MeanValue, BoundaryShape::Circle, true)?;
     let holes = mesh.topology().boundary_loops.len().saturating_sub(1);

@@ -139,6 +139,7 @@ fn geometry_family_runs_and_warns_for_the_debug_view() {
         file: dir.path().join("g.json"),
         dir: dir.path().to_path_buf(),
         spec: g,
+        hash: String::new(),
     };
     let valid = cgnodes::validate::validate(&gfile, &reg).unwrap_or_else(|e| panic!("{e:?}"));
     let out = dir.path().join("out");

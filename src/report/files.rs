@@ -219,7 +219,8 @@ impl FileRenderer {
             let tag = if i == 0 { "th" } else { "td" };
             s.push_str("<tr>");
             for c in r {
-                s.push_str(&format!("<{tag}>{}</{tag}>", esc(c)));
+                let c = if i == 0 { c.clone() } else { short_number(c) };
+                s.push_str(&format!("<{tag}>{}</{tag}>", esc(&c)));
             }
             s.push_str("</tr>\n");
         }
@@ -334,4 +335,43 @@ fn sample(paths: &[PathBuf]) -> Vec<&PathBuf> {
     (0..MAX_ANIM_FRAMES)
         .map(|i| &paths[i * (n - 1) / (MAX_ANIM_FRAMES - 1)])
         .collect()
+}
+
+/// A table cell for reading: a number with more than 7 significant digits shown with 7 (the
+/// file keeps them all); anything else as it is.
+fn short_number(cell: &str) -> String {
+    let digits = cell.chars().filter(char::is_ascii_digit).count();
+    match cell.trim().parse::<f64>() {
+        Ok(x) if x.is_finite() && digits > 7 && x != 0.0 => {
+            let mag = x.abs().log10().floor() as i32;
+            if (-4..7).contains(&mag) {
+                let decimals = (6 - mag).max(0) as usize;
+                let t = format!("{x:.decimals$}");
+                if t.contains('.') {
+                    t.trim_end_matches('0').trim_end_matches('.').to_string()
+                } else {
+                    t
+                }
+            } else {
+                format!("{x:.6e}")
+            }
+        }
+        _ => cell.to_string(),
+    }
+}
+
+#[cfg(test)]
+mod short_number_tests {
+    use super::short_number;
+
+    #[test]
+    fn long_numbers_keep_seven_significant_digits() {
+        assert_eq!(short_number("0.20325000000000001"), "0.20325");
+        assert_eq!(short_number("-1.8835174242825963"), "-1.883517");
+        assert_eq!(short_number("0.014443706174223275"), "0.01444371");
+        assert_eq!(short_number("1234.5678912"), "1234.568");
+        assert_eq!(short_number("1.2345678912e-9"), "1.234568e-9");
+        assert_eq!(short_number("801"), "801");
+        assert_eq!(short_number("ok"), "ok");
+    }
 }

@@ -168,7 +168,8 @@ sbatch --parsable --wait --dependency=afterok:"${FARRAY%%;*}" --kill-on-invalid-
     --export=ALL --output="$TMP/job-frames-done.out" "$ROOT/examples/slurm/frames_done.sbatch" \
     >/dev/null || fail "the frames check job failed"
 "$BIN" run "$GRAPH" --frames "$FRAMES" --out "$TMP/frames_whole" -q --no-report || fail "the unsharded frame run"
-[ "$(ls "$TMP/frames_whole" | wc -l)" = 10 ] || fail "the unsharded run wrote $(ls "$TMP/frames_whole" | wc -l) files, expected 10"
+# One CSV per frame, each with its provenance sidecar (docs/provenance.md).
+[ "$(ls "$TMP/frames_whole" | wc -l)" = 20 ] || fail "the unsharded run wrote $(ls "$TMP/frames_whole" | wc -l) files, expected 10 CSVs and their 10 provenance sidecars"
 diff -r "$TMP/frames_whole" "$TMP/frames" >&2 || fail "sharded frames differ from the unsharded run"
 step "passed: $SHARDS-task frame array wrote the unsharded run's files (total $(($(date +%s) - T0)) s)"
 

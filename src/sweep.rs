@@ -545,16 +545,52 @@ pub fn run_and_write(
     threads: Option<usize>,
 ) -> Result<Vec<SweepRow>, String> {
     let rows = run(spec, base, registry, threads)?;
+    let record = sweep_provenance(spec, base);
     if let Some(csv) = &spec.csv {
         let p = base.join(csv);
         let text = to_csv(spec, &rows);
         crate::io::write_atomic(&p, |w| w.write_all(text.as_bytes()))
             .map_err(|e| format!("{}: {e}", p.display()))?;
+        record.record_in(&p)?;
     }
     if let Some(plot) = &spec.plot {
-        crate::chart::draw(&to_chart(spec, &rows)?, &base.join(plot))?;
+        let p = base.join(plot);
+        crate::chart::draw(&to_chart(spec, &rows)?, &p)?;
+        record.record_in(&p)?;
     }
     Ok(rows)
+}
+
+/// What made a sweep's CSV and chart: the graph (path and hash), node `sweep`, and as
+/// parameters the sweep's `vary`, `set`, `measure`, `frames`, `repeat` and shard.
+fn sweep_provenance(spec: &SweepSpec, base: &Path) -> crate::node::Provenance {
+    let gpath = base.join(&spec.graph);
+    let mut params = std::collections::BTreeMap::new();
+    let json = |v: Result<serde_json::Value, serde_json::Error>| v.unwrap_or_default();
+    params.insert("vary".into(), json(serde_json::to_value(&spec.vary)));
+    params.insert("set".into(), json(serde_json::to_value(&spec.set)));
+    params.insert("measure".into(), json(serde_json::to_value(&spec.measure)));
+    params.insert("frames".into(), json(serde_json::to_value(&spec.frames)));
+    params.insert("repeat".into(), serde_json::Value::from(spec.repeat));
+    params.insert(
+        "shard".into(),
+        serde_json::Value::from(spec.shard.map(|s| s.to_string())),
+    );
+    crate::node::Provenance {
+        cgnodes: env!("CARGO_PKG_VERSION").into(),
+        graph: gpath.display().to_string(),
+        graph_hash: std::fs::read(&gpath)
+            .map(|b| crate::node::Provenance::hash_graph(&b))
+            .unwrap_or_default(),
+        node: "sweep".into(),
+        node_type: "cgnodes sweep".into(),
+        params,
+        frame: spec
+            .frames
+            .as_deref()
+            .and_then(|f| parse_frames(f).ok())
+            .map_or(0, |(_, b)| b),
+    }
 }
 
 #[cfg(test)]

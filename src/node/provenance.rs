@@ -59,4 +59,21 @@ impl Provenance {
         };
         serde_json::from_str(&text).map_err(|e| show(&e))
     }
+
+    /// Adds this record to a file already written outside a node (a sweep's CSV and chart):
+    /// embedded when the format has a place for it, else as the `FILE.provenance.json`
+    /// sidecar. Both writes are atomic.
+    pub fn record_in(&self, path: &Path) -> Result<(), String> {
+        let show = |e: &dyn std::fmt::Display| format!("{}: {e}", path.display());
+        let bytes = std::fs::read(path).map_err(|e| show(&e))?;
+        match crate::io::provenance::embed(path, &bytes, &self.to_line()) {
+            Some(b) => crate::io::write_atomic(path, |w| w.write_all(&b)).map_err(|e| show(&e)),
+            None => {
+                let side = crate::io::provenance::sidecar_path(path);
+                let text = serde_json::to_string_pretty(self).unwrap_or_default() + "\n";
+                crate::io::write_atomic(&side, |w| w.write_all(text.as_bytes()))
+                    .map_err(|e| format!("{}: {e}", side.display()))
+            }
+        }
+    }
 }

@@ -56,6 +56,19 @@ fn a_sweep_records_every_combination_and_failure_and_reuses_upstream_results() {
     };
     let rows = run_and_write(&spec, dir.path(), &r, Some(2)).unwrap();
     assert_eq!(rows.len(), 4 * 2 * 2);
+    // The CSV (sidecar) and the chart (SVG comment) say what made them.
+    let graph_hash =
+        cgnodes::node::Provenance::hash_graph(&std::fs::read(dir.path().join("g.json")).unwrap());
+    for f in ["sweep.csv", "sweep.svg"] {
+        let p = cgnodes::node::Provenance::read(&dir.path().join(f)).unwrap();
+        assert_eq!(
+            (p.node.as_str(), p.params["repeat"].as_u64()),
+            ("sweep", Some(2)),
+            "{f}"
+        );
+        assert_eq!(p.graph_hash, graph_hash, "{f}");
+        assert_eq!(p.params["vary"][1]["param"], "d.op", "{f}");
+    }
     // Division by zero fails (twice: two repeats) and the sweep goes on.
     let failed: Vec<_> = rows.iter().filter(|r| !r.ok).collect();
     assert_eq!(failed.len(), 2);

@@ -21,6 +21,12 @@ fn declare(b: &mut NodeBuilder) {
     b.add_input::<String>("path")
         .file_out()
         .doc("The animation file (.gif or .png/.apng).");
+    declare_options(b);
+}
+
+/// Declares the animation options `read_options` reads (`format`, `fps`, `loop`,
+/// `max_width`), shared with `mesh_sequence`.
+pub fn declare_options(b: &mut NodeBuilder) {
     b.add_choice::<AnimFormat>("format")
         .doc("gif (256 colours a frame) or apng (lossless).");
     b.add_input::<f64>("fps")

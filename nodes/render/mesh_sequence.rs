@@ -7,8 +7,8 @@
 //! not follow the mesh and the animation does not jump.
 
 use super::mesh_preview::{render_preview, Framing};
-use crate::nodes::image::animation::{to_rgba8, AnimFormat, FramePattern};
-use crate::nodes::image::frames_to_video::{assemble, read_options};
+use crate::nodes::image::animation::{to_rgba8, FramePattern};
+use crate::nodes::image::frames_to_video::{assemble, declare_options, read_options};
 use crate::prelude::*;
 
 fn declare(b: &mut NodeBuilder) {
@@ -30,19 +30,7 @@ fn declare(b: &mut NodeBuilder) {
         .default(240)
         .range(16.0, 4096.0)
         .doc("Preview height in pixels.");
-    b.add_choice::<AnimFormat>("format")
-        .doc("gif (256 colours a frame) or apng (lossless).");
-    b.add_input::<f64>("fps")
-        .default(12.0)
-        .range(0.1, 100.0)
-        .doc("Frames per second.");
-    b.add_input::<bool>("loop")
-        .default(true)
-        .doc("Loop forever (else play once).");
-    b.add_input::<i64>("max_width")
-        .default(0)
-        .range(0.0, 65535.0)
-        .doc("Downscale wider frames to this width (aspect kept); 0 keeps the size.");
+    declare_options(b);
 }
 
 /// The default preview pattern of an animation path: `anim/cloth.gif` gives

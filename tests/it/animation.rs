@@ -8,11 +8,12 @@ use cgnodes::nodes::image::animation::downscale;
 use image::{AnimationDecoder, RgbaImage};
 use std::path::Path;
 
-fn decode_gif(p: &Path) -> Vec<RgbaImage> {
-    let f = std::io::BufReader::new(std::fs::File::open(p).unwrap());
-    image::codecs::gif::GifDecoder::new(f)
-        .unwrap()
-        .into_frames()
+fn open(p: &Path) -> std::io::BufReader<std::fs::File> {
+    std::io::BufReader::new(std::fs::File::open(p).unwrap())
+}
+
+fn frames_of<'a>(d: impl AnimationDecoder<'a>) -> Vec<RgbaImage> {
+    d.into_frames()
         .collect_frames()
         .unwrap()
         .into_iter()
@@ -20,18 +21,17 @@ fn decode_gif(p: &Path) -> Vec<RgbaImage> {
         .collect()
 }
 
+fn decode_gif(p: &Path) -> Vec<RgbaImage> {
+    frames_of(image::codecs::gif::GifDecoder::new(open(p)).unwrap())
+}
+
 fn decode_apng(p: &Path) -> Vec<RgbaImage> {
-    let f = std::io::BufReader::new(std::fs::File::open(p).unwrap());
-    image::codecs::png::PngDecoder::new(f)
-        .unwrap()
-        .apng()
-        .unwrap()
-        .into_frames()
-        .collect_frames()
-        .unwrap()
-        .into_iter()
-        .map(|f| f.into_buffer())
-        .collect()
+    frames_of(
+        image::codecs::png::PngDecoder::new(open(p))
+            .unwrap()
+            .apng()
+            .unwrap(),
+    )
 }
 
 /// Frame `k` of a test sequence: a gradient with few colours (a GIF keeps them exactly).

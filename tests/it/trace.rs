@@ -66,7 +66,7 @@ fn mat(kind: MaterialKind, albedo: f64, emission: f64) -> Arc<Material> {
     })
 }
 
-fn mean(img: &Image) -> [f64; 3] {
+pub(crate) fn mean(img: &Image) -> [f64; 3] {
     let mut m = [0.0; 3];
     for p in &img.pixels {
         for k in 0..3 {
@@ -76,7 +76,7 @@ fn mean(img: &Image) -> [f64; 3] {
     m.map(|x| x / img.pixels.len() as f64)
 }
 
-fn patch_mean(img: &Image, rows: [u32; 2], cols: [u32; 2]) -> [f64; 3] {
+pub(crate) fn patch_mean(img: &Image, rows: [u32; 2], cols: [u32; 2]) -> [f64; 3] {
     let mut m = [0.0; 3];
     for y in rows[0]..rows[1] {
         for x in cols[0]..cols[1] {

@@ -6,7 +6,7 @@ use cgnodes::nodes::trace::render_whitted::{render_whitted, WhittedSettings};
 use cgnodes::types::{Camera, FovAxis, Image, Light, Material, Scene, SceneObject};
 use std::sync::Arc;
 
-use crate::trace::sphere;
+use crate::trace::{mean, patch_mean, sphere};
 
 fn noop(_: f64) {}
 
@@ -403,19 +403,8 @@ fn environment_and_bsdf_sampling_agree() {
             ..Default::default()
         };
         let (img, _) = render_path(&scene, Some(&cam), &s, &noop).unwrap();
-        let mut whole = [0.0f64; 3];
-        let mut low = [0.0f64; 3];
-        for y in 0..24u32 {
-            for x in 0..24u32 {
-                let p = img.get(x, y);
-                for k in 0..3 {
-                    whole[k] += p[k] as f64 / 576.0;
-                    if y >= 12 {
-                        low[k] += p[k] as f64 / 288.0;
-                    }
-                }
-            }
-        }
+        // Whole image and its lower half.
+        let (whole, low) = (mean(&img), patch_mean(&img, [12, 24], [0, 24]));
         means.push((strategy, whole, low));
     }
     let (_, w0, l0) = means[0];

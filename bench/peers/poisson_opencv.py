@@ -3,16 +3,19 @@
 mixed) on the course's bear pasted into NewBackGround.jpg and on a 1-megapixel paste (both
 images upscaled, the whole source rectangle less a 2-pixel frame as the mask).
 
-For each case and mode, cgnodes runs one graph (one thread) with several `poisson_blend` nodes
-that paste the same mask at different offsets: the first factors the Poisson matrix, the
-others reuse the factor (their `table` says `reused = 1`). Times are the node's own `time_ms`
+For each case and mode, cgnodes runs one graph with several `poisson_blend` nodes that paste
+the same mask at different offsets, each into the previous paste's result (a chain, so the
+nodes run one after another with all threads, like OpenCV's calls; OpenCV's pastes are
+chained the same way): the first factors the Poisson matrix, the others reuse the factor
+(their `table` says `reused = 1`). cgnodes gets as many threads as OpenCV uses
+(`cv2.getNumThreads()`), or `--threads N` for both. Times are the node's own `time_ms`
 (checks, right-hand side, factorization or cache lookup, solve, composing the image); OpenCV's
 the `seamlessClone` call on decoded arrays (median of the offsets). The mean difference is
 between the two 8-bit results over the mask, in 8-bit units: OpenCV solves on sRGB-encoded
 bytes with its own solver and boundary (it also drops the mask's outer pixel ring), cgnodes on
 linear values, so the two differ by design.
 
-    python3 bench/peers/poisson_opencv.py       # needs target/release/cgnodes (or $CGNODES)
+    python3 bench/peers/poisson_opencv.py [--threads N]   # needs target/release/cgnodes (or $CGNODES)
 
 Installs `opencv-python-headless` and `numpy` into target/peers-venv when they are missing.
 """
@@ -50,6 +53,7 @@ def cases(cv2, np):
 
 
 def opencv_paste(cv2, target, source, mask, off, flag):
+    """One `seamlessClone` call and its time in ms."""
     x, y, w, h = cv2.boundingRect(mask)
     # OpenCV centres the mask's bounding box on `p`: its top-left lands at p - (w/2, h/2)
     p = (off[0] + x + w // 2, off[1] + y + h // 2)
@@ -60,7 +64,7 @@ def opencv_paste(cv2, target, source, mask, off, flag):
     return out, (time.perf_counter() - t0) * 1e3
 
 
-def cgnodes_pastes(cv2, d, target, source, mask, offsets, mode):
+def cgnodes_pastes(cv2, d, target, source, mask, offsets, mode, threads):
     cv2.imwrite(os.path.join(d, "target.png"), target)
     cv2.imwrite(os.path.join(d, "source.png"), source)
     cv2.imwrite(os.path.join(d, "mask.png"), mask)
@@ -73,7 +77,7 @@ def cgnodes_pastes(cv2, d, target, source, mask, offsets, mode):
         nodes[f"b{i}"] = {
             "type": "poisson_blend",
             "params": {"offset": [float(ox), float(oy)], "mode": mode},
-            "inputs": {"target": "t.image", "source": "s.image", "mask": "m.image"},
+            "inputs": {"target": f"b{i - 1}.image" if i else "t.image", "source": "s.image", "mask": "m.image"},
         }
         nodes[f"w{i}"] = {"type": "table_write", "params": {"path": f"t{i}.csv"}, "inputs": {"value": f"b{i}.table"}}
         nodes[f"i{i}"] = {"type": "image_save", "params": {"path": f"out{i}.png"}, "inputs": {"image": f"b{i}.image"}}
@@ -81,7 +85,7 @@ def cgnodes_pastes(cv2, d, target, source, mask, offsets, mode):
     with open(g, "w") as f:
         json.dump({"format": "cgnodes-graph", "version": 1, "nodes": nodes}, f)
     out = os.path.join(d, "out")
-    subprocess.run([_images.cgnodes_bin(), "run", g, "--out", out, "--threads", "1"], check=True, capture_output=True)
+    subprocess.run([_images.cgnodes_bin(), "run", g, "--out", out, "--threads", str(threads)], check=True, capture_output=True)
     rows = []
     for i in range(len(offsets)):
         with open(os.path.join(out, f"t{i}.csv")) as f:
@@ -96,18 +100,24 @@ def main():
     import cv2
     import numpy as np
 
-    print(f"OpenCV {cv2.__version__} ({cv2.getNumThreads()} threads), cgnodes {_images.cgnodes_bin()} (1 thread), {os.cpu_count()} cores\n")
+    threads = cv2.getNumThreads()
+    if "--threads" in sys.argv:
+        threads = int(sys.argv[sys.argv.index("--threads") + 1])
+        cv2.setNumThreads(threads)
+    print(f"OpenCV {cv2.__version__} ({cv2.getNumThreads()} threads), cgnodes {_images.cgnodes_bin()} ({threads} threads), {os.cpu_count()} cores; pastes chained\n")
     print("| case | mode | pixels | cgnodes solver | cgnodes first ms | cgnodes reused ms | OpenCV ms | first / OpenCV | reused / OpenCV | mean diff (8-bit) | residual |")
     print("|---|---|---|---|---|---|---|---|---|---|---|")
     for name, target, source, mask, offsets in cases(cv2, np):
         for mode, flag in (("seamless", cv2.NORMAL_CLONE), ("mixed", cv2.MIXED_CLONE)):
             cv_times, cv_out = [], []
+            base = target
             for off in offsets:
-                out, ms = opencv_paste(cv2, target, source, mask, off, flag)
+                out, ms = opencv_paste(cv2, base, source, mask, off, flag)
                 cv_times.append(ms)
                 cv_out.append(out)
+                base = out
             with tempfile.TemporaryDirectory() as d:
-                rows = cgnodes_pastes(cv2, d, target, source, mask, offsets, mode)
+                rows = cgnodes_pastes(cv2, d, target, source, mask, offsets, mode, threads)
             first = [r for r in rows if r["reused"] == 0.0]
             reused = [r for r in rows if r["reused"] == 1.0]
             if len(first) != 1 or len(reused) != len(rows) - 1:

@@ -11,6 +11,7 @@
 use super::mask::MaskShape;
 use crate::types::Image;
 use faer::Mat;
+use rayon::prelude::*;
 
 /// Which guidance field to use (Pérez et al. 2003, §3).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -41,8 +42,9 @@ pub fn right_hand_side(
     // pixel indices: the source clamped to its edge, the target shifted by the offset
     let sidx = |x: i64, y: i64| (y.clamp(0, sh - 1) * sw + x.clamp(0, sw - 1)) as usize;
     let tidx = |x: i64, y: i64| ((y + offset[1]) * tw + x + offset[0]) as usize;
-    let mut b = Mat::<f64>::zeros(shape.len(), 3);
-    for (k, &[px, py]) in shape.inside.iter().enumerate() {
+    let n = shape.len();
+    let row_of = |k: usize| {
+        let [px, py] = shape.inside[k];
         let mut row = [0.0f64; 3];
         let (px, py) = (px as i64, py as i64);
         let gp = source.pixels[sidx(px, py)];
@@ -68,12 +70,36 @@ pub fn right_hand_side(
                 row[c] += v + if boundary { f64::from(fq[c]) } else { 0.0 };
             }
         }
-        for (c, v) in row.into_iter().enumerate() {
-            b[(k, c)] = v;
+        row
+    };
+    // the three channel columns filled in parallel chunks of unknowns
+    let mut b = Mat::<f64>::zeros(n, 3);
+    {
+        let (r, rest) = b.as_mut().split_at_col_mut(1);
+        let (g, bl) = rest.split_at_col_mut(1);
+        fn slice(m: faer::MatMut<'_, f64>) -> &mut [f64] {
+            m.col_mut(0)
+                .try_as_col_major_mut()
+                .expect("a Mat's column is contiguous")
+                .as_slice_mut()
         }
+        let (r, g, bl) = (slice(r), slice(g), slice(bl));
+        r.par_chunks_mut(CHUNK)
+            .zip(g.par_chunks_mut(CHUNK))
+            .zip(bl.par_chunks_mut(CHUNK))
+            .enumerate()
+            .for_each(|(i, ((r, g), b))| {
+                for j in 0..r.len() {
+                    let v = row_of(i * CHUNK + j);
+                    (r[j], g[j], b[j]) = (v[0], v[1], v[2]);
+                }
+            });
     }
     b
 }
+
+/// Unknowns per parallel task.
+const CHUNK: usize = 1 << 14;
 
 #[cfg(test)]
 mod tests {

@@ -3,6 +3,7 @@
 //! the factorization is cached.
 
 use crate::types::Image;
+use rayon::prelude::*;
 use std::hash::{Hash, Hasher};
 
 /// The inside pixels of a mask (the unknowns of the Poisson system), numbered row-major.
@@ -16,6 +17,8 @@ pub struct MaskShape {
     pub inside: Vec<[u32; 2]>,
     /// For each mask pixel (row-major), its unknown's number, or `u32::MAX` outside.
     pub index: Vec<u32>,
+    /// `bbox()`, found once: several checks of every paste ask for it.
+    bbox: Option<[u32; 4]>,
 }
 
 /// The shape of Ω up to translation. Two masks with equal keys give the same matrix.
@@ -42,25 +45,30 @@ impl MaskShape {
     pub fn from_flags(width: u32, height: u32, inside: &[bool]) -> MaskShape {
         let mut index = vec![u32::MAX; inside.len()];
         let mut cells = Vec::new();
+        let mut bbox: Option<[u32; 4]> = None;
         for (i, _) in inside.iter().enumerate().filter(|(_, &b)| b) {
             index[i] = cells.len() as u32;
-            cells.push([(i % width as usize) as u32, (i / width as usize) as u32]);
+            let (x, y) = ((i % width as usize) as u32, (i / width as usize) as u32);
+            cells.push([x, y]);
+            let b = bbox.get_or_insert([x, y, x, y]);
+            (b[0], b[2], b[3]) = (b[0].min(x), b[2].max(x), y);
         }
         MaskShape {
             width,
             height,
             inside: cells,
             index,
+            bbox,
         }
     }
 
     /// The inside pixels of a mask image: alpha above one half, or, when every pixel is
     /// opaque (a black-and-white mask), luminance (Rec. 709 weights) above one half.
     pub fn from_image(mask: &Image) -> MaskShape {
-        let opaque = mask.pixels.iter().all(|p| p[3] >= 1.0);
+        let opaque = mask.pixels.par_iter().all(|p| p[3] >= 1.0);
         let flags: Vec<bool> = mask
             .pixels
-            .iter()
+            .par_iter()
             .map(|p| {
                 if opaque {
                     0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2] > 0.5
@@ -93,14 +101,7 @@ impl MaskShape {
 
     /// The bounding box of the inside pixels, `[x0, y0, x1, y1]` inclusive; `None` if empty.
     pub fn bbox(&self) -> Option<[u32; 4]> {
-        let first = self.inside.first()?;
-        let mut b = [first[0], first[1], first[0], first[1]];
-        for &[x, y] in &self.inside {
-            b[0] = b[0].min(x);
-            b[2] = b[2].max(x);
-            b[3] = b[3].max(y);
-        }
-        Some(b)
+        self.bbox
     }
 
     /// The offsets (where the mask's top-left corner lands in a `w x h` target) that keep

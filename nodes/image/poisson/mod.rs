@@ -147,6 +147,7 @@ pub fn solve(
     // plain sum of squares: pixel-sized values cannot overflow (faer's scaled norm took
     // longer than the residual itself at 1 megapixel)
     let bn = (0..b.ncols())
+        .into_par_iter()
         .map(|c| b.col(c).iter().map(|v| v * v).sum::<f64>())
         .sum::<f64>()
         .sqrt();
@@ -163,14 +164,29 @@ pub fn solve(
 /// The target with the solved RGB values written over Ω (alpha kept from the target).
 /// Values are not clamped (the image is linear; `image_save` clamps when it encodes).
 pub fn compose(target: &Image, shape: &MaskShape, offset: [i64; 2], values: &Mat<f64>) -> Image {
-    let mut out = target.clone();
-    let tw = target.width as i64;
-    for (k, &[x, y]) in shape.inside.iter().enumerate() {
-        let i = ((y as i64 + offset[1]) * tw + x as i64 + offset[0]) as usize;
-        let p = &mut out.pixels[i];
-        for (c, v) in p.iter_mut().take(3).enumerate() {
-            *v = values[(k, c)] as f32;
-        }
-    }
+    let mut out = Image::new(target.width, target.height, [0.0; 4]);
+    let (tw, mw) = (target.width as usize, shape.width as usize);
+    // one target row per task: copied, then the mask row it overlaps written over it
+    out.pixels
+        .par_chunks_mut(tw)
+        .zip(target.pixels.par_chunks(tw))
+        .enumerate()
+        .for_each(|(ty, (row, src))| {
+            row.copy_from_slice(src);
+            let my = ty as i64 - offset[1];
+            if my < 0 || my >= i64::from(shape.height) {
+                return;
+            }
+            let index = &shape.index[my as usize * mw..(my as usize + 1) * mw];
+            for (mx, &k) in index.iter().enumerate() {
+                if k == u32::MAX {
+                    continue;
+                }
+                let p = &mut row[(mx as i64 + offset[0]) as usize];
+                for (c, v) in p.iter_mut().take(3).enumerate() {
+                    *v = values[(k as usize, c)] as f32;
+                }
+            }
+        });
     out
 }

@@ -15,6 +15,7 @@
 
 use rustfft::num_complex::Complex;
 use rustfft::{Fft, FftPlanner};
+use rayon::prelude::*;
 use std::sync::Arc;
 
 /// Rows transformed per FFT batch (pairs of rows): keeps the batch in cache.
@@ -87,10 +88,23 @@ impl RectSolver {
     /// its real and imaginary parts: `Y^a_k = (Z_k + conj Z_{N-k}) / 2`,
     /// `Y^b_k = (Z_k - conj Z_{N-k}) / 2i`.
     fn sine_rows(&self, u: &mut [f64]) {
+        let n = self.w + 1;
+        // batches are independent: one per task, each with its own buffers
+        u.par_chunks_mut(2 * self.w * PAIRS_PER_BATCH).for_each_init(
+            || {
+                (
+                    vec![Complex::new(0.0, 0.0); n * PAIRS_PER_BATCH],
+                    vec![Complex::new(0.0, 0.0); self.fft.get_inplace_scratch_len()],
+                )
+            },
+            |(buf, scratch), rows| self.sine_batch(rows, buf, scratch),
+        );
+    }
+
+    /// `sine_rows` for one batch of at most `2 PAIRS_PER_BATCH` rows.
+    fn sine_batch(&self, rows: &mut [f64], buf: &mut [Complex<f64>], scratch: &mut [Complex<f64>]) {
         let (w, n) = (self.w, self.w + 1);
-        let mut buf = vec![Complex::new(0.0, 0.0); n * PAIRS_PER_BATCH];
-        let mut scratch = vec![Complex::new(0.0, 0.0); self.fft.get_inplace_scratch_len()];
-        for rows in u.chunks_mut(2 * w * PAIRS_PER_BATCH) {
+        {
             let pairs = rows.len().div_ceil(2 * w);
             let buf = &mut buf[..n * pairs];
             for (p, seq) in buf.chunks_mut(n).enumerate() {
@@ -106,7 +120,7 @@ impl RectSolver {
                     seq[j] = Complex::new(y(a), b.map_or(0.0, y));
                 }
             }
-            self.fft.process_with_scratch(buf, &mut scratch);
+            self.fft.process_with_scratch(buf, scratch);
             for (p, seq) in buf.chunks(n).enumerate() {
                 let (head, tail) = rows.split_at_mut((2 * p + 1) * w);
                 let a = &mut head[2 * p * w..];

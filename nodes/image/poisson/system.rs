@@ -8,6 +8,7 @@ use super::mask::MaskShape;
 use crate::nodes::linalg::SpdFactor;
 use faer::sparse::{SparseColMat, SymbolicSparseColMat};
 use faer::{Mat, MatRef};
+use rayon::prelude::*;
 
 /// The lower triangle of the Poisson matrix in compressed columns. Unknowns are numbered
 /// row-major, so column k holds the diagonal, then the right neighbour, then the one below
@@ -45,26 +46,49 @@ pub fn apply(shape: &MaskShape, x: MatRef<'_, f64>) -> Mat<f64> {
     out
 }
 
-/// `||b - A x||` (Frobenius over the columns), without forming `A x`.
+/// `||b - A x||` (Frobenius over the columns), without forming `A x`; in parallel chunks.
 pub fn residual_norm(shape: &MaskShape, x: MatRef<'_, f64>, b: MatRef<'_, f64>) -> f64 {
     if let Some([w, h]) = shape.rectangle() {
         return rect_residual_norm(w as usize, h as usize, x, b);
     }
-    let mut sum = 0.0;
-    for_each_row(shape, x, |k, c, v| {
-        let r = b[(k, c)] - v;
-        sum += r * r;
-    });
+    let n = shape.len();
+    let sum: f64 = (0..n.div_ceil(CHUNK))
+        .into_par_iter()
+        .map(|t| {
+            let mut sum = 0.0;
+            for k in t * CHUNK..((t + 1) * CHUNK).min(n) {
+                let [px, py] = shape.inside[k];
+                let (px, py) = (px as i64, py as i64);
+                let nb = [(1, 0), (-1, 0), (0, 1), (0, -1)]
+                    .map(|(dx, dy)| shape.unknown(px + dx, py + dy));
+                for c in 0..x.ncols() {
+                    let mut v = 4.0 * x[(k, c)];
+                    for q in nb.iter().flatten() {
+                        v -= x[(*q, c)];
+                    }
+                    let r = b[(k, c)] - v;
+                    sum += r * r;
+                }
+            }
+            sum
+        })
+        .sum();
     sum.sqrt()
 }
 
+/// Unknowns (or rectangle rows) per parallel task of the residual.
+const CHUNK: usize = 1 << 14;
+
 /// `residual_norm` for a whole `w x h` rectangle: the stencil on row-major columns, without
-/// looking up the numbering.
+/// looking up the numbering; rows in parallel.
 fn rect_residual_norm(w: usize, h: usize, x: MatRef<'_, f64>, b: MatRef<'_, f64>) -> f64 {
-    let mut sum = 0.0;
-    for c in 0..x.ncols() {
-        let (xc, bc) = (x.col(c), b.col(c));
-        for y in 0..h {
+    let sum: f64 = (0..x.ncols() * h)
+        .into_par_iter()
+        .with_min_len(16)
+        .map(|cy| {
+            let (c, y) = (cy / h, cy % h);
+            let (xc, bc) = (x.col(c), b.col(c));
+            let mut sum = 0.0;
             for i in y * w..(y + 1) * w {
                 let mut v = 4.0 * xc[i];
                 if i % w > 0 {
@@ -82,8 +106,9 @@ fn rect_residual_norm(w: usize, h: usize, x: MatRef<'_, f64>, b: MatRef<'_, f64>
                 let r = bc[i] - v;
                 sum += r * r;
             }
-        }
-    }
+            sum
+        })
+        .sum();
     sum.sqrt()
 }
 

@@ -125,20 +125,38 @@ pub struct DepthTarget {
 const BAND: u32 = 16;
 
 /// Bins triangles to horizontal bands of `band` rows by their bounding boxes, in
-/// triangle order.
+/// triangle order. Chunks of triangles are binned in parallel and each band's lists are
+/// joined in chunk order, so the bins are the same as a sequential pass.
 pub fn bin_rows(tris: &[Option<TriSetup>], height: u32, band: u32) -> Vec<Vec<u32>> {
+    const CHUNK: usize = 1 << 14;
     let nb = height.div_ceil(band) as usize;
-    let mut bins: Vec<Vec<u32>> = vec![Vec::new(); nb];
-    for (i, t) in tris.iter().enumerate() {
-        if let Some(t) = t {
-            let b0 = (t.bbox[1] / band) as usize;
-            let b1 = ((t.bbox[3] - 1) / band) as usize;
-            for bin in &mut bins[b0.min(nb)..=b1.min(nb - 1)] {
-                bin.push(i as u32);
+    let parts: Vec<Vec<Vec<u32>>> = tris
+        .par_chunks(CHUNK)
+        .enumerate()
+        .map(|(ci, chunk)| {
+            let mut bins: Vec<Vec<u32>> = vec![Vec::new(); nb];
+            for (i, t) in chunk.iter().enumerate() {
+                if let Some(t) = t {
+                    let b0 = (t.bbox[1] / band) as usize;
+                    let b1 = ((t.bbox[3] - 1) / band) as usize;
+                    for bin in &mut bins[b0.min(nb)..=b1.min(nb - 1)] {
+                        bin.push((ci * CHUNK + i) as u32);
+                    }
+                }
             }
-        }
-    }
-    bins
+            bins
+        })
+        .collect();
+    (0..nb)
+        .into_par_iter()
+        .map(|b| {
+            let mut v = Vec::with_capacity(parts.iter().map(|p| p[b].len()).sum());
+            for p in &parts {
+                v.extend_from_slice(&p[b]);
+            }
+            v
+        })
+        .collect()
 }
 
 /// Triangles whose bounding box is wider than this many pixels are walked along each row's
@@ -409,6 +427,34 @@ mod tests {
             }
         }
         assert!(checked > 50, "only {checked} wide covered triangles");
+    }
+
+    #[test]
+    fn parallel_binning_matches_a_sequential_pass() {
+        // More triangles than one binning chunk (2^14), some culled (None), spanning one or
+        // several bands: every band lists its triangles once each, in index order.
+        let tris: Vec<Option<TriSetup>> = (0..40_000u32)
+            .map(|i| {
+                let y = (i * 7919 % 60) as f64;
+                let hgt = 1.0 + (i % 23) as f64;
+                let p = [[1.0, y, 1.0], [9.0, y, 1.0], [1.0, y + hgt, 1.0]];
+                (i % 11 != 0).then(|| setup_triangle(p, [1.0; 3], 0.5, 16, 64))?
+            })
+            .collect();
+        let bins = bin_rows(&tris, 64, 8);
+        let mut expect: Vec<Vec<u32>> = vec![Vec::new(); 8];
+        for (i, t) in tris.iter().enumerate() {
+            if let Some(t) = t {
+                for (b, bin) in expect.iter_mut().enumerate() {
+                    let (y0, y1) = (b as u32 * 8, b as u32 * 8 + 8);
+                    if t.bbox[1] < y1 && t.bbox[3] > y0 {
+                        bin.push(i as u32);
+                    }
+                }
+            }
+        }
+        assert!(expect.iter().all(|b| b.len() > 1000));
+        assert_eq!(bins, expect);
     }
 
     #[test]

@@ -15,6 +15,9 @@ use std::sync::atomic::{AtomicU64, Ordering};
 /// Pixel rows per band.
 pub(super) const BAND_PX: usize = 8;
 
+/// Pixel columns per block: a band is resolved block by block.
+const BLOCK_PX: usize = 16;
+
 /// Rasterizes and resolves every band of `bins` (triangles per band of `BAND_PX * s` sample
 /// rows) through `cam` at `s x s` samples per pixel; `triangles` is passed through to the
 /// output's count.
@@ -42,7 +45,9 @@ pub(super) fn resolve_bands(
     ];
     // Only the passes asked for get a buffer.
     let alloc = |on: bool, v: [f32; 4]| if on { vec![v; npx] } else { Vec::new() };
-    let mut color = alloc(passes.color, bg);
+    // Zeroed buffers are allocated lazily by the system; the bands write every colour
+    // pixel (the background where nothing is hit), in parallel.
+    let mut color = alloc(passes.color, zero);
     let mut depth = alloc(passes.depth, zero);
     let mut normal = alloc(passes.normal, zero);
     let mut position = alloc(passes.position, zero);
@@ -109,11 +114,16 @@ pub(super) fn resolve_bands(
                 let (sz, wsu) = (s as usize, ws as usize);
                 let ssaa = lit && opts.aa == AntiAliasing::Supersampling;
                 let msaa = lit && opts.aa == AntiAliasing::Multisampling;
-                for r in 0..rows {
+                // Blocks of BLOCK_PX columns, row by row inside each: the triangles and
+                // shadow-map texels a block reads stay in cache from one row to the next.
+                for (xb, r) in (0..wu)
+                    .step_by(BLOCK_PX)
+                    .flat_map(|xb| (0..rows).map(move |r| (xb, r)))
+                {
                     let py = bi * BAND_PX + r;
                     // Sample row of the pixel row's first sample, relative to the band.
                     let row0 = r * sz * wsu;
-                    for px in 0..wu {
+                    for px in xb..(xb + BLOCK_PX).min(wu) {
                         groups.clear();
                         let mut acc = [0.0f64; 3];
                         let mut empty = 0u32;
@@ -174,6 +184,9 @@ pub(super) fn resolve_bands(
                             }
                         }
                         if groups.is_empty() {
+                            if let Some(c) = out[0].as_deref_mut() {
+                                c[r * wu + px] = bg;
+                            }
                             continue;
                         }
                         // The nearest triangle in the pixel (first on ties) gives the passes.

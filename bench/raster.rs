@@ -190,7 +190,7 @@ fn phases(scene: &Scene, cam: &Camera, full: &RasterOptions, runs: usize) {
     let maps = median_ms(runs, || {
         dirs.iter()
             .map(|&d| directional_shadow_map(&g.pos, d, g.bounds, full.shadow_resolution))
-            .count()
+            .collect::<Vec<_>>()
     });
     let noshadow = RasterOptions {
         shadows: false,

@@ -6,7 +6,9 @@
 //! triangles per second and shaded pixels per second, with the same scene under 1x
 //! sampling without shadows as the baseline measured in the same run, the target line
 //! with only the colour and with all six passes (what a graph linking only `color`, or
-//! every output, computes), and 4x supersampling for comparison.
+//! every output, computes), and 4x supersampling for comparison. `CGNODES_BENCH_PHASES=1`
+//! prints the profile by stages instead (flattening, the shadow maps, and the render with
+//! only the depth pass, colour without shadows and colour with them; wall and CPU ms).
 
 use cgnodes::nodes::mesh::mesh_load::{load_mesh, LoadOptions};
 use cgnodes::nodes::mesh::mesh_plane::plane_mesh;

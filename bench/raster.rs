@@ -6,10 +6,14 @@
 //! triangles per second and shaded pixels per second, with the same scene under 1x
 //! sampling without shadows as the baseline measured in the same run, the target line
 //! with only the colour and with all six passes (what a graph linking only `color`, or
-//! every output, computes), and 4x supersampling for comparison.
+//! every output, computes), and 4x supersampling for comparison. `CGNODES_BENCH_PHASES=1`
+//! prints the profile by stages instead (flattening, the shadow maps, and the render with
+//! only the depth pass, colour without shadows and colour with them; wall and CPU ms).
 
 use cgnodes::nodes::mesh::mesh_load::{load_mesh, LoadOptions};
 use cgnodes::nodes::mesh::mesh_plane::plane_mesh;
+use cgnodes::nodes::render::raster::geometry::scene_geometry;
+use cgnodes::nodes::render::raster::shadow::directional_shadow_map;
 use cgnodes::nodes::render::raster::{render, AntiAliasing, Passes, RasterOptions};
 use cgnodes::types::*;
 use std::sync::Arc;
@@ -109,8 +113,12 @@ fn main() {
         "raster bench: {ntris} triangles (+2 ground), 1920x1080, {} threads",
         rayon::current_num_threads()
     );
-    let mut base_ms = 0.0;
     const RUNS: usize = 5;
+    if std::env::var("CGNODES_BENCH_PHASES").is_ok() {
+        phases(&scene, &cam, &full, RUNS);
+        return;
+    }
+    let mut base_ms = 0.0;
     // CGNODES_BENCH_ONLY=TEXT runs only the lines whose name contains TEXT (for profiling).
     let only = std::env::var("CGNODES_BENCH_ONLY").unwrap_or_default();
     for (name, o) in [
@@ -147,5 +155,67 @@ fn main() {
             shaded as f64 / t / 1e6,
             t * 1e3 / base_ms
         );
+    }
+}
+
+/// Median wall milliseconds of `runs` calls of `f` after a warm-up, and the mean CPU
+/// milliseconds per call.
+fn median_ms<T>(runs: usize, mut f: impl FnMut() -> T) -> (f64, f64) {
+    let _ = f();
+    let cpu0 = cpu_seconds();
+    let mut t: Vec<f64> = (0..runs)
+        .map(|_| {
+            let t0 = Instant::now();
+            let _ = std::hint::black_box(f());
+            t0.elapsed().as_secs_f64() * 1e3
+        })
+        .collect();
+    let cpu = (cpu_seconds() - cpu0) / runs as f64 * 1e3;
+    t.sort_by(|a, b| a.total_cmp(b));
+    (t[runs / 2], cpu)
+}
+
+/// The profile by phases (`CGNODES_BENCH_PHASES=1`): each stage of the target line timed on
+/// its own through the public API (median of `runs`), and the whole render with and without
+/// shadows; shading with shadow lookups is what the last two differ by beyond the maps.
+fn phases(scene: &Scene, cam: &Camera, full: &RasterOptions, runs: usize) {
+    let g = scene_geometry(scene).expect("geometry");
+    let geo = median_ms(runs, || scene_geometry(scene).expect("geometry"));
+    let dirs: Vec<[f64; 3]> = scene
+        .lights
+        .iter()
+        .filter_map(|l| match l {
+            Light::Directional { direction, .. } => Some(*direction),
+            _ => None,
+        })
+        .collect();
+    let maps = median_ms(runs, || {
+        dirs.iter()
+            .map(|&d| directional_shadow_map(&g.pos, d, g.bounds, full.shadow_resolution))
+            .collect::<Vec<_>>()
+    });
+    let noshadow = RasterOptions {
+        shadows: false,
+        ..full.clone()
+    };
+    let unlit = RasterOptions {
+        passes: Passes {
+            depth: true,
+            ..Passes::NONE
+        },
+        ..full.clone()
+    };
+    let r_unlit = median_ms(runs, || render(scene, cam, &unlit).expect("render"));
+    let r_nosh = median_ms(runs, || render(scene, cam, &noshadow).expect("render"));
+    let r_full = median_ms(runs, || render(scene, cam, full).expect("render"));
+    println!("phases of the target line (wall ms median of {runs} on the pool, CPU ms mean):");
+    for (name, (wall, cpu)) in [
+        ("flatten geometry (scene_geometry)", geo),
+        ("two 2048^2 shadow maps, one after the other", maps),
+        ("render, depth pass only (no lighting, no maps)", r_unlit),
+        ("render, colour without shadows", r_nosh),
+        ("render, colour with shadows (target line)", r_full),
+    ] {
+        println!("  {name:48} {wall:7.1} wall {cpu:7.1} CPU");
     }
 }

@@ -186,13 +186,15 @@ pub fn scene_geometry_creased(scene: &Scene, crease_deg: f64) -> Result<SceneGeo
         // usual single big mesh).
         append(&mut g.nrm, corner_normals);
         g.has_uv.resize(g.has_uv.len() + nt, corner_uvs.is_some());
+        // Zeros for a mesh without UVs: a new zeroed vector is allocated lazily (no pages
+        // touched until read), unlike `resize`, which writes them.
         match corner_uvs {
             Some(u) => append(&mut g.uv, u),
-            None => g.uv.resize(g.uv.len() + nt, [[0.0; 2]; 3]),
+            None => append(&mut g.uv, vec![[[0.0; 2]; 3]; nt]),
         }
         match corner_tans {
             Some(t) => append(&mut g.tan, t),
-            None => g.tan.resize(g.tan.len() + nt, [[0.0; 4]; 3]),
+            None => append(&mut g.tan, vec![[[0.0; 4]; 3]; nt]),
         }
         g.mat.resize(g.mat.len() + nt, mi);
     }

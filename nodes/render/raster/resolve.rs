@@ -15,6 +15,9 @@ use std::sync::atomic::{AtomicU64, Ordering};
 /// Pixel rows per band.
 pub(super) const BAND_PX: usize = 8;
 
+/// Pixel columns per block: a band is resolved block by block.
+const BLOCK_PX: usize = 16;
+
 /// Rasterizes and resolves every band of `bins` (triangles per band of `BAND_PX * s` sample
 /// rows) through `cam` at `s x s` samples per pixel; `triangles` is passed through to the
 /// output's count.
@@ -42,7 +45,9 @@ pub(super) fn resolve_bands(
     ];
     // Only the passes asked for get a buffer.
     let alloc = |on: bool, v: [f32; 4]| if on { vec![v; npx] } else { Vec::new() };
-    let mut color = alloc(passes.color, bg);
+    // Zeroed buffers are allocated lazily by the system; the bands write every colour
+    // pixel (the background where nothing is hit), in parallel.
+    let mut color = alloc(passes.color, zero);
     let mut depth = alloc(passes.depth, zero);
     let mut normal = alloc(passes.normal, zero);
     let mut position = alloc(passes.position, zero);
@@ -106,44 +111,82 @@ pub(super) fn resolve_bands(
                 );
                 let mut count = 0u64;
                 let rows = (y_end - y_start) as usize / s as usize;
-                for r in 0..rows {
+                let (sz, wsu) = (s as usize, ws as usize);
+                let ssaa = lit && opts.aa == AntiAliasing::Supersampling;
+                let msaa = lit && opts.aa == AntiAliasing::Multisampling;
+                // Blocks of BLOCK_PX columns, row by row inside each: the triangles and
+                // shadow-map texels a block reads stay in cache from one row to the next.
+                for (xb, r) in (0..wu)
+                    .step_by(BLOCK_PX)
+                    .flat_map(|xb| (0..rows).map(move |r| (xb, r)))
+                {
                     let py = bi * BAND_PX + r;
-                    for px in 0..wu {
+                    // Sample row of the pixel row's first sample, relative to the band.
+                    let row0 = r * sz * wsu;
+                    for px in xb..(xb + BLOCK_PX).min(wu) {
                         groups.clear();
                         let mut acc = [0.0f64; 3];
                         let mut empty = 0u32;
-                        for j in 0..s as usize {
-                            let sy = py * s as usize + j;
-                            for i in 0..s as usize {
-                                let sx = px * s as usize + i;
-                                let k = (sy - y_start as usize) * ws as usize + sx;
-                                let id = ibuf[k];
-                                if id == u32::MAX {
-                                    empty += 1;
-                                    continue;
+                        let k0 = row0 + px * sz;
+                        let first = ibuf[k0];
+                        // Fast path: every sample on one triangle (most pixels). The sums run
+                        // in the same order as the general loop, so the result is the same.
+                        let uniform = !ssaa
+                            && first != u32::MAX
+                            && (0..sz).all(|j| {
+                                let k = k0 + j * wsu;
+                                ibuf[k..k + sz].iter().all(|&id| id == first)
+                            });
+                        if uniform {
+                            let (mut gx, mut gy, mut gd) = (0.0f64, 0.0f64, f32::INFINITY);
+                            for j in 0..sz {
+                                let yc = (py * sz + j) as f64 + 0.5;
+                                let k = k0 + j * wsu;
+                                for (i, &d) in zbuf[k..k + sz].iter().enumerate() {
+                                    gx += (px * sz + i) as f64 + 0.5;
+                                    gy += yc;
+                                    gd = gd.min(d);
                                 }
-                                let (xc, yc) = (sx as f64 + 0.5, sy as f64 + 0.5);
-                                if lit && opts.aa == AntiAliasing::Supersampling {
-                                    if let Some(sf) = sh.surface(id as usize, xc, yc, 1.0, true) {
-                                        count += 1;
-                                        for (a, c) in acc.iter_mut().zip(sf.color) {
-                                            *a += c;
+                            }
+                            groups.push((first, (sz * sz) as u32, gx, gy, gd));
+                        } else {
+                            for j in 0..sz {
+                                let sy = py * sz + j;
+                                for i in 0..sz {
+                                    let sx = px * sz + i;
+                                    let k = k0 + j * wsu + i;
+                                    let id = ibuf[k];
+                                    if id == u32::MAX {
+                                        empty += 1;
+                                        continue;
+                                    }
+                                    let (xc, yc) = (sx as f64 + 0.5, sy as f64 + 0.5);
+                                    if ssaa {
+                                        if let Some(sf) = sh.surface(id as usize, xc, yc, 1.0, true)
+                                        {
+                                            count += 1;
+                                            for (a, c) in acc.iter_mut().zip(sf.color) {
+                                                *a += c;
+                                            }
                                         }
                                     }
-                                }
-                                let d = zbuf[k];
-                                match groups.iter_mut().find(|g| g.0 == id) {
-                                    Some(g) => {
-                                        g.1 += 1;
-                                        g.2 += xc;
-                                        g.3 += yc;
-                                        g.4 = g.4.min(d);
+                                    let d = zbuf[k];
+                                    match groups.iter_mut().find(|g| g.0 == id) {
+                                        Some(g) => {
+                                            g.1 += 1;
+                                            g.2 += xc;
+                                            g.3 += yc;
+                                            g.4 = g.4.min(d);
+                                        }
+                                        None => groups.push((id, 1, xc, yc, d)),
                                     }
-                                    None => groups.push((id, 1, xc, yc, d)),
                                 }
                             }
                         }
                         if groups.is_empty() {
+                            if let Some(c) = out[0].as_deref_mut() {
+                                c[r * wu + px] = bg;
+                            }
                             continue;
                         }
                         // The nearest triangle in the pixel (first on ties) gives the passes.
@@ -157,13 +200,13 @@ pub(super) fn resolve_bands(
                         let mut pass_surf = None;
                         for (gi, gr) in groups.iter().enumerate() {
                             let (x, y) = (gr.2 / gr.1 as f64, gr.3 / gr.1 as f64);
-                            if lit && opts.aa == AntiAliasing::Multisampling {
+                            if msaa {
                                 if let Some(sf) = sh.surface(gr.0 as usize, x, y, step, true) {
                                     count += 1;
                                     for (a, c) in acc.iter_mut().zip(sf.color) {
                                         *a += c * gr.1 as f64;
                                     }
-                                    if gi == nearest {
+                                    if gi == nearest && surface_passes {
                                         pass_surf = Some(sf);
                                     }
                                 }

@@ -81,9 +81,14 @@ impl Shader<'_> {
             n = n.map(|c| -c);
         }
         let m = &self.mats[g.mat[t] as usize];
-        let uv = interp2(b, &g.uv[t]);
-        let mut base = m.base;
         let has_uv = g.has_uv[t];
+        // Without UVs the corners' are zeros: skip reading them.
+        let uv = if has_uv {
+            interp2(b, &g.uv[t])
+        } else {
+            [0.0; 2]
+        };
+        let mut base = m.base;
         let (dx, dy) = if has_uv && (m.tex.is_some() || m.nmap.is_some()) {
             let d = |bb: Option<[f64; 3]>| {
                 bb.map(|bb| {

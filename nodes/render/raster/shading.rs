@@ -48,7 +48,9 @@ pub fn blinn_phong(
     let hl = (h[0] * h[0] + h[1] * h[1] + h[2] * h[2]).sqrt();
     let spec = if hl > 1e-12 && ks > 0.0 {
         let c = ((n[0] * h[0] + n[1] * h[1] + n[2] * h[2]) / hl).max(0.0);
-        ks * c.powf(k)
+        // cos^k in f32: the image is f32, and f32 pow is several times cheaper (it was 5%
+        // of the rasterizer's time).
+        ks * (c as f32).powf(k as f32) as f64
     } else {
         0.0
     };

@@ -81,6 +81,98 @@ pub fn pass_camera(
     Ok(cam)
 }
 
+/// The pinhole camera a position and depth pass were rendered with, recovered by linear
+/// least squares, for passes whose camera is not linked (Framework3D's `render_ssao` has no
+/// camera socket). A surface pixel at `(x', y')` from the image centre (x right, y up) with
+/// view depth `z` lies at `P = e + z (x' a + y' b + c)`, with `a = right / f`,
+/// `b = up / f` (`f` the focal length in pixels) and `c` the viewing direction. The fit
+/// solves for `(e + z c, a, b)` per coordinate (SVD of the 4 x 4 normal equations, which
+/// are singular when every depth is the same, e.g. a plane facing the camera, without
+/// disturbing `a` and `b`), then takes `c = b x a` normalized and `e` as the mean of
+/// `P - z (x' a + y' b + c)`. Fails when fewer than three pixels are surfaces or the
+/// positions do not fit one pinhole camera (residual above 1e-3 of the scene's extent).
+pub fn camera_from_gbuffer(position: &Image, depth: &Image) -> Result<Camera, String> {
+    use nalgebra::{Matrix4, Vector4};
+    let (w, h) = (position.width, position.height);
+    let mut samples = Vec::new();
+    for y in 0..h {
+        for x in 0..w {
+            let (p, d) = (position.get(x, y), depth.get(x, y));
+            if is_surface(p) && depth_hit(d) && d[0] > 0.0 {
+                let xs = x as f64 + 0.5 - 0.5 * w as f64;
+                let ys = 0.5 * h as f64 - y as f64 - 0.5;
+                samples.push(([p[0] as f64, p[1] as f64, p[2] as f64], xs, ys, d[0] as f64));
+            }
+        }
+    }
+    if samples.len() < 3 {
+        return Err("fewer than three surface pixels to recover the camera from".into());
+    }
+    let mut ata = Matrix4::<f64>::zeros();
+    let mut atp = [Vector4::<f64>::zeros(); 3];
+    for (p, xs, ys, z) in &samples {
+        let row = Vector4::new(1.0, z * xs, z * ys, *z);
+        ata += row * row.transpose();
+        for k in 0..3 {
+            atp[k] += row * p[k];
+        }
+    }
+    let svd = ata.svd(true, true);
+    let eps = 1e-12 * svd.singular_values.max();
+    let mut a = [0.0; 3];
+    let mut b = [0.0; 3];
+    for k in 0..3 {
+        let t = svd.solve(&atp[k], eps)?;
+        a[k] = t[1];
+        b[k] = t[2];
+    }
+    let (fa, fb) = (dot(a, a).sqrt(), dot(b, b).sqrt());
+    let c = crate::types::vec3::cross(b, a);
+    let Some(c) = normalize(c).filter(|_| fa > 0.0 && fb > 0.0) else {
+        return Err("the pixels do not span the image plane".into());
+    };
+    let point = |xs: f64, ys: f64, z: f64| -> [f64; 3] {
+        std::array::from_fn(|k| z * (xs * a[k] + ys * b[k] + c[k]))
+    };
+    let mut e = [0.0; 3];
+    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    for (p, xs, ys, z) in &samples {
+        let q = point(*xs, *ys, *z);
+        for k in 0..3 {
+            e[k] += (p[k] - q[k]) / samples.len() as f64;
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    let extent = dot(sub(hi, lo), sub(hi, lo)).sqrt().max(1e-12);
+    let (mut zmin, mut zmax, mut worst) = (f64::INFINITY, 0.0f64, 0.0f64);
+    for (p, xs, ys, z) in &samples {
+        let q = point(*xs, *ys, *z);
+        let r = sub(*p, std::array::from_fn(|k| e[k] + q[k]));
+        worst = worst.max(dot(r, r).sqrt());
+        zmin = zmin.min(*z);
+        zmax = zmax.max(*z);
+    }
+    if !(worst <= 1e-3 * extent) {
+        return Err(format!(
+            "the passes do not fit one pinhole camera (residual {worst:.3e} against extent {extent:.3e})"
+        ));
+    }
+    let f = 2.0 / (fa + fb);
+    let up = b.map(|v| v / fb);
+    Ok(Camera {
+        eye: e,
+        target: std::array::from_fn(|k| e[k] + c[k]),
+        up,
+        fov_deg: 2.0 * (0.5 * h as f64 / f).atan().to_degrees(),
+        fov_axis: crate::types::FovAxis::Vertical,
+        width: w,
+        height: h,
+        near: (0.5 * zmin).max(1e-9),
+        far: (2.0 * zmax).max(1.0),
+    })
+}
+
 /// The unit world direction of the camera ray through the centre of pixel `(x, y)` (row 0
 /// at the top), as the tracers and the rasterizer's projection define it (`Camera`).
 #[inline]

@@ -9,11 +9,16 @@
 //! `q_i = p + R (t, b, n) s_i` for the radius `R`. Each `q_i` is projected by the camera;
 //! it is occluded when the depth buffer there is nearer than its own depth minus a bias,
 //! weighted by the range check `smoothstep(0, 1, R / |z_p - z_buffer|)`, so that far
-//! occluders do not darken. `AO = 1 - (sum of weights) / N`, then averaged over a 4 x 4
+//! occluders do not darken. The buffer is read through the tangent plane (position and
+//! normal) of the pixel `q_i` lands in, at `q_i`'s own ray, so a plane gives its exact depth
+//! there and surfaces seen at grazing angles do not occlude themselves between pixel
+//! centres (a departure from reading the nearest depth texel). `AO = 1 - (sum of weights) / N`, then averaged over a 4 x 4
 //! box of surface pixels (the tile's size) to remove the tile's pattern. Samples that leave
 //! the image or land on background do not occlude. Without a normal pass the normal is
 //! reconstructed from the position pass (cross product of the screen-space differences
-//! with the nearer neighbour on each axis).
+//! with the nearer neighbour on each axis). Without a camera (Framework3D's node has no
+//! camera socket) the camera is recovered from the position and depth passes
+//! (`camera_from_gbuffer`).
 
 use super::{check_size, depth_hit, is_surface, pass_camera};
 use crate::nodes::trace::sampling::Pcg32;
@@ -193,8 +198,21 @@ pub fn ssao(
             if !(sx >= 0.0 && sy >= 0.0 && sx < w as f64 && sy < h as f64) {
                 continue;
             }
-            let zb = zbuf[sy as usize * w as usize + sx as usize];
-            if zb > 0.0 && zb <= v[2] - par.bias {
+            let (ix, iy) = (sx as u32, sy as u32);
+            let mut zb = zbuf[iy as usize * w as usize + ix as usize];
+            if zb <= 0.0 {
+                continue;
+            }
+            // Read the buffer through the tangent plane of the pixel q lands in.
+            if let Some(m) = normalize(px3(normal.get(ix, iy))) {
+                let dq = sub(q, cam.eye);
+                let den = dot(dq, m);
+                let tq = dot(sub(px3(position.get(ix, iy)), cam.eye), m) / den;
+                if den.abs() > 1e-12 && tq > 0.0 && tq.is_finite() {
+                    zb = tq * v[2];
+                }
+            }
+            if zb <= v[2] - par.bias {
                 occ += smoothstep(r / (zp - zb).abs().max(1e-12));
             }
         }
@@ -252,7 +270,8 @@ fn declare(b: &mut NodeBuilder) {
         .optional()
         .doc("World-space normal pass (else reconstructed from the positions).");
     b.add_input::<Camera>("camera")
-        .doc("The camera the G-buffer was rendered with (projects the kernel).");
+        .optional()
+        .doc("The camera the G-buffer was rendered with (else recovered from position and depth).");
     b.add_input::<f64>("radius")
         .default(0.5)
         .range(1e-6, 1e6)
@@ -285,7 +304,25 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
             check_size(n, i, w, h)?;
         }
     }
-    let cam = pass_camera(ctx.input_opt("camera")?, None, w, h)?;
+    let cam = match (ctx.input_opt::<Arc<Camera>>("camera")?, &depth) {
+        (Some(c), _) => pass_camera(Some(c), None, w, h)?,
+        (None, Some(d)) => {
+            let c = super::camera_from_gbuffer(&position, d).map_err(|e| {
+                NodeError::invalid("camera", format!("not linked, and not recoverable: {e}"))
+            })?;
+            ctx.log(format!(
+                "camera recovered from the position and depth passes: eye {:.4?}, fov {:.3} degrees",
+                c.eye, c.fov_deg
+            ));
+            c
+        }
+        (None, None) => {
+            return Err(NodeError::invalid(
+                "camera",
+                "link the G-buffer's camera, or the depth pass to recover it from",
+            ))
+        }
+    };
     let radius: f64 = ctx.input("radius")?;
     if !(radius.is_finite() && radius > 0.0) {
         return Err(NodeError::invalid("radius", "must be finite and positive"));

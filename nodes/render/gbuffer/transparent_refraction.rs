@@ -10,9 +10,16 @@
 //! `F = r0 + (1 - r0)(1 - cos)^5`, `r0 = ((1 - ior) / (1 + ior))^2`, `cos = I.n`;
 //! `colour = (1 - F) T env(refracted) + F env(reflected)`, with `T` the base colour when
 //! `tint` is on (else 1, as the course's shader); total internal reflection gives `F = 1`.
-//! Like the course's shader the ray refracts once (the surface is a window onto the
-//! environment), so a sphere with `ior > 1` shows the environment behind it turned over in
-//! its centre, as a lens does. The point and directional lights add Blinn-Phong highlights
+//! The course's shader refracts once, as if the object filled the space behind its front
+//! surface (`exit = false`). With `exit` on (the default) the ray also leaves the object
+//! through its back, modelled by the osculating sphere of the front surface: the curvature
+//! `kappa = dn.dP / |dP|^2` is taken from the normal and position passes towards the
+//! neighbour nearer in depth on each axis (averaged), the ray travels inside the sphere of
+//! radius `1 / kappa` centred at `p - n / kappa` to its far side and refracts out with index
+//! `ior` (for a sphere this is exact, and a glass ball turns the environment behind it over
+//! in its centre, as a ball lens does); where the front is flat or concave (`kappa <= 0`)
+//! the back is taken parallel to it, a slab, and the ray leaves in its original direction.
+//! Only the entry's Fresnel term is applied. The point and directional lights add Blinn-Phong highlights
 //! `highlight * E (n.h)^shininess` (no shadows). Pixels without a surface are black, as the
 //! course's cleared target (an `environment_pass` after this fills them).
 
@@ -31,6 +38,8 @@ pub struct Refraction {
     pub shininess: f64,
     /// Multiply the refracted light by the base colour.
     pub tint: bool,
+    /// Refract out of the back as well (osculating sphere, see the module doc).
+    pub exit: bool,
 }
 
 impl Default for Refraction {
@@ -40,6 +49,7 @@ impl Default for Refraction {
             highlight: 1.0,
             shininess: 200.0,
             tint: false,
+            exit: true,
         }
     }
 }
@@ -66,6 +76,68 @@ pub fn refract(i: [f64; 3], n: [f64; 3], eta: f64) -> Option<[f64; 3]> {
 pub fn reflect(i: [f64; 3], n: [f64; 3]) -> [f64; 3] {
     let d = 2.0 * dot(n, i);
     std::array::from_fn(|c| i[c] - d * n[c])
+}
+
+fn px3(p: [f32; 4]) -> [f64; 3] {
+    [p[0] as f64, p[1] as f64, p[2] as f64]
+}
+
+/// The front surface's curvature at pixel `(x, y)`, `dn.dP / |dP|^2` towards the neighbour
+/// nearer in depth on each axis, averaged over the axes that have one (0 without any).
+fn curvature(position: &Image, normal: &Image, x: u32, y: u32, p: [f64; 3], n: [f64; 3]) -> f64 {
+    let (w, h) = (position.width, position.height);
+    let at = |qx: u32, qy: u32| {
+        let (pp, nn) = (position.get(qx, qy), normal.get(qx, qy));
+        if !is_surface(pp) {
+            return None;
+        }
+        let dp = sub(px3(pp), p);
+        let d2 = dot(dp, dp);
+        let m = normalize(px3(nn))?;
+        (d2 > 0.0).then(|| (d2, dot(sub(m, n), dp) / d2))
+    };
+    let axis = |a: Option<(u32, u32)>, b: Option<(u32, u32)>| {
+        let a = a.and_then(|(qx, qy)| at(qx, qy));
+        let b = b.and_then(|(qx, qy)| at(qx, qy));
+        match (a, b) {
+            (Some(u), Some(v)) => Some(if u.0 <= v.0 { u.1 } else { v.1 }),
+            (u, v) => u.or(v).map(|t| t.1),
+        }
+    };
+    let ks: Vec<f64> = [
+        axis(
+            (x + 1 < w).then_some((x + 1, y)),
+            x.checked_sub(1).map(|xm| (xm, y)),
+        ),
+        axis(
+            (y + 1 < h).then_some((x, y + 1)),
+            y.checked_sub(1).map(|ym| (x, ym)),
+        ),
+    ]
+    .into_iter()
+    .flatten()
+    .collect();
+    if ks.is_empty() {
+        0.0
+    } else {
+        ks.iter().sum::<f64>() / ks.len() as f64
+    }
+}
+
+/// The direction in which a ray refracted into the surface at `p` (normal `n`, facing the
+/// eye) along `t` leaves the object's back (see the module doc); `None` on total internal
+/// reflection there.
+fn exit_direction(p: [f64; 3], n: [f64; 3], t: [f64; 3], view: [f64; 3], kappa: f64, ior: f64) -> Option<[f64; 3]> {
+    if !(kappa > 1e-9 && kappa.is_finite()) {
+        return Some(view);
+    }
+    let r = 1.0 / kappa;
+    let c: [f64; 3] = std::array::from_fn(|k| p[k] - r * n[k]);
+    // P lies on the sphere: the far intersection is at s = -2 t.(P - C).
+    let s = -2.0 * dot(t, sub(p, c));
+    let p2: [f64; 3] = std::array::from_fn(|k| p[k] + s * t[k]);
+    let n2 = normalize(sub(p2, c))?;
+    refract(t, n2.map(|v| -v), ior)
 }
 
 /// Shades the surface pixels of the G-buffer (`position`, `normal`, `depth`, optional
@@ -100,9 +172,17 @@ pub fn transparent_refraction(
         }
         let view = iv.map(|c| -c);
         let refl = sky.eval(reflect(view, n));
-        let (fr, trans) = match refract(view, n, 1.0 / set.ior) {
-            Some(t) => (schlick(dot(iv, n), set.ior), sky.eval(t)),
-            None => (1.0, [0.0; 3]),
+        let inside = refract(view, n, 1.0 / set.ior);
+        let out = match (inside, set.exit) {
+            (Some(t), true) => {
+                let kappa = curvature(position, normal, x, y, p, n);
+                exit_direction(p, n, t, view, kappa, set.ior)
+            }
+            (t, _) => t,
+        };
+        let (fr, trans) = match (inside, out) {
+            (Some(_), Some(t)) => (schlick(dot(iv, n), set.ior), sky.eval(t)),
+            _ => (1.0, [0.0; 3]),
         };
         let tint = match (set.tint, base_color) {
             (true, Some(b)) => {
@@ -163,6 +243,9 @@ fn declare(b: &mut NodeBuilder) {
     b.add_input::<bool>("tint")
         .default(false)
         .doc("Multiply the refracted light by the base colour.");
+    b.add_input::<bool>("exit")
+        .default(true)
+        .doc("Refract out of the object's back too (its osculating sphere); off: one refraction, as the course's shader.");
     b.add_input::<Color>("background")
         .default(Color([0.0, 0.0, 0.0]))
         .doc("What refracted and reflected rays see when the scene has no environment light.");
@@ -189,6 +272,7 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
         highlight: ctx.input("highlight")?,
         shininess: ctx.input("shininess")?,
         tint: ctx.input("tint")?,
+        exit: ctx.input("exit")?,
     };
     if !(set.ior.is_finite() && set.ior >= 1.0) {
         return Err(NodeError::invalid("ior", "must be finite and at least 1"));

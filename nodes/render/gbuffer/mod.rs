@@ -153,7 +153,7 @@ pub fn camera_from_gbuffer(position: &Image, depth: &Image) -> Result<Camera, St
         zmin = zmin.min(*z);
         zmax = zmax.max(*z);
     }
-    if !(worst <= 1e-3 * extent) {
+    if worst.is_nan() || worst > 1e-3 * extent {
         return Err(format!(
             "the passes do not fit one pinhole camera (residual {worst:.3e} against extent {extent:.3e})"
         ));

@@ -21,8 +21,11 @@ fn near_of(diag: f64) -> f64 {
     (1e-5 * diag).max(1e-9)
 }
 
+/// An axis-aligned box (low and high corners).
+type Bounds = ([f64; 3], [f64; 3]);
+
 /// The scene's triangles and bounding box, flattened as the rasterizer does.
-fn tris_and_bounds(scene: &Scene) -> Result<(Vec<[[f64; 3]; 3]>, ([f64; 3], [f64; 3])), String> {
+fn tris_and_bounds(scene: &Scene) -> Result<(Vec<[[f64; 3]; 3]>, Bounds), String> {
     let g = scene_geometry(scene)?;
     Ok((g.pos, g.bounds))
 }

@@ -346,8 +346,8 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
         Some(c) => {
             let mut o = (**c).clone();
             for (p, a) in o.pixels.iter_mut().zip(&ao.pixels) {
-                for k in 0..3 {
-                    p[k] *= a[0];
+                for c in p.iter_mut().take(3) {
+                    *c *= a[0];
                 }
             }
             o

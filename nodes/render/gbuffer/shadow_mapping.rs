@@ -23,9 +23,11 @@ fn near_of(diag: f64) -> f64 {
 
 /// An axis-aligned box (low and high corners).
 type Bounds = ([f64; 3], [f64; 3]);
+/// World-space triangles.
+type Tris = Vec<[[f64; 3]; 3]>;
 
 /// The scene's triangles and bounding box, flattened as the rasterizer does.
-fn tris_and_bounds(scene: &Scene) -> Result<(Vec<[[f64; 3]; 3]>, Bounds), String> {
+fn tris_and_bounds(scene: &Scene) -> Result<(Tris, Bounds), String> {
     let g = scene_geometry(scene)?;
     Ok((g.pos, g.bounds))
 }

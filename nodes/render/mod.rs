@@ -1,10 +1,10 @@
 //! Render nodes: the scene description shared by the rasterizer and the tracers (camera,
 //! lights, materials, scene), the rasterizer, and mesh previews and their animations
-//! (`mesh_preview`, `mesh_sequence`).
+//! (`mesh_preview`, `mesh_sequence`), and the G-buffer passes over its output (`gbuffer`).
 
 crate::node_domain! {
     category: "render",
-    nodes: [camera, light, material, mesh_sequence, mesh_uv_project, raster, scene],
+    nodes: [camera, gbuffer, light, material, mesh_sequence, mesh_uv_project, raster, scene],
     modules: [mesh_preview],
 }
 

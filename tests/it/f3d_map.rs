@@ -205,7 +205,16 @@ fn composition_family_maps_lights_and_warns() {
 #[test]
 fn hw9_render_and_composition_graphs_import_with_warnings() {
     let reg = builtin_registry();
-    for (f, n) in [("RenderGraph.json", 8), ("CompositionGraph.json", 1)] {
+    // The render graph keeps its two shading passes (transparent refraction into the
+    // environment pass); the scene, rasterize and present nodes are not run yet.
+    for (f, n, types) in [
+        (
+            "RenderGraph.json",
+            6,
+            vec!["environment_pass", "transparent_refraction"],
+        ),
+        ("CompositionGraph.json", 1, vec![]),
+    ] {
         let g = import(
             &read(&format!("assets/course/hw9/{f}")),
             &Aliases::default(),
@@ -215,7 +224,9 @@ fn hw9_render_and_composition_graphs_import_with_warnings() {
         let w = warnings(&g);
         let not_run = w.iter().filter(|w| w.contains(") is not run:")).count();
         assert_eq!(not_run, n, "{f}: {w:?}");
-        assert!(g.nodes.is_empty(), "{f}");
+        let mut got: Vec<&str> = g.nodes.values().map(|n| n.node_type.as_str()).collect();
+        got.sort();
+        assert_eq!(got, types, "{f}");
     }
     // Framework3D saves an untouched editor with null parts: imported, reported empty.
     let t = json!({"links_info": null, "nodes_info": null, "sockets_info": null});

@@ -63,14 +63,15 @@ pub enum ShadowMap {
     },
 }
 
-/// Builds an orthographic shadow map for light travelling along `dir`, fitted to the box
-/// `bounds` (so every triangle casts), at `res` x `res`.
-pub fn directional_shadow_map(
-    tris: &[[[f64; 3]; 3]],
+/// The orthographic frame of a directional light's shadow map: light-space axes
+/// `[right, up, forward]` for light travelling along `dir`, and the window fitted to the box
+/// `bounds` (left `x0`, top `y1`, `k` pixels per world unit at `res` x `res`). Shared by
+/// `directional_shadow_map` and the G-buffer passes, which rebuild a map from its depths.
+pub(crate) fn directional_frame(
     dir: [f64; 3],
     bounds: ([f64; 3], [f64; 3]),
     res: u32,
-) -> ShadowMap {
+) -> ([[f64; 3]; 3], f64, f64, f64) {
     let f = unit(dir);
     let a = if f[1].abs() > 0.9 {
         [1.0, 0.0, 0.0]
@@ -100,6 +101,18 @@ pub fn directional_shadow_map(
     let pad = 0.01 * ext;
     let (x0, y1) = (x0 - pad, y1 + pad);
     let k = res as f64 / (ext + 2.0 * pad);
+    ([r, u, f], x0, y1, k)
+}
+
+/// Builds an orthographic shadow map for light travelling along `dir`, fitted to the box
+/// `bounds` (so every triangle casts), at `res` x `res`.
+pub fn directional_shadow_map(
+    tris: &[[[f64; 3]; 3]],
+    dir: [f64; 3],
+    bounds: ([f64; 3], [f64; 3]),
+    res: u32,
+) -> ShadowMap {
+    let ([r, u, f], x0, y1, k) = directional_frame(dir, bounds, res);
     let setups: Vec<_> = tris
         .par_iter()
         .map(|t| {
@@ -121,7 +134,8 @@ pub fn directional_shadow_map(
     }
 }
 
-fn cube_axes() -> [[[f64; 3]; 3]; 6] {
+/// The axes `[right, up, forward]` of a cube map's faces +X, -X, +Y, -Y, +Z, -Z.
+pub(crate) fn cube_axes() -> [[[f64; 3]; 3]; 6] {
     let fw = [
         [1.0, 0.0, 0.0],
         [-1.0, 0.0, 0.0],

@@ -82,7 +82,9 @@ pub fn link_present_fallback(
                     found = Some((m, mid));
                     break 'search;
                 }
-                skipped.push(format!("{} (node {m})", info[&m].0));
+                if !spec.nodes.contains_key(&mid) {
+                    skipped.push(format!("{} (node {m})", info[&m].0));
+                }
                 queue.push_back(m);
             }
         }

@@ -264,6 +264,7 @@ fn run(registry: &Registry, args: &ProjectArgs) -> Result<i32, (i32, String)> {
     // 4. Per frame: the stage, then the render graph.
     for (k, g) in geometry.into_iter().enumerate() {
         let frame = f0 + k as i64;
+        monitor.set_prefix(format!("[frame {frame}] "));
         let st = stage::frame_stage(g, &composition, bounds, (args.width, args.height));
         let stage_path = args.out.join(format!("stage_{frame:04}.usda"));
         stage::write(&st, &stage_path).map_err(|e| (EXIT_NODE_FAILED, e))?;

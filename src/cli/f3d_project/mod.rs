@@ -73,8 +73,9 @@ fn validate(
         hash: hash.to_string(),
     };
     crate::validate::validate_with(&g, registry, assets).map_err(|errs| {
+        // Each error names the file already.
         errs.iter()
-            .map(|e| format!("{}: {e}", file.display()))
+            .map(|e| e.to_string())
             .collect::<Vec<_>>()
             .join("\n")
     })

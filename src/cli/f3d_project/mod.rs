@@ -105,6 +105,12 @@ fn run(registry: &Registry, args: &ProjectArgs) -> Result<i32, (i32, String)> {
         None => (0, 0),
         Some(r) => r.map_err(usage)?,
     };
+    // One stage per frame is kept until rendering: bound the range.
+    if f1.checked_sub(f0).is_none_or(|n| n >= 100_000) {
+        return Err(usage(format!(
+            "--frames {f0}..{f1}: at most 100000 frames per run"
+        )));
+    }
     let aliases = match &args.f3d_aliases {
         Some(p) => super::read_aliases(p).map_err(usage)?,
         None => Default::default(),
@@ -254,17 +260,16 @@ fn run(registry: &Registry, args: &ProjectArgs) -> Result<i32, (i32, String)> {
         }
     }
     // 3. The camera's framing covers the geometry of every frame.
-    let mut bounds = None;
-    let mut geometry = Vec::new();
+    // (The layers are read twice rather than all kept in memory.)
+    let mut bounds = composition.bounds();
     for files in &layers {
         let s = stage::geometry_stage(files).map_err(invalid)?;
         bounds = stage::union(bounds, s.bounds());
-        geometry.push(s);
     }
-    bounds = stage::union(bounds, composition.bounds());
     // 4. Per frame: the stage, then the render graph.
-    for (k, g) in geometry.into_iter().enumerate() {
+    for (k, files) in layers.iter().enumerate() {
         let frame = f0 + k as i64;
+        let g = stage::geometry_stage(files).map_err(invalid)?;
         monitor.set_prefix(format!("[frame {frame}] "));
         let st = stage::frame_stage(g, &composition, bounds, (args.width, args.height));
         let stage_path = args.out.join(format!("stage_{frame:04}.usda"));

@@ -40,6 +40,10 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let text = std::fs::read_to_string(&path).map_err(|e| NodeError::io(&path, e).at("path"))?;
     let stage = read_stage(&text)
         .map_err(|e| NodeError::invalid("path", format!("{}: {e}", path.display())))?;
+    // Each point becomes an octahedron: 6 positions and UVs, 8 triangles (about 300 bytes).
+    let points: u64 = stage.points.iter().map(|p| p.points.len() as u64).sum();
+    let what = format!("{}: {points} points as octahedra", path.display());
+    ctx.reserve_bytes("path", &what, crate::node::bytes_of(&[points, 300]))?;
     let dir = path.parent().map(|d| d.to_path_buf()).unwrap_or_default();
     let files = ctx.files().clone();
     let mut load = |file: &str| -> Result<Option<Arc<Image>>, String> {

@@ -267,6 +267,7 @@ fn run(registry: &Registry, args: &ProjectArgs) -> Result<i32, (i32, String)> {
         bounds = stage::union(bounds, s.bounds());
     }
     // 4. Per frame: the stage, then the render graph.
+    monitor.start_frames(f0, f1);
     for (k, files) in layers.iter().enumerate() {
         let frame = f0 + k as i64;
         let g = stage::geometry_stage(files).map_err(invalid)?;
@@ -284,6 +285,7 @@ fn run(registry: &Registry, args: &ProjectArgs) -> Result<i32, (i32, String)> {
             hash,
         } = &render
         else {
+            monitor.frame_done(f0, f1, frame);
             continue;
         };
         let mut spec = (**spec).clone();
@@ -307,6 +309,7 @@ fn run(registry: &Registry, args: &ProjectArgs) -> Result<i32, (i32, String)> {
             validate(file, &args.dir, spec, hash, registry, &args.assets).map_err(invalid)?;
         let r = exec.run(&valid, &opts(args.out.clone()), frame);
         report(&r, "render");
+        monitor.frame_done(f0, f1, frame);
     }
     Ok(code)
 }

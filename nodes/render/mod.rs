@@ -4,7 +4,7 @@
 
 crate::node_domain! {
     category: "render",
-    nodes: [camera, gbuffer, light, material, mesh_sequence, mesh_uv_project, raster, scene],
+    nodes: [camera, gbuffer, light, material, mesh_sequence, mesh_uv_project, raster, scene, stage],
     modules: [mesh_preview],
 }
 

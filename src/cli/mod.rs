@@ -8,6 +8,7 @@
 mod chart;
 mod describe;
 mod dot;
+mod f3d_project;
 mod import_f3d;
 mod nodes;
 mod progress;
@@ -137,6 +138,12 @@ enum Cmd {
         #[arg(long, requires = "list_map")]
         markdown: bool,
     },
+    /// Run a Framework3D project folder: the geometry graph per frame, the stage built by the
+    /// composition graph, and the render graph's frames (docs/framework3d.md).
+    #[command(
+        after_help = "Example: cgnodes f3d-project assets/course/hw9 --frames 0..20 --assets assets/course_hw9 --out out"
+    )]
+    F3dProject(f3d_project::ProjectArgs),
     /// Print what made a file cgnodes wrote: version, graph hash, node, parameters, frame.
     #[command(after_help = "Example: cgnodes provenance out/arap_cow/layout.png --json")]
     Provenance {
@@ -416,6 +423,7 @@ pub fn main_with(registry: Registry) -> i32 {
             }
             _ => import_f3d::list_map(aliases.as_deref(), markdown),
         },
+        Cmd::F3dProject(args) => f3d_project::cmd(&registry, args),
         Cmd::Provenance { file, json } => provenance::cmd(&file, json),
         Cmd::Completions { shell } => {
             use clap::CommandFactory;

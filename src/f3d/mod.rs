@@ -16,6 +16,7 @@ use std::collections::BTreeMap;
 
 mod builtin;
 mod names;
+pub mod present;
 pub mod table;
 mod util;
 use names::{write_usd_path, write_usd_paths};

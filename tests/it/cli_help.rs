@@ -32,6 +32,7 @@ fn help_lists_exit_codes_and_each_subcommand_has_an_example() {
         "sweep-merge",
         "chart",
         "import-f3d",
+        "f3d-project",
         "completions",
     ] {
         let (ok, h) = cgnodes(&[sub, "--help"]);

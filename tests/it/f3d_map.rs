@@ -186,48 +186,84 @@ fn composition_family_maps_lights_and_warns() {
     )
     .unwrap();
     let l = &g.nodes["comp_add_point_light_20"];
-    assert_eq!(l.node_type, "light_point");
+    assert_eq!(l.node_type, "stage_light");
+    assert_eq!(l.params["kind"], json!("point"));
     assert_eq!(l.params["position"], json!([1.5, -2.0, 3.0]));
     assert_eq!(l.params["color"], json!([0.5, 0.25, 1.0]));
+    assert_eq!(l.params["radius"], json!(0.1));
+    assert_eq!(l.params["path"], json!("Light"));
+    let r = &g.nodes["comp_read_usd_1"];
+    assert_eq!(r.node_type, "stage_read");
+    assert_eq!(r.params["path"], json!("sphere.usda"));
+    let m = &g.nodes["comp_merge_to_global_10"];
+    assert_eq!(m.node_type, "stage_merge");
+    assert_eq!(m.params["path"], json!("Scene"));
     assert_eq!(
-        g.nodes["comp_read_usd_1"].params["path"],
-        json!("sphere.usda")
+        m.inputs["layer"],
+        cgnodes::graph::format::LinkSpec::One("comp_read_usd_1.layer".into())
     );
-    assert!(!g.nodes.contains_key("comp_merge_to_global_10"));
-    let w = warnings(&g);
-    assert!(
-        w.iter()
-            .any(|w| w.starts_with("comp_add_dome_light (node 30) is not run")),
-        "{w:?}"
+    let d = &g.nodes["comp_add_dome_light_30"];
+    assert_eq!(
+        (&d.params["kind"], &d.params["file"]),
+        (&json!("dome"), &json!("garden.exr"))
     );
+    assert!(warnings(&g).is_empty(), "{:?}", warnings(&g));
 }
 
 #[test]
 fn hw9_render_and_composition_graphs_import_with_warnings() {
     let reg = builtin_registry();
-    // The render graph keeps its two shading passes (transparent refraction into the
-    // environment pass); the scene, rasterize and present nodes are not run yet.
-    for (f, n, types) in [
-        (
-            "RenderGraph.json",
-            6,
-            vec!["environment_pass", "transparent_refraction"],
-        ),
-        ("CompositionGraph.json", 1, vec![]),
+    // Every node of the render graph is mapped: the stage readers, the rasterizer, the two
+    // shading passes (transparent refraction into the environment pass) and present.
+    let g = import(
+        &read("assets/course/hw9/RenderGraph.json"),
+        &Aliases::default(),
+        &reg,
+    )
+    .unwrap();
+    let not_run = warnings(&g)
+        .iter()
+        .filter(|w| w.contains(") is not run:"))
+        .count();
+    assert_eq!(not_run, 0, "{:?}", warnings(&g));
+    let mut types: Vec<&str> = g.nodes.values().map(|n| n.node_type.as_str()).collect();
+    types.sort();
+    types.dedup();
+    assert_eq!(
+        types,
+        [
+            "environment_pass",
+            "image_save",
+            "render_raster",
+            "stage_load",
+            "transparent_refraction"
+        ]
+    );
+    for id in [
+        "render_scene_camera_13",
+        "render_scene_meshes_19",
+        "render_scene_lights_36",
     ] {
-        let g = import(
-            &read(&format!("assets/course/hw9/{f}")),
-            &Aliases::default(),
-            &reg,
-        )
-        .unwrap_or_else(|e| panic!("{f}: {e}"));
-        let w = warnings(&g);
-        let not_run = w.iter().filter(|w| w.contains(") is not run:")).count();
-        assert_eq!(not_run, n, "{f}: {w:?}");
-        let mut got: Vec<&str> = g.nodes.values().map(|n| n.node_type.as_str()).collect();
-        got.sort();
-        assert_eq!(got, types, "{f}");
+        assert_eq!(g.nodes[id].node_type, "stage_load", "{id}");
     }
+    let r = &g.nodes["render_rasterize_impl_1"];
+    assert_eq!(r.node_type, "render_raster");
+    assert_eq!(
+        r.inputs["camera"],
+        cgnodes::graph::format::LinkSpec::One("render_scene_camera_13.camera".into())
+    );
+    assert_eq!(g.nodes["render_present_50"].node_type, "image_save");
+    let g = import(
+        &read("assets/course/hw9/CompositionGraph.json"),
+        &Aliases::default(),
+        &reg,
+    )
+    .unwrap();
+    assert!(warnings(&g).is_empty(), "{:?}", warnings(&g));
+    let d = &g.nodes["comp_add_dome_light_1"];
+    assert_eq!(d.params["color"], json!([1.0, 1.0, 2.013000011444092]));
+    assert_eq!(d.params["file"], json!("garden.exr"));
+    assert_eq!(d.params["path"], json!("DomeLight"));
     // Framework3D saves an untouched editor with null parts: imported, reported empty.
     let t = json!({"links_info": null, "nodes_info": null, "sockets_info": null});
     let g = import(&t, &Aliases::default(), &reg).unwrap();

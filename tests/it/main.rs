@@ -14,6 +14,7 @@ mod course_graphs;
 mod curve;
 mod f3d;
 mod f3d_map;
+mod f3d_project;
 mod gbuffer;
 mod graphs;
 mod hostile;

@@ -119,6 +119,18 @@ impl<'a> Lexer<'a> {
                 self.i += q;
                 Tok::Str(text)
             }
+            b'@' => {
+                // An asset path `@file@`, read as a string (a dome light's texture file).
+                let start = self.i + 1;
+                let end = self.s[start..]
+                    .iter()
+                    .position(|&b| b == b'@' || b == b'\n')
+                    .map(|p| start + p)
+                    .filter(|&e| self.s[e] == b'@')
+                    .ok_or_else(|| err(line, "unterminated asset path '@'"))?;
+                self.i = end + 1;
+                Tok::Str(String::from_utf8_lossy(&self.s[start..end]).into_owned())
+            }
             b'<' => {
                 let start = self.i + 1;
                 while self.i < self.s.len() && self.s[self.i] != b'>' {

@@ -143,6 +143,17 @@ fn expand_indexed<T: Clone>(prim: &UsdPrim, a: &UsdAttr, values: Vec<T>) -> Resu
 pub fn read_usda(text: &str, prim_path: &str, apply_transform: bool) -> Result<Mesh, String> {
     let layer = parse_usda(text)?;
     let chain = find_mesh(&layer, prim_path)?;
+    read_mesh_chain(&layer, &chain, apply_transform)
+}
+
+/// Reads the `Mesh` prim at the end of `chain` (its ancestors, root first) of a parsed
+/// layer, with the chain's transforms applied when `apply_transform` is set (the stage
+/// reader walks a layer once and reads every mesh through this).
+pub fn read_mesh_chain(
+    layer: &UsdLayer,
+    chain: &[&UsdPrim],
+    apply_transform: bool,
+) -> Result<Mesh, String> {
     let prim = chain[chain.len() - 1];
     for a in &prim.attrs {
         check_time_samples(a).or_else(|e| {
@@ -286,7 +297,7 @@ pub fn read_usda(text: &str, prim_path: &str, apply_transform: bool) -> Result<M
         .is_some_and(|v| matches!(v, UsdValue::Str(s) | UsdValue::Ident(s) if s == "leftHanded"));
     let mut applied = None;
     if apply_transform {
-        let m = world_transform(&chain)?;
+        let m = world_transform(chain)?;
         if m != Mat4::identity() {
             applied = Some(m);
             transform_points(&m, &mut positions);
@@ -304,7 +315,7 @@ pub fn read_usda(text: &str, prim_path: &str, apply_transform: bool) -> Result<M
     mesh.uvs = uvs;
     mesh.colors = colors;
     mesh.attributes = attributes;
-    mesh.skin = super::skel::read_binding(&layer, &chain, nv, applied.as_ref(), apply_transform)?
+    mesh.skin = super::skel::read_binding(layer, chain, nv, applied.as_ref(), apply_transform)?
         .map(std::sync::Arc::new);
     if left {
         reverse_faces(&mut mesh);

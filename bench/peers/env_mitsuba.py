@@ -2,7 +2,10 @@
 """Mitsuba 3 against cgnodes' `render_path` under an environment map (issue 28).
 
     python3 bench/peers/env_mitsuba.py [--size 128] [--spp 1024] [--variant llvm_ad_rgb]
-                                       [--rotation 60] [--check-only]
+                                       [--rotation 60] [--check-only] [--docs] [--reuse]
+
+`--reuse` keeps cgnodes' two renders from an earlier run (target/env_mitsuba/cgnodes_*.exr)
+and renders only Mitsuba again. The docs' figures: `--size 256 --spp 1024 --docs`.
 
 Scene (written by this script into target/env_mitsuba/, the same files for both renderers):
 a UV sphere of radius 1 (48x24 segments, per-vertex normals `vn`, UVs `vt`) whose diffuse

@@ -10,13 +10,20 @@
 //! chart of RMSE against time for both goes to `docs/path_tracing_rmse.svg`.
 //!
 //! Options (after `--`): `--ref-spp N` (default 2048), `--spp a,b,c` (default 4,16,64,256),
-//! `--quick` (one 64-spp timing, no reference).
+//! `--quick` (one 64-spp timing, no reference), `--wide-bvh` (traverse the BVH collapsed to
+//! 4 children per node instead of the binary tree, to measure what it buys), `--scene igea`
+//! (the box with the 154k-triangle igea scan standing in it, white diffuse, as
+//! `trace_mitsuba.py --scene igea` builds it; `--igea PATH`, default
+//! `/work/shared/assets/meshes/igea_front.obj`). The SVG chart is written for the plain box
+//! only.
 
+use cgnodes::nodes::mesh::obj::load_obj;
 use cgnodes::nodes::trace::render_path::{render, Filter, PathSettings, Strategy};
 use cgnodes::nodes::trace::render_scene::{PinholeCamera, RenderScene};
 use cgnodes::nodes::trace::scene_load::load_obj_scene;
-use cgnodes::types::{Camera, FovAxis, Image};
+use cgnodes::types::{Camera, FovAxis, Image, Material, Scene, SceneObject};
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::time::Instant;
 
 fn cpu_seconds() -> f64 {
@@ -152,6 +159,37 @@ fn svg_chart(rows: &[Row], path: &Path) {
     std::fs::write(path, s).unwrap();
 }
 
+/// Adds the igea scan to the box: scaled so its largest extent is 0.8, its box centre at
+/// (0, -0.2, 0.2), white diffuse like the box's walls (`trace_mitsuba.py` applies the
+/// same transform, computed from the same vertex bounds).
+fn add_igea(scene: &mut Scene, path: &Path) {
+    let mut mesh = load_obj(path, "").unwrap_or_else(|e| panic!("{e}"));
+    let (mut lo, mut hi) = ([f64::MAX; 3], [f64::MIN; 3]);
+    for p in &mesh.positions {
+        for k in 0..3 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    let ext = (0..3).map(|k| hi[k] - lo[k]).fold(0.0, f64::max);
+    let s = 0.8 / ext;
+    let at = [0.0, -0.2, 0.2];
+    for p in &mut mesh.positions {
+        for k in 0..3 {
+            p[k] = (p[k] - 0.5 * (lo[k] + hi[k])) * s + at[k];
+        }
+    }
+    mesh.normals = None;
+    let white = Material {
+        base_color: [0.885809, 0.698859, 0.666422],
+        ..Default::default()
+    };
+    scene.objects.push(SceneObject {
+        mesh: Arc::new(mesh),
+        material: Some(Arc::new(white)),
+    });
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let get = |k: &str| {
@@ -169,7 +207,23 @@ fn main() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let out = root.join("target/trace_bench");
     std::fs::create_dir_all(&out).unwrap();
-    let scene = load_obj_scene(&root.join("assets/cornell/cornell_box.obj"), false).unwrap();
+    let which = get("--scene").unwrap_or("box".into());
+    let mut scene = load_obj_scene(&root.join("assets/cornell/cornell_box.obj"), false).unwrap();
+    if which == "igea" {
+        let p = get("--igea").unwrap_or("/work/shared/assets/meshes/igea_front.obj".into());
+        add_igea(&mut scene, Path::new(&p));
+    }
+    let ntris: usize = scene
+        .objects
+        .iter()
+        .map(|o| {
+            o.mesh
+                .face_counts()
+                .iter()
+                .map(|&c| (c as usize).saturating_sub(2))
+                .sum::<usize>()
+        })
+        .sum();
     let cam = Camera {
         eye: [0.0, 0.0, 3.9],
         target: [0.0; 3],
@@ -182,10 +236,13 @@ fn main() {
         far: 100.0,
     };
     let t = Instant::now();
-    let sc = RenderScene::new(&scene).unwrap();
+    let mut sc = RenderScene::new(&scene).unwrap();
+    if args.iter().any(|a| a == "--wide-bvh") {
+        sc.bvh.widen();
+    }
     let cam = PinholeCamera::new(&cam).unwrap();
     println!(
-        "scene flatten + BVH: {:.3} ms",
+        "scene {which} ({ntris} triangles) flatten + BVH: {:.3} ms",
         t.elapsed().as_secs_f64() * 1e3
     );
     let settings = |spp: u32, seed: u64| PathSettings {
@@ -210,14 +267,14 @@ fn main() {
         let (_, _, secs, cpu) = run(64, 1);
         let paths = 256.0 * 256.0 * 64.0;
         println!(
-            "cgnodes 64 spp: {secs:.3} s wall, {cpu:.2} s CPU on {threads} threads: {:.2} Mpaths/s wall, {:.2} Mpaths per CPU-second",
+            "cgnodes {which} 64 spp: {secs:.3} s wall, {cpu:.2} s CPU on {threads} threads: {:.2} Mpaths/s wall, {:.2} Mpaths per CPU-second",
             paths / secs / 1e6,
             paths / cpu.max(1e-9) / 1e6
         );
         return;
     }
-    let ref_path: PathBuf = out.join(format!("ref_box_{ref_spp}.exr"));
-    let ref_var_path: PathBuf = out.join(format!("ref_box_{ref_spp}_var.exr"));
+    let ref_path: PathBuf = out.join(format!("ref_{which}_{ref_spp}.exr"));
+    let ref_var_path: PathBuf = out.join(format!("ref_{which}_{ref_spp}_var.exr"));
     let (reference, ref_var) = match (load_exr(&ref_path), load_exr(&ref_var_path)) {
         (Some(r), Some(v)) => (r, v),
         _ => {
@@ -242,7 +299,7 @@ fn main() {
         let paths = 256.0 * 256.0 * spp as f64;
         let e = corrected(rmse(&img, &reference));
         println!(
-            "cgnodes box {spp:>5} spp: {secs:7.3} s wall ({cpu:.2} s CPU, {threads} threads), {:.2} Mpaths/s, {:.2} Mpaths per CPU-second, rmse_excl_light {e:.5}",
+            "cgnodes {which} {spp:>5} spp: {secs:7.3} s wall ({cpu:.2} s CPU, {threads} threads), {:.2} Mpaths/s, {:.2} Mpaths per CPU-second, rmse_excl_light {e:.5}",
             paths / secs / 1e6,
             paths / cpu.max(1e-9) / 1e6
         );
@@ -258,13 +315,16 @@ fn main() {
         let v: serde_json::Value = serde_json::from_str(&text).unwrap();
         for r in v["runs"].as_array().cloned().unwrap_or_default() {
             let variant = r["variant"].as_str().unwrap_or("?").to_string();
+            if r["scene"].as_str().unwrap_or("box") != which {
+                continue;
+            }
             let spp = r["spp"].as_u64().unwrap_or(0) as u32;
             let secs = r["seconds"].as_f64().unwrap_or(0.0);
             let cpu = r["cpu_seconds"].as_f64().unwrap_or(f64::NAN);
             let img = r["exr"].as_str().and_then(|p| load_exr(&out.join(p)));
             let e = img.map(|i| corrected(rmse(&i, &reference)));
             println!(
-                "mitsuba {variant} box {spp:>5} spp: {secs:7.3} s wall ({cpu:.2} s CPU), {:.2} Mpaths/s, {:.2} Mpaths per CPU-second, rmse_excl_light {}",
+                "mitsuba {variant} {which} {spp:>5} spp: {secs:7.3} s wall ({cpu:.2} s CPU), {:.2} Mpaths/s, {:.2} Mpaths per CPU-second, rmse_excl_light {}",
                 256.0 * 256.0 * spp as f64 / secs / 1e6,
                 256.0 * 256.0 * spp as f64 / cpu / 1e6,
                 e.map_or("-".into(), |e| format!("{e:.5}"))
@@ -281,7 +341,9 @@ fn main() {
     }
     let docs = root.join("docs");
     std::fs::create_dir_all(&docs).unwrap();
-    svg_chart(&rows, &docs.join("path_tracing_rmse.svg"));
+    if which == "box" {
+        svg_chart(&rows, &docs.join("path_tracing_rmse.svg"));
+    }
     // Equal-time comparison: interpolate each peer's RMSE at cgnodes' times (log-log).
     for r in rows.iter().filter(|r| r.who != "cgnodes") {
         if let Some(e) = r.rmse {

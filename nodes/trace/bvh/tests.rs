@@ -122,3 +122,56 @@ fn parallel_build_matches_counts() {
         }
     }
 }
+
+/// The 4-wide tree holds every triangle exactly once, each leaf's triangles inside the
+/// box its parent stores for it, and answers every query as the binary tree does (same
+/// triangle, same distance) for closest and any hit, rays starting inside and outside.
+#[test]
+#[allow(clippy::needless_range_loop)] // lanes index several arrays in step
+fn wide_tree_matches_binary_tree() {
+    let tris = random_tris(20_000, 13);
+    let binary = Bvh::build(&tris);
+    assert!(binary.wide.is_empty());
+    let mut bvh = binary.clone();
+    bvh.widen();
+    assert!(!bvh.wide.is_empty());
+    let mut seen = vec![0u32; bvh.tris.len()];
+    let mut nodes_seen = vec![0u32; bvh.wide.len()];
+    nodes_seen[0] = 1;
+    for n in &bvh.wide {
+        for l in 0..4 {
+            let c = n.child[l];
+            if c == u32::MAX {
+                continue;
+            }
+            if c & wide::LEAF != 0 {
+                let s = ((c & !wide::LEAF) >> 3) as usize;
+                for i in s..s + (c & 7) as usize {
+                    seen[i] += 1;
+                    for p in &bvh.tris[i] {
+                        for (k, x) in p.iter().enumerate() {
+                            assert!(*x >= n.min[k][l] && *x <= n.max[k][l]);
+                        }
+                    }
+                }
+            } else {
+                nodes_seen[c as usize] += 1;
+            }
+        }
+    }
+    assert!(seen.iter().all(|&s| s == 1), "a triangle missing or repeated");
+    assert!(nodes_seen.iter().all(|&s| s == 1), "a node unreachable or shared");
+    let mut r = Pcg32::new(21, 5);
+    for i in 0..4000 {
+        let org = if i % 2 == 0 {
+            [r.next_f32() * 6.0 - 1.0, r.next_f32() * 6.0 - 1.0, -2.0]
+        } else {
+            [r.next_f32() * 4.0, r.next_f32() * 4.0, r.next_f32() * 4.0]
+        };
+        let dir = normalize([r.next_f32() - 0.5, r.next_f32() - 0.5, r.next_f32() - 0.3]);
+        let a = bvh.intersect(org, dir, 3.0).map(|h| (h.t, h.prim));
+        let b = binary.intersect(org, dir, 3.0).map(|h| (h.t, h.prim));
+        assert_eq!(a, b);
+        assert_eq!(bvh.occluded(org, dir, 3.0), b.is_some());
+    }
+}

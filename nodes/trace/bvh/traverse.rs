@@ -8,8 +8,8 @@ use crate::nodes::trace::sampling::{sub, V3};
 /// axis `kz`, the permuted axes and the shear that maps the ray to +z.
 #[derive(Clone, Copy, Debug)]
 pub struct RayPre {
-    org: V3,
-    inv: V3,
+    pub(super) org: V3,
+    pub(super) inv: V3,
     kx: usize,
     ky: usize,
     kz: usize,
@@ -69,7 +69,7 @@ pub fn intersect_triangle(r: &RayPre, tri: &[V3; 3], tmax: f32) -> Option<(f32, 
 
 /// The test with the axis permutation fixed at compile time (no indexed loads).
 #[inline(always)]
-fn tri_test<const KX: usize, const KY: usize, const KZ: usize>(
+pub(super) fn tri_test<const KX: usize, const KY: usize, const KZ: usize>(
     r: &RayPre,
     tri: &[V3; 3],
     tmax: f32,
@@ -161,6 +161,16 @@ impl Bvh {
             return None;
         }
         let r = RayPre::new(org, dir);
+        if !self.wide.is_empty() {
+            return match (r.kx, r.ky, r.kz) {
+                (1, 2, 0) => self.traverse4::<ANY, 1, 2, 0>(&r, tmax),
+                (2, 1, 0) => self.traverse4::<ANY, 2, 1, 0>(&r, tmax),
+                (2, 0, 1) => self.traverse4::<ANY, 2, 0, 1>(&r, tmax),
+                (0, 2, 1) => self.traverse4::<ANY, 0, 2, 1>(&r, tmax),
+                (0, 1, 2) => self.traverse4::<ANY, 0, 1, 2>(&r, tmax),
+                _ => self.traverse4::<ANY, 1, 0, 2>(&r, tmax),
+            };
+        }
         match (r.kx, r.ky, r.kz) {
             (1, 2, 0) => self.traverse_k::<ANY, 1, 2, 0>(&r, tmax),
             (2, 1, 0) => self.traverse_k::<ANY, 2, 1, 0>(&r, tmax),

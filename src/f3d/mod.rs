@@ -33,7 +33,8 @@ pub struct Aliases {
 
 /// How one Framework3D node becomes a cgnodes node.
 ///
-/// Socket targets are a cgnodes socket name, `null` (dropped), or for inputs
+/// Socket targets are a cgnodes socket name, `null` (dropped: a link from a dropped output
+/// leaves the input it fed at its default, with a warning), or for inputs
 /// `"socket<helper.in:out"` (the Framework3D value or link goes into input `in` of a helper
 /// node whose output `out` feeds `socket`, e.g. `image<image_load.path:image`), and for
 /// outputs `"socket>helper.in:out"` (output `socket` passes through a helper node, e.g.
@@ -443,7 +444,15 @@ fn convert(
         }
         let source = match fmap.outputs.get(fsock) {
             Some(Some(s)) => s.clone(),
-            _ => return Err(sock_err(fnode, "output", fsock)),
+            Some(None) => {
+                // an output the map drops on purpose (e.g. the rasterizer's MetallicRoughness)
+                warnings.push(format!(
+                    "{} (node {}) input '{tsock}' keeps its default: output '{fsock}' of {} (node {}) has no cgnodes counterpart",
+                    tnode.id_name, tnode.id, fnode.id_name, fnode.id
+                ));
+                continue;
+            }
+            None => return Err(sock_err(fnode, "output", fsock)),
         };
         let fid = node_id(fnode);
         let src = if let Some((s, helper_spec)) = source.split_once('>') {

@@ -263,6 +263,39 @@ pub fn stage_to_scene(
         }
     };
     camera.check().map_err(|e| format!("camera: {e}"))?;
+    let mut camera = camera;
+    if stage.up_axis == UpAxis::Z {
+        y_up(&mut scene, &mut camera)?;
+    }
     scene.camera = Some(camera.clone());
     Ok((scene, camera))
+}
+
+/// Turns a Z-up stage's scene and camera into cgnodes' Y-up convention, (x, y, z) ->
+/// (x, z, -y) (a rotation by -90 degrees about x): the environment light's equirectangular
+/// image has its poles on +-y (`nodes/trace/environment.rs`), so a Framework3D dome light is
+/// seen with its horizon level. Images are unchanged; only world coordinates turn (the
+/// dome's turn about the up axis keeps its angle).
+fn y_up(scene: &mut Scene, camera: &mut Camera) -> Result<(), String> {
+    let r = |p: [f64; 3]| [p[0], p[2], -p[1]];
+    let m = nalgebra::Matrix4::new(
+        1.0, 0.0, 0.0, 0.0, //
+        0.0, 0.0, 1.0, 0.0, //
+        0.0, -1.0, 0.0, 0.0, //
+        0.0, 0.0, 0.0, 1.0,
+    );
+    for o in &mut scene.objects {
+        o.mesh = Arc::new(crate::nodes::mesh::mesh_transform::transform_mesh(&o.mesh, &m)?);
+    }
+    for l in &mut scene.lights {
+        match l {
+            Light::Point { position, .. } => *position = r(*position),
+            Light::Directional { direction, .. } => *direction = r(*direction),
+            Light::Environment { .. } => {}
+        }
+    }
+    camera.eye = r(camera.eye);
+    camera.target = r(camera.target);
+    camera.up = r(camera.up);
+    Ok(())
 }

@@ -124,14 +124,17 @@ fn lights_become_cgnodes_lights_with_the_framework_transforms() {
         }
         l => panic!("{l:?}"),
     }
+    // The Z-up stage is turned into cgnodes' Y-up world, (x, y, z) -> (x, z, -y): the point
+    // light at (1, -2, 3.5) on the stage is at (1, 3.5, 2).
     assert_eq!(
         scene.lights[1],
-        Light::Point { position: [1.0, -2.0, 3.5], color: [0.25, 0.5, 1.0], intensity: 2.0 }
+        Light::Point { position: [1.0, 3.5, 2.0], color: [0.25, 0.5, 1.0], intensity: 2.0 }
     );
-    // Rotate X 90: local -Z (the light's direction) turns to +Y (x-rotation, right-handed).
+    // Rotate X 90: local -Z (the light's direction) turns to +Y on the stage (x-rotation,
+    // right-handed), which is -Z in the Y-up scene.
     match &scene.lights[2] {
         Light::Directional { direction, .. } => {
-            let want = [0.0, 1.0, 0.0];
+            let want = [0.0, 0.0, -1.0];
             assert!((0..3).all(|k| (direction[k] - want[k]).abs() < 1e-12), "{direction:?}");
         }
         l => panic!("{l:?}"),
@@ -148,6 +151,8 @@ fn lights_become_cgnodes_lights_with_the_framework_transforms() {
     assert_eq!((tex.width, tex.height), (2, 2));
     assert_eq!(tex.pixels[1], [0.9, 0.2, 0.1, 1.0]);
     assert_eq!(cam.width, 32);
+    // the default camera's up (the stage's +Z) is the scene's +Y
+    assert!(cam.up[1] > 0.99 && scene.camera.as_ref() == Some(&cam), "{:?}", cam.up);
 }
 
 #[test]

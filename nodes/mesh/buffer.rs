@@ -1,6 +1,8 @@
 //! Framework3D's buffer nodes: `buffer_decompose2`/`buffer_decompose3` split a list of
 //! 2-/3-vectors into coordinate lists, `buffer_compose2`/`buffer_compose3` zip them back
-//! (used by imported graphs, e.g. "vertex X, Y become texcoords").
+//! (used by imported graphs, e.g. "vertex X, Y become texcoords"); `buffer_repeat`,
+//! `buffer_repeat2`, `buffer_repeat3` and `buffer_repeat_int` fill a list with `size` copies
+//! of one value (Framework3D's Create Buffer nodes).
 
 use crate::prelude::*;
 
@@ -72,12 +74,94 @@ where
     );
 }
 
+/// `size` copies of `value`: a constant buffer (Framework3D's `func_create_buffer*`).
+pub fn repeat<T: Clone>(value: T, size: usize) -> Vec<T> {
+    vec![value; size]
+}
+
+/// The largest `size` of `buffer_repeat*` (a guard against a mistyped count filling memory).
+pub const MAX_REPEAT: f64 = 1e7;
+
+/// The `size` input, checked against 0..=MAX_REPEAT (also when it arrives through a link).
+fn size(ctx: &mut ExecContext) -> Result<usize, NodeError> {
+    let n: i64 = ctx.input("size")?;
+    usize::try_from(n)
+        .ok()
+        .filter(|&n| n as f64 <= MAX_REPEAT)
+        .ok_or_else(|| NodeError::invalid("size", format!("{n} is outside 0..={MAX_REPEAT}")))
+}
+
+fn declare_size(b: &mut NodeBuilder) {
+    b.add_input::<i64>("size")
+        .default(1i64)
+        .range(0.0, MAX_REPEAT)
+        .doc("Number of copies.");
+}
+
+fn reg_repeat<const N: usize>(r: &mut Registry, name: &str)
+where
+    [f64; N]: Typed + FromValue + Into<Value>,
+{
+    r.add(
+        name,
+        |b| {
+            b.doc("A list of `size` copies of one vector (Framework3D's Create Buffer).");
+            for a in &AXES[..N] {
+                b.add_input::<f64>(a).default(0.0).doc("Coordinate of every entry.");
+            }
+            declare_size(b);
+            b.add_output::<Vec<[f64; N]>>("buffer");
+        },
+        |ctx| {
+            let mut v = [0.0; N];
+            for (k, a) in AXES[..N].iter().enumerate() {
+                v[k] = ctx.input(a)?;
+            }
+            let n = size(ctx)?;
+            ctx.set_output("buffer", repeat(v, n));
+            Ok(())
+        },
+    );
+}
+
 /// Registers the buffer nodes.
 pub fn register(r: &mut Registry) {
     reg_decompose::<2>(r, "buffer_decompose2");
     reg_decompose::<3>(r, "buffer_decompose3");
     reg_compose::<2>(r, "buffer_compose2");
     reg_compose::<3>(r, "buffer_compose3");
+    reg_repeat::<2>(r, "buffer_repeat2");
+    reg_repeat::<3>(r, "buffer_repeat3");
+    r.add(
+        "buffer_repeat",
+        |b| {
+            b.doc("A list of `size` copies of one number (Framework3D's Create Buffer1f).");
+            b.add_input::<f64>("x").default(0.0).doc("Value of every entry.");
+            declare_size(b);
+            b.add_output::<Vec<f64>>("buffer");
+        },
+        |ctx| {
+            let x: f64 = ctx.input("x")?;
+            let n = size(ctx)?;
+            ctx.set_output("buffer", repeat(x, n));
+            Ok(())
+        },
+    );
+    r.add(
+        "buffer_repeat_int",
+        |b| {
+            b.doc("A list of `size` copies of one integer (Framework3D's Create Buffer1i).");
+            b.add_input::<i64>("x").default(0i64).doc("Value of every entry.");
+            declare_size(b);
+            b.add_output::<Vec<i64>>("buffer");
+        },
+        |ctx| {
+            let x: i64 = ctx.input("x")?;
+            let n = size(ctx)?;
+            ctx.set_output("buffer", repeat(x, n));
+            Ok(())
+        },
+    );
 }
 
 #[cfg(test)]

@@ -152,12 +152,12 @@ pub const BUILTIN: &str = r#"{
       "Depth": "depth", "Lights": "scene", "Color": null, "Shader": null},
     "outputs": {"Color": "color"},
     "note": "transparent_refraction.fs: one refraction (ior 1.5, exit off) and the reflection into the environment, mixed by Schlick's Fresnel term, plus the lights' highlights"},
-  "func_create_buffer1f": {"unsupported": "no cgnodes node repeats one value into a buffer of Size entries yet"},
-  "func_create_buffer1i": {"unsupported": "no cgnodes node repeats one value into a buffer of Size entries yet"},
-  "func_create_buffer2f": {"unsupported": "no cgnodes node repeats one value into a buffer of Size entries yet"},
-  "func_create_buffer2i": {"unsupported": "no cgnodes node repeats one value into a buffer of Size entries yet"},
-  "func_create_buffer3f": {"unsupported": "no cgnodes node repeats one value into a buffer of Size entries yet"},
-  "func_create_buffer3i": {"unsupported": "no cgnodes node repeats one value into a buffer of Size entries yet"},
-  "func_create_buffer4f": {"unsupported": "no cgnodes node repeats one value into a buffer of Size entries yet"},
-  "func_create_buffer4i": {"unsupported": "no cgnodes node repeats one value into a buffer of Size entries yet"}
+  "func_create_buffer1f": {"type": "buffer_repeat", "inputs": {"X": "x", "Size": "size"}, "outputs": {"Buffer": "buffer"}},
+  "func_create_buffer1i": {"type": "buffer_repeat_int", "inputs": {"X": "x", "Size": "size"}, "outputs": {"Buffer": "buffer"}},
+  "func_create_buffer2f": {"type": "buffer_repeat2", "inputs": {"X": "x", "Y": "y", "Size": "size"}, "outputs": {"Buffer": "buffer"}},
+  "func_create_buffer2i": {"type": "buffer_repeat2", "inputs": {"X": "x", "Y": "y", "Size": "size"}, "outputs": {"Buffer": "buffer"}, "note": "cgnodes has no integer vectors: the entries are float 2-vectors"},
+  "func_create_buffer3f": {"type": "buffer_repeat3", "inputs": {"X": "x", "Y": "y", "Z": "z", "Size": "size"}, "outputs": {"Buffer": "buffer"}},
+  "func_create_buffer3i": {"type": "buffer_repeat3", "inputs": {"X": "x", "Y": "y", "Z": "z", "Size": "size"}, "outputs": {"Buffer": "buffer"}, "note": "cgnodes has no integer vectors: the entries are float 3-vectors"},
+  "func_create_buffer4f": {"unsupported": "cgnodes has no 4-vector type for the buffer's entries"},
+  "func_create_buffer4i": {"unsupported": "cgnodes has no 4-vector type for the buffer's entries"}
 }"#;

@@ -332,3 +332,55 @@ fn hw8_mass_spring_widgets_carry_over() {
         json!("projective")
     );
 }
+
+/// Create Buffer3f and Create Buffer1i (Framework3D's `func_create_buffer*`): the widget
+/// values become the repeat nodes' parameters, and `repeat` gives `Size` copies.
+#[test]
+fn create_buffer_widgets_become_repeat_nodes() {
+    let reg = builtin_registry();
+    let sock = |id: i64, ident: &str, inout: i64, v: Value| {
+        let mut s = json!({"ID": id, "identifier": ident, "in_out": inout});
+        if !v.is_null() {
+            s["value"] = v;
+        }
+        (id.to_string(), s)
+    };
+    let sockets: serde_json::Map<String, Value> = [
+        sock(2, "X", 1, json!(1.5)),
+        sock(3, "Y", 1, json!(-2.0)),
+        sock(4, "Z", 1, json!(3.25)),
+        sock(5, "Size", 1, json!(4)),
+        sock(6, "Buffer", 0, Value::Null),
+        sock(12, "X", 1, json!(7)),
+        sock(13, "Size", 1, json!(3)),
+        sock(14, "Buffer", 0, Value::Null),
+    ]
+    .into_iter()
+    .collect();
+    let tree = json!({"links_info": {}, "sockets_info": sockets, "nodes_info": {
+        "1": {"ID": 1, "id_name": "func_create_buffer3f", "inputs": {"0": 2, "1": 3, "2": 4, "3": 5}, "outputs": {"0": 6}},
+        "11": {"ID": 11, "id_name": "func_create_buffer1i", "inputs": {"0": 12, "1": 13}, "outputs": {"0": 14}}}});
+    let g = import(&tree, &Aliases::default(), &reg).unwrap();
+    let b3 = &g.nodes["create_buffer3f_1"];
+    assert_eq!(b3.node_type, "buffer_repeat3");
+    assert_eq!(
+        [
+            &b3.params["x"],
+            &b3.params["y"],
+            &b3.params["z"],
+            &b3.params["size"]
+        ],
+        [&json!(1.5), &json!(-2.0), &json!(3.25), &json!(4)]
+    );
+    let b1 = &g.nodes["create_buffer1i_11"];
+    assert_eq!(b1.node_type, "buffer_repeat_int");
+    assert_eq!(
+        (&b1.params["x"], &b1.params["size"]),
+        (&json!(7), &json!(3))
+    );
+    // The repeat function itself: Size copies of the value.
+    assert_eq!(
+        cgnodes::nodes::mesh::buffer::repeat([1.5, -2.0, 3.25], 4),
+        vec![[1.5, -2.0, 3.25]; 4]
+    );
+}

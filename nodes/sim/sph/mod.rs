@@ -15,6 +15,7 @@ pub mod kernel;
 pub mod neighbour_grid;
 pub mod neighbours;
 pub mod non_pressure;
+pub mod particle_box;
 pub mod points_save;
 pub mod pressure_solver;
 pub mod sph_fluid;
@@ -29,8 +30,9 @@ pub use wcsph::Wcsph;
 
 use crate::registry::Registry;
 
-/// Registers `sph_fluid` and `points_save`.
+/// Registers `sph_fluid`, `points_save`, `particles_in_box` and `particles_around_box`.
 pub fn register(r: &mut Registry) {
     sph_fluid::register(r);
+    particle_box::register(r);
     points_save::register(r);
 }

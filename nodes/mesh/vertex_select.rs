@@ -6,7 +6,9 @@
 use crate::types::{AttributeData, Domain, Mesh};
 
 /// Vertices named by a selection: `""`/`none`, a list of indices (`"0,39"` or `"0 39"`),
-/// `top_corners`, `top_edge`, `corners`, or `attr:NAME` (a vertex attribute, nonzero = selected).
+/// `top_corners`, `top_edge`, `corners`, `first_row_ends` (vertices 0 and floor(sqrt(n)) - 1:
+/// the two ends of the first row of a square grid, what Framework3D 2024's `MassSpring`
+/// fixes), or `attr:NAME` (a vertex attribute, nonzero = selected).
 /// `gravity` is the direction gravity pulls (its largest component names the axis; a zero
 /// vector means -z). "Top" is against gravity when the mesh extends along it (the lowest
 /// coordinate when gravity points along +axis), else along the in-plane axis with the largest
@@ -50,6 +52,10 @@ pub fn select_vertices(mesh: &Mesh, sel: &str, gravity: [f64; 3]) -> Result<Vec<
     }
     if n == 0 {
         return Ok(Vec::new());
+    }
+    if sel == "first_row_ends" {
+        let last = ((n as f64).sqrt().floor() as usize).saturating_sub(1);
+        return Ok(if last == 0 { vec![0] } else { vec![0, last] });
     }
     let (lo, hi) = mesh.bounds();
     let ext = [hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]];
@@ -102,7 +108,7 @@ pub fn select_vertices(mesh: &Mesh, sel: &str, gravity: [f64; 3]) -> Result<Vec<
             Ok(out)
         }
         other => Err(format!(
-            "'{other}' is not a selection: use indices like \"0,39\", top_corners, top_edge, corners, attr:NAME or none"
+            "'{other}' is not a selection: use indices like \"0,39\", top_corners, top_edge, corners, first_row_ends, attr:NAME or none"
         )),
     }
 }
@@ -128,6 +134,17 @@ mod tests {
             }
         }
         m
+    }
+
+    #[test]
+    fn first_row_ends_are_framework3ds_fixed_pair() {
+        // 5 x 5 vertices: 0 and sqrt(25) - 1 = 4, whatever the grid's orientation
+        let g = grid(4, 1.0, 0, 1);
+        assert_eq!(select_vertices(&g, "first_row_ends", DOWN_Z).unwrap(), vec![0, 4]);
+        // not a square count: floor(sqrt(30)) - 1 = 4
+        let mut m = g.clone();
+        m.positions.extend(vec![[0.0; 3]; 5]);
+        assert_eq!(select_vertices(&m, "first_row_ends", DOWN_Z).unwrap(), vec![0, 4]);
     }
 
     #[test]

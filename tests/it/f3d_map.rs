@@ -311,6 +311,8 @@ fn hw8_mass_spring_widgets_carry_over() {
         assert_eq!(p[ours], json!(widget(&tree, f3d) != json!(0)), "{f3d}");
     }
     assert_eq!(p["integrator"], json!("semi_implicit"));
+    // no widget fixes vertices: the pair Framework3D's MassSpring constructor fixes
+    assert_eq!(p["fixed"], json!("first_row_ends"));
     assert_eq!(
         g.nodes["mass_spring_20"].inputs["sphere_center"].links()[0].to_string(),
         "create_float3f_10.value"

@@ -15,17 +15,13 @@ import sys
 import numpy as np
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "envmaps"))
-from make_sky import write_exr  # noqa: E402
+from make_sky import directions, write_exr  # noqa: E402
 
 W, H = 64, 32
 
 
 def garden():
-    v = (np.arange(H) + 0.5) / H
-    u = (np.arange(W) + 0.5) / W
-    th = np.pi * v[:, None] * np.ones((1, W))
-    ph = 2 * np.pi * (u[None, :] - 0.5) * np.ones((H, 1))
-    d = np.stack([np.sin(th) * np.sin(ph), np.cos(th), -np.sin(th) * np.cos(ph)], -1)
+    d, ph = directions(W, H)
     up = d[..., 1]
     t = np.clip(up, 0, 1)[..., None]
     img = np.array([0.95, 0.97, 1.0]) * (1 - t) + np.array([0.35, 0.55, 0.95]) * t

@@ -16,12 +16,18 @@ import numpy as np
 W, H = 64, 32
 
 
-def sky():
-    v = (np.arange(H) + 0.5) / H
-    u = (np.arange(W) + 0.5) / W
-    th = np.pi * v[:, None] * np.ones((1, W))
-    ph = 2 * np.pi * (u[None, :] - 0.5) * np.ones((H, 1))
+def directions(w=W, h=H):
+    """The direction each texel centre looks along (h x w x 3) and its azimuth phi."""
+    v = (np.arange(h) + 0.5) / h
+    u = (np.arange(w) + 0.5) / w
+    th = np.pi * v[:, None] * np.ones((1, w))
+    ph = 2 * np.pi * (u[None, :] - 0.5) * np.ones((h, 1))
     d = np.stack([np.sin(th) * np.sin(ph), np.cos(th), -np.sin(th) * np.cos(ph)], -1)
+    return d, ph
+
+
+def sky():
+    d, _ = directions()
     up = d[..., 1]
     img = np.zeros((H, W, 3))
     t = np.clip(up, 0, 1)[..., None]

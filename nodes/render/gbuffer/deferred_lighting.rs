@@ -146,18 +146,7 @@ fn declare(b: &mut NodeBuilder) {
         .default(0.2)
         .range(0.0, 10.0)
         .doc("Ambient term ka*Ia, times the base colour.");
-    b.add_input::<i64>("pcf_radius")
-        .default(1i64)
-        .range(0.0, 4.0)
-        .doc("Percentage-closer filtering radius r: (2r+1)^2 taps.");
-    b.add_input::<f64>("shadow_bias")
-        .default(1.0)
-        .range(0.0, 100.0)
-        .doc("Constant depth bias, in shadow-map texels.");
-    b.add_input::<f64>("shadow_slope_bias")
-        .default(1.5)
-        .range(0.0, 100.0)
-        .doc("Slope-scaled depth bias, in texels per unit tan(angle) and PCF ring.");
+    crate::nodes::render::raster::render_raster::declare_shadow_params(b);
     b.add_input::<Color>("background")
         .default(Color([0.05, 0.05, 0.05]))
         .doc("Colour where no surface is.");
@@ -185,21 +174,11 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
         background: ctx.input::<Color>("background")?.0,
         ..Default::default()
     };
-    let pcf: i64 = ctx.input("pcf_radius")?;
-    if !(0..=4).contains(&pcf) {
-        return Err(NodeError::invalid("pcf_radius", "must lie in 0..=4"));
-    }
-    set.shadow = ShadowParams {
-        pcf_radius: pcf as u32,
-        bias: ctx.input("shadow_bias")?,
-        slope_bias: ctx.input("shadow_slope_bias")?,
-    };
+    set.shadow = crate::nodes::render::raster::render_raster::read_shadow_params(ctx)?;
     for (n, v) in [
         ("metallic", set.metallic),
         ("roughness", set.roughness),
         ("ambient", set.ambient),
-        ("shadow_bias", set.shadow.bias),
-        ("shadow_slope_bias", set.shadow.slope_bias),
     ] {
         if !(v.is_finite() && v >= 0.0) {
             return Err(NodeError::invalid(n, "must be finite and not negative"));

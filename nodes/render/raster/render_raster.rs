@@ -22,6 +22,42 @@ impl Choice for Wrap {
     ];
 }
 
+/// The shadow lookup's sockets (`pcf_radius`, `shadow_bias`, `shadow_slope_bias`), shared by
+/// `render_raster` and the G-buffer's `deferred_lighting`.
+pub(crate) fn declare_shadow_params(b: &mut NodeBuilder) {
+    b.add_input::<i64>("pcf_radius")
+        .default(1i64)
+        .range(0.0, 4.0)
+        .doc("Percentage-closer filtering radius r: (2r+1)^2 taps.");
+    b.add_input::<f64>("shadow_bias")
+        .default(1.0)
+        .range(0.0, 100.0)
+        .doc("Constant depth bias, in shadow-map texels.");
+    b.add_input::<f64>("shadow_slope_bias")
+        .default(1.5)
+        .range(0.0, 100.0)
+        .doc("Slope-scaled depth bias, in texels per unit tan(angle) and PCF ring.");
+}
+
+/// Reads and checks the sockets of `declare_shadow_params`.
+pub(crate) fn read_shadow_params(ctx: &mut ExecContext) -> Result<ShadowParams, NodeError> {
+    let pcf: i64 = ctx.input("pcf_radius")?;
+    if !(0..=4).contains(&pcf) {
+        return Err(NodeError::invalid("pcf_radius", "must lie in 0..=4"));
+    }
+    let p = ShadowParams {
+        pcf_radius: pcf as u32,
+        bias: ctx.input("shadow_bias")?,
+        slope_bias: ctx.input("shadow_slope_bias")?,
+    };
+    for (n, v) in [("shadow_bias", p.bias), ("shadow_slope_bias", p.slope_bias)] {
+        if !(v.is_finite() && v >= 0.0) {
+            return Err(NodeError::invalid(n, "must be finite and not negative"));
+        }
+    }
+    Ok(p)
+}
+
 fn declare(b: &mut NodeBuilder) {
     b.doc("Rasterizes a scene: Blinn-Phong with shadow maps, textures and normal maps, plus deferred passes.");
     b.add_input::<Scene>("scene")
@@ -45,18 +81,7 @@ fn declare(b: &mut NodeBuilder) {
         .default(2048i64)
         .range(256.0, 8192.0)
         .doc("Shadow map size; point-light cube faces use half of it.");
-    b.add_input::<i64>("pcf_radius")
-        .default(1i64)
-        .range(0.0, 4.0)
-        .doc("Percentage-closer filtering radius r: (2r+1)^2 taps.");
-    b.add_input::<f64>("shadow_bias")
-        .default(1.0)
-        .range(0.0, 100.0)
-        .doc("Constant depth bias, in shadow-map texels.");
-    b.add_input::<f64>("shadow_slope_bias")
-        .default(1.5)
-        .range(0.0, 100.0)
-        .doc("Slope-scaled depth bias, in texels per unit tan(angle) and PCF ring.");
+    declare_shadow_params(b);
     b.add_input::<f64>("ambient")
         .default(0.2)
         .range(0.0, 10.0)
@@ -111,21 +136,10 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
             "must lie in 256..=8192",
         ));
     }
-    let pcf: i64 = ctx.input("pcf_radius")?;
-    if !(0..=4).contains(&pcf) {
-        return Err(NodeError::invalid("pcf_radius", "must lie in 0..=4"));
-    }
-    let bias: f64 = ctx.input("shadow_bias")?;
-    let slope: f64 = ctx.input("shadow_slope_bias")?;
+    let shadow = read_shadow_params(ctx)?;
     let ambient: f64 = ctx.input("ambient")?;
-    for (n, v) in [
-        ("shadow_bias", bias),
-        ("shadow_slope_bias", slope),
-        ("ambient", ambient),
-    ] {
-        if !(v.is_finite() && v >= 0.0) {
-            return Err(NodeError::invalid(n, "must be finite and not negative"));
-        }
+    if !(ambient.is_finite() && ambient >= 0.0) {
+        return Err(NodeError::invalid("ambient", "must be finite and not negative"));
     }
     let wrap = ctx.choice::<Wrap>("texture_wrap")?;
     let bgc: Color = ctx.input("background")?;
@@ -135,11 +149,7 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
         cull_backfaces: ctx.input("cull_backfaces")?,
         shadows: ctx.input("shadows")?,
         shadow_resolution: res as u32,
-        shadow: ShadowParams {
-            pcf_radius: pcf as u32,
-            bias,
-            slope_bias: slope,
-        },
+        shadow,
         ambient,
         wrap,
         mipmaps: ctx.input("mipmaps")?,

@@ -266,7 +266,28 @@ fn run(registry: &Registry, args: &ProjectArgs) -> Result<i32, (i32, String)> {
         let s = stage::geometry_stage(files).map_err(invalid)?;
         bounds = stage::union(bounds, s.bounds());
     }
-    // 4. Per frame: the stage, then the render graph.
+    // 4. Per frame: the stage, then the render graph. The render graph's present fallback
+    // and stage size are set once; only the stage path changes from frame to frame.
+    let render_base = match &render {
+        ProjectGraph::Graph {
+            file, raw, spec, ..
+        } => {
+            let mut spec = (**spec).clone();
+            for n in spec.nodes.values_mut() {
+                if n.node_type == "stage_load" {
+                    n.params
+                        .insert("width".into(), serde_json::json!(args.width));
+                    n.params
+                        .insert("height".into(), serde_json::json!(args.height));
+                }
+            }
+            for w in crate::f3d::present::link_present_fallback(raw, &mut spec, registry) {
+                eprintln!("warning: {}: {w}", file.display());
+            }
+            Some(spec)
+        }
+        _ => None,
+    };
     monitor.start_frames(f0, f1);
     for (k, files) in layers.iter().enumerate() {
         let frame = f0 + k as i64;
@@ -278,31 +299,16 @@ fn run(registry: &Registry, args: &ProjectArgs) -> Result<i32, (i32, String)> {
         if !args.quiet {
             eprintln!("[frame {frame}] wrote {}", stage_path.display());
         }
-        let ProjectGraph::Graph {
-            file,
-            raw,
-            spec,
-            hash,
-        } = &render
-        else {
+        let (ProjectGraph::Graph { file, hash, .. }, Some(base)) = (&render, &render_base) else {
             monitor.frame_done(f0, f1, frame);
             continue;
         };
-        let mut spec = (**spec).clone();
+        let mut spec = base.clone();
         let abs = std::fs::canonicalize(&stage_path).unwrap_or(stage_path.clone());
         for n in spec.nodes.values_mut() {
             if n.node_type == "stage_load" {
                 n.params
                     .insert("path".into(), serde_json::json!(abs.to_string_lossy()));
-                n.params
-                    .insert("width".into(), serde_json::json!(args.width));
-                n.params
-                    .insert("height".into(), serde_json::json!(args.height));
-            }
-        }
-        for w in crate::f3d::present::link_present_fallback(raw, &mut spec, registry) {
-            if frame == f0 {
-                eprintln!("warning: {}: {w}", file.display());
             }
         }
         let valid =

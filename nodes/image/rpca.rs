@@ -4,6 +4,8 @@
 
 #[path = "rpca/admm.rs"]
 pub mod admm;
+#[path = "rpca/svt.rs"]
+pub mod svt;
 
 use crate::prelude::*;
 use admm::{Decomposition, Params};

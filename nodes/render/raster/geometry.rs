@@ -32,6 +32,20 @@ pub struct SceneGeometry {
     pub bounds: ([f64; 3], [f64; 3]),
 }
 
+impl SceneGeometry {
+    /// Empties every array, keeping its capacity, and drops the materials.
+    pub fn clear(&mut self) {
+        self.pos.clear();
+        self.nrm.clear();
+        self.uv.clear();
+        self.tan.clear();
+        self.mat.clear();
+        self.has_uv.clear();
+        self.materials.clear();
+        self.bounds = ([0.0; 3], [0.0; 3]);
+    }
+}
+
 /// Flattens a scene's meshes to triangles (polygons fan-triangulated). Normals come from
 /// the mesh when it has them, else area-weighted vertex normals; tangents from the UVs.
 pub fn scene_geometry(scene: &Scene) -> Result<SceneGeometry, String> {
@@ -43,7 +57,34 @@ pub fn scene_geometry(scene: &Scene) -> Result<SceneGeometry, String> {
 /// (180 smooths everything, 0 gives flat shading), so the edges of a box stay sharp while a
 /// tessellated sphere shades smooth. The tracers use it with a crease angle.
 pub fn scene_geometry_creased(scene: &Scene, crease_deg: f64) -> Result<SceneGeometry, String> {
-    let mut g = SceneGeometry::default();
+    scene_geometry_in(scene, crease_deg, SceneGeometry::default())
+}
+
+/// `scene_geometry_creased` writing into the arrays of `g` (cleared first, their capacity
+/// kept): a caller rendering frame after frame passes the previous frame's geometry, so the
+/// arrays (about 45 MB for 154k triangles) are neither reallocated nor page-faulted again.
+/// Every array is reserved for the scene's triangle count up front and filled in place.
+pub fn scene_geometry_in(
+    scene: &Scene,
+    crease_deg: f64,
+    mut g: SceneGeometry,
+) -> Result<SceneGeometry, String> {
+    g.clear();
+    // Fan triangulation gives n - 2 triangles per polygon of n corners.
+    let total: usize = scene
+        .objects
+        .iter()
+        .map(|o| {
+            let c = o.mesh.face_counts().iter();
+            c.map(|&n| (n as usize).saturating_sub(2)).sum::<usize>()
+        })
+        .sum();
+    g.pos.reserve_exact(total);
+    g.nrm.reserve_exact(total);
+    g.uv.reserve_exact(total);
+    g.tan.reserve_exact(total);
+    g.mat.reserve_exact(total);
+    g.has_uv.reserve_exact(total);
     let mut lo = [f64::INFINITY; 3];
     let mut hi = [f64::NEG_INFINITY; 3];
     let default_mat = Arc::new(Material::default());
@@ -75,12 +116,13 @@ pub fn scene_geometry_creased(scene: &Scene, crease_deg: f64) -> Result<SceneGeo
                 hi[k] = hi[k].max(q[k]);
             }
         }
+        // Every array is filled in place from index `base` (reserved above).
+        let base = g.pos.len();
+        let nt = tris.len();
         // Normals per corner.
-        let corner_normals: Vec<[[f64; 3]; 3]> = match &mesh.normals {
-            Some(a) if attr_len_ok(a.domain, a.values.len(), p.len(), tris.len()) => (0..tris
-                .len())
-                .into_par_iter()
-                .map(|t| {
+        match &mesh.normals {
+            Some(a) if attr_len_ok(a.domain, a.values.len(), p.len(), tris.len()) => {
+                g.nrm.par_extend((0..tris.len()).into_par_iter().map(|t| {
                     std::array::from_fn(|k| {
                         let v = match a.domain {
                             Domain::Vertex => a.values[tris[t][k] as usize],
@@ -89,9 +131,11 @@ pub fn scene_geometry_creased(scene: &Scene, crease_deg: f64) -> Result<SceneGeo
                         };
                         normalize(v).unwrap_or([0.0, 0.0, 1.0])
                     })
-                })
-                .collect(),
-            _ if crease_deg < 180.0 => creased_normals(p, &tris, crease_deg),
+                }))
+            }
+            _ if crease_deg < 180.0 => g
+                .nrm
+                .extend_from_slice(&creased_normals(p, &tris, crease_deg)),
             _ => {
                 let mut vn = vec![[0.0; 3]; p.len()];
                 for t in &tris {
@@ -105,35 +149,38 @@ pub fn scene_geometry_creased(scene: &Scene, crease_deg: f64) -> Result<SceneGeo
                         }
                     }
                 }
-                tris.par_iter()
-                    .map(|t| {
-                        let f = normalize(cross(
-                            sub(p[t[1] as usize], p[t[0] as usize]),
-                            sub(p[t[2] as usize], p[t[0] as usize]),
-                        ))
-                        .unwrap_or([0.0, 0.0, 1.0]);
-                        std::array::from_fn(|k| normalize(vn[t[k] as usize]).unwrap_or(f))
-                    })
-                    .collect()
+                g.nrm.par_extend(tris.par_iter().map(|t| {
+                    let f = normalize(cross(
+                        sub(p[t[1] as usize], p[t[0] as usize]),
+                        sub(p[t[2] as usize], p[t[0] as usize]),
+                    ))
+                    .unwrap_or([0.0, 0.0, 1.0]);
+                    std::array::from_fn(|k| normalize(vn[t[k] as usize]).unwrap_or(f))
+                }))
             }
         };
+        let corner_normals = &g.nrm[base..];
         // UVs per corner.
-        let corner_uvs: Option<Vec<[[f64; 2]; 3]>> = match &mesh.uvs {
-            Some(a) if attr_len_ok(a.domain, a.values.len(), p.len(), tris.len()) => Some(
-                (0..tris.len())
-                    .map(|t| {
-                        std::array::from_fn(|k| match a.domain {
-                            Domain::Vertex => a.values[tris[t][k] as usize],
-                            Domain::Corner => a.values[3 * t + k],
-                            Domain::Face => a.values[t],
-                        })
+        let has_uv = match &mesh.uvs {
+            Some(a) if attr_len_ok(a.domain, a.values.len(), p.len(), tris.len()) => {
+                g.uv.extend((0..tris.len()).map(|t| {
+                    std::array::from_fn(|k| match a.domain {
+                        Domain::Vertex => a.values[tris[t][k] as usize],
+                        Domain::Corner => a.values[3 * t + k],
+                        Domain::Face => a.values[t],
                     })
-                    .collect(),
-            ),
-            _ => None,
+                }));
+                true
+            }
+            // Zeros for a mesh without UVs, written in parallel.
+            _ => {
+                g.uv.par_extend(rayon::iter::repeat_n([[0.0; 2]; 3], nt));
+                false
+            }
         };
+        let uvs = &g.uv[base..];
         // Tangents (Lengyel 2001), accumulated per position vertex.
-        let corner_tans: Option<Vec<[[f64; 4]; 3]>> = corner_uvs.as_ref().map(|uvs| {
+        if has_uv {
             let mut tv = vec![[0.0; 3]; p.len()];
             let mut bv = vec![[0.0; 3]; p.len()];
             for (t, tri) in tris.iter().enumerate() {
@@ -156,9 +203,7 @@ pub fn scene_geometry_creased(scene: &Scene, crease_deg: f64) -> Result<SceneGeo
                     }
                 }
             }
-            (0..tris.len())
-                .into_par_iter()
-                .map(|t| {
+            g.tan.par_extend((0..tris.len()).into_par_iter().map(|t| {
                     std::array::from_fn(|k| {
                         let v = tris[t][k] as usize;
                         let n = corner_normals[t][k];
@@ -176,26 +221,13 @@ pub fn scene_geometry_creased(scene: &Scene, crease_deg: f64) -> Result<SceneGeo
                             None => [0.0; 4],
                         }
                     })
-                })
-                .collect()
-        });
-        let nt = tris.len();
+                }));
+        } else {
+            g.tan.par_extend(rayon::iter::repeat_n([[0.0; 4]; 3], nt));
+        }
         g.pos
             .par_extend(tris.par_iter().map(|tri| tri.map(|v| p[v as usize])));
-        // The first mesh's arrays are moved in, later ones appended (no copy of the
-        // usual single big mesh).
-        append(&mut g.nrm, corner_normals);
-        g.has_uv.resize(g.has_uv.len() + nt, corner_uvs.is_some());
-        // Zeros for a mesh without UVs: a new zeroed vector is allocated lazily (no pages
-        // touched until read), unlike `resize`, which writes them.
-        match corner_uvs {
-            Some(u) => append(&mut g.uv, u),
-            None => append(&mut g.uv, vec![[[0.0; 2]; 3]; nt]),
-        }
-        match corner_tans {
-            Some(t) => append(&mut g.tan, t),
-            None => append(&mut g.tan, vec![[[0.0; 4]; 3]; nt]),
-        }
+        g.has_uv.resize(g.has_uv.len() + nt, has_uv);
         g.mat.resize(g.mat.len() + nt, mi);
     }
     if g.pos.is_empty() {
@@ -282,15 +314,6 @@ pub fn normal_mapped(
     normalize(std::array::from_fn(|k| {
         q[0] * tt[k] + q[1] * bb[k] + q[2] * n[k]
     }))
-}
-
-/// Appends `v` to `dst`, moving it in when `dst` is empty.
-fn append<T: Clone>(dst: &mut Vec<T>, v: Vec<T>) {
-    if dst.is_empty() {
-        *dst = v;
-    } else {
-        dst.extend_from_slice(&v);
-    }
 }
 
 fn attr_len_ok(d: Domain, n: usize, nv: usize, nt: usize) -> bool {

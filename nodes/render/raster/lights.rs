@@ -47,6 +47,7 @@ pub(super) fn prepare_lights(
                     Light::Environment { .. } => None,
                 })
                 .flatten(),
+            factors: Vec::new(),
         })
         .collect::<Vec<_>>()
 }

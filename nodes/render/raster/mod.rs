@@ -27,6 +27,7 @@ pub mod options;
 pub mod rasterize;
 pub mod render_raster;
 mod resolve;
+mod scratch;
 mod setup;
 mod shader;
 pub mod shading;
@@ -34,7 +35,9 @@ pub mod shadow;
 pub mod texture;
 
 use crate::prelude::*;
+use rayon::prelude::*;
 pub use options::{AntiAliasing, Passes, RasterOptions, RenderOutput};
+pub use scratch::release_scratch;
 
 /// Renders a scene through a camera (see the module doc). Fails on an unusable camera or
 /// non-finite geometry. Only the passes in `opts.passes` are produced.
@@ -52,14 +55,25 @@ pub fn render_progress(
     cam.check()?;
     let s = opts.samples_per_axis.clamp(1, 8);
     let lit = opts.passes.color;
-    let g = geometry::scene_geometry(scene)?;
+    let g = geometry::scene_geometry_in(scene, 180.0, scratch::take_geometry())?;
     let band_rows = resolve::BAND_PX as u32 * s;
     // The camera's triangle setup and the shadow maps (one light per task) are
     // independent: build them side by side.
-    let ((setups, ngs, bins), lights) = rayon::join(
+    let ((setups, ngs, bins), mut lights) = rayon::join(
         || setup::camera_setup(&g, cam, s, band_rows, opts.cull_backfaces),
         || lights::prepare_lights(scene, &g, opts, lit),
     );
+    // A directional light's shadow-bias factor depends on the triangle only: once per
+    // triangle here instead of once per lookup.
+    for lp in &mut lights {
+        if let (Some((l, _)), Some(_)) = (lp.dir, &lp.map) {
+            let mut f = scratch::FACTORS.take(ngs.len());
+            ngs.par_iter()
+                .map(|ng| ng.map_or(0.0, |ng| shadow::bias_factor(ng, l, &opts.shadow)))
+                .collect_into_vec(&mut f);
+            lp.factors = f;
+        }
+    }
     let triangles = setups.iter().filter(|t| t.is_some()).count();
     let sh = shader::Shader {
         g: &g,
@@ -72,7 +86,18 @@ pub fn render_progress(
         opts,
         progress,
     };
-    Ok(resolve::resolve_bands(&sh, &bins, cam, s, opts, triangles))
+    let out = resolve::resolve_bands(&sh, &bins, cam, s, opts, triangles);
+    // The big buffers go back to the pools for the next render (`scratch`).
+    for lp in sh.lights {
+        scratch::FACTORS.give(lp.factors);
+        if let Some(map) = lp.map {
+            map.recycle();
+        }
+    }
+    scratch::SETUPS.give(setups);
+    scratch::NORMALS.give(ngs);
+    scratch::give_geometry(g);
+    Ok(out)
 }
 
 /// The bytes `render` allocates for its buffers: 16 per pixel and produced pass, the

@@ -267,9 +267,24 @@ pub fn rasterize(
     zmax: f64,
     keep_ids: bool,
 ) -> DepthTarget {
+    rasterize_into(tris, width, height, zmin, zmax, keep_ids, Vec::new())
+}
+
+/// `rasterize` writing the depths into `depth` (cleared and refilled; a buffer reused
+/// from an earlier render is written without new page faults).
+pub(super) fn rasterize_into(
+    tris: &[Option<TriSetup>],
+    width: u32,
+    height: u32,
+    zmin: f64,
+    zmax: f64,
+    keep_ids: bool,
+    mut depth: Vec<f32>,
+) -> DepthTarget {
     let bins = bin_rows(tris, height, BAND);
     let w = width as usize;
-    let mut depth = vec![f32::INFINITY; w * height as usize];
+    depth.clear();
+    depth.resize(w * height as usize, f32::INFINITY);
     let mut ids = if keep_ids {
         vec![u32::MAX; w * height as usize]
     } else {

@@ -5,6 +5,7 @@
 
 use super::geometry::SceneGeometry;
 use super::rasterize::{bin_rows, setup_triangle, TriSetup};
+use super::scratch::{NORMALS, SETUPS};
 use super::shader::MatPrep;
 use super::shading;
 use super::texture::MipTexture;
@@ -29,8 +30,10 @@ pub(super) fn camera_setup(
     let view = cam.look_at::<f64>();
     let f = cam.focal_length_px() * s as f64;
     let (cx, cy) = (ws as f64 * 0.5, hs as f64 * 0.5);
-    let (setups, ngs): (Vec<Option<TriSetup>>, Vec<Option<[f64; 3]>>) = g
-        .pos
+    // Buffers kept from earlier renders (`scratch`), written in place.
+    let mut setups = SETUPS.take(g.pos.len());
+    let mut ngs = NORMALS.take(g.pos.len());
+    g.pos
         .par_iter()
         .map(|t| {
             let c = t.map(|p| view.to_view(p));
@@ -49,7 +52,7 @@ pub(super) fn camera_setup(
             let ng = normalize(cross(sub(t[1], t[0]), sub(t[2], t[0])));
             (Some(st), ng)
         })
-        .unzip();
+        .unzip_into_vecs(&mut setups, &mut ngs);
     let bins = bin_rows(&setups, hs, band_rows);
     (setups, ngs, bins)
 }

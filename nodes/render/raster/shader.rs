@@ -7,7 +7,7 @@ use super::geometry::{normal_mapped, SceneGeometry};
 use super::options::RasterOptions;
 use super::rasterize::{barycentric, TriSetup};
 use super::shading;
-use super::shadow::ShadowMap;
+use super::shadow::{self, ShadowMap};
 use super::texture::MipTexture;
 use crate::prelude::*;
 use crate::types::vec3::{dot, normalize_recip as normalize, sub};
@@ -28,6 +28,10 @@ pub(super) struct LightPrep {
     /// A directional light's unit direction towards it and irradiance, computed once.
     pub(super) dir: Option<([f64; 3], [f64; 3])>,
     pub(super) map: Option<ShadowMap>,
+    /// A directional light's shadow-bias factor per triangle (`shadow::bias_factor` of the
+    /// triangle's geometric normal, computed once per triangle instead of per lookup);
+    /// empty for other lights, which compute it per lookup.
+    pub(super) factors: Vec<f64>,
 }
 
 /// A reconstructed surface point.
@@ -147,8 +151,15 @@ impl Shader<'_> {
                 if f == [0.0; 3] {
                     continue;
                 }
+                let sp = &self.opts.shadow;
                 let vis = match &lp.map {
-                    Some(map) => map.visibility(p, ng, l, &self.opts.shadow),
+                    Some(map) => {
+                        let factor = match lp.factors.get(t) {
+                            Some(&f) => f,
+                            None => shadow::bias_factor(ng, l, sp),
+                        };
+                        map.visibility_with(p, factor, sp.pcf_radius)
+                    }
                     None => 1.0,
                 };
                 for k in 0..3 {

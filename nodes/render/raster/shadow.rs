@@ -12,7 +12,8 @@
 //! `tau * tan(theta)` per texel, and PCF compares against texels up to `(r + 1/2) sqrt 2`
 //! texels away, so `c1 >= 1.5` keeps every lit plane free of acne.
 
-use super::rasterize::{rasterize, setup_triangle};
+use super::rasterize::{rasterize_into, setup_triangle};
+use super::scratch::{DEPTHS, SETUPS};
 use crate::types::vec3::{cross, dot, sub, unit};
 use rayon::prelude::*;
 
@@ -113,14 +114,25 @@ pub fn directional_shadow_map(
     res: u32,
 ) -> ShadowMap {
     let ([r, u, f], x0, y1, k) = directional_frame(dir, bounds, res);
-    let setups: Vec<_> = tris
-        .par_iter()
+    // Setups and depths in buffers kept from earlier renders (`scratch`).
+    let mut setups = SETUPS.take(tris.len());
+    tris.par_iter()
         .map(|t| {
             let h = t.map(|p| [(dot(p, r) - x0) * k, (y1 - dot(p, u)) * k, 1.0]);
             setup_triangle(h, t.map(|p| dot(p, f)), 0.5, res, res)
         })
-        .collect();
-    let target = rasterize(&setups, res, res, f64::NEG_INFINITY, f64::INFINITY, false);
+        .collect_into_vec(&mut setups);
+    let n = res as usize * res as usize;
+    let target = rasterize_into(
+        &setups,
+        res,
+        res,
+        f64::NEG_INFINITY,
+        f64::INFINITY,
+        false,
+        DEPTHS.take(n),
+    );
+    SETUPS.give(setups);
     ShadowMap::Directional {
         face: Box::new(Face {
             axes: [r, u, f],
@@ -160,8 +172,8 @@ pub(crate) fn cube_axes() -> [[[f64; 3]; 3]; 6] {
 pub fn point_shadow_map(tris: &[[[f64; 3]; 3]], pos: [f64; 3], res: u32, near: f64) -> ShadowMap {
     let half = res as f64 * 0.5;
     let faces = cube_axes().map(|[r, u, f]| {
-        let setups: Vec<_> = tris
-            .par_iter()
+        let mut setups = SETUPS.take(tris.len());
+        tris.par_iter()
             .map(|t| {
                 let c = t.map(|p| {
                     let d = sub(p, pos);
@@ -173,8 +185,10 @@ pub fn point_shadow_map(tris: &[[[f64; 3]; 3]], pos: [f64; 3], res: u32, near: f
                 let h = c.map(|v| [half * v[2] + half * v[0], half * v[2] - half * v[1], v[2]]);
                 setup_triangle(h, c.map(|v| v[2]), near, res, res)
             })
-            .collect();
-        let target = rasterize(&setups, res, res, near, f64::INFINITY, false);
+            .collect_into_vec(&mut setups);
+        let n = res as usize * res as usize;
+        let target = rasterize_into(&setups, res, res, near, f64::INFINITY, false, DEPTHS.take(n));
+        SETUPS.give(setups);
         Face {
             axes: [r, u, f],
             origin: pos,
@@ -195,6 +209,16 @@ fn pcf(depth: &[f32], res: u32, x: f64, y: f64, z: f64, bias: f64, r: i64, clamp
     let (cx, cy) = (floor_i64(x), floor_i64(y));
     let n = res as i64;
     let zt = (z - bias) as f32;
+    if r == 1 && cx >= 1 && cy >= 1 && cx + 1 < n && cy + 1 < n {
+        // The default 3x3 window, on the map: three rows of three taps, no loops.
+        let (n, i) = (n as usize, ((cy - 1) * n + cx - 1) as usize);
+        let row = |k: usize| {
+            let t = &depth[k..k + 3];
+            (t[0] >= zt) as u32 + (t[1] >= zt) as u32 + (t[2] >= zt) as u32
+        };
+        let lit = row(i) + row(i + n) + row(i + 2 * n);
+        return lit as f64 / 9.0;
+    }
     if cx - r >= 0 && cy - r >= 0 && cx + r < n && cy + r < n {
         // The whole window lies on the map: no clamping or bounds tests per tap.
         let mut lit = 0usize;
@@ -239,14 +263,40 @@ fn floor_i64(x: f64) -> i64 {
     }
 }
 
+/// The bias of a lookup in texel sizes, `c0 + c1 tan(theta) (r + 1)` (see the module doc),
+/// for unit geometric normal `ng` (either side) and unit direction to the light `l`. It
+/// depends on the triangle and the light only, so the rasterizer computes it once per
+/// triangle for directional lights (`ShadowMap::visibility_with`).
+pub fn bias_factor(ng: [f64; 3], l: [f64; 3], sp: &ShadowParams) -> f64 {
+    let c = dot(ng, l).abs().clamp(1e-3, 1.0);
+    let tan = ((1.0 - c * c).sqrt() / c).min(10.0);
+    let r = sp.pcf_radius as i64;
+    sp.bias + sp.slope_bias * tan * (r as f64 + 1.0)
+}
+
 impl ShadowMap {
     /// Fraction of the light reaching point `p` with geometric normal `ng` (unit, facing
     /// the light side) and unit direction to the light `l`: 1 lit, 0 in shadow.
     pub fn visibility(&self, p: [f64; 3], ng: [f64; 3], l: [f64; 3], sp: &ShadowParams) -> f64 {
-        let c = dot(ng, l).abs().clamp(1e-3, 1.0);
-        let tan = ((1.0 - c * c).sqrt() / c).min(10.0);
-        let r = sp.pcf_radius as i64;
-        let slope = |tau: f64| tau * (sp.bias + sp.slope_bias * tan * (r as f64 + 1.0));
+        self.visibility_with(p, bias_factor(ng, l, sp), sp.pcf_radius)
+    }
+
+    /// Gives the depth buffers back to the rasterizer's pool (`scratch`) for the next render.
+    pub(super) fn recycle(self) {
+        match self {
+            ShadowMap::Directional { face, .. } => DEPTHS.give(face.depth),
+            ShadowMap::Point { faces, .. } => {
+                for f in *faces {
+                    DEPTHS.give(f.depth);
+                }
+            }
+        }
+    }
+
+    /// `visibility` with the bias factor of `bias_factor` given, and PCF radius `pcf_radius`.
+    pub fn visibility_with(&self, p: [f64; 3], factor: f64, pcf_radius: u32) -> f64 {
+        let r = pcf_radius as i64;
+        let slope = |tau: f64| tau * factor;
         match self {
             ShadowMap::Directional {
                 face,

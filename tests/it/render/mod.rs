@@ -3,7 +3,7 @@
 //! `golden`.
 
 use cgnodes::nodes::mesh::mesh_plane::plane_mesh;
-use cgnodes::nodes::render::raster::{render, AntiAliasing, RasterOptions};
+use cgnodes::nodes::render::raster::{release_scratch, render, AntiAliasing, RasterOptions};
 use cgnodes::types::*;
 use std::sync::Arc;
 
@@ -470,5 +470,61 @@ fn antialiasing_blends_edges_and_is_deterministic() {
     let c = render(&scene, &cam, &o).unwrap();
     for (x, y) in a.color.pixels.iter().zip(&c.color.pixels) {
         assert!((x[0] - y[0]).abs() < 1e-6);
+    }
+}
+
+/// The rasterizer keeps its big buffers (setups, shadow maps, flattened scene) from one render
+/// to the next: a render after a larger one with other lights, and one after the buffers are
+/// freed, give the same bytes in every pass as the first.
+#[test]
+fn renders_reusing_kept_buffers_match_fresh_ones() {
+    // The light slanted so the camera above sees the blocker's shadow beside it.
+    let mut small = shadow_scene([0.6, 0.3, 0.9]);
+    small.lights = vec![Light::Directional {
+        direction: [0.6, -1.0, 0.3],
+        color: [1.0; 3],
+        intensity: 1.0,
+    }];
+    let cam = top_camera();
+    let o = RasterOptions {
+        shadow_resolution: 256,
+        ..opts1()
+    };
+    let first = render(&small, &cam, &o).unwrap();
+    // More triangles, a point light's cube map, bigger maps and image.
+    let mut big = shadow_scene([0.2, 0.8, 0.4]);
+    big.objects.push(SceneObject {
+        mesh: Arc::new(plane_mesh(3.0, [0.0, 0.5, 0.0], 12, 1.0)),
+        material: None,
+    });
+    big.lights.push(Light::Point {
+        position: [1.0, 2.0, 0.5],
+        color: [1.0; 3],
+        intensity: 3.0,
+    });
+    let big_cam = Camera {
+        width: 96,
+        height: 80,
+        ..top_camera()
+    };
+    let big_o = RasterOptions {
+        shadow_resolution: 512,
+        samples_per_axis: 2,
+        ..o.clone()
+    };
+    assert!(render(&big, &big_cam, &big_o).unwrap().triangles > first.triangles);
+    let again = render(&small, &cam, &o).unwrap();
+    release_scratch();
+    let fresh = render(&small, &cam, &o).unwrap();
+    // Lit and shadowed pixels both present, so stale depths or setups would show.
+    let ambient = first.color.pixels.iter().filter(|c| c[0] < 0.2).count();
+    assert!(ambient > 20 && ambient < 48 * 48 - 200, "{ambient}");
+    for out in [&again, &fresh] {
+        assert_eq!(out.color.pixels, first.color.pixels);
+        assert_eq!(out.depth.pixels, first.depth.pixels);
+        assert_eq!(out.normal.pixels, first.normal.pixels);
+        assert_eq!(out.position.pixels, first.position.pixels);
+        assert_eq!(out.uv.pixels, first.uv.pixels);
+        assert_eq!(out.base_color.pixels, first.base_color.pixels);
     }
 }

@@ -8,12 +8,14 @@
 //! contiguous in memory, and traversal allocates nothing.
 
 mod build;
+mod lanes;
 #[cfg(test)]
 mod tests;
 mod traverse;
 mod wide;
 
 pub use traverse::{intersect_triangle, RayPre};
+pub use lanes::Tri4;
 pub use wide::Node4;
 
 use super::sampling::{cross, sub, V3};
@@ -89,9 +91,10 @@ pub struct Bvh {
     /// Original index of each triangle in `tris`.
     pub prim: Vec<u32>,
     /// The same tree collapsed to 4 children per node, filled by `widen` (the queries
-    /// traverse it when it is not empty). Not built by default: measured on 2026-12-02 it
-    /// bought nothing on the Cornell box or the igea scene (docs/path_tracing.md).
+    /// traverse it when it is not empty).
     pub wide: Vec<Node4>,
+    /// The 4-wide tree's leaves, four triangles each in structure of arrays.
+    pub wide_tris: Vec<Tri4>,
 }
 
 /// The closest hit along a ray.
@@ -111,7 +114,7 @@ impl Bvh {
     /// Collapses the tree to 4 children per node for the queries to traverse (left empty
     /// when the leaves cannot be encoded: 2^28 triangles or more).
     pub fn widen(&mut self) {
-        self.wide = wide::collapse(&self.nodes, self.tris.len());
+        (self.wide, self.wide_tris) = wide::collapse(self);
     }
 
     /// Bounds of the whole scene.

@@ -90,8 +90,8 @@ pub struct Bvh {
     pub tris: Vec<[V3; 3]>,
     /// Original index of each triangle in `tris`.
     pub prim: Vec<u32>,
-    /// The same tree collapsed to 4 children per node, filled by `widen` (the queries
-    /// traverse it when it is not empty).
+    /// The same tree collapsed to 4 children per node, filled by `widen` (called by
+    /// `build`; the queries traverse it when it is not empty, the binary tree otherwise).
     pub wide: Vec<Node4>,
     /// The 4-wide tree's leaves, four triangles each in structure of arrays.
     pub wide_tris: Vec<Tri4>,
@@ -112,9 +112,16 @@ pub struct Hit {
 
 impl Bvh {
     /// Collapses the tree to 4 children per node for the queries to traverse (left empty
-    /// when the leaves cannot be encoded: 2^28 triangles or more).
+    /// when the leaves cannot be encoded: 2^28 triangles or more). `build` calls it.
     pub fn widen(&mut self) {
         (self.wide, self.wide_tris) = wide::collapse(self);
+    }
+
+    /// Drops the 4-wide tree so that the queries traverse the binary one (to compare the
+    /// two; `build` makes both).
+    pub fn narrow(&mut self) {
+        self.wide = Vec::new();
+        self.wide_tris = Vec::new();
     }
 
     /// Bounds of the whole scene.

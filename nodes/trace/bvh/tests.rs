@@ -130,11 +130,10 @@ fn parallel_build_matches_counts() {
 #[allow(clippy::needless_range_loop)] // lanes index several arrays in step
 fn wide_tree_matches_binary_tree() {
     let tris = random_tris(20_000, 13);
-    let binary = Bvh::build(&tris);
-    assert!(binary.wide.is_empty());
-    let mut bvh = binary.clone();
-    bvh.widen();
+    let bvh = Bvh::build(&tris);
     assert!(!bvh.wide.is_empty());
+    let mut binary = bvh.clone();
+    binary.narrow();
     let mut seen = vec![0u32; bvh.tris.len()];
     let mut leaves_seen = vec![0u32; bvh.wide_tris.len()];
     let mut nodes_seen = vec![0u32; bvh.wide.len()];
@@ -201,10 +200,10 @@ fn wide_tree_matches_binary_tree_on_shared_edges() {
             [a1.cos(), a1.sin(), 0.0],
         ]);
     }
-    let binary = Bvh::build(&tris);
-    let mut bvh = binary.clone();
-    bvh.widen();
+    let bvh = Bvh::build(&tris);
     assert!(!bvh.wide.is_empty());
+    let mut binary = bvh.clone();
+    binary.narrow();
     let mut r = Pcg32::new(5, 7);
     for i in 0..3000 {
         let e = i % k;

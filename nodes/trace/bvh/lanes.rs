@@ -120,9 +120,9 @@ impl Tri4 {
         for l in 0..4 {
             let i = if l < tris.len() { l } else { 0 };
             q.prim[l] = prim[i];
-            for c in 0..3 {
-                for k in 0..3 {
-                    q.v[c][k][l] = tris[i][c][k];
+            for (c, p) in tris[i].iter().enumerate() {
+                for (k, x) in p.iter().enumerate() {
+                    q.v[c][k][l] = *x;
                 }
             }
         }

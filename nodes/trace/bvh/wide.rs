@@ -143,8 +143,9 @@ fn set_lane(
 impl Bvh {
     /// Closest-hit (or, with `ANY`, any-hit) traversal of the 4-wide tree, front to back:
     /// the four boxes of a node are tested on four lanes, the entered children sorted by
-    /// entry distance, the nearest visited next and the others pushed far to near; a
-    /// popped entry is skipped once a hit closer than its entry distance has been found.
+    /// entry distance (not for any-hit), the nearest visited next and the others pushed far
+    /// to near; a popped entry is skipped once a hit closer than its entry distance has
+    /// been found.
     pub(super) fn traverse4<const ANY: bool, const KX: usize, const KY: usize, const KZ: usize>(
         &self,
         r: &RayPre,
@@ -173,6 +174,20 @@ impl Bvh {
                     let first = m.trailing_zeros() as usize;
                     m &= m - 1;
                     if m == 0 {
+                        c = n.child[first];
+                        continue;
+                    }
+                    if ANY {
+                        // Any hit ends the query, so the order does not matter: push the
+                        // other entered children unsorted.
+                        while m != 0 {
+                            let l = m.trailing_zeros() as usize;
+                            m &= m - 1;
+                            if sp < stack.len() {
+                                stack[sp] = (n.child[l], te[l]);
+                                sp += 1;
+                            }
+                        }
                         c = n.child[first];
                         continue;
                     }

@@ -10,8 +10,9 @@
 //! chart of RMSE against time for both goes to `docs/path_tracing_rmse.svg`.
 //!
 //! Options (after `--`): `--ref-spp N` (default 2048), `--spp a,b,c` (default 4,16,64,256),
-//! `--quick` (one 64-spp timing, no reference), `--wide-bvh` (traverse the BVH collapsed to
-//! 4 children per node instead of the binary tree, to measure what it buys), `--scene igea`
+//! `--quick` (one 64-spp timing, no reference), `--binary-bvh` (traverse the binary BVH
+//! instead of the default one collapsed to 4 children per node, to measure what the wide
+//! tree buys; `--wide-bvh`, the default, is accepted and does nothing), `--scene igea`
 //! (the box with the 154k-triangle igea scan standing in it, white diffuse, as
 //! `trace_mitsuba.py --scene igea` builds it; `--igea PATH`, default
 //! `/work/shared/assets/meshes/igea_front.obj`). The SVG chart is written for the plain box
@@ -237,8 +238,8 @@ fn main() {
     };
     let t = Instant::now();
     let mut sc = RenderScene::new(&scene).unwrap();
-    if args.iter().any(|a| a == "--wide-bvh") {
-        sc.bvh.widen();
+    if args.iter().any(|a| a == "--binary-bvh") {
+        sc.bvh.narrow();
     }
     let cam = PinholeCamera::new(&cam).unwrap();
     println!(

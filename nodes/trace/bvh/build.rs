@@ -104,7 +104,8 @@ fn join_children(info: &[PrimInfo], bounds: Aabb, left: Vec<u32>, right: Vec<u32
 }
 
 impl Bvh {
-    /// Builds the BVH over `tris` (any order; degenerate triangles are kept and never hit).
+    /// Builds the BVH over `tris` (any order; degenerate triangles are kept and never hit),
+    /// and its 4-wide form (`widen`), which the queries traverse.
     pub fn build(tris: &[[V3; 3]]) -> Bvh {
         let info: Vec<PrimInfo> = tris
             .iter()
@@ -136,6 +137,7 @@ impl Bvh {
             count: 0,
         });
         bvh.flatten(root, 0, tris);
+        bvh.widen();
         bvh
     }
 

@@ -8,12 +8,14 @@
 //! contiguous in memory, and traversal allocates nothing.
 
 mod build;
+mod lanes;
 #[cfg(test)]
 mod tests;
 mod traverse;
 mod wide;
 
 pub use traverse::{intersect_triangle, RayPre};
+pub use lanes::Tri4;
 pub use wide::Node4;
 
 use super::sampling::{cross, sub, V3};
@@ -88,10 +90,11 @@ pub struct Bvh {
     pub tris: Vec<[V3; 3]>,
     /// Original index of each triangle in `tris`.
     pub prim: Vec<u32>,
-    /// The same tree collapsed to 4 children per node, filled by `widen` (the queries
-    /// traverse it when it is not empty). Not built by default: measured on 2026-12-02 it
-    /// bought nothing on the Cornell box or the igea scene (docs/path_tracing.md).
+    /// The same tree collapsed to 4 children per node, filled by `widen` (called by
+    /// `build`; the queries traverse it when it is not empty, the binary tree otherwise).
     pub wide: Vec<Node4>,
+    /// The 4-wide tree's leaves, four triangles each in structure of arrays.
+    pub wide_tris: Vec<Tri4>,
 }
 
 /// The closest hit along a ray.
@@ -109,9 +112,16 @@ pub struct Hit {
 
 impl Bvh {
     /// Collapses the tree to 4 children per node for the queries to traverse (left empty
-    /// when the leaves cannot be encoded: 2^28 triangles or more).
+    /// when the leaves cannot be encoded: 2^28 triangles or more). `build` calls it.
     pub fn widen(&mut self) {
-        self.wide = wide::collapse(&self.nodes, self.tris.len());
+        (self.wide, self.wide_tris) = wide::collapse(self);
+    }
+
+    /// Drops the 4-wide tree so that the queries traverse the binary one (to compare the
+    /// two; `build` makes both).
+    pub fn narrow(&mut self) {
+        self.wide = Vec::new();
+        self.wide_tris = Vec::new();
     }
 
     /// Bounds of the whole scene.

@@ -3,6 +3,28 @@
 
 use super::{Aabb, Bvh, Hit};
 use crate::nodes::trace::sampling::{sub, V3};
+use std::cell::RefCell;
+
+/// Entries of a traversal stack: (node, entry distance). A 4-wide node adds at most three
+/// pending entries per level and a binary node one; SAH trees over millions of triangles
+/// stay far below this depth (a full stack drops entries rather than overflow).
+const STACK: usize = 128;
+
+thread_local! {
+    /// One traversal stack per thread, reused by every ray: a stack array local to the
+    /// traversal was zeroed (a 768-byte `memset`) on every ray, 2.7 % of the path tracer's
+    /// time (docs/path_tracing.md).
+    static STACKS: RefCell<[(u32, f32); STACK]> = const { RefCell::new([(0, 0.0); STACK]) };
+}
+
+/// Runs `f` with this thread's traversal stack (a fresh one if it is already in use).
+#[inline(always)]
+pub(super) fn with_stack<R>(f: impl FnOnce(&mut [(u32, f32)]) -> R) -> R {
+    STACKS.with(|s| match s.try_borrow_mut() {
+        Ok(mut s) => f(&mut s[..]),
+        Err(_) => f(&mut [(0, 0.0); STACK]),
+    })
+}
 
 /// Per-ray constants of the watertight test (Woop et al. 2013, section 3): the dominant
 /// axis `kz`, the permuted axes and the shear that maps the ray to +z.
@@ -13,9 +35,9 @@ pub struct RayPre {
     kx: usize,
     ky: usize,
     kz: usize,
-    sx: f32,
-    sy: f32,
-    sz: f32,
+    pub(super) sx: f32,
+    pub(super) sy: f32,
+    pub(super) sz: f32,
 }
 
 impl RayPre {
@@ -186,12 +208,21 @@ impl Bvh {
         r: &RayPre,
         tmax: f32,
     ) -> Option<Hit> {
+        with_stack(|stack| self.walk2::<ANY, KX, KY, KZ>(r, tmax, stack))
+    }
+
+    #[inline(always)]
+    fn walk2<const ANY: bool, const KX: usize, const KY: usize, const KZ: usize>(
+        &self,
+        r: &RayPre,
+        tmax: f32,
+        stack: &mut [(u32, f32)],
+    ) -> Option<Hit> {
         let r = *r;
         let mut best: Option<Hit> = None;
         let mut tmax = tmax;
         // Stack of (node, entry distance): a popped node is skipped once a closer hit has
         // been found than its entry distance.
-        let mut stack = [(0u32, 0.0f32); 96];
         let mut sp = 0usize;
         let mut node = 0usize;
         intersect_aabb(&r, &self.nodes[0].bounds, tmax)?;

@@ -1,0 +1,215 @@
+//! Four-lane building blocks of the 4-wide BVH: `[f32; 4]` helpers written as plain
+//! lane-wise comparisons (`if a < b { a } else { b }`), which LLVM turns into packed SSE
+//! (`minps`, `maxps`, `cmpps` + `movmskps`) on baseline x86_64 without `unsafe` or target
+//! features (`f32::min`/`max` would not: their NaN rules block the packed forms); the
+//! four-box slab test; and the watertight ray-triangle test of Woop, Benthin and Wald 2013
+//! run on four triangles stored axis by axis (`Tri4`).
+//!
+//! Every lane computes exactly the operations of the scalar `tri_test`, in the same order
+//! (Rust never contracts to FMA), so a lane's result is bit for bit the scalar one; the
+//! rare lanes that need the scalar test's double-precision fallback are handed to it.
+
+use super::traverse::{tri_test, RayPre};
+use crate::nodes::trace::sampling::V3;
+
+/// Four floats, one per lane.
+pub type F4 = [f32; 4];
+
+#[inline(always)]
+fn map2(a: F4, b: F4, f: impl Fn(f32, f32) -> f32) -> F4 {
+    [f(a[0], b[0]), f(a[1], b[1]), f(a[2], b[2]), f(a[3], b[3])]
+}
+
+#[inline(always)]
+fn sub4(a: F4, b: F4) -> F4 {
+    map2(a, b, |x, y| x - y)
+}
+
+#[inline(always)]
+fn mul4(a: F4, b: F4) -> F4 {
+    map2(a, b, |x, y| x * y)
+}
+
+#[inline(always)]
+fn add4(a: F4, b: F4) -> F4 {
+    map2(a, b, |x, y| x + y)
+}
+
+/// `if a > b { a } else { b }` per lane (`maxps`: a NaN in `a` keeps `b`).
+#[inline(always)]
+fn max4(a: F4, b: F4) -> F4 {
+    map2(a, b, |x, y| if x > y { x } else { y })
+}
+
+/// `if a < b { a } else { b }` per lane (`minps`: a NaN in `a` keeps `b`).
+#[inline(always)]
+fn min4(a: F4, b: F4) -> F4 {
+    map2(a, b, |x, y| if x < y { x } else { y })
+}
+
+/// The lanes where `f(a, b)` holds, as the low four bits (`cmpps` + `movmskps`).
+#[inline(always)]
+fn mask(a: F4, b: F4, f: impl Fn(f32, f32) -> bool) -> u32 {
+    (f(a[0], b[0]) as u32)
+        | (f(a[1], b[1]) as u32) << 1
+        | (f(a[2], b[2]) as u32) << 2
+        | (f(a[3], b[3]) as u32) << 3
+}
+
+/// A ray broadcast to four lanes for the box test: origin and inverse direction per axis,
+/// and per axis whether the direction is negative (then the near slab is the box's max).
+#[derive(Clone, Copy, Debug)]
+pub struct Ray4 {
+    org: [F4; 3],
+    inv: [F4; 3],
+    neg: [bool; 3],
+}
+
+impl Ray4 {
+    /// Broadcasts the ray of `r`.
+    #[inline(always)]
+    pub fn new(r: &RayPre) -> Ray4 {
+        Ray4 {
+            org: [[r.org[0]; 4], [r.org[1]; 4], [r.org[2]; 4]],
+            inv: [[r.inv[0]; 4], [r.inv[1]; 4], [r.inv[2]; 4]],
+            neg: [r.inv[0] < 0.0, r.inv[1] < 0.0, r.inv[2] < 0.0],
+        }
+    }
+}
+
+/// Slab test of one ray against four boxes (`min[axis][lane]`, `max[axis][lane]`):
+/// the mask of the boxes entered before `tmax` and the entry distances. A NaN from
+/// `0 * inf` keeps the previous bound, and the exit distance is widened by 1 + 2 gamma(3)
+/// so round-off cannot cull a hit on a face (Ize 2013, "Robust BVH Ray Traversal"), as in
+/// the binary traversal. An empty lane (min = +inf, max = -inf) is never entered.
+#[inline(always)]
+pub fn slab4(r: &Ray4, min: &[F4; 3], max: &[F4; 3], tmax: f32) -> (u32, F4) {
+    let mut t0 = [0.0f32; 4];
+    let mut t1 = [tmax; 4];
+    for k in 0..3 {
+        let (near, far) = if r.neg[k] {
+            (max[k], min[k])
+        } else {
+            (min[k], max[k])
+        };
+        t0 = max4(mul4(sub4(near, r.org[k]), r.inv[k]), t0);
+        t1 = min4(mul4(sub4(far, r.org[k]), r.inv[k]), t1);
+    }
+    let t1 = mul4(t1, [1.000_000_4; 4]);
+    (mask(t0, t1, |a, b| a <= b), t0)
+}
+
+/// Up to four triangles of a leaf, axis by axis: `v[corner][axis][lane]`, and the
+/// caller's index of each. Unused lanes repeat lane 0 (finite values, never reported).
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(16))]
+pub struct Tri4 {
+    /// Corners per axis per lane.
+    pub v: [[F4; 3]; 3],
+    /// Caller's triangle index per lane.
+    pub prim: [u32; 4],
+}
+
+impl Tri4 {
+    /// Packs `tris` (1 to 4 triangles) and their caller indices `prim`.
+    pub fn pack(tris: &[[V3; 3]], prim: &[u32]) -> Tri4 {
+        let mut q = Tri4 {
+            v: [[[0.0; 4]; 3]; 3],
+            prim: [prim[0]; 4],
+        };
+        for l in 0..4 {
+            let i = if l < tris.len() { l } else { 0 };
+            q.prim[l] = prim[i];
+            for (c, p) in tris[i].iter().enumerate() {
+                for (k, x) in p.iter().enumerate() {
+                    q.v[c][k][l] = *x;
+                }
+            }
+        }
+        q
+    }
+
+    /// The triangle of lane `l` as corners.
+    #[inline]
+    pub fn get(&self, l: usize) -> [V3; 3] {
+        let c = |c: usize| [self.v[c][0][l], self.v[c][1][l], self.v[c][2][l]];
+        [c(0), c(1), c(2)]
+    }
+}
+
+/// The watertight test (Woop et al. 2013, Listing 1) of one ray against the first `count`
+/// triangles of `q`, visited in lane order exactly as the scalar loop over a leaf does:
+/// a lane hit before the current `tmax` lowers it for the lanes after it. Calls `hit(t,
+/// u, v, lane)` for every accepted hit; with `ANY`, stops at the first and returns true.
+#[inline(always)]
+pub fn tri4<const ANY: bool, const KX: usize, const KY: usize, const KZ: usize>(
+    r: &RayPre,
+    q: &Tri4,
+    count: usize,
+    tmax: &mut f32,
+    mut hit: impl FnMut(f32, f32, f32, usize),
+) -> bool {
+    let z = [0.0f32; 4];
+    // Translate to the origin, shear and scale (eq. 5), per corner, on four lanes.
+    let corner = |c: usize| {
+        let d = |k: usize| sub4(q.v[c][k], [r.org[k]; 4]);
+        let (dx, dy, dz) = (d(KX), d(KY), d(KZ));
+        (
+            sub4(dx, mul4([r.sx; 4], dz)),
+            sub4(dy, mul4([r.sy; 4], dz)),
+            mul4([r.sz; 4], dz),
+        )
+    };
+    let (ax, ay, az) = corner(0);
+    let (bx, by, bz) = corner(1);
+    let (cx, cy, cz) = corner(2);
+    // Scaled barycentrics (2-D edge functions).
+    let u = sub4(mul4(cx, by), mul4(cy, bx));
+    let v = sub4(mul4(ax, cy), mul4(ay, cx));
+    let w = sub4(mul4(bx, ay), mul4(by, ax));
+    let live = (1u32 << count) - 1;
+    let eq = |a: F4| mask(a, z, |x, y| x == y);
+    let lt = |a: F4| mask(a, z, |x, y| x < y);
+    let gt = |a: F4| mask(a, z, |x, y| x > y);
+    // Lanes on an edge go to the scalar test's double-precision fallback (section 3.3).
+    let edge = (eq(u) | eq(v) | eq(w)) & live;
+    let outside = (lt(u) | lt(v) | lt(w)) & (gt(u) | gt(v) | gt(w));
+    let det = add4(add4(u, v), w);
+    let t = add4(add4(mul4(u, az), mul4(v, bz)), mul4(w, cz));
+    // The sign-aware depth test of section 3.4 against the current `tmax`: a lane failing
+    // it here fails it for every smaller `tmax` too, so only the rest are looked at again.
+    let td = mul4([*tmax; 4], det);
+    let pos = gt(det);
+    let reject_pos = mask(t, z, |a, b| a <= b) | mask(t, td, |a, b| a >= b);
+    let reject_neg = mask(t, z, |a, b| a >= b) | mask(t, td, |a, b| a <= b);
+    let depth = (pos & !reject_pos) | (!pos & !reject_neg);
+    let mut cand = (live & !edge & !outside & !eq(det) & depth) | edge;
+    while cand != 0 {
+        let l = cand.trailing_zeros() as usize;
+        cand &= cand - 1;
+        let found = if edge & (1 << l) != 0 {
+            tri_test::<KX, KY, KZ>(r, &q.get(l), *tmax)
+        } else {
+            let (t, det) = (t[l], det[l]);
+            let rejected = if det > 0.0 {
+                t <= 0.0 || t >= *tmax * det
+            } else {
+                t >= 0.0 || t <= *tmax * det
+            };
+            if rejected {
+                None
+            } else {
+                let rcp = 1.0 / det;
+                Some((t * rcp, v[l] * rcp, w[l] * rcp))
+            }
+        };
+        if let Some((th, b1, b2)) = found {
+            *tmax = th;
+            hit(th, b1, b2, l);
+            if ANY {
+                return true;
+            }
+        }
+    }
+    false
+}

@@ -17,7 +17,6 @@ pub mod system;
 pub use guidance::Mode;
 pub use mask::{MaskShape, ShapeKey};
 
-use crate::nodes::linalg::SpdFactor;
 use crate::types::Image;
 use faer::reborrow::ReborrowMut;
 use rayon::prelude::*;
@@ -31,8 +30,8 @@ pub const CACHE_SLOTS: usize = 4;
 
 /// The factorization of one shape's Poisson matrix.
 pub enum Factor {
-    /// Sparse Cholesky (faer, AMD ordering): any Ω.
-    Cholesky(Box<SpdFactor>),
+    /// Sparse Cholesky (faer; AMD or nested-dissection ordering): any Ω.
+    Cholesky(Box<system::PoissonFactor>),
     /// Sine transform along rows and tridiagonal pivots down columns: a rectangular Ω.
     Rect(RectSolver),
 }
@@ -81,10 +80,17 @@ static CACHE: Mutex<Cache> = Mutex::new(Vec::new());
 /// The factorization of `shape`'s Poisson matrix, from the cache when a mask of the same
 /// shape was factored recently; the flag says whether it was reused.
 pub fn cached_factor(shape: &MaskShape) -> Result<(Arc<Factor>, bool), String> {
-    let key = shape.key();
+    cached_factor_keyed(shape, &shape.key())
+}
+
+/// `cached_factor` with the shape's key found already.
+pub fn cached_factor_keyed(
+    shape: &MaskShape,
+    key: &ShapeKey,
+) -> Result<(Arc<Factor>, bool), String> {
     {
         let mut cache = CACHE.lock().unwrap_or_else(|e| e.into_inner());
-        if let Some(i) = cache.iter().position(|(k, _)| *k == key) {
+        if let Some(i) = cache.iter().position(|(k, _)| k == key) {
             // move to the back: most recently used
             let entry = cache.remove(i);
             let f = entry.1.clone();
@@ -95,11 +101,11 @@ pub fn cached_factor(shape: &MaskShape) -> Result<(Arc<Factor>, bool), String> {
     // factored outside the lock: another paste may run meanwhile
     let f = Arc::new(Factor::new(shape)?);
     let mut cache = CACHE.lock().unwrap_or_else(|e| e.into_inner());
-    if !cache.iter().any(|(k, _)| *k == key) {
+    if !cache.iter().any(|(k, _)| k == key) {
         if cache.len() >= CACHE_SLOTS {
             cache.remove(0);
         }
-        cache.push((key, f.clone()));
+        cache.push((key.clone(), f.clone()));
     }
     Ok((f, false))
 }
@@ -129,6 +135,18 @@ pub fn solve(
     offset: [i64; 2],
     mode: Mode,
 ) -> Result<Solution, String> {
+    solve_keyed(shape, &shape.key(), target, source, offset, mode)
+}
+
+/// `solve` with the shape's key (`MaskShape::key`) found already.
+pub fn solve_keyed(
+    shape: &MaskShape,
+    key: &ShapeKey,
+    target: &Image,
+    source: &Image,
+    offset: [i64; 2],
+    mode: Mode,
+) -> Result<Solution, String> {
     let t0 = Instant::now();
     let Some([xr, yr]) = shape.offset_range(target.width, target.height) else {
         return Err("the mask region does not fit inside the target".into());
@@ -140,7 +158,7 @@ pub fn solve(
         return Err("source and mask sizes differ".into());
     }
     let b = guidance::right_hand_side(shape, target, source, offset, mode);
-    let (factor, reused) = cached_factor(shape)?;
+    let (factor, reused) = cached_factor_keyed(shape, key)?;
     let mut x = b.clone();
     factor.solve_in_place(x.as_mut());
     let r = system::residual_norm(shape, x.as_ref(), b.as_ref());

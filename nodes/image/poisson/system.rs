@@ -3,6 +3,11 @@
 //! Ω never touches the target's border, so |N_p| = 4 everywhere: 4 on the diagonal, -1 for
 //! each inside 4-neighbour. The matrix is symmetric, diagonally dominant, and strictly so at
 //! each pixel next to ∂Ω, hence positive definite (every component of Ω touches ∂Ω).
+//!
+//! Its sparse Cholesky factor (faer) is found in one of two elimination orders: faer's AMD for
+//! small Ω, and for large Ω a nested dissection of the pixel grid (George 1973), whose
+//! separators are whole grid lines and whose two top-level halves are factored on two cores
+//! and joined through the dense Schur complement of the top separator (`TwoDomainFactor`).
 
 use super::mask::MaskShape;
 use crate::nodes::linalg::nested_dissection::Dissection;

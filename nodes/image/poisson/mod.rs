@@ -110,6 +110,11 @@ pub fn cached_factor_keyed(
     Ok((f, false))
 }
 
+/// The last paste's right-hand side buffer (`n x 3`), kept for the next paste: at a megapixel
+/// it is 25 MB that would otherwise be fresh memory, page-faulted in again on every paste.
+/// The solution itself is returned, so it stays a fresh matrix.
+static RHS_BUFFER: Mutex<Option<Mat<f64>>> = Mutex::new(None);
+
 /// A solved paste: the values of the unknowns before they are written into the image.
 #[derive(Clone, Debug)]
 pub struct Solution {
@@ -157,7 +162,10 @@ pub fn solve_keyed(
     if (source.width, source.height) != (shape.width, shape.height) {
         return Err("source and mask sizes differ".into());
     }
-    let b = guidance::right_hand_side(shape, target, source, offset, mode);
+    // the right-hand side in the last paste's buffer when it is free (see `RHS_BUFFER`)
+    let kept = RHS_BUFFER.try_lock().ok().and_then(|mut k| k.take());
+    let mut b = kept.unwrap_or_else(Mat::new);
+    guidance::right_hand_side_into(shape, target, source, offset, mode, &mut b);
     let (factor, reused) = cached_factor_keyed(shape, key)?;
     let mut x = b.clone();
     factor.solve_in_place(x.as_mut());
@@ -170,6 +178,9 @@ pub fn solve_keyed(
         .sum::<f64>()
         .sqrt();
     let residual = if bn > 0.0 { r / bn } else { r };
+    if let Ok(mut k) = RHS_BUFFER.try_lock() {
+        *k = Some(b);
+    }
     Ok(Solution {
         values: x,
         residual,

@@ -6,8 +6,9 @@
 pub mod poisson;
 
 use crate::prelude::*;
-use poisson::{MaskShape, Mode};
+use poisson::{MaskShape, Mode, ShapeKey};
 use rayon::prelude::*;
+use std::sync::{Mutex, Weak};
 
 /// The first non-finite pixel of `img`, as an error message.
 fn check_finite(img: &Image) -> Result<(), String> {
@@ -53,32 +54,67 @@ pub fn poisson_blend(
     offset: [f64; 2],
     mode: Mode,
 ) -> Result<Blend, NodeError> {
+    let region = Region::new(source, mask)?;
+    blend_region(target, source, &region, offset, mode)
+}
+
+/// Ω of a paste, from the mask or the source's alpha, with its cache key: found once per
+/// mask image (the node keeps the last one, so that a frame sequence that only moves the
+/// offset does not scan the mask again).
+pub struct Region {
+    shape: MaskShape,
+    key: ShapeKey,
+    /// The socket Ω came from (`mask`, or `source` for the default mask).
+    socket: &'static str,
+}
+
+impl Region {
+    /// Ω of `mask` (checked: finite, the source's size), or of the source's alpha.
+    pub fn new(source: &Image, mask: Option<&Image>) -> Result<Region, NodeError> {
+        let shape = match mask {
+            Some(m) => {
+                check_finite(m).map_err(|e| NodeError::invalid("mask", e))?;
+                MaskShape::from_image(m)
+            }
+            None => {
+                // the source's alpha; an opaque source is inside everywhere
+                let opaque = source.pixels.iter().all(|p| p[3] >= 1.0);
+                let flags: Vec<bool> =
+                    source.pixels.iter().map(|p| opaque || p[3] > 0.5).collect();
+                MaskShape::from_flags(source.width, source.height, &flags)
+            }
+        };
+        Ok(Region {
+            key: shape.key(),
+            shape,
+            socket: if mask.is_some() { "mask" } else { "source" },
+        })
+    }
+}
+
+/// `poisson_blend` with Ω given (`Region::new` of this source's mask or alpha).
+pub fn blend_region(
+    target: &Image,
+    source: &Image,
+    region: &Region,
+    offset: [f64; 2],
+    mode: Mode,
+) -> Result<Blend, NodeError> {
     check_finite(target).map_err(|e| NodeError::invalid("target", e))?;
     check_finite(source).map_err(|e| NodeError::invalid("source", e))?;
     if offset.iter().any(|v| !v.is_finite()) {
         return Err(NodeError::invalid("offset", "the offset is not finite"));
     }
-    let shape = match mask {
-        Some(m) => {
-            check_finite(m).map_err(|e| NodeError::invalid("mask", e))?;
-            if (m.width, m.height) != (source.width, source.height) {
-                return Err(NodeError::invalid(
-                    "mask",
-                    format!(
-                        "the mask is {}x{} but the source is {}x{}",
-                        m.width, m.height, source.width, source.height
-                    ),
-                ));
-            }
-            MaskShape::from_image(m)
-        }
-        None => {
-            // the source's alpha; an opaque source is inside everywhere
-            let opaque = source.pixels.iter().all(|p| p[3] >= 1.0);
-            let flags: Vec<bool> = source.pixels.iter().map(|p| opaque || p[3] > 0.5).collect();
-            MaskShape::from_flags(source.width, source.height, &flags)
-        }
-    };
+    let (shape, socket) = (&region.shape, region.socket);
+    if (shape.width, shape.height) != (source.width, source.height) {
+        return Err(NodeError::invalid(
+            "mask",
+            format!(
+                "the mask is {}x{} but the source is {}x{}",
+                shape.width, shape.height, source.width, source.height
+            ),
+        ));
+    }
     if shape.is_empty() {
         return Ok(Blend {
             image: target.clone(),
@@ -86,7 +122,6 @@ pub fn poisson_blend(
             pixels: 0,
         });
     }
-    let socket = if mask.is_some() { "mask" } else { "source" };
     let Some([xr, yr]) = shape.offset_range(target.width, target.height) else {
         let [x0, y0, x1, y1] = shape.bbox().unwrap_or([0; 4]);
         return Err(NodeError::invalid(
@@ -113,14 +148,36 @@ pub fn poisson_blend(
             ),
         ));
     }
-    let sol = poisson::solve(&shape, target, source, off, mode).map_err(|e| {
-        NodeError::singular(format!("Poisson system: {e}"))
-    })?;
+    let sol = poisson::solve_keyed(shape, &region.key, target, source, off, mode)
+        .map_err(|e| NodeError::singular(format!("Poisson system: {e}")))?;
     Ok(Blend {
-        image: poisson::compose(target, &shape, off, &sol.values),
+        image: poisson::compose(target, shape, off, &sol.values),
         pixels: shape.len(),
         solution: Some(sol),
     })
+}
+
+/// The last mask image the node found Ω of (held weakly: its allocation cannot be reused by
+/// another image while this lives, and an image behind an `Arc` is not changed) and Ω.
+type LastRegion = Option<(Weak<Image>, Arc<Region>)>;
+static LAST_REGION: Mutex<LastRegion> = Mutex::new(None);
+
+/// Ω of `mask` (or of the source's alpha), from `LAST_REGION` when it is the same image.
+fn region_of(source: &Arc<Image>, mask: Option<&Arc<Image>>) -> Result<Arc<Region>, NodeError> {
+    let image = mask.unwrap_or(source);
+    {
+        let last = LAST_REGION.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some((w, r)) = last.as_ref() {
+            if std::ptr::eq(w.as_ptr(), Arc::as_ptr(image)) && (r.socket == "mask") == mask.is_some()
+            {
+                return Ok(r.clone());
+            }
+        }
+    }
+    let region = Arc::new(Region::new(source, mask.map(|m| &**m))?);
+    *LAST_REGION.lock().unwrap_or_else(|e| e.into_inner()) =
+        Some((Arc::downgrade(image), region.clone()));
+    Ok(region)
 }
 
 fn declare(b: &mut NodeBuilder) {
@@ -162,7 +219,8 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let offset: [f64; 2] = ctx.input("offset")?;
     let mode = ctx.choice::<Mode>("mode")?;
     let t0 = std::time::Instant::now();
-    let r = poisson_blend(&target, &source, mask.as_deref(), offset, mode)?;
+    let region = region_of(&source, mask.as_ref())?;
+    let r = blend_region(&target, &source, &region, offset, mode)?;
     let millis = t0.elapsed().as_secs_f64() * 1e3;
     if r.solution.is_none() {
         ctx.log("warning: the mask is empty; the target is returned unchanged");
@@ -401,6 +459,34 @@ mod tests {
         let mut bad = mask.clone();
         bad.set(0, 0, [0.0, 0.0, f32::NAN, 1.0]);
         assert_eq!(sock(run(&target, &source, Some(&bad), [4.0, 4.0])), "mask");
+    }
+
+    #[test]
+    fn the_node_finds_omega_again_for_another_mask_image() {
+        let source = Arc::new(image(12, 12, 21));
+        let a = Arc::new(disc(12, 12, 5.0));
+        let ra = region_of(&source, Some(&a)).unwrap();
+        // the same image: the same region, not scanned again
+        assert!(Arc::ptr_eq(&ra, &region_of(&source, Some(&a)).unwrap()));
+        let pixels = ra.shape.len();
+        drop((ra, a));
+        // a new image (perhaps where the old one was): its own region
+        let b = Arc::new(disc(12, 12, 3.0));
+        let rb = region_of(&source, Some(&b)).unwrap();
+        assert_eq!(rb.shape, MaskShape::from_image(&b));
+        assert!(rb.shape.len() < pixels);
+        // the source as its own mask (luminance) is not the default mask (its alpha)
+        assert_eq!(region_of(&source, Some(&source)).unwrap().socket, "mask");
+        let alpha = region_of(&source, None).unwrap();
+        assert_eq!((alpha.socket, alpha.shape.len()), ("source", 144));
+        // a bad mask is an error every time
+        let mut bad = disc(12, 12, 3.0);
+        bad.set(0, 0, [f32::NAN; 4]);
+        let bad = Arc::new(bad);
+        for _ in 0..2 {
+            let e = region_of(&source, Some(&bad)).err().unwrap();
+            assert_eq!(e.socket.as_deref(), Some("mask"));
+        }
     }
 
     #[test]

@@ -37,6 +37,21 @@ pub fn right_hand_side(
     offset: [i64; 2],
     mode: Mode,
 ) -> Mat<f64> {
+    let mut b = Mat::<f64>::zeros(shape.len(), 3);
+    right_hand_side_into(shape, target, source, offset, mode, &mut b);
+    b
+}
+
+/// `right_hand_side` written over `b` (resized to `n x 3` when its size differs), so that a
+/// caller can keep the buffer between pastes: memory written before does not fault again.
+pub fn right_hand_side_into(
+    shape: &MaskShape,
+    target: &Image,
+    source: &Image,
+    offset: [i64; 2],
+    mode: Mode,
+    b: &mut Mat<f64>,
+) {
     let (sw, sh) = (source.width as i64, source.height as i64);
     let tw = target.width as i64;
     // pixel indices: the source clamped to its edge, the target shifted by the offset
@@ -72,8 +87,10 @@ pub fn right_hand_side(
         }
         row
     };
-    // the three channel columns filled in parallel chunks of unknowns
-    let mut b = Mat::<f64>::zeros(n, 3);
+    // the three channel columns filled in parallel chunks of unknowns (every entry written)
+    if (b.nrows(), b.ncols()) != (n, 3) {
+        *b = Mat::zeros(n, 3);
+    }
     {
         let (r, rest) = b.as_mut().split_at_col_mut(1);
         let (g, bl) = rest.split_at_col_mut(1);
@@ -95,7 +112,6 @@ pub fn right_hand_side(
                 }
             });
     }
-    b
 }
 
 /// Unknowns per parallel task.

@@ -17,7 +17,6 @@ pub mod system;
 pub use guidance::Mode;
 pub use mask::{MaskShape, ShapeKey};
 
-use crate::nodes::linalg::SpdFactor;
 use crate::types::Image;
 use faer::reborrow::ReborrowMut;
 use rayon::prelude::*;
@@ -31,8 +30,8 @@ pub const CACHE_SLOTS: usize = 4;
 
 /// The factorization of one shape's Poisson matrix.
 pub enum Factor {
-    /// Sparse Cholesky (faer, AMD ordering): any Ω.
-    Cholesky(Box<SpdFactor>),
+    /// Sparse Cholesky (faer; AMD or nested-dissection ordering): any Ω.
+    Cholesky(Box<system::PoissonFactor>),
     /// Sine transform along rows and tridiagonal pivots down columns: a rectangular Ω.
     Rect(RectSolver),
 }
@@ -81,10 +80,17 @@ static CACHE: Mutex<Cache> = Mutex::new(Vec::new());
 /// The factorization of `shape`'s Poisson matrix, from the cache when a mask of the same
 /// shape was factored recently; the flag says whether it was reused.
 pub fn cached_factor(shape: &MaskShape) -> Result<(Arc<Factor>, bool), String> {
-    let key = shape.key();
+    cached_factor_keyed(shape, &shape.key())
+}
+
+/// `cached_factor` with the shape's key found already.
+pub fn cached_factor_keyed(
+    shape: &MaskShape,
+    key: &ShapeKey,
+) -> Result<(Arc<Factor>, bool), String> {
     {
         let mut cache = CACHE.lock().unwrap_or_else(|e| e.into_inner());
-        if let Some(i) = cache.iter().position(|(k, _)| *k == key) {
+        if let Some(i) = cache.iter().position(|(k, _)| k == key) {
             // move to the back: most recently used
             let entry = cache.remove(i);
             let f = entry.1.clone();
@@ -95,14 +101,19 @@ pub fn cached_factor(shape: &MaskShape) -> Result<(Arc<Factor>, bool), String> {
     // factored outside the lock: another paste may run meanwhile
     let f = Arc::new(Factor::new(shape)?);
     let mut cache = CACHE.lock().unwrap_or_else(|e| e.into_inner());
-    if !cache.iter().any(|(k, _)| *k == key) {
+    if !cache.iter().any(|(k, _)| k == key) {
         if cache.len() >= CACHE_SLOTS {
             cache.remove(0);
         }
-        cache.push((key, f.clone()));
+        cache.push((key.clone(), f.clone()));
     }
     Ok((f, false))
 }
+
+/// The last paste's right-hand side buffer (`n x 3`), kept for the next paste: at a megapixel
+/// it is 25 MB that would otherwise be fresh memory, page-faulted in again on every paste.
+/// The solution itself is returned, so it stays a fresh matrix.
+static RHS_BUFFER: Mutex<Option<Mat<f64>>> = Mutex::new(None);
 
 /// A solved paste: the values of the unknowns before they are written into the image.
 #[derive(Clone, Debug)]
@@ -129,6 +140,18 @@ pub fn solve(
     offset: [i64; 2],
     mode: Mode,
 ) -> Result<Solution, String> {
+    solve_keyed(shape, &shape.key(), target, source, offset, mode)
+}
+
+/// `solve` with the shape's key (`MaskShape::key`) found already.
+pub fn solve_keyed(
+    shape: &MaskShape,
+    key: &ShapeKey,
+    target: &Image,
+    source: &Image,
+    offset: [i64; 2],
+    mode: Mode,
+) -> Result<Solution, String> {
     let t0 = Instant::now();
     let Some([xr, yr]) = shape.offset_range(target.width, target.height) else {
         return Err("the mask region does not fit inside the target".into());
@@ -139,8 +162,11 @@ pub fn solve(
     if (source.width, source.height) != (shape.width, shape.height) {
         return Err("source and mask sizes differ".into());
     }
-    let b = guidance::right_hand_side(shape, target, source, offset, mode);
-    let (factor, reused) = cached_factor(shape)?;
+    // the right-hand side in the last paste's buffer when it is free (see `RHS_BUFFER`)
+    let kept = RHS_BUFFER.try_lock().ok().and_then(|mut k| k.take());
+    let mut b = kept.unwrap_or_else(Mat::new);
+    guidance::right_hand_side_into(shape, target, source, offset, mode, &mut b);
+    let (factor, reused) = cached_factor_keyed(shape, key)?;
     let mut x = b.clone();
     factor.solve_in_place(x.as_mut());
     let r = system::residual_norm(shape, x.as_ref(), b.as_ref());
@@ -152,6 +178,9 @@ pub fn solve(
         .sum::<f64>()
         .sqrt();
     let residual = if bn > 0.0 { r / bn } else { r };
+    if let Ok(mut k) = RHS_BUFFER.try_lock() {
+        *k = Some(b);
+    }
     Ok(Solution {
         values: x,
         residual,

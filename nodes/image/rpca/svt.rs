@@ -95,11 +95,16 @@ impl Thresholder {
             1.0,
             par,
         );
-        let warm = self
+        let start = self
             .prev
             .as_ref()
-            .filter(|v| v.ncols() > 0 && WARM_FRACTION * (v.ncols() + OVERSAMPLE) <= d)
-            .and_then(|v| warm_eigen(self.gram.as_ref(), tau * tau, v.as_ref(), par));
+            .filter(|v| v.ncols() > 0 && WARM_FRACTION * (v.ncols() + OVERSAMPLE) <= d);
+        let warm = start.and_then(|v| {
+            // the warm start multiplies by G: the whole matrix (the eigensolver below still
+            // reads only the lower triangle)
+            mirror_lower(&mut self.gram);
+            warm_eigen(self.gram.as_ref(), tau * tau, v.as_ref(), par)
+        });
         let (sigma2, v) = match warm {
             Some(found) => {
                 self.warm_calls += 1;
@@ -176,20 +181,18 @@ fn mirror_lower(f: &mut Mat<f64>) {
     }
 }
 
-/// The eigenpairs of the symmetric `g` (lower triangle given) with eigenvalues above
+/// The eigenpairs of the symmetric `g` (both triangles) with eigenvalues above
 /// `threshold`, by subspace iteration from `start`, certified as the module comment says;
 /// `None` when the certificate is not reached (the caller then runs the full eigensolver).
 /// Eigenvalues ascending, eigenvectors as columns.
 fn warm_eigen(
-    g_lower: MatRef<'_, f64>,
+    g: MatRef<'_, f64>,
     threshold: f64,
     start: MatRef<'_, f64>,
     par: Par,
 ) -> Option<(Vec<f64>, Mat<f64>)> {
-    let d = g_lower.nrows();
-    let mut g = g_lower.to_owned();
-    mirror_lower(&mut g);
-    let k = eigenvalues_above(g.as_ref(), threshold)?;
+    let d = g.nrows();
+    let k = eigenvalues_above(g, threshold)?;
     if k == 0 {
         return Some((Vec::new(), Mat::zeros(d, 0)));
     }
@@ -209,7 +212,7 @@ fn warm_eigen(
     let mut q = q0.qr().compute_thin_Q();
     for _ in 0..MAX_STEPS {
         let mut gq = Mat::<f64>::zeros(d, b);
-        faer::linalg::matmul::matmul(gq.as_mut(), Accum::Replace, g.as_ref(), q.as_ref(), 1.0, par);
+        faer::linalg::matmul::matmul(gq.as_mut(), Accum::Replace, g, q.as_ref(), 1.0, par);
         // Rayleigh–Ritz on span(q)
         let h = q.transpose() * &gq;
         let h = Mat::from_fn(b, b, |i, j| 0.5 * (h[(i, j)] + h[(j, i)]));
@@ -250,7 +253,7 @@ fn warm_eigen(
         let m = (m as usize).max(1);
         let ritz = &q * w;
         let g_ritz = &gq * w;
-        let filtered = chebyshev_filter(g.as_ref(), ritz, g_ritz, threshold, m, par);
+        let filtered = chebyshev_filter(g, ritz, g_ritz, threshold, m, par);
         q = filtered.qr().compute_thin_Q();
     }
     None
@@ -258,8 +261,8 @@ fn warm_eigen(
 
 /// T_m((G - c I) / e) Z with c = e = τ²/2 (the interval [0, τ²] mapped onto [-1, 1]), by the
 /// three-term recurrence T_{j+1} = 2 x T_j - T_{j-1} (Zhou & Saad 2007, "A Chebyshev–Davidson
-/// algorithm", Alg. 3.1, unscaled: m is small); `gz` is G Z, already known. Column j is then
-/// divided by T_m at its Ritz value when that exceeds 1, to keep the columns comparable.
+/// algorithm", Alg. 3.1, unscaled: m is small); `gz` is G Z, already known. Columns longer
+/// than 1 are then scaled to unit length, to keep them comparable before the QR.
 fn chebyshev_filter(
     g: MatRef<'_, f64>,
     z: Mat<f64>,

@@ -20,6 +20,7 @@ use crate::nodes::trace::environment::Environment;
 use crate::prelude::*;
 use crate::types::vec3::{dot, normalize_recip as normalize, sub};
 use crate::types::LookAt;
+pub use crate::nodes::render::raster::light_at;
 
 /// Whether a position, normal or base-colour pixel holds a surface (alpha above 0).
 #[inline]
@@ -180,29 +181,6 @@ pub fn camera_ray(look: &LookAt<f64>, focal_px: f64, w: u32, h: u32, x: u32, y: 
     let sx = (x as f64 + 0.5 - 0.5 * w as f64) / focal_px;
     let sy = (0.5 * h as f64 - y as f64 - 0.5) / focal_px;
     look.ray_dir(sx, sy)
-}
-
-/// Unit direction from `p` towards a point or directional light and the irradiance it
-/// gives there (colour times intensity, over the squared distance for a point light), as
-/// the rasterizer lights a surface; `None` for environment lights and degenerate ones.
-pub fn light_at(light: &Light, p: [f64; 3]) -> Option<([f64; 3], [f64; 3])> {
-    match light {
-        Light::Directional {
-            direction,
-            color,
-            intensity,
-        } => normalize(*direction).map(|d| (d.map(|c| -c), color.map(|c| c * intensity))),
-        Light::Point {
-            position,
-            color,
-            intensity,
-        } => {
-            let d = sub(*position, p);
-            let r2 = dot(d, d);
-            normalize(d).map(|l| (l, color.map(|c| c * intensity / r2)))
-        }
-        Light::Environment { .. } => None,
-    }
 }
 
 /// What a camera ray sees when it leaves the scene: the scene's first environment light

@@ -25,11 +25,7 @@ pub(super) fn prepare_lights(
         .map(|l| LightPrep {
             light: l.clone(),
             dir: match l {
-                Light::Directional {
-                    direction,
-                    color,
-                    intensity,
-                } => normalize(*direction).map(|d| (d.map(|c| -c), color.map(|c| c * intensity))),
+                Light::Directional { .. } => light_at(l, [0.0; 3]),
                 Light::Point { .. } | Light::Environment { .. } => None,
             },
             map: (lit && opts.shadows && !g.pos.is_empty())
@@ -50,4 +46,27 @@ pub(super) fn prepare_lights(
             factors: Vec::new(),
         })
         .collect::<Vec<_>>()
+}
+
+/// Unit direction from `p` towards a point or directional light and the irradiance it
+/// gives there (colour times intensity, over the squared distance for a point light), as
+/// the rasterizer lights a surface; `None` for environment lights and degenerate ones.
+pub fn light_at(light: &Light, p: [f64; 3]) -> Option<([f64; 3], [f64; 3])> {
+    match light {
+        Light::Directional {
+            direction,
+            color,
+            intensity,
+        } => normalize(*direction).map(|d| (d.map(|c| -c), color.map(|c| c * intensity))),
+        Light::Point {
+            position,
+            color,
+            intensity,
+        } => {
+            let d = sub(*position, p);
+            let r2 = dot(d, d);
+            normalize(d).map(|l| (l, color.map(|c| c * intensity / r2)))
+        }
+        Light::Environment { .. } => None,
+    }
 }

@@ -37,6 +37,7 @@ pub mod texture;
 use crate::prelude::*;
 use rayon::prelude::*;
 pub use options::{AntiAliasing, Passes, RasterOptions, RenderOutput};
+pub use lights::light_at;
 pub use scratch::release_scratch;
 
 /// Renders a scene through a camera (see the module doc). Fails on an unusable camera or

@@ -4,6 +4,7 @@
 //! shadow-map visibility of each light.
 
 use super::geometry::{normal_mapped, SceneGeometry};
+use super::lights::light_at;
 use super::options::RasterOptions;
 use super::rasterize::{barycentric, TriSetup};
 use super::shading;
@@ -133,18 +134,10 @@ impl Shader<'_> {
                         Some(le) => le,
                         None => continue,
                     },
-                    Light::Point {
-                        position,
-                        color,
-                        intensity,
-                    } => {
-                        let d = sub(*position, p);
-                        let r2 = dot(d, d);
-                        match normalize(d) {
-                            Some(l) => (l, color.map(|c| c * intensity / r2)),
-                            None => continue,
-                        }
-                    }
+                    Light::Point { .. } => match light_at(&lp.light, p) {
+                        Some(le) => le,
+                        None => continue,
+                    },
                     Light::Environment { .. } => continue,
                 };
                 let f = shading::blinn_phong(n, l, v, base, m.ks, m.k);

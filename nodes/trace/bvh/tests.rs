@@ -63,16 +63,7 @@ fn watertight_on_shared_edges_and_vertices() {
     // A fan of triangles around the origin; rays aimed exactly at the shared vertex and
     // along shared edges must hit exactly one or two of them, never slip through.
     let k = 12;
-    let mut tris = Vec::new();
-    for i in 0..k {
-        let a0 = i as f32 / k as f32 * std::f32::consts::TAU;
-        let a1 = (i + 1) as f32 / k as f32 * std::f32::consts::TAU;
-        tris.push([
-            [0.0, 0.0, 0.0],
-            [a0.cos(), a0.sin(), 0.0],
-            [a1.cos(), a1.sin(), 0.0],
-        ]);
-    }
+    let tris = fan(k);
     let bvh = Bvh::build(&tris);
     let mut r = Pcg32::new(5, 5);
     for i in 0..2000 {
@@ -190,16 +181,7 @@ fn wide_tree_matches_binary_tree() {
 #[test]
 fn wide_tree_matches_binary_tree_on_shared_edges() {
     let k = 12;
-    let mut tris = Vec::new();
-    for i in 0..k {
-        let a0 = i as f32 / k as f32 * std::f32::consts::TAU;
-        let a1 = (i + 1) as f32 / k as f32 * std::f32::consts::TAU;
-        tris.push([
-            [0.0, 0.0, 0.0],
-            [a0.cos(), a0.sin(), 0.0],
-            [a1.cos(), a1.sin(), 0.0],
-        ]);
-    }
+    let tris = fan(k);
     let bvh = Bvh::build(&tris);
     assert!(!bvh.wide.is_empty());
     let mut binary = bvh.clone();
@@ -233,4 +215,19 @@ fn wide_tree_matches_binary_tree_on_shared_edges() {
         }
         assert_eq!(bvh.occluded(org, dir, 10.0), b.is_some());
     }
+}
+
+/// `k` triangles around the origin in the z = 0 plane, sharing the centre and their edges.
+fn fan(k: usize) -> Vec<[[f32; 3]; 3]> {
+    (0..k)
+        .map(|i| {
+            let a0 = i as f32 / k as f32 * std::f32::consts::TAU;
+            let a1 = (i + 1) as f32 / k as f32 * std::f32::consts::TAU;
+            [
+                [0.0, 0.0, 0.0],
+                [a0.cos(), a0.sin(), 0.0],
+                [a1.cos(), a1.sin(), 0.0],
+            ]
+        })
+        .collect()
 }

@@ -263,7 +263,7 @@ fn environment_pass_shows_the_environment_along_camera_rays() {
     }
 }
 
-/// The G-buffer of `scene` through a camera at the origin looking down -z.
+/// The G-buffer of `scene` seen through `cam`, one sample per pixel.
 fn gbuffer_of(scene: &Scene, cam: &Camera) -> cgnodes::nodes::render::raster::RenderOutput {
     render(
         scene,
@@ -387,45 +387,29 @@ fn pass_nodes_name_the_socket_at_fault() {
         camera: None,
         ..scene.clone()
     };
-    let e = run_node(
-        "deferred_lighting",
-        vec![
-            ("scene", Value::Scene(Arc::new(no_cam.clone()))),
+    // deferred lighting over 96x72 G-buffer images, the normal image `normal_w` wide
+    let deferred = |scene: &Scene, normal_w: u32, extra: Vec<(&'static str, Value)>| {
+        let mut inputs = vec![
+            ("scene", Value::Scene(Arc::new(scene.clone()))),
             ("position", img(96, 72)),
-            ("normal", img(96, 72)),
+            ("normal", img(normal_w, 72)),
             ("base_color", img(96, 72)),
-        ],
-        &files,
-    )
-    .unwrap_err();
+        ];
+        inputs.extend(extra);
+        run_node("deferred_lighting", inputs, &files).unwrap_err()
+    };
+    let e = deferred(&no_cam, 96, vec![]);
     assert!(e.contains("camera"), "{e}");
-    let e = run_node(
-        "deferred_lighting",
-        vec![
-            ("scene", Value::Scene(Arc::new(scene.clone()))),
-            ("position", img(96, 72)),
-            ("normal", img(95, 72)),
-            ("base_color", img(96, 72)),
-        ],
-        &files,
-    )
-    .unwrap_err();
+    let e = deferred(&scene, 95, vec![]);
     assert!(e.contains("normal") && e.contains("95x72"), "{e}");
-    let e = run_node(
-        "deferred_lighting",
-        vec![
-            ("scene", Value::Scene(Arc::new(scene.clone()))),
-            ("position", img(96, 72)),
-            ("normal", img(96, 72)),
-            ("base_color", img(96, 72)),
-            (
-                "shadows",
-                Value::from(vec![Arc::new(Image::new(8, 8, [0.0; 4]))]),
-            ),
-        ],
-        &files,
-    )
-    .unwrap_err();
+    let e = deferred(
+        &scene,
+        96,
+        vec![(
+            "shadows",
+            Value::from(vec![Arc::new(Image::new(8, 8, [0.0; 4]))]),
+        )],
+    );
     assert!(e.contains("shadows"), "{e}");
     let e = run_node(
         "ssao",

@@ -1,12 +1,11 @@
 //! SSAO against references (1 on an open plane, darker in a corner with a larger radius)
 //! and the camera recovered from a G-buffer.
 
-use super::{lit_scene, obj, rmse};
+use super::{gbuffer_of, lit_scene, obj, rmse};
 use crate::common::run_node;
 use cgnodes::nodes::mesh::mesh_plane::plane_mesh;
 use cgnodes::nodes::render::gbuffer::ssao::{ssao, SsaoParams};
 use cgnodes::nodes::render::gbuffer::{camera_from_gbuffer, is_surface};
-use cgnodes::nodes::render::raster::{render, RasterOptions};
 use cgnodes::types::*;
 use std::sync::Arc;
 
@@ -27,15 +26,7 @@ fn ssao_is_one_on_an_open_plane() {
         objects: vec![obj(plane_mesh(40.0, [0.0; 3], 1, 1.0), None)],
         ..Default::default()
     };
-    let out = render(
-        &scene,
-        &cam,
-        &RasterOptions {
-            samples_per_axis: 1,
-            ..Default::default()
-        },
-    )
-    .unwrap();
+    let out = gbuffer_of(&scene, &cam);
     for normal in [Some(&out.normal), None] {
         let ao = ssao(
             &out.position,
@@ -80,15 +71,7 @@ fn ssao_darkens_a_corner_more_with_a_larger_radius() {
         height: 48,
         ..Default::default()
     };
-    let out = render(
-        &scene,
-        &cam,
-        &RasterOptions {
-            samples_per_axis: 1,
-            ..Default::default()
-        },
-    )
-    .unwrap();
+    let out = gbuffer_of(&scene, &cam);
     let mean_where = |ao: &Image, near: bool| {
         let (mut s, mut n) = (0.0, 0);
         for (i, p) in out.position.pixels.iter().enumerate() {
@@ -136,15 +119,7 @@ fn ssao_darkens_a_corner_more_with_a_larger_radius() {
 #[test]
 fn camera_is_recovered_from_position_and_depth() {
     let (scene, cam) = lit_scene();
-    let out = render(
-        &scene,
-        &cam,
-        &RasterOptions {
-            samples_per_axis: 1,
-            ..Default::default()
-        },
-    )
-    .unwrap();
+    let out = gbuffer_of(&scene, &cam);
     let facing = Camera {
         eye: [0.3, 0.2, 5.0],
         target: [0.3, 0.2, 0.0],
@@ -164,18 +139,13 @@ fn camera_is_recovered_from_position_and_depth() {
         &[[0, 1, 2], [0, 2, 3]],
     )
     .unwrap();
-    let flat = render(
+    let flat = gbuffer_of(
         &Scene {
             objects: vec![obj(wall, None)],
             ..Default::default()
         },
         &facing,
-        &RasterOptions {
-            samples_per_axis: 1,
-            ..Default::default()
-        },
-    )
-    .unwrap();
+    );
     for (c, o) in [(&cam, &out), (&facing, &flat)] {
         let r = camera_from_gbuffer(&o.position, &o.depth).unwrap();
         let (a, b) = (c.look_at::<f64>(), r.look_at::<f64>());

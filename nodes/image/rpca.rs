@@ -169,6 +169,7 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
         "dual",
         "rank",
         "nonzeros",
+        "warm",
         "time_ms",
     ]);
     for (c, d) in res.iter().enumerate() {
@@ -180,6 +181,7 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
                 s.dual,
                 s.rank as f64,
                 s.nonzeros as f64,
+                f64::from(u8::from(s.warm)),
                 s.seconds * 1e3,
             ]);
         }
@@ -269,6 +271,8 @@ mod tests {
         let es = (&d.sparse - &s0).norm_l2() / s0.norm_l2();
         assert!(el < 1e-6 && es < 1e-6, "L {el:e}, S {es:e}, {} iterations", d.log.len());
         assert_eq!(d.log.last().unwrap().rank, r);
+        // the low-rank phase runs on the warm-started thresholding, so the recovery covers it
+        assert!(d.log.last().unwrap().warm, "last step not warm-started");
         assert!((d.lambda - 1.0 / (n as f64).sqrt()).abs() < 1e-15);
     }
 

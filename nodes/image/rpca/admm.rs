@@ -40,6 +40,8 @@ pub struct Step {
     pub rank: usize,
     /// Non-zero entries of S.
     pub nonzeros: usize,
+    /// Whether the thresholding was answered by the warm start (`svt.rs`).
+    pub warm: bool,
     /// Seconds since the decomposition started, at the end of this iteration.
     pub seconds: f64,
 }
@@ -117,6 +119,7 @@ pub fn rpca(m: MatRef<'_, f64>, p: Params) -> Result<Decomposition, String> {
     let mut svt = Thresholder::default();
     for _ in 0..p.max_iterations {
         // L-step: SVT of M - S + Y/ρ
+        let warm_before = svt.warm_calls;
         let (l, rank) = svt.threshold(MatRef::from_column_major_slice(&arg, rows, cols), inv_rho)?;
         // S-step, dual update, residuals and the next argument; per-column sums added in
         // column order so the stopping test does not depend on the thread count
@@ -156,6 +159,7 @@ pub fn rpca(m: MatRef<'_, f64>, p: Params) -> Result<Decomposition, String> {
             dual: rho * ds.sqrt() / norm,
             rank,
             nonzeros,
+            warm: svt.warm_calls > warm_before,
             seconds: t0.elapsed().as_secs_f64(),
         };
         out.log.push(step);

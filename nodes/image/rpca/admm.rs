@@ -120,7 +120,9 @@ pub fn rpca(m: MatRef<'_, f64>, p: Params) -> Result<Decomposition, String> {
     for _ in 0..p.max_iterations {
         // L-step: SVT of M - S + Y/ρ
         let warm_before = svt.warm_calls;
-        let (l, rank) = svt.threshold(MatRef::from_column_major_slice(&arg, rows, cols), inv_rho)?;
+        let x = MatRef::from_column_major_slice(&arg, rows, cols);
+        let rank = svt.threshold_into(x, inv_rho, &mut out.low_rank)?;
+        let l = &out.low_rank;
         // S-step, dual update, residuals and the next argument; per-column sums added in
         // column order so the stopping test does not depend on the thread count
         let sums: Vec<(f64, f64, usize)> = s
@@ -153,7 +155,6 @@ pub fn rpca(m: MatRef<'_, f64>, p: Params) -> Result<Decomposition, String> {
             r2 += b;
             nonzeros += c;
         }
-        out.low_rank = l;
         let step = Step {
             primal: r2.sqrt() / norm,
             dual: rho * ds.sqrt() / norm,

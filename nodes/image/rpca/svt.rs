@@ -21,8 +21,13 @@
 //! ||R||_F / (θ_k - τ²), which must be below 1e-10; otherwise the full eigendecomposition runs.
 
 use crate::nodes::image::image_svd::svd::randomized::gaussian_matrix;
+use faer::diag::Diag;
+use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+use faer::linalg::evd::{self_adjoint_evd, self_adjoint_evd_scratch, ComputeEigenvectors};
+use faer::linalg::matmul::matmul;
 use faer::linalg::matmul::triangular::{matmul as tri_matmul, BlockStructure};
-use faer::{Accum, Mat, MatRef, Par};
+use faer::prelude::{default, Reborrow, ReborrowMut};
+use faer::{Accum, Mat, MatMut, MatRef, Par};
 
 /// Warm starts are tried while at most this fraction of the directions was kept last step
 /// (1 / 8): above it the block's products and the factorization of G - τ² I cost about what
@@ -39,12 +44,22 @@ const MAX_DEGREE: usize = 12;
 const ANGLE_TOL: f64 = 1e-10;
 
 /// D_τ with memory of the previous call's kept directions, for a sequence of nearby matrices
-/// of one shape (the ADMM iterates).
+/// of one shape (the ADMM iterates). It also keeps its buffers (the Gram matrix, the
+/// eigensolver's output and workspace, the filter): fresh pages for them were about a twentieth
+/// of a 500 x 500 step.
 pub struct Thresholder {
-    /// Kept eigenvectors of the previous Gram matrix (d x k).
+    /// Kept eigenvectors of the previous Gram matrix (d x k), while few enough for a warm start.
     prev: Option<Mat<f64>>,
     /// The Gram matrix, reused between calls.
     gram: Mat<f64>,
+    /// The full eigensolver's eigenvectors (d x d) and eigenvalues.
+    vecs: Mat<f64>,
+    vals: Diag<f64>,
+    /// The eigensolver's workspace.
+    stack: MemBuffer,
+    stack_bytes: usize,
+    /// The d x d filter of the many-directions branch of `apply_filter`.
+    filter: Mat<f64>,
     /// Calls answered by the warm start and by the full eigendecomposition.
     pub warm_calls: usize,
     /// See `warm_calls`.
@@ -56,6 +71,11 @@ impl Default for Thresholder {
         Thresholder {
             prev: None,
             gram: Mat::zeros(0, 0),
+            vecs: Mat::zeros(0, 0),
+            vals: Diag::zeros(0),
+            stack: MemBuffer::new(StackReq::EMPTY),
+            stack_bytes: 0,
+            filter: Mat::zeros(0, 0),
             warm_calls: 0,
             full_calls: 0,
         }
@@ -70,7 +90,22 @@ pub fn singular_value_threshold(x: MatRef<'_, f64>, tau: f64) -> Result<(Mat<f64
 impl Thresholder {
     /// D_τ(X) and the rank kept (singular values above τ).
     pub fn threshold(&mut self, x: MatRef<'_, f64>, tau: f64) -> Result<(Mat<f64>, usize), String> {
+        let mut out = Mat::zeros(x.nrows(), x.ncols());
+        let k = self.threshold_into(x, tau, &mut out)?;
+        Ok((out, k))
+    }
+
+    /// D_τ(X) written into `out` (resized if its shape differs), and the rank kept.
+    pub fn threshold_into(
+        &mut self,
+        x: MatRef<'_, f64>,
+        tau: f64,
+        out: &mut Mat<f64>,
+    ) -> Result<usize, String> {
         let (m, n) = x.shape();
+        if out.shape() != (m, n) {
+            *out = Mat::zeros(m, n);
+        }
         let tall = m >= n;
         let d = m.min(n);
         let par = faer::get_global_parallelism();
@@ -105,70 +140,118 @@ impl Thresholder {
             mirror_lower(&mut self.gram);
             warm_eigen(self.gram.as_ref(), tau * tau, v.as_ref(), par)
         });
-        let (sigma2, v) = match warm {
-            Some(found) => {
+        let k = match warm {
+            Some((sigma2, mut v)) => {
                 self.warm_calls += 1;
-                found
+                // few directions (at most d / 4): the filter does not scale v in place
+                let f = &mut self.filter;
+                apply_filter(x, v.as_mut(), &sigma2, tau, tall, f, out.as_mut(), par);
+                self.prev = Some(v);
+                sigma2.len()
             }
             None => {
                 self.full_calls += 1;
-                let Ok(eig) = self.gram.self_adjoint_eigen(faer::Side::Lower) else {
+                if !self.full_eigen(par) {
                     self.prev = None;
-                    return svt_by_svd(x, tau);
-                };
-                let (lambda, vecs) = (eig.S().column_vector(), eig.U());
+                    let (l, k) = svt_by_svd(x, tau)?;
+                    *out = l;
+                    return Ok(k);
+                }
+                let lambda = self.vals.column_vector();
                 // eigenvalues ascending: the kept ones are the last k
                 let k = (0..d).rev().take_while(|&i| lambda[i] > tau * tau).count();
                 let sigma2: Vec<f64> = (d - k..d).map(|i| lambda[i]).collect();
-                (sigma2, vecs.subcols(d - k, k).to_owned())
+                let v = self.vecs.subcols_mut(d - k, k);
+                // remembered only when the next step could start from it
+                self.prev = (WARM_FRACTION * (k + OVERSAMPLE) <= d).then(|| v.to_owned());
+                apply_filter(x, v, &sigma2, tau, tall, &mut self.filter, out.as_mut(), par);
+                k
             }
         };
-        let k = sigma2.len();
-        let l = apply_filter(x, v.as_ref(), &sigma2, tau, tall, par);
-        self.prev = Some(v);
-        Ok((l, k))
+        Ok(k)
+    }
+
+    /// The eigendecomposition of the Gram matrix (lower triangle) into the kept buffers;
+    /// false if the eigensolver failed.
+    fn full_eigen(&mut self, par: Par) -> bool {
+        let d = self.gram.nrows();
+        if self.vecs.shape() != (d, d) {
+            self.vecs = Mat::zeros(d, d);
+            self.vals = Diag::zeros(d);
+        }
+        let req = self_adjoint_evd_scratch::<f64>(d, ComputeEigenvectors::Yes, par, default());
+        if req.size_bytes() > self.stack_bytes {
+            self.stack = MemBuffer::new(req);
+            self.stack_bytes = req.size_bytes();
+        }
+        self_adjoint_evd(
+            self.gram.as_ref(),
+            self.vals.as_mut(),
+            Some(self.vecs.as_mut()),
+            par,
+            MemStack::new(&mut self.stack),
+            default(),
+        )
+        .is_ok()
     }
 }
 
-/// X V diag(1 - τ/σ) Vᵀ (tall) or V diag(1 - τ/σ) Vᵀ X (wide). When most directions are kept
-/// (k > 2d/3 of d), the d x d filter F = W Wᵀ with W = V diag(√(1 - τ/σ)) is formed as a
-/// lower triangle and mirrored, and X F costs one product: d² k / 2 + m d² multiply-adds
-/// instead of 2 m d k.
+/// X V diag(1 - τ/σ) Vᵀ (tall) or V diag(1 - τ/σ) Vᵀ X (wide), into `out`. When most
+/// directions are kept (k > 2d/3 of d), the d x d filter F = W Wᵀ with
+/// W = V diag(√(1 - τ/σ)) (V scaled in place) is formed in `filter` as a lower triangle and
+/// mirrored, and X F costs one product: d² k / 2 + m d² multiply-adds instead of 2 m d k.
+#[allow(clippy::too_many_arguments)]
 fn apply_filter(
     x: MatRef<'_, f64>,
-    v: MatRef<'_, f64>,
+    mut v: MatMut<'_, f64>,
     sigma2: &[f64],
     tau: f64,
     tall: bool,
+    filter: &mut Mat<f64>,
+    out: MatMut<'_, f64>,
     par: Par,
-) -> Mat<f64> {
+) {
+    let mut out = out;
     let (d, k) = v.shape();
     if k == 0 {
-        return Mat::zeros(x.nrows(), x.ncols());
+        out.fill(0.0);
+        return;
     }
     let shrink = |j: usize| 1.0 - tau / sigma2[j].sqrt();
     if 3 * k > 2 * d {
-        let w = Mat::from_fn(d, k, |i, j| v[(i, j)] * shrink(j).sqrt());
-        let mut f = Mat::<f64>::zeros(d, d);
+        for (j, col) in v.rb_mut().col_iter_mut().enumerate() {
+            let w = shrink(j).sqrt();
+            col.iter_mut().for_each(|e| *e *= w);
+        }
+        if filter.shape() != (d, d) {
+            *filter = Mat::zeros(d, d);
+        }
         tri_matmul(
-            f.as_mut(),
+            filter.as_mut(),
             BlockStructure::TriangularLower,
             Accum::Replace,
-            w.as_ref(),
+            v.rb(),
             BlockStructure::Rectangular,
-            w.transpose(),
+            v.rb().transpose(),
             BlockStructure::Rectangular,
             1.0,
             par,
         );
-        mirror_lower(&mut f);
-        return if tall { x * &f } else { &f * x };
+        mirror_lower(filter);
+        let (a, b) = if tall {
+            (x, filter.as_ref())
+        } else {
+            (filter.as_ref(), x)
+        };
+        matmul(out, Accum::Replace, a, b, 1.0, par);
+        return;
     }
+    let v = v.rb();
     let scaled = Mat::from_fn(d, k, |i, j| v[(i, j)] * shrink(j));
     if tall {
-        (x * v) * scaled.transpose()
+        matmul(out, Accum::Replace, x * v, scaled.transpose(), 1.0, par);
     } else {
-        scaled * (v.transpose() * x)
+        matmul(out, Accum::Replace, scaled, v.transpose() * x, 1.0, par);
     }
 }
 
@@ -212,7 +295,7 @@ fn warm_eigen(
     let mut q = q0.qr().compute_thin_Q();
     for _ in 0..MAX_STEPS {
         let mut gq = Mat::<f64>::zeros(d, b);
-        faer::linalg::matmul::matmul(gq.as_mut(), Accum::Replace, g, q.as_ref(), 1.0, par);
+        matmul(gq.as_mut(), Accum::Replace, g, q.as_ref(), 1.0, par);
         // Rayleigh–Ritz on span(q)
         let h = q.transpose() * &gq;
         let h = Mat::from_fn(b, b, |i, j| 0.5 * (h[(i, j)] + h[(j, i)]));
@@ -277,7 +360,7 @@ fn chebyshev_filter(
     let mut cur = Mat::from_fn(d, b, |i, j| (gz[(i, j)] - ce * prev[(i, j)]) / ce);
     let mut next = Mat::<f64>::zeros(d, b);
     for _ in 1..m {
-        faer::linalg::matmul::matmul(next.as_mut(), Accum::Replace, g, cur.as_ref(), 1.0, par);
+        matmul(next.as_mut(), Accum::Replace, g, cur.as_ref(), 1.0, par);
         for j in 0..b {
             for i in 0..d {
                 next[(i, j)] = 2.0 * (next[(i, j)] - ce * cur[(i, j)]) / ce - prev[(i, j)];

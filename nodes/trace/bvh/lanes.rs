@@ -213,31 +213,3 @@ pub fn tri4<const ANY: bool, const KX: usize, const KY: usize, const KZ: usize>(
     }
     false
 }
-
-/// Slab test of one ray against four quantised boxes (planes `origin + q * step` per
-/// axis, `q` 8-bit per lane and plane), factored as Ylitie et al. 2017 do (section 3.2):
-/// per axis the scalars `step / d` and `(origin - o) / d`, then per plane one conversion,
-/// one multiply and one add.
-#[inline(always)]
-pub fn slab4q(
-    r: &Ray4,
-    origin: [f32; 3],
-    step: [f32; 3],
-    lo: &[[u8; 4]; 3],
-    hi: &[[u8; 4]; 3],
-    tmax: f32,
-) -> (u32, F4) {
-    let mut t0 = [0.0f32; 4];
-    let mut t1 = [tmax; 4];
-    let cvt = |q: [u8; 4]| [q[0] as f32, q[1] as f32, q[2] as f32, q[3] as f32];
-    for k in 0..3 {
-        let inv = r.inv[k][0];
-        let a = [step[k] * inv; 4];
-        let b = [(origin[k] - r.org[k][0]) * inv; 4];
-        let (near, far) = if r.neg[k] { (hi[k], lo[k]) } else { (lo[k], hi[k]) };
-        t0 = max4(add4(mul4(cvt(near), a), b), t0);
-        t1 = min4(add4(mul4(cvt(far), a), b), t1);
-    }
-    let t1 = mul4(t1, [1.000_000_6; 4]);
-    (mask(t0, t1, |a, b| a <= b), t0)
-}

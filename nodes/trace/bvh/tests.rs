@@ -130,15 +130,13 @@ fn wide_tree_matches_binary_tree() {
     let mut nodes_seen = vec![0u32; bvh.wide.len()];
     nodes_seen[0] = 1;
     for n in &bvh.wide {
-        let (nmin, nmax) = n.boxes();
         for l in 0..4 {
             let c = n.child[l];
             if c == u32::MAX {
-                // An unused lane is masked off, so no ray enters it.
-                assert_eq!(n.live & (1 << l), 0);
+                // An unused lane's box is empty, so no ray enters it.
+                assert!((0..3).all(|k| n.min[k][l] > n.max[k][l]));
                 continue;
             }
-            assert_ne!(n.live & (1 << l), 0);
             if c & wide::LEAF != 0 {
                 let q = &bvh.wide_tris[((c & !wide::LEAF) >> 3) as usize];
                 leaves_seen[((c & !wide::LEAF) >> 3) as usize] += 1;
@@ -149,7 +147,7 @@ fn wide_tree_matches_binary_tree() {
                     assert_eq!(q.get(i), tris[p]);
                     for p in &q.get(i) {
                         for (k, x) in p.iter().enumerate() {
-                            assert!(*x >= nmin[k][l] && *x <= nmax[k][l]);
+                            assert!(*x >= n.min[k][l] && *x <= n.max[k][l]);
                         }
                     }
                 }

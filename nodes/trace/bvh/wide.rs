@@ -9,8 +9,8 @@
 //!
 //! The lane arithmetic is in `lanes.rs`; docs/path_tracing.md has the measurements.
 
-use super::lanes::{slab4q, tri4, Ray4, Tri4, F4};
-use super::{Aabb, Bvh};
+use super::lanes::{slab4, tri4, Ray4, Tri4};
+use super::{Bvh, BvhNode};
 use crate::nodes::trace::bvh::traverse::{with_stack, RayPre};
 use crate::nodes::trace::bvh::Hit;
 
@@ -22,115 +22,18 @@ pub(super) const LEAF: u32 = 1 << 31;
 /// Triangle counts at or above this cannot be encoded; such scenes keep the binary tree.
 pub(super) const MAX_TRIS: usize = 1 << 28;
 
-/// A node of the 4-wide BVH in one cache line (64 bytes): the four child boxes quantised
-/// to 8 bits per plane on a grid over the node's own box (Ylitie, Karras and Laine 2017,
-/// "Efficient incoherent ray traversal on GPUs through compressed wide BVHs", section 3.1:
-/// an origin, a power-of-two step per axis, and per child and plane an integer `q`, the
-/// plane being `origin + q * 2^e`), rounded outward so that every decoded box holds its
-/// child's exact box; and per child either an interior node (its index), a leaf
-/// (`LEAF | leaf << 3 | count`) or nothing (`EMPTY`, its bit clear in `live`). The full
-/// f32 boxes took two cache lines, and traversal waited on their loads
-/// (docs/path_tracing.md).
+/// A node of the 4-wide BVH: four child boxes (per axis, per lane), and per child either
+/// an interior node (its index), a leaf (`LEAF | leaf << 3 | count`) or nothing (`EMPTY`,
+/// whose box is empty: min = +inf, max = -inf, so no ray enters it).
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(64))]
 pub struct Node4 {
-    /// Lower corner of the quantisation grid.
-    pub origin: [f32; 3],
-    /// Per axis, the grid step `2^e` as its biased f32 exponent field (`e + 127`).
-    pub exp: [u8; 3],
-    /// Bit `l` set when child `l` is in use.
-    pub live: u8,
-    /// Lower planes, `lo[axis][lane]`, in grid steps from `origin`.
-    pub lo: [[u8; 4]; 3],
-    /// Upper planes, `hi[axis][lane]`.
-    pub hi: [[u8; 4]; 3],
+    /// Lower corners, `min[axis][lane]`.
+    pub min: [[f32; 4]; 3],
+    /// Upper corners, `max[axis][lane]`.
+    pub max: [[f32; 4]; 3],
     /// Child node index or leaf code.
     pub child: [u32; 4],
-}
-
-impl Node4 {
-    /// The grid step of `axis`.
-    #[inline(always)]
-    fn step(&self, axis: usize) -> f32 {
-        f32::from_bits((self.exp[axis] as u32) << 23)
-    }
-
-    /// The decoded boxes, `(min[axis][lane], max[axis][lane])`: `origin + q * step` in f32
-    /// (exact product, one rounding in the sum), the same operations the quantiser checked.
-    #[inline(always)]
-    pub fn boxes(&self) -> ([F4; 3], [F4; 3]) {
-        let dec = |q: [u8; 4], o: f32, s: f32| -> F4 {
-            [
-                o + q[0] as f32 * s,
-                o + q[1] as f32 * s,
-                o + q[2] as f32 * s,
-                o + q[3] as f32 * s,
-            ]
-        };
-        let mut min = [[0.0; 4]; 3];
-        let mut max = [[0.0; 4]; 3];
-        for a in 0..3 {
-            let s = self.step(a);
-            min[a] = dec(self.lo[a], self.origin[a], s);
-            max[a] = dec(self.hi[a], self.origin[a], s);
-        }
-        (min, max)
-    }
-
-    /// The decoded box of child `lane` (it holds the child's exact box).
-    pub fn bounds(&self, lane: usize) -> Aabb {
-        let (min, max) = self.boxes();
-        Aabb {
-            min: [min[0][lane], min[1][lane], min[2][lane]],
-            max: [max[0][lane], max[1][lane], max[2][lane]],
-        }
-    }
-}
-
-/// Quantises the child boxes `kids` (at most four, each non-empty) into `n`'s grid:
-/// origin at their union's lower corner, per axis the smallest power-of-two step with 255
-/// steps spanning the union, each lower plane rounded down and each upper plane up, then
-/// moved a step further while the f32 decoding (`Node4::boxes`) is not outside the exact
-/// plane. False when a step would leave the normal f32 range (a scene over about 1e36
-/// wide): the caller keeps the binary tree.
-fn quantise(n: &mut Node4, kids: &[Aabb]) -> bool {
-    let mut u = Aabb::EMPTY;
-    for b in kids {
-        u = u.union(b);
-    }
-    n.origin = u.min;
-    for a in 0..3 {
-        let ext = u.max[a] as f64 - u.min[a] as f64;
-        // Smallest e with 255 * 2^e >= ext, kept normal (-126..=119, so 255 * 2^e is
-        // finite).
-        let mut e = -126i32;
-        while 255.0 * 2f64.powi(e) < ext {
-            e += 1;
-            if e > 119 {
-                return false;
-            }
-        }
-        n.exp[a] = (e + 127) as u8;
-        let (o, s) = (n.origin[a], n.step(a));
-        let dec = |q: u32| o + q as f32 * s;
-        for (l, b) in kids.iter().enumerate() {
-            let mut q = (((b.min[a] as f64 - o as f64) / s as f64).floor()).clamp(0.0, 255.0) as u32;
-            while q > 0 && dec(q) > b.min[a] {
-                q -= 1;
-            }
-            n.lo[a][l] = q as u8;
-            let mut q = (((b.max[a] as f64 - o as f64) / s as f64).ceil()).clamp(0.0, 255.0) as u32;
-            while q < 255 && dec(q) < b.max[a] {
-                q += 1;
-            }
-            n.hi[a][l] = q as u8;
-            if dec(n.lo[a][l] as u32) > b.min[a] || dec(n.hi[a][l] as u32) < b.max[a] {
-                return false;
-            }
-        }
-    }
-    n.live = (1u8 << kids.len()) - 1;
-    true
 }
 
 /// Collapses the binary tree of `bvh` (root first, children of an interior node at
@@ -161,14 +64,10 @@ pub fn collapse(bvh: &Bvh) -> (Vec<Node4>, Vec<Tri4>) {
         };
     }
     let is_leaf = |k: usize| under[k].1 <= 4;
-    let fail = (Vec::new(), Vec::new());
     if is_leaf(0) {
         // A single leaf: a root with one child.
         let mut n = empty_node();
-        set_lane(&mut n, 0, bvh, under[0], &mut leaves);
-        if !quantise(&mut n, &[nodes[0].bounds]) {
-            return fail;
-        }
+        set_lane(&mut n, 0, bvh, 0, under[0], &mut leaves);
         out.push(n);
         return (out, leaves);
     }
@@ -196,12 +95,8 @@ pub fn collapse(bvh: &Bvh) -> (Vec<Node4>, Vec<Tri4>) {
             kids.push(f + 1);
         }
         let mut n = empty_node();
-        let boxes: Vec<Aabb> = kids.iter().map(|&k| nodes[k].bounds).collect();
-        if !quantise(&mut n, &boxes) {
-            return fail;
-        }
         for (lane, &k) in kids.iter().enumerate() {
-            set_lane(&mut n, lane, bvh, under[k], &mut leaves);
+            set_lane(&mut n, lane, bvh, k, under[k], &mut leaves);
             if !is_leaf(k) {
                 n.child[lane] = out.len() as u32;
                 todo.push((k, out.len()));
@@ -215,25 +110,28 @@ pub fn collapse(bvh: &Bvh) -> (Vec<Node4>, Vec<Tri4>) {
 
 fn empty_node() -> Node4 {
     Node4 {
-        origin: [0.0; 3],
-        exp: [127; 3],
-        live: 0,
-        lo: [[0; 4]; 3],
-        hi: [[0; 4]; 3],
+        min: [[f32::INFINITY; 4]; 3],
+        max: [[f32::NEG_INFINITY; 4]; 3],
         child: [EMPTY; 4],
     }
 }
 
-/// Makes a binary node child `lane` of `n` when it is a leaf (at most four
-/// triangles, `under`: first, count): those packed into a new `Tri4` (the caller sets an
-/// interior child's index; `quantise` stores the boxes).
+/// Puts binary node `k` of `bvh` in `lane` of `n`: its box, and when it holds at most
+/// four triangles (`under`: first, count) those packed into a new `Tri4` as a leaf (the
+/// caller sets an interior child's index).
 fn set_lane(
     n: &mut Node4,
     lane: usize,
     bvh: &Bvh,
+    k: usize,
     under: (u32, u32),
     leaves: &mut Vec<Tri4>,
 ) {
+    let b: &BvhNode = &bvh.nodes[k];
+    for a in 0..3 {
+        n.min[a][lane] = b.bounds.min[a];
+        n.max[a][lane] = b.bounds.max[a];
+    }
     let (first, count) = under;
     if count <= 4 {
         let r = first as usize..(first + count) as usize;
@@ -271,9 +169,7 @@ impl Bvh {
         'outer: loop {
             if c & LEAF == 0 {
                 let n = &self.wide[c as usize];
-                let step = [n.step(0), n.step(1), n.step(2)];
-                let (m, te) = slab4q(&ray, n.origin, step, &n.lo, &n.hi, tmax);
-                let mut m = m & n.live as u32;
+                let (mut m, te) = slab4(&ray, &n.min, &n.max, tmax);
                 if m != 0 {
                     let first = m.trailing_zeros() as usize;
                     m &= m - 1;

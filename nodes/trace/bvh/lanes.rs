@@ -84,25 +84,6 @@ impl Ray4 {
 /// the binary traversal. An empty lane (min = +inf, max = -inf) is never entered.
 #[inline(always)]
 pub fn slab4(r: &Ray4, min: &[F4; 3], max: &[F4; 3], tmax: f32) -> (u32, F4) {
-    #[cfg(target_arch = "x86_64")]
-    {
-        // SAFETY: `slab4_sse` only needs SSE2, which every x86_64 CPU has (it is part of
-        // the x86_64 baseline, checked at compile time below), so calling it is sound.
-        // Why not plain Rust: inlined into the closest-hit traversal, LLVM's SLP
-        // vectoriser split the plain-Rust version into one 2-lane and two scalar halves
-        // (objdump: 6 `maxss`/`minss` beside the packed ops in every closest-hit
-        // instance), about twice the instructions; docs/path_tracing.md has the gain.
-        const _: () = assert!(cfg!(target_feature = "sse2"));
-        unsafe { slab4_sse(r, min, max, tmax) }
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    slab4_plain(r, min, max, tmax)
-}
-
-/// `slab4` in plain lane arithmetic (the reference; the x86_64 build uses `slab4_sse`).
-#[inline(always)]
-#[cfg_attr(target_arch = "x86_64", allow(dead_code))]
-pub fn slab4_plain(r: &Ray4, min: &[F4; 3], max: &[F4; 3], tmax: f32) -> (u32, F4) {
     let mut t0 = [0.0f32; 4];
     let mut t1 = [tmax; 4];
     for k in 0..3 {
@@ -116,38 +97,6 @@ pub fn slab4_plain(r: &Ray4, min: &[F4; 3], max: &[F4; 3], tmax: f32) -> (u32, F
     }
     let t1 = mul4(t1, [1.000_000_4; 4]);
     (mask(t0, t1, |a, b| a <= b), t0)
-}
-
-/// `slab4` in SSE intrinsics, the same operations in the same order (so the same bits):
-/// `_mm_max_ps(a, b)` is `if a > b { a } else { b }` (a NaN in `a` keeps `b`), as `max4`.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "sse2")]
-#[inline]
-fn slab4_sse(r: &Ray4, min: &[F4; 3], max: &[F4; 3], tmax: f32) -> (u32, F4) {
-    use std::arch::x86_64::*;
-    let ld = |a: &F4| _mm_set_ps(a[3], a[2], a[1], a[0]);
-    let mut t0 = _mm_setzero_ps();
-    let mut t1 = _mm_set1_ps(tmax);
-    for k in 0..3 {
-        let (near, far) = if r.neg[k] {
-            (&max[k], &min[k])
-        } else {
-            (&min[k], &max[k])
-        };
-        let (o, inv) = (ld(&r.org[k]), ld(&r.inv[k]));
-        t0 = _mm_max_ps(_mm_mul_ps(_mm_sub_ps(ld(near), o), inv), t0);
-        t1 = _mm_min_ps(_mm_mul_ps(_mm_sub_ps(ld(far), o), inv), t1);
-    }
-    let t1 = _mm_mul_ps(t1, _mm_set1_ps(1.000_000_4));
-    let m = _mm_movemask_ps(_mm_cmple_ps(t0, t1)) as u32;
-    let lane = |v: __m128| _mm_cvtss_f32(v);
-    let te = [
-        lane(t0),
-        lane(_mm_shuffle_ps::<0b01_01_01_01>(t0, t0)),
-        lane(_mm_shuffle_ps::<0b10_10_10_10>(t0, t0)),
-        lane(_mm_shuffle_ps::<0b11_11_11_11>(t0, t0)),
-    ];
-    (m, te)
 }
 
 /// Up to four triangles of a leaf, axis by axis: `v[corner][axis][lane]`, and the

@@ -174,6 +174,10 @@ pub fn tri4<const ANY: bool, const KX: usize, const KY: usize, const KZ: usize>(
     // Lanes on an edge go to the scalar test's double-precision fallback (section 3.3).
     let edge = (eq(u) | eq(v) | eq(w)) & live;
     let outside = (lt(u) | lt(v) | lt(w)) & (gt(u) | gt(v) | gt(w));
+    // Most leaf tests miss every triangle: stop before the depth test then.
+    if (live & !outside) | edge == 0 {
+        return false;
+    }
     let det = add4(add4(u, v), w);
     let t = add4(add4(mul4(u, az), mul4(v, bz)), mul4(w, cz));
     // The sign-aware depth test of section 3.4 against the current `tmax`: a lane failing

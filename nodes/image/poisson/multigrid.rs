@@ -314,12 +314,15 @@ fn residual(level: &Level, u: &Field, b: Option<&Field>, out: &mut Field) -> P3 
     dot
 }
 
+/// Matching chunks of `x`, `r`, `p`, `q` in `cg_update`.
+type CgChunks<'a> = (((&'a mut [P3], &'a mut [P3]), &'a [P3]), &'a [P3]);
+
 /// Conjugate gradients' update `x += α p`, `r -= α q` in one pass; returns `||r||²` per
 /// channel.
 fn cg_update(level: &Level, x: &mut Field, r: &mut Field, p: &Field, q: &Field, alpha: P3) -> P3 {
     let mut sum = [0.0; 3];
     for par in 0..2 {
-        let f = |(((xv, rv), pv), qv): (((&mut [P3], &mut [P3]), &[P3]), &[P3])| {
+        let f = |(((xv, rv), pv), qv): CgChunks<'_>| {
             let mut s = [0.0; 3];
             for i in 0..xv.len() {
                 for c in 0..3 {
@@ -397,6 +400,7 @@ fn restrict(fine: &Level, coarse: &Level, r: &Field, bc: &mut Field) {
 }
 
 /// `u += P uc` at the fine points inside.
+#[allow(clippy::needless_range_loop)] // x indexes the row and, halved, the coarse rows
 fn prolong_add(fine: &Level, uc: &Field, u: &mut Field) {
     let (w, h) = (fine.w, fine.h);
     for p in 0..2 {
@@ -435,6 +439,7 @@ fn parents(j: usize) -> impl Iterator<Item = (usize, f64)> {
 /// The Galerkin coarse level `Pᵀ A P` of `fine` (Trottenberg et al. 2001, §2.3.2): for each
 /// coarse point `I` and fine point `i` of its support, each fine neighbour `j` of `i` and each
 /// coarse parent `J` of `j`, `A_c[I][J] += P[i][I] A[i][j] P[j][J]`.
+#[allow(clippy::needless_range_loop)] // xc is a grid coordinate, doubled for the fine grid
 fn galerkin(fine: &Level) -> Level {
     let (mx, my) = ((fine.w - 1) / 2, (fine.h - 1) / 2);
     // coarse points 0..=m along each axis (0 and m outside), padded to an odd size

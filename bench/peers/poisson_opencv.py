@@ -17,6 +17,9 @@ linear values, so the two differ by design.
 
     python3 bench/peers/poisson_opencv.py [--threads N]   # needs target/release/cgnodes (or $CGNODES)
 
+$POISSON_SOLVER (auto, cholesky, multigrid) sets the node's `solver` parameter (unset: the
+parameter is not written, so binaries from before it existed run too).
+
 Installs `opencv-python-headless` and `numpy` into target/peers-venv when they are missing.
 """
 import csv
@@ -79,6 +82,8 @@ def cgnodes_pastes(cv2, d, target, source, mask, offsets, mode, threads):
             "params": {"offset": [float(ox), float(oy)], "mode": mode},
             "inputs": {"target": f"b{i - 1}.image" if i else "t.image", "source": "s.image", "mask": "m.image"},
         }
+        if os.environ.get("POISSON_SOLVER"):
+            nodes[f"b{i}"]["params"]["solver"] = os.environ["POISSON_SOLVER"]
         nodes[f"w{i}"] = {"type": "table_write", "params": {"path": f"t{i}.csv"}, "inputs": {"value": f"b{i}.table"}}
         nodes[f"i{i}"] = {"type": "image_save", "params": {"path": f"out{i}.png"}, "inputs": {"image": f"b{i}.image"}}
     g = os.path.join(d, "g.json")
@@ -129,6 +134,9 @@ def main():
                 region[ys + off[1], xs + off[0]] = True
                 diffs.append(np.abs(r["image"].astype(float) - o.astype(float))[region].mean())
             solver = "sine transform" if rows[0].get("sine_transform") == 1.0 else "Cholesky"
+            if rows[0].get("multigrid") == 1.0:
+                iters = "/".join(str(int(r["iterations"])) for r in rows)
+                solver = f"multigrid ({iters} it.)"
             cv_ms = statistics.median(cv_times)
             re_ms = statistics.median(r["time_ms"] for r in reused)
             print(

@@ -1,12 +1,13 @@
 //! `poisson_blend`: Poisson image editing (Pérez, Gangnet, Blake 2003), seamless cloning and
-//! mixed gradients, with the mask's factorization (sine transforms for a rectangle, sparse
-//! Cholesky otherwise) reused across calls (see `poisson/mod.rs`).
+//! mixed gradients, with the mask's factorization (sine transforms for a rectangle, a
+//! multigrid hierarchy or sparse Cholesky otherwise) reused across calls (see
+//! `poisson/mod.rs`).
 
 #[path = "poisson/mod.rs"]
 pub mod poisson;
 
 use crate::prelude::*;
-use poisson::{MaskShape, Mode, ShapeKey};
+use poisson::{MaskShape, Mode, ShapeKey, Solver};
 use rayon::prelude::*;
 use std::sync::{Mutex, Weak};
 
@@ -55,7 +56,7 @@ pub fn poisson_blend(
     mode: Mode,
 ) -> Result<Blend, NodeError> {
     let region = Region::new(source, mask)?;
-    blend_region(target, source, &region, offset, mode)
+    blend_region(target, source, &region, offset, mode, Solver::Auto)
 }
 
 /// Ω of a paste, from the mask or the source's alpha, with its cache key: found once per
@@ -92,13 +93,14 @@ impl Region {
     }
 }
 
-/// `poisson_blend` with Ω given (`Region::new` of this source's mask or alpha).
+/// `poisson_blend` with Ω given (`Region::new` of this source's mask or alpha), by `solver`.
 pub fn blend_region(
     target: &Image,
     source: &Image,
     region: &Region,
     offset: [f64; 2],
     mode: Mode,
+    solver: Solver,
 ) -> Result<Blend, NodeError> {
     check_finite(target).map_err(|e| NodeError::invalid("target", e))?;
     check_finite(source).map_err(|e| NodeError::invalid("source", e))?;
@@ -148,7 +150,10 @@ pub fn blend_region(
             ),
         ));
     }
-    let sol = poisson::solve_keyed(shape, &region.key, target, source, off, mode)
+    if solver == Solver::SineTransform && shape.rectangle().is_none() {
+        return Err(NodeError::invalid("solver", poisson::not_a_rectangle()));
+    }
+    let sol = poisson::solve_keyed(shape, &region.key, target, source, off, mode, solver)
         .map_err(|e| NodeError::singular(format!("Poisson system: {e}")))?;
     Ok(Blend {
         image: poisson::compose(target, shape, off, &sol.values),
@@ -184,7 +189,8 @@ fn declare(b: &mut NodeBuilder) {
     b.doc(
         "Poisson image editing (Pérez et al. 2003): pastes the source's gradients into the \
          target over a mask, seamlessly. A rectangular mask is solved by sine transforms \
-         (O(n log n)), any other by sparse Cholesky; the factorization is reused by later \
+         (O(n log n)), any other by multigrid-preconditioned conjugate gradients or sparse \
+         Cholesky (`solver`); the factorization or multigrid hierarchy is reused by later \
          calls with the same mask shape (e.g. when only the offset moves).",
     );
     b.add_input::<Image>("target")
@@ -204,11 +210,20 @@ fn declare(b: &mut NodeBuilder) {
         "seamless: source gradients; mixed: per edge and channel the stronger of the source \
          and target gradients (transparent objects, holes).",
     );
+    b.add_choice::<Solver>("solver").doc(
+        "auto: sine transforms for a rectangular mask, multigrid for a mask of at least 4096 \
+         pixels filling a quarter of its bounding box, sparse Cholesky otherwise; cholesky: \
+         sparse Cholesky (fastest when one large mask shape is pasted many times); multigrid: \
+         geometric multigrid-preconditioned conjugate gradients (fastest first paste of a \
+         large mask); sine_transform: rectangular masks only (an error otherwise).",
+    );
     b.add_output::<Image>("image");
     b.add_output::<Table>("table")
         .doc(
-            "pixels solved, relative residual of the Poisson system, reused (0/1), \
-             sine_transform (1: the rectangle's fast solver, 0: sparse Cholesky), time_ms.",
+            "pixels solved, relative residual of the Poisson system, reused (0/1: the \
+             factorization or multigrid hierarchy came from the cache), sine_transform (1: \
+             the rectangle's fast solver), multigrid (1: multigrid, 0 with sine_transform 0: \
+             sparse Cholesky), iterations (multigrid CG iterations), time_ms.",
         );
 }
 
@@ -218,17 +233,25 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let mask: Option<Arc<Image>> = ctx.input_opt("mask")?;
     let offset: [f64; 2] = ctx.input("offset")?;
     let mode = ctx.choice::<Mode>("mode")?;
+    let solver = ctx.choice::<Solver>("solver")?;
     let t0 = std::time::Instant::now();
     let region = region_of(&source, mask.as_ref())?;
-    let r = blend_region(&target, &source, &region, offset, mode)?;
+    let r = blend_region(&target, &source, &region, offset, mode, solver)?;
     let millis = t0.elapsed().as_secs_f64() * 1e3;
     if r.solution.is_none() {
         ctx.log("warning: the mask is empty; the target is returned unchanged");
     }
-    let (residual, reused, rect) = r.solution.as_ref().map_or((0.0, 0.0, 0.0), |s| {
-        let flag = |b: bool| f64::from(u8::from(b));
-        (s.residual, flag(s.reused), flag(s.solver == "sine_transform"))
-    });
+    let (residual, reused, rect, mg, iterations) =
+        r.solution.as_ref().map_or((0.0, 0.0, 0.0, 0.0, 0.0), |s| {
+            let flag = |b: bool| f64::from(u8::from(b));
+            (
+                s.residual,
+                flag(s.reused),
+                flag(s.solver == "sine_transform"),
+                flag(s.solver == "multigrid"),
+                s.iterations as f64,
+            )
+        });
     ctx.set_output("image", r.image);
     ctx.set_output(
         "table",
@@ -237,6 +260,8 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
             ("residual", residual),
             ("reused", reused),
             ("sine_transform", rect),
+            ("multigrid", mg),
+            ("iterations", iterations),
             ("time_ms", millis),
         ]),
     );

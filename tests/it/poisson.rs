@@ -185,3 +185,69 @@ fn bad_inputs_get_errors_naming_the_socket() {
     let e = err(inputs(&target, &source, &full, [2.0, 2.0], "poisson"));
     assert!(e.contains("socket 'mode'"), "{e}");
 }
+
+#[test]
+fn solver_choice_multigrid_and_cholesky_agree_and_sine_transform_needs_a_rectangle() {
+    let target = ramp(200, 180, 1.0);
+    let source = ramp(97, 83, 2.5);
+    let mask = ring(97, 83); // 4,500 pixels: `auto` picks multigrid (a shape only this test uses)
+    let with = |solver: &str, off: [f64; 2]| {
+        let mut ins = inputs(&target, &source, &mask, off, "mixed");
+        ins.push(("solver", Value::from(solver)));
+        blend(ins)
+    };
+    let col = |t: &Table, c: &str| t.column(c).unwrap()[0];
+    let (chol, _) = with("cholesky", [20.0, 30.0]).unwrap();
+    let tc = table(&chol);
+    assert!(col(&tc, "pixels") > 4096.0);
+    assert_eq!((col(&tc, "multigrid"), col(&tc, "iterations")), (0.0, 0.0));
+    for (i, solver) in ["multigrid", "auto"].iter().enumerate() {
+        let (mg, _) = with(solver, [20.0, 30.0]).unwrap();
+        let tm = table(&mg);
+        assert_eq!(col(&tm, "multigrid"), 1.0, "{solver}");
+        // `auto` shares the hierarchy `multigrid` built
+        assert_eq!(col(&tm, "reused"), i as f64, "{solver}");
+        assert!(col(&tm, "residual") < 1e-10);
+        // the repeated identical paste starts from its own solution: no iteration needed
+        let it = col(&tm, "iterations");
+        assert!(
+            if i == 0 {
+                (1.0..=30.0).contains(&it)
+            } else {
+                it == 0.0
+            },
+            "{solver}: {it}"
+        );
+        // the same pixels as Cholesky up to the f32 image's rounding
+        let (a, b) = (image(&chol), image(&mg));
+        let worst = a
+            .pixels
+            .iter()
+            .zip(&b.pixels)
+            .flat_map(|(p, q)| (0..4).map(move |c| (p[c] - q[c]).abs()));
+        assert!(worst.fold(0.0f32, f32::max) < 1e-5);
+    }
+    // moved: the hierarchy is reused, warm-started from the last solution
+    let (moved, _) = with("multigrid", [90.0, 80.0]).unwrap();
+    let tm = table(&moved);
+    assert_eq!(col(&tm, "reused"), 1.0);
+    assert!(col(&tm, "residual") < 1e-10);
+    assert!(col(&tm, "iterations") >= 1.0);
+    // the sine transform only for a rectangle
+    let e = with("sine_transform", [20.0, 30.0]).unwrap_err();
+    assert!(
+        e.contains("socket 'solver'") && e.contains("rectangular"),
+        "{e}"
+    );
+    let full = Image::new(97, 83, [1.0; 4]);
+    let mut ins = inputs(&target, &source, &full, [20.0, 30.0], "seamless");
+    ins.push(("solver", Value::from("sine_transform")));
+    let (rect, _) = blend(ins).unwrap();
+    assert_eq!(col(&table(&rect), "sine_transform"), 1.0);
+    let e = {
+        let mut ins = inputs(&target, &source, &mask, [20.0, 30.0], "seamless");
+        ins.push(("solver", Value::from("fastest")));
+        blend(ins).unwrap_err()
+    };
+    assert!(e.contains("socket 'solver'"), "{e}");
+}

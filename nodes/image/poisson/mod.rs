@@ -3,14 +3,16 @@
 //! Poisson equation (eq. 7) with the target as Dirichlet values on ∂Ω.
 //!
 //! `mask.rs` holds Ω and its numbering, `system.rs` the matrix and its sparse Cholesky
-//! factor, `rect.rs` the fast sine-transform solver for a rectangular Ω, `guidance.rs` the
-//! right-hand side; this file the factorization cache and the solve. The matrix depends only
+//! factor, `rect.rs` the fast sine-transform solver for a rectangular Ω, `multigrid.rs` the
+//! multigrid-preconditioned conjugate gradients for any Ω, `guidance.rs` the right-hand
+//! side; this file the solver choice, the factorization cache and the solve. The matrix depends only
 //! on the shape of Ω, so its factorization is kept in a small process-wide cache keyed by the
 //! shape up to translation: a sequence of pastes that only moves the offset (the course's
 //! interactive dragging) or changes the images solves without refactoring.
 
 pub mod guidance;
 pub mod mask;
+pub mod multigrid;
 pub mod rect;
 pub mod system;
 
@@ -28,27 +30,90 @@ use std::time::Instant;
 /// How many factorizations the cache keeps (least recently used dropped first).
 pub const CACHE_SLOTS: usize = 4;
 
+/// Which solver a paste uses (the node's `solver` parameter).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Solver {
+    /// The sine transform for a rectangle, else `auto_solver`'s choice.
+    Auto,
+    /// Sparse Cholesky (any Ω).
+    Cholesky,
+    /// Multigrid-preconditioned conjugate gradients (any Ω).
+    Multigrid,
+    /// The sine-transform solver (a rectangular Ω only).
+    SineTransform,
+}
+
+impl crate::node::Choice for Solver {
+    const CHOICES: &'static [(&'static str, Self)] = &[
+        ("auto", Solver::Auto),
+        ("cholesky", Solver::Cholesky),
+        ("multigrid", Solver::Multigrid),
+        ("sine_transform", Solver::SineTransform),
+    ];
+}
+
+/// Unknowns below which `auto` factors by Cholesky rather than building a multigrid
+/// hierarchy (measured in docs/image.md: on small masks the factorization is cheap and its
+/// solve beats a dozen V-cycles).
+pub const MULTIGRID_MIN_UNKNOWNS: usize = 4096;
+
+/// The solver `auto` picks for `shape`: the sine transform for a rectangle, multigrid for a
+/// large Ω that fills at least a quarter of its bounding box (multigrid works on the box's
+/// grid), sparse Cholesky otherwise.
+pub fn auto_solver(shape: &MaskShape) -> Solver {
+    if shape.rectangle().is_some() {
+        return Solver::SineTransform;
+    }
+    let area = shape
+        .bbox()
+        .map_or(0, |[x0, y0, x1, y1]| (x1 - x0 + 1) as usize * (y1 - y0 + 1) as usize);
+    if shape.len() >= MULTIGRID_MIN_UNKNOWNS && 4 * shape.len() >= area {
+        Solver::Multigrid
+    } else {
+        Solver::Cholesky
+    }
+}
+
 /// The factorization of one shape's Poisson matrix.
 pub enum Factor {
     /// Sparse Cholesky (faer; AMD or nested-dissection ordering): any Ω.
     Cholesky(Box<system::PoissonFactor>),
     /// Sine transform along rows and tridiagonal pivots down columns: a rectangular Ω.
     Rect(RectSolver),
+    /// The multigrid hierarchy (coarse levels and their operators): any Ω.
+    Multigrid(Box<multigrid::Multigrid>),
 }
 
 impl Factor {
     /// Factors the Poisson matrix of `shape`: the fast solver for a rectangle, else Cholesky.
     pub fn new(shape: &MaskShape) -> Result<Factor, String> {
-        Ok(match shape.rectangle() {
-            Some([w, h]) => Factor::Rect(RectSolver::new(w as usize, h as usize)),
-            None => Factor::Cholesky(Box::new(system::factor(shape)?)),
+        Factor::with(shape, Solver::Auto)
+    }
+
+    /// Factors the Poisson matrix of `shape` for `solver` (`Auto` resolved by `auto_solver`);
+    /// `SineTransform` for an Ω that is not a rectangle is an error.
+    pub fn with(shape: &MaskShape, solver: Solver) -> Result<Factor, String> {
+        let solver = match solver {
+            Solver::Auto => auto_solver(shape),
+            s => s,
+        };
+        Ok(match solver {
+            Solver::SineTransform => match shape.rectangle() {
+                Some([w, h]) => Factor::Rect(RectSolver::new(w as usize, h as usize)),
+                None => return Err(not_a_rectangle()),
+            },
+            Solver::Multigrid => Factor::Multigrid(Box::new(multigrid::Multigrid::new(shape)?)),
+            _ => Factor::Cholesky(Box::new(system::factor(shape)?)),
         })
     }
 
-    /// Solves `A X = B` in place, every column of `x` (one per channel).
-    pub fn solve_in_place(&self, mut x: faer::MatMut<'_, f64>) {
+    /// Solves `A X = B` in place, every column of `x` (one per channel); the multigrid
+    /// iterations (0 for a direct solver). The multigrid starts from the previous solution
+    /// of the same shape when that is closer than zero.
+    pub fn solve_in_place(&self, mut x: faer::MatMut<'_, f64>) -> Result<usize, String> {
         match self {
             Factor::Cholesky(f) => f.solve_in_place(x),
+            Factor::Multigrid(m) => return Ok(m.solve_in_place(x, true)?.iterations),
             Factor::Rect(f) => {
                 // the channels are independent: one per task
                 let mut cols: Vec<_> = x.as_mut().col_iter_mut().collect();
@@ -63,31 +128,50 @@ impl Factor {
                 });
             }
         }
+        Ok(0)
     }
 
-    /// Which solver this is, for the table (`cholesky` or `sine_transform`).
+    /// Which solver this is, for the table (`cholesky`, `sine_transform` or `multigrid`).
     pub fn name(&self) -> &'static str {
         match self {
             Factor::Cholesky(_) => "cholesky",
             Factor::Rect(_) => "sine_transform",
+            Factor::Multigrid(_) => "multigrid",
         }
     }
 }
 
-type Cache = Vec<(ShapeKey, Arc<Factor>)>;
+/// The error for `solver: sine_transform` on an Ω that is not a rectangle.
+pub fn not_a_rectangle() -> String {
+    "solver 'sine_transform' needs a rectangular mask (every pixel of its bounding box \
+     inside); this mask is not one: use auto, cholesky or multigrid"
+        .into()
+}
+
+type Cache = Vec<((ShapeKey, Solver), Arc<Factor>)>;
 static CACHE: Mutex<Cache> = Mutex::new(Vec::new());
 
 /// The factorization of `shape`'s Poisson matrix, from the cache when a mask of the same
 /// shape was factored recently; the flag says whether it was reused.
 pub fn cached_factor(shape: &MaskShape) -> Result<(Arc<Factor>, bool), String> {
-    cached_factor_keyed(shape, &shape.key())
+    cached_factor_keyed(shape, &shape.key(), Solver::Auto)
 }
 
-/// `cached_factor` with the shape's key found already.
+/// `cached_factor` with the shape's key found already, for `solver` (`Auto` resolved first,
+/// so that `auto` and the solver it picks share the cache entry).
 pub fn cached_factor_keyed(
     shape: &MaskShape,
     key: &ShapeKey,
+    solver: Solver,
 ) -> Result<(Arc<Factor>, bool), String> {
+    let solver = match solver {
+        Solver::Auto => auto_solver(shape),
+        s => s,
+    };
+    if solver == Solver::SineTransform && !matches!(key, ShapeKey::Rect { .. }) {
+        return Err(not_a_rectangle());
+    }
+    let key = &(key.clone(), solver);
     {
         let mut cache = CACHE.lock().unwrap_or_else(|e| e.into_inner());
         if let Some(i) = cache.iter().position(|(k, _)| k == key) {
@@ -99,7 +183,7 @@ pub fn cached_factor_keyed(
         }
     }
     // factored outside the lock: another paste may run meanwhile
-    let f = Arc::new(Factor::new(shape)?);
+    let f = Arc::new(Factor::with(shape, solver)?);
     let mut cache = CACHE.lock().unwrap_or_else(|e| e.into_inner());
     if !cache.iter().any(|(k, _)| k == key) {
         if cache.len() >= CACHE_SLOTS {
@@ -126,6 +210,8 @@ pub struct Solution {
     pub reused: bool,
     /// Which solver ran (`Factor::name`).
     pub solver: &'static str,
+    /// Multigrid-preconditioned CG iterations (0 for the direct solvers).
+    pub iterations: usize,
     /// Wall time of the solve (right-hand side, factorization or lookup, solve, residual).
     pub millis: f64,
 }
@@ -140,10 +226,10 @@ pub fn solve(
     offset: [i64; 2],
     mode: Mode,
 ) -> Result<Solution, String> {
-    solve_keyed(shape, &shape.key(), target, source, offset, mode)
+    solve_keyed(shape, &shape.key(), target, source, offset, mode, Solver::Auto)
 }
 
-/// `solve` with the shape's key (`MaskShape::key`) found already.
+/// `solve` with the shape's key (`MaskShape::key`) found already, by `solver`.
 pub fn solve_keyed(
     shape: &MaskShape,
     key: &ShapeKey,
@@ -151,6 +237,7 @@ pub fn solve_keyed(
     source: &Image,
     offset: [i64; 2],
     mode: Mode,
+    solver: Solver,
 ) -> Result<Solution, String> {
     let t0 = Instant::now();
     let Some([xr, yr]) = shape.offset_range(target.width, target.height) else {
@@ -166,9 +253,9 @@ pub fn solve_keyed(
     let kept = RHS_BUFFER.try_lock().ok().and_then(|mut k| k.take());
     let mut b = kept.unwrap_or_else(Mat::new);
     guidance::right_hand_side_into(shape, target, source, offset, mode, &mut b);
-    let (factor, reused) = cached_factor_keyed(shape, key)?;
+    let (factor, reused) = cached_factor_keyed(shape, key, solver)?;
     let mut x = b.clone();
-    factor.solve_in_place(x.as_mut());
+    let iterations = factor.solve_in_place(x.as_mut())?;
     let r = system::residual_norm(shape, x.as_ref(), b.as_ref());
     // plain sum of squares: pixel-sized values cannot overflow (faer's scaled norm took
     // longer than the residual itself at 1 megapixel)
@@ -186,6 +273,7 @@ pub fn solve_keyed(
         residual,
         reused,
         solver: factor.name(),
+        iterations,
         millis: t0.elapsed().as_secs_f64() * 1e3,
     })
 }

@@ -233,6 +233,21 @@ fn solver_choice_multigrid_and_cholesky_agree_and_sine_transform_needs_a_rectang
     assert_eq!(col(&tm, "reused"), 1.0);
     assert!(col(&tm, "residual") < 1e-10);
     assert!(col(&tm, "iterations") >= 1.0);
+    // three multigrid pastes of this shape so far: `auto` switches to Cholesky (the
+    // ski-rental rule, `AUTO_CHOLESKY_AFTER`), here the factor the first paste made
+    assert_eq!(
+        cgnodes::nodes::image::poisson_blend::poisson::AUTO_CHOLESKY_AFTER,
+        3
+    );
+    for off in [[60.0, 50.0], [30.0, 40.0]] {
+        let (late, _) = with("auto", off).unwrap();
+        let tl = table(&late);
+        assert_eq!((col(&tl, "multigrid"), col(&tl, "reused")), (0.0, 1.0));
+        assert!(col(&tl, "residual") < 1e-10);
+    }
+    // an explicit choice is kept
+    let (mg, _) = with("multigrid", [60.0, 50.0]).unwrap();
+    assert_eq!(col(&table(&mg), "multigrid"), 1.0);
     // the sine transform only for a rectangle
     let e = with("sine_transform", [20.0, 30.0]).unwrap_err();
     assert!(

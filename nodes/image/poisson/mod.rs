@@ -57,6 +57,15 @@ impl crate::node::Choice for Solver {
 /// solve beats a dozen V-cycles).
 pub const MULTIGRID_MIN_UNKNOWNS: usize = 4096;
 
+/// Pastes of one shape that `auto` answers by multigrid before it factors by Cholesky instead:
+/// multigrid's first paste is the cheaper (no factorization), Cholesky's repeated one (two
+/// triangular solves against about ten V-cycles), so a long drag of one shape switches, as in
+/// the ski-rental rule (Karlin et al. 1988, "Competitive snoopy caching"): rent (multigrid)
+/// until the rent paid approaches the price of buying (the factorization). On the idle
+/// 1-megapixel ellipse a factorization costs about 2.7 reused multigrid pastes and on the
+/// course mask about 2.5 (docs/image.md).
+pub const AUTO_CHOLESKY_AFTER: usize = 3;
+
 /// The solver `auto` picks for `shape`: the sine transform for a rectangle, multigrid for a
 /// large Ω that fills at least a quarter of its bounding box (multigrid works on the box's
 /// grid), sparse Cholesky otherwise.
@@ -148,7 +157,8 @@ pub fn not_a_rectangle() -> String {
         .into()
 }
 
-type Cache = Vec<((ShapeKey, Solver), Arc<Factor>)>;
+/// Cache entries: (shape, solver), the factorization, and how many pastes asked for it.
+type Cache = Vec<((ShapeKey, Solver), Arc<Factor>, usize)>;
 static CACHE: Mutex<Cache> = Mutex::new(Vec::new());
 
 /// The factorization of `shape`'s Poisson matrix, from the cache when a mask of the same
@@ -164,32 +174,46 @@ pub fn cached_factor_keyed(
     key: &ShapeKey,
     solver: Solver,
 ) -> Result<(Arc<Factor>, bool), String> {
-    let solver = match solver {
+    let auto = solver == Solver::Auto;
+    let mut solver = match solver {
         Solver::Auto => auto_solver(shape),
         s => s,
     };
     if solver == Solver::SineTransform && !matches!(key, ShapeKey::Rect { .. }) {
         return Err(not_a_rectangle());
     }
-    let key = &(key.clone(), solver);
+    let mg_key = (key.clone(), Solver::Multigrid);
     {
         let mut cache = CACHE.lock().unwrap_or_else(|e| e.into_inner());
-        if let Some(i) = cache.iter().position(|(k, _)| k == key) {
+        if auto && solver == Solver::Multigrid {
+            // the ski-rental switch: a shape pasted often enough goes to Cholesky
+            let uses = cache.iter().find(|(k, ..)| *k == mg_key).map_or(0, |e| e.2);
+            if uses >= AUTO_CHOLESKY_AFTER {
+                solver = Solver::Cholesky;
+            }
+        }
+        let key = (key.clone(), solver);
+        if let Some(i) = cache.iter().position(|(k, ..)| *k == key) {
             // move to the back: most recently used
-            let entry = cache.remove(i);
+            let mut entry = cache.remove(i);
+            entry.2 += 1;
             let f = entry.1.clone();
             cache.push(entry);
             return Ok((f, true));
         }
     }
+    let key = (key.clone(), solver);
     // factored outside the lock: another paste may run meanwhile
     let f = Arc::new(Factor::with(shape, solver)?);
     let mut cache = CACHE.lock().unwrap_or_else(|e| e.into_inner());
-    if !cache.iter().any(|(k, _)| k == key) {
-        if cache.len() >= CACHE_SLOTS {
-            cache.remove(0);
+    if !cache.iter().any(|(k, ..)| *k == key) {
+        // evict the least recently used, but not the multigrid entry whose count keeps
+        // `auto` on the Cholesky factor just made
+        while cache.len() >= CACHE_SLOTS {
+            let i = cache.iter().position(|(k, ..)| *k != mg_key).unwrap_or(0);
+            cache.remove(i);
         }
-        cache.push((key.clone(), f.clone()));
+        cache.push((key, f.clone(), 1));
     }
     Ok((f, false))
 }

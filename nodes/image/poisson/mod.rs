@@ -3,7 +3,7 @@
 //! Poisson equation (eq. 7) with the target as Dirichlet values on ∂Ω.
 //!
 //! `mask.rs` holds Ω and its numbering, `system.rs` the matrix and its sparse Cholesky
-//! factor, `rect.rs` the fast sine-transform solver for a rectangular Ω, `multigrid.rs` the
+//! factor, `rect.rs` the fast sine-transform solver for a rectangular Ω, `multigrid/` the
 //! multigrid-preconditioned conjugate gradients for any Ω, `guidance.rs` the right-hand
 //! side; this file the solver choice, the factorization cache and the solve. The matrix depends only
 //! on the shape of Ω, so its factorization is kept in a small process-wide cache keyed by the

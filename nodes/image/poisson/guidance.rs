@@ -64,11 +64,12 @@ pub fn right_hand_side_into(
         let (px, py) = (px as i64, py as i64);
         let gp = source.pixels[sidx(px, py)];
         let fp = target.pixels[tidx(px, py)];
-        for (dx, dy) in [(1, 0), (-1, 0), (0, 1), (0, -1)] {
+        let nb = shape.neighbours(k);
+        for (q, (dx, dy)) in [(1, 0), (-1, 0), (0, 1), (0, -1)].into_iter().enumerate() {
             let (qx, qy) = (px + dx, py + dy);
             let gq = source.pixels[sidx(qx, qy)];
             let fq = target.pixels[tidx(qx, qy)];
-            let boundary = shape.unknown(qx, qy).is_none();
+            let boundary = nb[q] == u32::MAX;
             for c in 0..3 {
                 let vs = f64::from(gp[c]) - f64::from(gq[c]);
                 let v = match mode {

@@ -295,21 +295,30 @@ pub fn residual_norm(shape: &MaskShape, x: MatRef<'_, f64>, b: MatRef<'_, f64>) 
         return rect_residual_norm(w as usize, h as usize, x, b);
     }
     let n = shape.len();
+    // the columns as slices (a copy for a strided one): plain indexing in the loop
+    fn cols(m: MatRef<'_, f64>) -> Vec<std::borrow::Cow<'_, [f64]>> {
+        m.col_iter()
+            .map(|c| match c.try_as_col_major() {
+                Some(c) => std::borrow::Cow::Borrowed(c.as_slice()),
+                None => std::borrow::Cow::Owned(c.iter().copied().collect()),
+            })
+            .collect()
+    }
+    let (xs, bs) = (cols(x), cols(b));
     let sum: f64 = (0..n.div_ceil(CHUNK))
         .into_par_iter()
         .map(|t| {
             let mut sum = 0.0;
             for k in t * CHUNK..((t + 1) * CHUNK).min(n) {
-                let [px, py] = shape.inside[k];
-                let (px, py) = (px as i64, py as i64);
-                let nb = [(1, 0), (-1, 0), (0, 1), (0, -1)]
-                    .map(|(dx, dy)| shape.unknown(px + dx, py + dy));
-                for c in 0..x.ncols() {
-                    let mut v = 4.0 * x[(k, c)];
-                    for q in nb.iter().flatten() {
-                        v -= x[(*q, c)];
+                let nb = shape.neighbours(k);
+                for (xc, bc) in xs.iter().zip(&bs) {
+                    let mut v = 4.0 * xc[k];
+                    for &q in &nb {
+                        if q != u32::MAX {
+                            v -= xc[q as usize];
+                        }
                     }
-                    let r = b[(k, c)] - v;
+                    let r = bc[k] - v;
                     sum += r * r;
                 }
             }

@@ -61,17 +61,17 @@ pub const TOLERANCE: f64 = 5e-11;
 const MAX_ITERATIONS: usize = 200;
 
 
-/// Per-level vectors of a V-cycle and the conjugate-gradient vectors, kept between solves.
+/// Per-level vectors of a V-cycle (f32) and the conjugate-gradient vectors (f64), kept
+/// between solves.
 struct Work {
-    /// Per level: solution, right-hand side, residual.
-    u: Vec<Field>,
-    b: Vec<Field>,
-    r: Vec<Field>,
-    /// Conjugate gradients on the fine level: iterate, residual, direction, `A p`.
-    x: Field,
-    res: Field,
-    p: Field,
-    q: Field,
+    /// Per level: solution and right-hand side (the residual is restricted as it is formed).
+    u: Vec<Field<f32>>,
+    b: Vec<Field<f32>>,
+    /// Conjugate gradients on the fine level: iterate, residual (f64), search direction
+    /// (f32: `A p` is formed from it exactly in f64, so `x` and the residual stay consistent).
+    x: Field<f64>,
+    res: Field<f64>,
+    p: Field<f32>,
 }
 
 /// The multigrid hierarchy of one Ω: what the factorization cache keeps per mask shape.
@@ -84,7 +84,7 @@ pub struct Multigrid {
     /// Gauss-Seidel sweeps before and after each coarse correction.
     sweeps: usize,
     /// The last solution on the fine grid (one 3-channel group), a warm start for the next.
-    last: Mutex<Option<Field>>,
+    last: Mutex<Option<Field<f64>>>,
 }
 
 /// What a multigrid solve did.
@@ -162,14 +162,13 @@ impl Multigrid {
     fn work(&self) -> Work {
         let f = |l: &Level| Field::zeros(l.w, l.h);
         let fine = &self.levels[0];
+        let g = || Field::zeros(fine.w, fine.h);
         Work {
             u: self.levels.iter().map(f).collect(),
             b: self.levels.iter().map(f).collect(),
-            r: self.levels.iter().map(f).collect(),
-            x: f(fine),
-            res: f(fine),
-            p: f(fine),
-            q: f(fine),
+            x: g(),
+            res: g(),
+            p: Field::zeros(fine.w, fine.h),
         }
     }
 
@@ -180,14 +179,15 @@ impl Multigrid {
             return;
         }
         let level = &self.levels[l];
-        wk.u[l].fill_zero();
-        for _ in 0..self.sweeps {
+        for s in 0..self.sweeps {
             for &(py, xs) in &COLOURS {
-                smooth_rows(level, &mut wk.u[l], &wk.b[l], py, xs);
+                smooth_rows(level, &mut wk.u[l], &wk.b[l], py, xs, s == 0);
             }
         }
-        residual(level, &wk.u[l], Some(&wk.b[l]), &mut wk.r[l]);
-        restrict(level, &self.levels[l + 1], &wk.r[l], &mut wk.b[l + 1]);
+        {
+            let (lo, hi) = wk.b.split_at_mut(l + 1);
+            restrict_residual(level, &self.levels[l + 1], &wk.u[l], Some(&lo[l]), &mut hi[0]);
+        }
         self.vcycle(l + 1, wk);
         {
             let (lo, hi) = wk.u.split_at_mut(l + 1);
@@ -195,16 +195,15 @@ impl Multigrid {
         }
         for _ in 0..self.sweeps {
             for &(py, [a, b]) in COLOURS.iter().rev() {
-                smooth_rows(level, &mut wk.u[l], &wk.b[l], py, [b, a]);
+                smooth_rows(level, &mut wk.u[l], &wk.b[l], py, [b, a], false);
             }
         }
     }
 
-    /// `z = M r`: one V-cycle on the fine level from a zero start (the preconditioner).
+    /// `z = M r` into `u[0]`: one V-cycle on the fine level from a zero start (the
+    /// preconditioner), with `r` already in `b[0]` (rounded to f32).
     fn precondition(&self, wk: &mut Work) {
-        std::mem::swap(&mut wk.b[0], &mut wk.res);
         self.vcycle(0, wk);
-        std::mem::swap(&mut wk.b[0], &mut wk.res);
     }
 
     /// Solves `A X = B` in place, every column of `x` (in groups of three), by conjugate
@@ -222,22 +221,28 @@ impl Multigrid {
         let ncols = x.ncols();
         for g in (0..ncols).step_by(3) {
             let cols = (ncols - g).min(3);
-            // b into the residual field, the warm start (or zero) into x
-            wk.res.fill_zero();
-            for (k, &[y, xx]) in self.cells.iter().enumerate() {
-                let v = &mut wk.res.row_mut(y as usize)[xx as usize];
-                for c in 0..cols {
-                    v[c] = x[(k, g + c)];
+            // b into the residual field (outside Ω it stays zero)
+            for c in 0..cols {
+                let col = x.as_ref().col(g + c);
+                let w = wk.res.w;
+                for (&[y, xx], v) in self.cells.iter().zip(col.iter()) {
+                    let (p, i) = ((y & 1) as usize, (y >> 1) as usize * w + xx as usize);
+                    wk.res.rows[p][i][c] = *v;
+                }
+            }
+            for c in cols..3 {
+                for &[y, xx] in &self.cells {
+                    wk.res.row_mut(y as usize)[xx as usize][c] = 0.0;
                 }
             }
             let reuse = warm && ncols == 3;
             let s = self.pcg(wk, reuse)?;
             stats.iterations = stats.iterations.max(s.iterations);
             stats.warm |= s.warm;
-            for (k, &[y, xx]) in self.cells.iter().enumerate() {
-                let v = wk.x.row(y as usize)[xx as usize];
-                for c in 0..cols {
-                    x[(k, g + c)] = v[c];
+            for c in 0..cols {
+                let w = wk.x.w;
+                for (&[y, xx], v) in self.cells.iter().zip(x.as_mut().col_mut(g + c).iter_mut()) {
+                    *v = wk.x.rows[(y & 1) as usize][(y >> 1) as usize * w + xx as usize][c];
                 }
             }
             if reuse {
@@ -257,6 +262,7 @@ impl Multigrid {
     fn pcg(&self, wk: &mut Work, warm: bool) -> Result<Stats, String> {
         let fine = &self.levels[0];
         let bn = norms(&wk.res);
+        let flat = |p: P3| p.iter().sum::<f64>();
         let bnorm = bn.iter().sum::<f64>().sqrt();
         let mut stats = Stats::default();
         wk.x.fill_zero();
@@ -267,24 +273,27 @@ impl Multigrid {
         if warm {
             if let Ok(guard) = self.last.try_lock() {
                 if let Some(last) = guard.as_ref() {
-                    // r = b - A x_last, kept when it is smaller than b
-                    residual(fine, last, Some(&wk.res), &mut wk.q);
-                    if norms(&wk.q).iter().sum::<f64>() < bnorm * bnorm {
+                    // r = b - A x_last (in x for now), kept when it is smaller than b
+                    fine_residual(fine, last, Some(&wk.res), &mut wk.x);
+                    if flat(norms(&wk.x)) < bnorm * bnorm {
+                        std::mem::swap(&mut wk.res, &mut wk.x);
                         wk.x.clone_from(last);
-                        std::mem::swap(&mut wk.res, &mut wk.q);
                         stats.warm = true;
+                    } else {
+                        wk.x.fill_zero();
                     }
                 }
             }
         }
-        let mut rn = norms(&wk.res).iter().sum::<f64>().sqrt();
+        let mut rn = flat(norms(&wk.res)).sqrt();
         if rn <= goal {
             return Ok(stats);
         }
         // z = M r into u[0]; p = z
+        to_f32(fine, &wk.res, &mut wk.b[0]);
         self.precondition(wk);
-        wk.p.clone_from(&wk.u[0]);
-        let mut rz = dots(&wk.res, &wk.u[0]);
+        next_direction(fine, &mut wk.p, &wk.u[0], [0.0; 3]);
+        let mut rz = z_dots(fine, &wk.u[0], &wk.res, &wk.p).0;
         while rn > goal {
             if stats.iterations >= MAX_ITERATIONS {
                 return Err(format!(
@@ -294,7 +303,7 @@ impl Multigrid {
                 ));
             }
             stats.iterations += 1;
-            let pq = residual(fine, &wk.p, None, &mut wk.q);
+            let pq = p_ap(fine, &wk.p);
             let alpha = std::array::from_fn::<f64, 3, _>(|c| {
                 if pq[c] > 0.0 && rz[c] > 0.0 {
                     rz[c] / pq[c]
@@ -302,39 +311,26 @@ impl Multigrid {
                     0.0
                 }
             });
-            rn = cg_update(fine, &mut wk.x, &mut wk.res, &wk.p, &wk.q, alpha)
-                .iter()
-                .sum::<f64>()
-                .sqrt();
+            rn = flat(cg_update(fine, &mut wk.x, &mut wk.res, &wk.p, &mut wk.b[0], alpha)).sqrt();
             if rn <= goal {
                 break;
             }
             self.precondition(wk);
-            let rz1 = dots(&wk.res, &wk.u[0]);
+            // β of Polak and Ribière, zᵀ(r_new - r_old) / z_oldᵀ r_old with r_new - r_old =
+            // -α A p: it tolerates the f32 V-cycle being not exactly the same symmetric operator
+            // every time (flexible CG; Notay 2000, "Flexible conjugate gradients", SIAM J. Sci.
+            // Comput. 22(4)), and equals Fletcher and Reeves' β when it is
+            let (rz1, zq) = z_dots(fine, &wk.u[0], &wk.res, &wk.p);
             let beta = std::array::from_fn::<f64, 3, _>(|c| {
                 if rz[c] > 0.0 {
-                    rz1[c] / rz[c]
+                    (-alpha[c] * zq[c] / rz[c]).max(0.0)
                 } else {
                     0.0
                 }
             });
             rz = rz1;
             // p = z + β p
-            let z = &wk.u[0];
-            for p in 0..2 {
-                let zr = &z.rows[p];
-                let par = fine.par();
-                let f = |(pv, zv): (&mut P3, &P3)| {
-                    for c in 0..3 {
-                        pv[c] = zv[c] + beta[c] * pv[c];
-                    }
-                };
-                if par {
-                    wk.p.rows[p].par_iter_mut().zip(zr.par_iter()).for_each(f);
-                } else {
-                    wk.p.rows[p].iter_mut().zip(zr.iter()).for_each(f);
-                }
-            }
+            next_direction(fine, &mut wk.p, &wk.u[0], beta);
         }
         Ok(stats)
     }
@@ -347,68 +343,25 @@ impl Multigrid {
         let fine = &self.levels[0];
         wk.x.fill_zero();
         for (k, &[y, xx]) in self.cells.iter().enumerate() {
-            let v = &mut wk.q.row_mut(y as usize)[xx as usize];
+            let v = &mut wk.x.row_mut(y as usize)[xx as usize];
             for c in 0..b.ncols().min(3) {
                 v[c] = b[(k, c)];
             }
         }
-        let target = wk.q.clone();
+        let target = wk.x.clone();
+        wk.x.fill_zero();
         let r0 = norms(&target).iter().sum::<f64>().sqrt();
         let mut r = r0;
         for _ in 0..cycles {
-            residual(fine, &wk.x, Some(&target), &mut wk.res);
+            fine_residual(fine, &wk.x, Some(&target), &mut wk.res);
+            to_f32(fine, &wk.res, &mut wk.b[0]);
             self.precondition(&mut wk);
-            update(fine, &mut wk.x, &wk.u[0], [1.0; 3]);
-            residual(fine, &wk.x, Some(&target), &mut wk.res);
+            add_correction(&mut wk.x, &wk.u[0]);
+            fine_residual(fine, &wk.x, Some(&target), &mut wk.res);
             r = norms(&wk.res).iter().sum::<f64>().sqrt();
         }
         (r / r0).powf(1.0 / cycles as f64)
     }
-}
-
-/// `a += s ∘ b` per channel.
-fn update(level: &Level, a: &mut Field, b: &Field, s: P3) {
-    for p in 0..2 {
-        let f = |(av, bv): (&mut P3, &P3)| {
-            for c in 0..3 {
-                av[c] += s[c] * bv[c];
-            }
-        };
-        if level.par() {
-            a.rows[p].par_iter_mut().zip(b.rows[p].par_iter()).for_each(f);
-        } else {
-            a.rows[p].iter_mut().zip(b.rows[p].iter()).for_each(f);
-        }
-    }
-}
-
-/// Per-channel dot products of two fields (in parallel chunks for a large one).
-fn dots(a: &Field, b: &Field) -> P3 {
-    let add = |s: P3, t: P3| [s[0] + t[0], s[1] + t[1], s[2] + t[2]];
-    let dot = |x: &[P3], y: &[P3]| {
-        x.iter().zip(y).fold([0.0; 3], |s, (u, v)| {
-            [s[0] + u[0] * v[0], s[1] + u[1] * v[1], s[2] + u[2] * v[2]]
-        })
-    };
-    let mut s = [0.0; 3];
-    for p in 0..2 {
-        let (x, y) = (&a.rows[p], &b.rows[p]);
-        let t = if x.len() >= PAR_MIN / 2 {
-            x.par_chunks(1 << 13)
-                .zip(y.par_chunks(1 << 13))
-                .map(|(x, y)| dot(x, y))
-                .reduce(|| [0.0; 3], add)
-        } else {
-            dot(x, y)
-        };
-        s = add(s, t);
-    }
-    s
-}
-
-/// Per-channel squared norms.
-fn norms(a: &Field) -> P3 {
-    dots(a, a)
 }
 
 #[cfg(test)]
@@ -517,24 +470,24 @@ mod tests {
         let shape = mask(23, 19, |x, y| (x - 11) * (x - 11) + 2 * (y - 9) * (y - 9) < 90 || (x == 3 && y > 2));
         let mg = Multigrid::new(&shape).unwrap();
         let (fine, coarse) = (&mg.levels[0], &galerkin(&mg.levels[0]));
-        let Op::Stencil(a) = &coarse.op else { panic!("coarse levels are stencils") };
+        let Op::Stencil { index, table } = &coarse.op else { panic!("coarse levels are stencils") };
+        let a: Vec<[f32; 9]> = index.iter().map(|&i| table[i as usize]).collect();
         let mut checked = 0;
         for yc in 1..coarse.h - 1 {
             for xc in 1..coarse.w - 1 {
                 if !coarse.inside(yc, xc) {
                     continue;
                 }
-                let mut e = Field::zeros(coarse.w, coarse.h);
+                let mut e = Field::<f32>::zeros(coarse.w, coarse.h);
                 e.row_mut(yc)[xc] = [1.0; 3];
                 let mut pe = Field::zeros(fine.w, fine.h);
                 prolong_add(fine, &e, &mut pe);
-                let mut ape = Field::zeros(fine.w, fine.h);
-                residual(fine, &pe, None, &mut ape);
+                // Pᵀ (0 - A P e): the column of A_c, negated
                 let mut col = Field::zeros(coarse.w, coarse.h);
-                restrict(fine, coarse, &ape, &mut col);
+                restrict_residual(fine, coarse, &pe, None, &mut col);
                 for k in 0..9 {
                     let (y, x) = (yc + k / 3 - 1, xc + k % 3 - 1);
-                    let want = col.row(y)[x][0];
+                    let want = -f64::from(col.row(y)[x][0]);
                     // the stencil of the neighbour reaching back to (yc, xc) (symmetry)
                     // stored in f32: equal up to its rounding, and exactly symmetric
                     let (ai, aj) = (a[yc * coarse.w + xc][k], a[y * coarse.w + x][8 - k]);

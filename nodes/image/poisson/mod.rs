@@ -57,14 +57,29 @@ impl crate::node::Choice for Solver {
 /// solve beats a dozen V-cycles).
 pub const MULTIGRID_MIN_UNKNOWNS: usize = 4096;
 
-/// Pastes of one shape that `auto` answers by multigrid before it factors by Cholesky instead:
-/// multigrid's first paste is the cheaper (no factorization), Cholesky's repeated one (two
-/// triangular solves against about ten V-cycles), so a long drag of one shape switches, as in
-/// the ski-rental rule (Karlin et al. 1988, "Competitive snoopy caching"): rent (multigrid)
-/// until the rent paid approaches the price of buying (the factorization). On the idle
-/// 1-megapixel ellipse a factorization costs about 2.7 reused multigrid pastes and on the
-/// course mask about 2.5 (docs/image.md).
+/// Pastes of one shape that `auto` answers by multigrid before it factors by Cholesky instead,
+/// for a shape below `system::ND_MIN_UNKNOWNS` unknowns: multigrid's first paste is the
+/// cheaper (no factorization), Cholesky's repeated one (two triangular solves against about
+/// ten V-cycles), so a long drag of one shape switches, as in the ski-rental rule (Karlin et
+/// al. 1988, "Competitive snoopy caching"): pay the extra cost of the cheaper-to-start option
+/// until it adds up to the price of the other's start (here the factorization). On the course
+/// mask (14.9k unknowns) a factorization costs about 25-40 ms and a multigrid paste about
+/// 11 ms more than a reused Cholesky one (docs/image.md).
 pub const AUTO_CHOLESKY_AFTER: usize = 3;
+
+/// `AUTO_CHOLESKY_AFTER` for a shape of at least `system::ND_MIN_UNKNOWNS` unknowns: on the
+/// 0.84-megapixel ellipse the factorization costs about 1.5 s and a multigrid paste about
+/// 0.1 s more than a reused Cholesky one (0.6 against 0.49 s, docs/image.md).
+pub const AUTO_CHOLESKY_AFTER_LARGE: usize = 12;
+
+/// How many multigrid pastes `auto` makes of a shape of `unknowns` before it factors.
+pub fn auto_cholesky_after(unknowns: usize) -> usize {
+    if unknowns < system::ND_MIN_UNKNOWNS {
+        AUTO_CHOLESKY_AFTER
+    } else {
+        AUTO_CHOLESKY_AFTER_LARGE
+    }
+}
 
 /// The solver `auto` picks for `shape`: the sine transform for a rectangle, multigrid for a
 /// large Ω that fills at least a quarter of its bounding box (multigrid works on the box's
@@ -188,7 +203,7 @@ pub fn cached_factor_keyed(
         if auto && solver == Solver::Multigrid {
             // the ski-rental switch: a shape pasted often enough goes to Cholesky
             let uses = cache.iter().find(|(k, ..)| *k == mg_key).map_or(0, |e| e.2);
-            if uses >= AUTO_CHOLESKY_AFTER {
+            if uses >= auto_cholesky_after(shape.len()) {
                 solver = Solver::Cholesky;
             }
         }

@@ -14,8 +14,7 @@
 //! instead of the default one collapsed to 4 children per node, to measure what the wide
 //! tree buys; `--wide-bvh`, the default, is accepted and does nothing), `--no-interleave`
 //! (trace a path's shadow ray and its next ray one after the other instead of interleaved,
-//! to measure what `Bvh::intersect_occluded` buys), `--no-lockstep` (trace a pixel's
-//! samples one after the other instead of two paths in lockstep), `--scene igea`
+//! to measure what `Bvh::intersect_occluded` buys), `--scene igea`
 //! (the box with the 154k-triangle igea scan standing in it, white diffuse, as
 //! `trace_mitsuba.py --scene igea` builds it; `--igea PATH`, default
 //! `/work/shared/assets/meshes/igea_front.obj`). The SVG chart is written for the plain box
@@ -252,7 +251,6 @@ fn main() {
         "scene {which} ({ntris} triangles) flatten + BVH: {:.3} ms",
         t.elapsed().as_secs_f64() * 1e3
     );
-    let lockstep = !args.iter().any(|a| a == "--no-lockstep");
     let settings = |spp: u32, seed: u64| PathSettings {
         spp,
         max_depth: 8,
@@ -260,7 +258,6 @@ fn main() {
         seed,
         filter: Filter::Box,
         strategy: Strategy::Mis,
-        lockstep,
         ..Default::default()
     };
     let threads = rayon::current_num_threads();

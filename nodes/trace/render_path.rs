@@ -14,10 +14,10 @@
 //! per-pixel average) or Mitsuba's Gaussian (stddev 0.5 px, radius 2 px), whose samples are
 //! splatted into the neighbouring pixels and normalised by the summed filter weights.
 
-pub use super::path::radiance;
-use super::path::{radiance2, PathState};
+use super::direct::{delta_lights, environment_nee, Vertex};
+use super::bvh::Segment;
 use super::render_scene::{prepare, PinholeCamera, RenderScene};
-use super::sampling::{Pcg32, V3};
+use super::sampling::{add, dot, max_comp, mul, power_heuristic, scale, sub, Pcg32, V3};
 use super::tracer_node::{crease_input, declare_crease, reserve_image, trace_error};
 use crate::prelude::*;
 use rayon::prelude::*;
@@ -75,10 +75,6 @@ pub struct PathSettings {
     pub strategy: Strategy,
     /// Crease angle in degrees for computed vertex normals (0 = flat shading).
     pub crease_deg: f64,
-    /// Trace a pixel's samples two at a time in lockstep (`path::radiance2`, their rays
-    /// interleaved); false traces them one after the other. The image is the same bit
-    /// for bit; the switch is there to measure what the lockstep buys.
-    pub lockstep: bool,
 }
 
 impl Default for PathSettings {
@@ -91,9 +87,218 @@ impl Default for PathSettings {
             filter: Filter::Gaussian,
             strategy: Strategy::Mis,
             crease_deg: super::render_scene::DEFAULT_CREASE_DEG,
-            lockstep: true,
         }
     }
+}
+
+/// Direct light estimated at a path vertex whose shadow ray has not been traced yet: it is
+/// traced together with the next segment's ray (`Bvh::intersect_occluded`, two
+/// independent traversals interleaved) and added to the path's radiance before anything
+/// the next segment finds, in the order the estimates were made, so the sums are bit for
+/// bit those of tracing the shadow ray at once.
+struct Deferred {
+    /// The area emitter sample's shadow ray and its contribution when unblocked.
+    nee: Option<(Segment, V3)>,
+    /// Point and directional lights (their shadow rays already traced).
+    delta: V3,
+    /// The environment sample, when one was drawn.
+    env: Option<V3>,
+}
+
+impl Deferred {
+    /// Adds the estimates to `l`, the emitter sample's only when `blocked` is false.
+    #[inline]
+    fn add_to(&self, l: V3, blocked: bool) -> V3 {
+        let mut l = l;
+        if let (Some((_, c)), false) = (self.nee, blocked) {
+            l = add(l, c);
+        }
+        l = add(l, self.delta);
+        if let Some(e) = self.env {
+            l = add(l, e);
+        }
+        l
+    }
+
+    /// Traces the shadow ray alone (the path ends here) and adds the estimates to `l`.
+    #[inline]
+    fn finish(&self, sc: &RenderScene, l: V3) -> V3 {
+        let blocked = self.nee.is_some_and(|((o, d, t), _)| sc.bvh.occluded(o, d, t));
+        self.add_to(l, blocked)
+    }
+}
+
+/// Radiance arriving at `org` from direction `-dir` (unit `dir`), estimated with one path.
+pub fn radiance(
+    sc: &RenderScene,
+    org: V3,
+    dir: V3,
+    tmax: f32,
+    rng: &mut Pcg32,
+    s: &PathSettings,
+) -> V3 {
+    let mut l = [0.0f32; 3];
+    let mut thr = [1.0f32; 3];
+    let mut eta = 1.0f32;
+    let mut prev_pdf = 0.0f32;
+    let mut prev_delta = true;
+    let mut depth = 0u32;
+    let (mut org, mut dir, mut tmax) = (org, dir, tmax);
+    // The previous vertex's direct light, waiting for its shadow ray.
+    let mut pending: Option<Deferred> = None;
+    loop {
+        let hit = match pending.take() {
+            None => sc.intersect(org, dir, tmax),
+            Some(d) => {
+                let (hit, blocked) = match d.nee {
+                    Some((shadow, _)) => sc.bvh.intersect_occluded((org, dir, tmax), shadow),
+                    None => (sc.intersect(org, dir, tmax), false),
+                };
+                l = d.add_to(l, blocked);
+                hit
+            }
+        };
+        let Some(hit) = hit else {
+            // The ray escapes: the environment's radiance, weighted like an emitter hit.
+            if let Some(env) = &sc.env {
+                let w = if depth == 0 || prev_delta {
+                    1.0
+                } else {
+                    match s.strategy {
+                        Strategy::Bsdf => 1.0,
+                        Strategy::Nee => 0.0,
+                        Strategy::Mis => power_heuristic(prev_pdf, env.pdf(dir)),
+                    }
+                };
+                l = add(l, scale(mul(thr, env.eval(dir)), w));
+            }
+            break;
+        };
+        let tri = hit.prim;
+        let ng = sc.normals[tri as usize];
+        let mat = sc.material(tri);
+        let wo = scale(dir, -1.0);
+        let p = add(org, scale(dir, hit.t));
+
+        // Emission found by the ray just traced (Veach 1997, eq. 9.13 for the weight).
+        if mat.is_emitter() {
+            let le = sc.emitted(tri, wo);
+            if max_comp(le) > 0.0 {
+                let w = if depth == 0 || prev_delta {
+                    1.0
+                } else {
+                    match s.strategy {
+                        Strategy::Bsdf => 1.0,
+                        Strategy::Nee => 0.0,
+                        Strategy::Mis => {
+                            let cos_l = dot(ng, wo).abs();
+                            let p_light = sc.light_pdf_area[tri as usize] * hit.t * hit.t / cos_l;
+                            power_heuristic(prev_pdf, p_light)
+                        }
+                    }
+                };
+                l = add(l, scale(mul(thr, le), w));
+            }
+        }
+        if depth + 1 >= s.max_depth {
+            break;
+        }
+        let bsdf = mat.bsdf;
+        let sp = sc.surface(&hit);
+        let (ns, albedo) = (sp.ns, sp.albedo);
+        if !bsdf.is_delta() {
+            let mut d = Deferred {
+                nee: None,
+                delta: [0.0; 3],
+                env: None,
+            };
+            // Next-event estimation on the area emitters.
+            if s.strategy != Strategy::Bsdf {
+                let u = rng.next_f32();
+                let uv = rng.next_2d();
+                if let Some(ls) = sc.sample_emitter(u, uv) {
+                    let dv = sub(ls.p, p);
+                    let dist2 = dot(dv, dv);
+                    let dist = dist2.sqrt();
+                    if dist > 0.0 {
+                        let wi = scale(dv, 1.0 / dist);
+                        let le = sc.emitted(ls.tri, scale(wi, -1.0));
+                        let cos_l = dot(ls.n, wi).abs();
+                        if max_comp(le) > 0.0 && cos_l > 0.0 {
+                            let f = bsdf.eval(albedo, ng, ns, wo, wi);
+                            if max_comp(f) > 0.0 {
+                                let side = if dot(ng, wi) > 0.0 {
+                                    ng
+                                } else {
+                                    scale(ng, -1.0)
+                                };
+                                let o = sc.offset(p, side);
+                                let p_light = ls.pdf_area * dist2 / cos_l;
+                                let w = if s.strategy == Strategy::Mis {
+                                    power_heuristic(p_light, bsdf.pdf(ng, ns, wo, wi))
+                                } else {
+                                    1.0
+                                };
+                                let c = scale(mul(thr, mul(f, le)), w / p_light);
+                                d.nee = Some(((o, sub(ls.p, o), 1.0 - 1e-4), c));
+                            }
+                        }
+                    }
+                }
+            }
+            // Point and directional lights (delta lights: only shadow rays reach them),
+            // and one environment sample.
+            let v = Vertex {
+                p,
+                wo,
+                sp: &sp,
+                bsdf,
+            };
+            d.delta = mul(thr, delta_lights(sc, &v));
+            if sc.env.is_some() && s.strategy != Strategy::Bsdf {
+                let u = rng.next_2d();
+                let le = environment_nee(sc, &v, u, s.strategy == Strategy::Mis);
+                d.env = Some(mul(thr, le));
+            }
+            pending = Some(d);
+        }
+        // BSDF sampling for the next segment.
+        let u = rng.next_f32();
+        let uv = rng.next_2d();
+        let Some(bs) = bsdf.sample(albedo, ng, ns, wo, u, uv) else {
+            break;
+        };
+        thr = mul(thr, bs.weight);
+        eta *= bs.eta;
+        prev_pdf = bs.pdf;
+        prev_delta = bs.delta;
+        depth += 1;
+        // Russian roulette (Arvo & Kirk 1990), as Mitsuba 3 does it.
+        let tmaxc = max_comp(thr);
+        if depth >= s.rr_depth {
+            let q = (tmaxc * eta * eta).min(0.95);
+            if rng.next_f32() >= q {
+                break;
+            }
+            thr = scale(thr, 1.0 / q);
+        }
+        if tmaxc <= 0.0 || !tmaxc.is_finite() {
+            break;
+        }
+        let side = if dot(ng, bs.wi) > 0.0 {
+            ng
+        } else {
+            scale(ng, -1.0)
+        };
+        org = sc.offset(p, side);
+        dir = bs.wi;
+        tmax = f32::INFINITY;
+    }
+    // A path that ended after estimating direct light still owes its shadow ray.
+    if let Some(d) = pending {
+        l = d.finish(sc, l);
+    }
+    l
 }
 
 /// Mitsuba's Gaussian filter: exp(-x^2 / (2 sigma^2)) minus its value at the radius,
@@ -147,8 +352,13 @@ pub fn render(
                 for x in x0..x1 {
                     let pix = y as u64 * w as u64 + x as u64;
                     let (mut s1, mut s2) = ([0.0f64; 3], [0.0f64; 3]);
-                    let mut add_sample = |fx: f32, fy: f32, c: V3| {
-                        let mut c = c;
+                    for k in 0..s.spp {
+                        let mut rng = Pcg32::for_sample(pix, k as u64, s.seed);
+                        let [ux, uy] = rng.next_2d();
+                        let fx = x as f32 + ux;
+                        let fy = y as f32 + uy;
+                        let dir = cam.ray_dir(fx, fy);
+                        let mut c = radiance(sc, cam.eye, dir, cam.far, &mut rng, s);
                         if !c.iter().all(|v| v.is_finite()) {
                             c = [0.0; 3];
                         }
@@ -198,33 +408,6 @@ pub fn render(
                                 }
                             }
                         }
-                    };
-                    // Samples in pairs (each with its own random stream), accumulated in
-                    // sample order.
-                    let mut k = 0;
-                    while k < s.spp {
-                        let m = if s.lockstep { (s.spp - k).min(2) } else { 1 };
-                        let mut rngs: [Pcg32; 2] = std::array::from_fn(|j| {
-                            Pcg32::for_sample(pix, (k + j as u32) as u64, s.seed)
-                        });
-                        let mut fxy = [(0.0f32, 0.0f32); 2];
-                        for (f, rng) in fxy.iter_mut().zip(rngs.iter_mut()).take(m as usize) {
-                            let [ux, uy] = rng.next_2d();
-                            *f = (x as f32 + ux, y as f32 + uy);
-                        }
-                        let dir = |j: usize| cam.ray_dir(fxy[j].0, fxy[j].1);
-                        let [ra, rb] = &mut rngs;
-                        if m == 2 {
-                            let a = PathState::new(cam.eye, dir(0), cam.far, ra);
-                            let b = PathState::new(cam.eye, dir(1), cam.far, rb);
-                            let [ca, cb] = radiance2(sc, a, b, s);
-                            add_sample(fxy[0].0, fxy[0].1, ca);
-                            add_sample(fxy[1].0, fxy[1].1, cb);
-                        } else {
-                            let c = radiance(sc, cam.eye, dir(0), cam.far, ra, s);
-                            add_sample(fxy[0].0, fxy[0].1, c);
-                        }
-                        k += m;
                     }
                     let n = s.spp as f64;
                     let mut v = [0.0f32; 3];
@@ -364,7 +547,6 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
         filter,
         strategy,
         crease_deg,
-        lockstep: true,
     };
     // Per pixel: the f64 accumulator (32 bytes), colour and variance images (16 each), the
     // tiles' splat margins and variances (about 40).

@@ -10,7 +10,7 @@
 //! `intersect` and `occluded`.
 
 use super::lanes::Dyn;
-use super::traverse::{with_four_stacks, with_stacks, RayPre, STACK};
+use super::traverse::{with_stacks, RayPre};
 use super::wide::Walk;
 use super::{Bvh, Hit};
 use crate::nodes::trace::sampling::V3;
@@ -33,57 +33,6 @@ impl Bvh {
     #[inline]
     pub fn intersect_pair(&self, a: Segment, b: Segment) -> (Option<Hit>, Option<Hit>) {
         self.trace_pair::<false, false>(a, b)
-    }
-
-    /// Up to four rays traced interleaved, one node or leaf step of each in turn:
-    /// `rays[i]` is a segment and whether an any-hit query suffices (a shadow ray); `out[i]`
-    /// receives its closest hit (for an any-hit query some hit, when there is one). The
-    /// same answers as `intersect` and `occluded` one ray at a time. Rays past the fourth
-    /// (or past `out`'s length) are ignored.
-    pub fn trace_many(&self, rays: &[(Segment, bool)], out: &mut [Option<Hit>]) {
-        let n = rays.len().min(4).min(out.len());
-        if n == 0 {
-            return;
-        }
-        if self.wide.is_empty() || self.one_at_a_time {
-            for (((o, d, t), any), h) in rays[..n].iter().zip(out.iter_mut()) {
-                *h = if *any {
-                    self.traverse::<true>(*o, *d, *t)
-                } else {
-                    self.traverse::<false>(*o, *d, *t)
-                };
-            }
-            return;
-        }
-        let pre: [RayPre; 4] = std::array::from_fn(|i| {
-            let ((o, d, _), _) = rays[i.min(n - 1)];
-            RayPre::new(o, d)
-        });
-        let mut walks: [Walk; 4] = std::array::from_fn(|i| Walk::new(&pre[i], rays[i.min(n - 1)].0 .2));
-        with_four_stacks(|stacks| {
-            let mut live = (1u32 << n) - 1;
-            while live != 0 {
-                let mut m = live;
-                while m != 0 {
-                    let i = m.trailing_zeros() as usize;
-                    m &= m - 1;
-                    let stack = &mut stacks[i * STACK..(i + 1) * STACK];
-                    let r = &pre[i];
-                    let axes = Dyn(r.kx, r.ky, r.kz);
-                    let done = if rays[i].1 {
-                        self.step4::<true, _>(r, axes, &mut walks[i], stack)
-                    } else {
-                        self.step4::<false, _>(r, axes, &mut walks[i], stack)
-                    };
-                    if done {
-                        live &= !(1 << i);
-                    }
-                }
-            }
-        });
-        for (h, w) in out.iter_mut().zip(&walks).take(n) {
-            *h = w.best();
-        }
     }
 
     fn trace_pair<const ANY_A: bool, const ANY_B: bool>(

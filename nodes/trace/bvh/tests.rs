@@ -231,18 +231,18 @@ fn interleaved_pairs_match_single_queries() {
     assert!(!bvh.wide.is_empty());
     let mut r = Pcg32::new(17, 9);
     let mut ray = |i: usize| {
-        let org = if i % 3 == 0 {
+        let org = if i.is_multiple_of(3) {
             [r.next_f32() * 4.0, r.next_f32() * 4.0, r.next_f32() * 4.0]
         } else {
             [r.next_f32() * 6.0 - 1.0, r.next_f32() * 6.0 - 1.0, -2.0]
         };
-        let dir = if i % 5 == 0 {
+        let dir = if i.is_multiple_of(5) {
             // Through the fan's centre (on its shared vertex).
             normalize(sub([0.0, 0.0, 0.0], org))
         } else {
             normalize([r.next_f32() - 0.5, r.next_f32() - 0.5, r.next_f32() - 0.3])
         };
-        let tmax = if i % 4 == 0 { 1.5 } else { f32::INFINITY };
+        let tmax = if i.is_multiple_of(4) { 1.5 } else { f32::INFINITY };
         (org, dir, tmax)
     };
     let key = |h: Option<Hit>| h.map(|h| (h.t.to_bits(), h.prim, h.u.to_bits(), h.v.to_bits()));
@@ -262,7 +262,7 @@ fn interleaved_pairs_match_single_queries() {
         // which the visiting order breaks).
         let brute_b = brute(&tris, b.0, b.1).filter(|x| x.0 < b.2);
         assert_eq!(pb.map(|h| h.t), brute_b.map(|x| x.0));
-        if (2 * i + 1) % 5 != 0 {
+        if !(2 * i + 1).is_multiple_of(5) {
             assert_eq!(pb.map(|h| h.prim), brute_b.map(|x| x.1));
         }
         assert_eq!(occ, brute_b.is_some());

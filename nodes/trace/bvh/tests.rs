@@ -257,13 +257,18 @@ fn interleaved_pairs_match_single_queries() {
         let (qa, occ) = bvh.intersect_occluded(a, b);
         assert_eq!(key(qa), key(single_a), "pair {i}, closest hit beside a shadow ray");
         assert_eq!(occ, bvh.occluded(b.0, b.1, b.2), "pair {i}, shadow ray");
-        // Brute force over the caller's triangles agrees on the distance, and on the
-        // triangle except through the fan's shared vertex (a tie between its triangles,
-        // which the visiting order breaks).
+        // Brute force over the caller's triangles agrees on triangle and distance, except
+        // through the fan's shared vertex: there the fan's triangles tie, the visiting
+        // order picks one, and each computes the distance with its own round-off.
         let brute_b = brute(&tris, b.0, b.1).filter(|x| x.0 < b.2);
-        assert_eq!(pb.map(|h| h.t), brute_b.map(|x| x.0));
-        if !(2 * i + 1).is_multiple_of(5) {
-            assert_eq!(pb.map(|h| h.prim), brute_b.map(|x| x.1));
+        if (2 * i + 1).is_multiple_of(5) {
+            let (t, tb) = (pb.map(|h| h.t), brute_b.map(|x| x.0));
+            assert_eq!(t.is_some(), tb.is_some(), "pair {i}");
+            if let (Some(t), Some(tb)) = (t, tb) {
+                assert!((t - tb).abs() <= 1e-5 * tb, "pair {i}: {t} vs {tb}");
+            }
+        } else {
+            assert_eq!(pb.map(|h| (h.t, h.prim)), brute_b, "pair {i}");
         }
         assert_eq!(occ, brute_b.is_some());
         hits += single_a.is_some() as usize;

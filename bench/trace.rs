@@ -12,7 +12,9 @@
 //! Options (after `--`): `--ref-spp N` (default 2048), `--spp a,b,c` (default 4,16,64,256),
 //! `--quick` (one 64-spp timing, no reference), `--binary-bvh` (traverse the binary BVH
 //! instead of the default one collapsed to 4 children per node, to measure what the wide
-//! tree buys; `--wide-bvh`, the default, is accepted and does nothing), `--scene igea`
+//! tree buys; `--wide-bvh`, the default, is accepted and does nothing), `--no-interleave`
+//! (trace a path's shadow ray and its next ray one after the other instead of interleaved,
+//! to measure what `Bvh::intersect_occluded` buys), `--scene igea`
 //! (the box with the 154k-triangle igea scan standing in it, white diffuse, as
 //! `trace_mitsuba.py --scene igea` builds it; `--igea PATH`, default
 //! `/work/shared/assets/meshes/igea_front.obj`). The SVG chart is written for the plain box
@@ -240,6 +242,9 @@ fn main() {
     let mut sc = RenderScene::new(&scene).unwrap();
     if args.iter().any(|a| a == "--binary-bvh") {
         sc.bvh.narrow();
+    }
+    if args.iter().any(|a| a == "--no-interleave") {
+        sc.bvh.one_at_a_time = true;
     }
     let cam = PinholeCamera::new(&cam).unwrap();
     println!(

@@ -15,6 +15,7 @@
 //! splatted into the neighbouring pixels and normalised by the summed filter weights.
 
 use super::direct::{delta_lights, environment_nee, Vertex};
+use super::bvh::Segment;
 use super::render_scene::{prepare, PinholeCamera, RenderScene};
 use super::sampling::{add, dot, max_comp, mul, power_heuristic, scale, sub, Pcg32, V3};
 use super::tracer_node::{crease_input, declare_crease, reserve_image, trace_error};
@@ -90,6 +91,43 @@ impl Default for PathSettings {
     }
 }
 
+/// Direct light estimated at a path vertex whose shadow ray has not been traced yet: it is
+/// traced together with the next segment's ray (`Bvh::intersect_occluded`, two
+/// independent traversals interleaved) and added to the path's radiance before anything
+/// the next segment finds, in the order the estimates were made, so the sums are bit for
+/// bit those of tracing the shadow ray at once.
+struct Deferred {
+    /// The area emitter sample's shadow ray and its contribution when unblocked.
+    nee: Option<(Segment, V3)>,
+    /// Point and directional lights (their shadow rays already traced).
+    delta: V3,
+    /// The environment sample, when one was drawn.
+    env: Option<V3>,
+}
+
+impl Deferred {
+    /// Adds the estimates to `l`, the emitter sample's only when `blocked` is false.
+    #[inline]
+    fn add_to(&self, l: V3, blocked: bool) -> V3 {
+        let mut l = l;
+        if let (Some((_, c)), false) = (self.nee, blocked) {
+            l = add(l, c);
+        }
+        l = add(l, self.delta);
+        if let Some(e) = self.env {
+            l = add(l, e);
+        }
+        l
+    }
+
+    /// Traces the shadow ray alone (the path ends here) and adds the estimates to `l`.
+    #[inline]
+    fn finish(&self, sc: &RenderScene, l: V3) -> V3 {
+        let blocked = self.nee.is_some_and(|((o, d, t), _)| sc.bvh.occluded(o, d, t));
+        self.add_to(l, blocked)
+    }
+}
+
 /// Radiance arriving at `org` from direction `-dir` (unit `dir`), estimated with one path.
 pub fn radiance(
     sc: &RenderScene,
@@ -106,8 +144,21 @@ pub fn radiance(
     let mut prev_delta = true;
     let mut depth = 0u32;
     let (mut org, mut dir, mut tmax) = (org, dir, tmax);
+    // The previous vertex's direct light, waiting for its shadow ray.
+    let mut pending: Option<Deferred> = None;
     loop {
-        let Some(hit) = sc.intersect(org, dir, tmax) else {
+        let hit = match pending.take() {
+            None => sc.intersect(org, dir, tmax),
+            Some(d) => {
+                let (hit, blocked) = match d.nee {
+                    Some((shadow, _)) => sc.bvh.intersect_occluded((org, dir, tmax), shadow),
+                    None => (sc.intersect(org, dir, tmax), false),
+                };
+                l = d.add_to(l, blocked);
+                hit
+            }
+        };
+        let Some(hit) = hit else {
             // The ray escapes: the environment's radiance, weighted like an emitter hit.
             if let Some(env) = &sc.env {
                 let w = if depth == 0 || prev_delta {
@@ -156,16 +207,21 @@ pub fn radiance(
         let sp = sc.surface(&hit);
         let (ns, albedo) = (sp.ns, sp.albedo);
         if !bsdf.is_delta() {
+            let mut d = Deferred {
+                nee: None,
+                delta: [0.0; 3],
+                env: None,
+            };
             // Next-event estimation on the area emitters.
             if s.strategy != Strategy::Bsdf {
                 let u = rng.next_f32();
                 let uv = rng.next_2d();
                 if let Some(ls) = sc.sample_emitter(u, uv) {
-                    let d = sub(ls.p, p);
-                    let dist2 = dot(d, d);
+                    let dv = sub(ls.p, p);
+                    let dist2 = dot(dv, dv);
                     let dist = dist2.sqrt();
                     if dist > 0.0 {
-                        let wi = scale(d, 1.0 / dist);
+                        let wi = scale(dv, 1.0 / dist);
                         let le = sc.emitted(ls.tri, scale(wi, -1.0));
                         let cos_l = dot(ls.n, wi).abs();
                         if max_comp(le) > 0.0 && cos_l > 0.0 {
@@ -177,15 +233,14 @@ pub fn radiance(
                                     scale(ng, -1.0)
                                 };
                                 let o = sc.offset(p, side);
-                                if !sc.bvh.occluded(o, sub(ls.p, o), 1.0 - 1e-4) {
-                                    let p_light = ls.pdf_area * dist2 / cos_l;
-                                    let w = if s.strategy == Strategy::Mis {
-                                        power_heuristic(p_light, bsdf.pdf(ng, ns, wo, wi))
-                                    } else {
-                                        1.0
-                                    };
-                                    l = add(l, scale(mul(thr, mul(f, le)), w / p_light));
-                                }
+                                let p_light = ls.pdf_area * dist2 / cos_l;
+                                let w = if s.strategy == Strategy::Mis {
+                                    power_heuristic(p_light, bsdf.pdf(ng, ns, wo, wi))
+                                } else {
+                                    1.0
+                                };
+                                let c = scale(mul(thr, mul(f, le)), w / p_light);
+                                d.nee = Some(((o, sub(ls.p, o), 1.0 - 1e-4), c));
                             }
                         }
                     }
@@ -199,12 +254,13 @@ pub fn radiance(
                 sp: &sp,
                 bsdf,
             };
-            l = add(l, mul(thr, delta_lights(sc, &v)));
+            d.delta = mul(thr, delta_lights(sc, &v));
             if sc.env.is_some() && s.strategy != Strategy::Bsdf {
                 let u = rng.next_2d();
                 let le = environment_nee(sc, &v, u, s.strategy == Strategy::Mis);
-                l = add(l, mul(thr, le));
+                d.env = Some(mul(thr, le));
             }
+            pending = Some(d);
         }
         // BSDF sampling for the next segment.
         let u = rng.next_f32();
@@ -237,6 +293,10 @@ pub fn radiance(
         org = sc.offset(p, side);
         dir = bs.wi;
         tmax = f32::INFINITY;
+    }
+    // A path that ended after estimating direct light still owes its shadow ray.
+    if let Some(d) = pending {
+        l = d.finish(sc, l);
     }
     l
 }

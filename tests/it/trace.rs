@@ -183,6 +183,42 @@ fn cornell_camera(w: u32, h: u32) -> Camera {
     camera([0.0, 0.0, 3.9], [0.0; 3], 39.3077, w, h)
 }
 
+/// Tracing a path's shadow ray beside its next segment (the two traversals interleaved)
+/// changes no bit of the image: the Cornell box with two glossy conductors, a point light
+/// (delta lights are estimated between the deferred shadow ray and the next hit) and the
+/// Gaussian filter, against the same render with the rays traced one at a time.
+#[test]
+fn interleaved_shadow_rays_change_no_bit() {
+    use cgnodes::nodes::trace::render_path::render;
+    use cgnodes::nodes::trace::render_scene::prepare;
+    let mut scene = cornell_scene();
+    for o in scene.objects.iter_mut().take(2) {
+        let mut m = (**o.material.as_ref().unwrap()).clone();
+        m.kind = MaterialKind::Conductor { roughness: 0.3 };
+        o.material = Some(Arc::new(m));
+    }
+    scene.lights.push(cgnodes::types::Light::Point {
+        position: [0.3, 0.5, 0.5],
+        color: [1.0, 0.9, 0.8],
+        intensity: 2.0,
+    });
+    let cam = cornell_camera(24, 24);
+    let (mut sc, pc) = prepare(&scene, Some(&cam), 0.0).unwrap();
+    let s = settings(5, 8, Strategy::Mis, Filter::Gaussian);
+    let (pairs, pairs_var) = render(&sc, &pc, &s, &noop);
+    sc.bvh.one_at_a_time = true;
+    let (single, single_var) = render(&sc, &pc, &s, &noop);
+    let bits = |i: &Image| {
+        i.pixels
+            .iter()
+            .flat_map(|p| p.map(f32::to_bits))
+            .collect::<Vec<_>>()
+    };
+    assert!(mean(&single)[0] > 0.01, "the render is black");
+    assert_eq!(bits(&pairs), bits(&single), "shadow rays interleaved");
+    assert_eq!(bits(&pairs_var), bits(&single_var));
+}
+
 /// Emitter sampling alone, BSDF sampling alone and their MIS combination estimate the same
 /// image: the Cornell box at low resolution, with the short box turned into a rough GGX
 /// conductor so a glossy lobe is exercised too.

@@ -9,8 +9,49 @@
 //! (Rust never contracts to FMA), so a lane's result is bit for bit the scalar one; the
 //! rare lanes that need the scalar test's double-precision fallback are handed to it.
 
-use super::traverse::{tri_test, RayPre};
+use super::traverse::{intersect_triangle, tri_test, RayPre};
 use crate::nodes::trace::sampling::V3;
+
+/// The axis permutation of the watertight test (`RayPre`'s kx, ky, kz): fixed at compile
+/// time (`Fixed`, constant indices into a `Tri4`) for the single-ray traversal, which is
+/// monomorphised per permutation, or read from the ray (`Dyn`) for the interleaved
+/// traversal of two rays, which would need 36 instances otherwise.
+pub trait Axes: Copy {
+    /// (kx, ky, kz).
+    fn get(self) -> (usize, usize, usize);
+    /// The scalar watertight test with this permutation (for lanes on an edge).
+    fn scalar(self, r: &RayPre, tri: &[V3; 3], tmax: f32) -> Option<(f32, f32, f32)>;
+}
+
+/// A permutation known at compile time.
+#[derive(Clone, Copy, Debug)]
+pub struct Fixed<const KX: usize, const KY: usize, const KZ: usize>;
+
+impl<const KX: usize, const KY: usize, const KZ: usize> Axes for Fixed<KX, KY, KZ> {
+    #[inline(always)]
+    fn get(self) -> (usize, usize, usize) {
+        (KX, KY, KZ)
+    }
+    #[inline(always)]
+    fn scalar(self, r: &RayPre, tri: &[V3; 3], tmax: f32) -> Option<(f32, f32, f32)> {
+        tri_test::<KX, KY, KZ>(r, tri, tmax)
+    }
+}
+
+/// A permutation read at run time.
+#[derive(Clone, Copy, Debug)]
+pub struct Dyn(pub usize, pub usize, pub usize);
+
+impl Axes for Dyn {
+    #[inline(always)]
+    fn get(self) -> (usize, usize, usize) {
+        (self.0, self.1, self.2)
+    }
+    #[inline(never)]
+    fn scalar(self, r: &RayPre, tri: &[V3; 3], tmax: f32) -> Option<(f32, f32, f32)> {
+        intersect_triangle(r, tri, tmax)
+    }
+}
 
 /// Four floats, one per lane.
 pub type F4 = [f32; 4];
@@ -137,32 +178,43 @@ impl Tri4 {
     }
 }
 
+/// One corner of four triangles (`p[axis][lane]`) moved to the ray's frame: translated by
+/// the permuted origin `o`, sheared and scaled by `sh` = (sx, sy, sz) (Woop et al. 2013,
+/// eq. 5). A plain function, not a closure: LLVM would not inline the closure once the
+/// permutation is a run-time value (`Dyn`).
+#[inline(always)]
+fn shear(p: &[F4; 3], k: (usize, usize, usize), o: V3, sh: V3) -> (F4, F4, F4) {
+    let dx = sub4(p[k.0], [o[0]; 4]);
+    let dy = sub4(p[k.1], [o[1]; 4]);
+    let dz = sub4(p[k.2], [o[2]; 4]);
+    (
+        sub4(dx, mul4([sh[0]; 4], dz)),
+        sub4(dy, mul4([sh[1]; 4], dz)),
+        mul4([sh[2]; 4], dz),
+    )
+}
+
 /// The watertight test (Woop et al. 2013, Listing 1) of one ray against the first `count`
 /// triangles of `q`, visited in lane order exactly as the scalar loop over a leaf does:
 /// a lane hit before the current `tmax` lowers it for the lanes after it. Calls `hit(t,
 /// u, v, lane)` for every accepted hit; with `ANY`, stops at the first and returns true.
 #[inline(always)]
-pub fn tri4<const ANY: bool, const KX: usize, const KY: usize, const KZ: usize>(
+pub fn tri4<const ANY: bool, P: Axes>(
     r: &RayPre,
+    axes: P,
     q: &Tri4,
     count: usize,
     tmax: &mut f32,
     mut hit: impl FnMut(f32, f32, f32, usize),
 ) -> bool {
     let z = [0.0f32; 4];
+    let (kx, ky, kz) = axes.get();
     // Translate to the origin, shear and scale (eq. 5), per corner, on four lanes.
-    let corner = |c: usize| {
-        let d = |k: usize| sub4(q.v[c][k], [r.org[k]; 4]);
-        let (dx, dy, dz) = (d(KX), d(KY), d(KZ));
-        (
-            sub4(dx, mul4([r.sx; 4], dz)),
-            sub4(dy, mul4([r.sy; 4], dz)),
-            mul4([r.sz; 4], dz),
-        )
-    };
-    let (ax, ay, az) = corner(0);
-    let (bx, by, bz) = corner(1);
-    let (cx, cy, cz) = corner(2);
+    let o = [r.org[kx], r.org[ky], r.org[kz]];
+    let sh = [r.sx, r.sy, r.sz];
+    let (ax, ay, az) = shear(&q.v[0], (kx, ky, kz), o, sh);
+    let (bx, by, bz) = shear(&q.v[1], (kx, ky, kz), o, sh);
+    let (cx, cy, cz) = shear(&q.v[2], (kx, ky, kz), o, sh);
     // Scaled barycentrics (2-D edge functions).
     let u = sub4(mul4(cx, by), mul4(cy, bx));
     let v = sub4(mul4(ax, cy), mul4(ay, cx));
@@ -192,7 +244,7 @@ pub fn tri4<const ANY: bool, const KX: usize, const KY: usize, const KZ: usize>(
         let l = cand.trailing_zeros() as usize;
         cand &= cand - 1;
         let found = if edge & (1 << l) != 0 {
-            tri_test::<KX, KY, KZ>(r, &q.get(l), *tmax)
+            axes.scalar(r, &q.get(l), *tmax)
         } else {
             let (t, det) = (t[l], det[l]);
             let rejected = if det > 0.0 {

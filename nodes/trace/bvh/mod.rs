@@ -9,6 +9,7 @@
 
 mod build;
 mod lanes;
+mod pair;
 #[cfg(test)]
 mod tests;
 mod traverse;
@@ -16,6 +17,7 @@ mod wide;
 
 pub use traverse::{intersect_triangle, RayPre};
 pub use lanes::Tri4;
+pub use pair::Segment;
 pub use wide::Node4;
 
 use super::sampling::{cross, sub, V3};
@@ -95,6 +97,10 @@ pub struct Bvh {
     pub wide: Vec<Node4>,
     /// The 4-wide tree's leaves, four triangles each in structure of arrays.
     pub wide_tris: Vec<Tri4>,
+    /// When set, the two-ray queries (`intersect_occluded`, `intersect_pair`) trace their
+    /// rays one after the other instead of interleaved (same answers; to measure what the
+    /// interleaving buys).
+    pub one_at_a_time: bool,
 }
 
 /// The closest hit along a ray.

@@ -218,6 +218,66 @@ fn wide_tree_matches_binary_tree_on_shared_edges() {
 }
 
 /// `k` triangles around the origin in the z = 0 plane, sharing the centre and their edges.
+/// Two rays traced interleaved (`intersect_occluded`, `intersect_pair`) get bit for bit
+/// the answers of two single-ray queries (triangle, distance, barycentrics), and those are
+/// brute force's; the pairs mix rays that start inside and outside the mesh, miss, and hit
+/// at different depths (so one ray of a pair finishes first), and include rays through the
+/// shared vertex of a fan (the scalar fallback of the four-lane test).
+#[test]
+fn interleaved_pairs_match_single_queries() {
+    let mut tris = random_tris(5000, 31);
+    tris.extend(fan(8));
+    let bvh = Bvh::build(&tris);
+    assert!(!bvh.wide.is_empty());
+    let mut r = Pcg32::new(17, 9);
+    let mut ray = |i: usize| {
+        let org = if i.is_multiple_of(3) {
+            [r.next_f32() * 4.0, r.next_f32() * 4.0, r.next_f32() * 4.0]
+        } else {
+            [r.next_f32() * 6.0 - 1.0, r.next_f32() * 6.0 - 1.0, -2.0]
+        };
+        let dir = if i.is_multiple_of(5) {
+            // Through the fan's centre (on its shared vertex).
+            normalize(sub([0.0, 0.0, 0.0], org))
+        } else {
+            normalize([r.next_f32() - 0.5, r.next_f32() - 0.5, r.next_f32() - 0.3])
+        };
+        let tmax = if i.is_multiple_of(4) { 1.5 } else { f32::INFINITY };
+        (org, dir, tmax)
+    };
+    let key = |h: Option<Hit>| h.map(|h| (h.t.to_bits(), h.prim, h.u.to_bits(), h.v.to_bits()));
+    let (mut hits, mut blocked) = (0, 0);
+    for i in 0..3000 {
+        let (a, b) = (ray(2 * i), ray(2 * i + 1));
+        let single_a = bvh.intersect(a.0, a.1, a.2);
+        let single_b = bvh.intersect(b.0, b.1, b.2);
+        let (pa, pb) = bvh.intersect_pair(a, b);
+        assert_eq!(key(pa), key(single_a), "pair {i}, first ray");
+        assert_eq!(key(pb), key(single_b), "pair {i}, second ray");
+        let (qa, occ) = bvh.intersect_occluded(a, b);
+        assert_eq!(key(qa), key(single_a), "pair {i}, closest hit beside a shadow ray");
+        assert_eq!(occ, bvh.occluded(b.0, b.1, b.2), "pair {i}, shadow ray");
+        // Brute force over the caller's triangles agrees on triangle and distance, except
+        // through the fan's shared vertex: there the fan's triangles tie, the visiting
+        // order picks one, and each computes the distance with its own round-off.
+        let brute_b = brute(&tris, b.0, b.1).filter(|x| x.0 < b.2);
+        if (2 * i + 1).is_multiple_of(5) {
+            let (t, tb) = (pb.map(|h| h.t), brute_b.map(|x| x.0));
+            assert_eq!(t.is_some(), tb.is_some(), "pair {i}");
+            if let (Some(t), Some(tb)) = (t, tb) {
+                assert!((t - tb).abs() <= 1e-5 * tb, "pair {i}: {t} vs {tb}");
+            }
+        } else {
+            assert_eq!(pb.map(|h| (h.t, h.prim)), brute_b, "pair {i}");
+        }
+        assert_eq!(occ, brute_b.is_some());
+        hits += single_a.is_some() as usize;
+        blocked += occ as usize;
+    }
+    // Both outcomes occur often enough for the pairs to finish in either order.
+    assert!(hits > 300 && hits < 2900 && blocked > 300 && blocked < 2900, "{hits} {blocked}");
+}
+
 fn fan(k: usize) -> Vec<[[f32; 3]; 3]> {
     (0..k)
         .map(|i| {

@@ -14,15 +14,29 @@ thread_local! {
     /// One traversal stack per thread, reused by every ray: a stack array local to the
     /// traversal was zeroed (a 768-byte `memset`) on every ray, 2.7 % of the path tracer's
     /// time (docs/path_tracing.md).
-    static STACKS: RefCell<[(u32, f32); STACK]> = const { RefCell::new([(0, 0.0); STACK]) };
+    /// Two stacks, for the interleaved traversal of two rays (`Bvh::intersect_occluded`).
+    static STACKS: RefCell<[(u32, f32); 2 * STACK]> =
+        const { RefCell::new([(0, 0.0); 2 * STACK]) };
 }
 
 /// Runs `f` with this thread's traversal stack (a fresh one if it is already in use).
 #[inline(always)]
 pub(super) fn with_stack<R>(f: impl FnOnce(&mut [(u32, f32)]) -> R) -> R {
     STACKS.with(|s| match s.try_borrow_mut() {
-        Ok(mut s) => f(&mut s[..]),
+        Ok(mut s) => f(&mut s[..STACK]),
         Err(_) => f(&mut [(0, 0.0); STACK]),
+    })
+}
+
+/// Runs `f` with this thread's two traversal stacks (fresh ones if they are in use).
+#[inline(always)]
+pub(super) fn with_stacks<R>(f: impl FnOnce(&mut [(u32, f32)], &mut [(u32, f32)]) -> R) -> R {
+    STACKS.with(|s| match s.try_borrow_mut() {
+        Ok(mut s) => {
+            let (a, b) = s.split_at_mut(STACK);
+            f(a, b)
+        }
+        Err(_) => f(&mut [(0, 0.0); STACK], &mut [(0, 0.0); STACK]),
     })
 }
 
@@ -32,9 +46,9 @@ pub(super) fn with_stack<R>(f: impl FnOnce(&mut [(u32, f32)]) -> R) -> R {
 pub struct RayPre {
     pub(super) org: V3,
     pub(super) inv: V3,
-    kx: usize,
-    ky: usize,
-    kz: usize,
+    pub(super) kx: usize,
+    pub(super) ky: usize,
+    pub(super) kz: usize,
     pub(super) sx: f32,
     pub(super) sy: f32,
     pub(super) sz: f32,
@@ -178,7 +192,7 @@ impl Bvh {
     }
 
     #[inline]
-    fn traverse<const ANY: bool>(&self, org: V3, dir: V3, tmax: f32) -> Option<Hit> {
+    pub(super) fn traverse<const ANY: bool>(&self, org: V3, dir: V3, tmax: f32) -> Option<Hit> {
         if self.nodes.is_empty() {
             return None;
         }

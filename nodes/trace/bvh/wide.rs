@@ -9,7 +9,7 @@
 //!
 //! The lane arithmetic is in `lanes.rs`; docs/path_tracing.md has the measurements.
 
-use super::lanes::{slab4, tri4, Ray4, Tri4};
+use super::lanes::{slab4, tri4, Axes, Fixed, Ray4, Tri4};
 use super::{Bvh, BvhNode};
 use crate::nodes::trace::bvh::traverse::{with_stack, RayPre};
 use crate::nodes::trace::bvh::Hit;
@@ -140,6 +140,37 @@ fn set_lane(
     }
 }
 
+/// One ray's state in the 4-wide traversal, advanced one node or leaf at a time by
+/// `Bvh::step4` (so that two rays can be advanced in turn, `Bvh::trace_pair`).
+pub(super) struct Walk {
+    ray: Ray4,
+    tmax: f32,
+    best: Option<Hit>,
+    /// Entries on this ray's stack.
+    sp: usize,
+    /// The node or leaf to visit next.
+    c: u32,
+}
+
+impl Walk {
+    #[inline(always)]
+    pub(super) fn new(r: &RayPre, tmax: f32) -> Walk {
+        Walk {
+            ray: Ray4::new(r),
+            tmax,
+            best: None,
+            sp: 0,
+            c: 0,
+        }
+    }
+
+    /// The closest hit found so far (the any hit, for an any-hit query).
+    #[inline(always)]
+    pub(super) fn best(&self) -> Option<Hit> {
+        self.best
+    }
+}
+
 impl Bvh {
     /// Closest-hit (or, with `ANY`, any-hit) traversal of the 4-wide tree, front to back:
     /// the four boxes of a node are tested on four lanes, the entered children sorted by
@@ -151,93 +182,97 @@ impl Bvh {
         r: &RayPre,
         tmax: f32,
     ) -> Option<Hit> {
-        with_stack(|stack| self.walk4::<ANY, KX, KY, KZ>(r, tmax, stack))
+        with_stack(|stack| {
+            let mut w = Walk::new(r, tmax);
+            while !self.step4::<ANY, _>(r, Fixed::<KX, KY, KZ>, &mut w, stack) {}
+            w.best
+        })
     }
 
+    /// Advances `w` by one node (test its four boxes, go to the nearest entered child,
+    /// push the others) or one leaf (test its triangles), then, when nothing was entered,
+    /// pops the next entry not farther than the closest hit. Returns true when the query
+    /// is finished (stack empty, or an any-hit query found a hit); `w.best` is its answer.
     #[inline(always)]
-    fn walk4<const ANY: bool, const KX: usize, const KY: usize, const KZ: usize>(
+    pub(super) fn step4<const ANY: bool, P: Axes>(
         &self,
         r: &RayPre,
-        tmax: f32,
+        axes: P,
+        w: &mut Walk,
         stack: &mut [(u32, f32)],
-    ) -> Option<Hit> {
-        let ray = Ray4::new(r);
-        let mut best: Option<Hit> = None;
-        let mut tmax = tmax;
-        let mut sp = 0usize;
-        let mut c = 0u32;
-        'outer: loop {
-            if c & LEAF == 0 {
-                let n = &self.wide[c as usize];
-                let (mut m, te) = slab4(&ray, &n.min, &n.max, tmax);
-                if m != 0 {
-                    let first = m.trailing_zeros() as usize;
-                    m &= m - 1;
-                    if m == 0 {
-                        c = n.child[first];
-                        continue;
-                    }
-                    if ANY {
-                        // Any hit ends the query, so the order does not matter: push the
-                        // other entered children unsorted.
-                        while m != 0 {
-                            let l = m.trailing_zeros() as usize;
-                            m &= m - 1;
-                            if sp < stack.len() {
-                                stack[sp] = (n.child[l], te[l]);
-                                sp += 1;
-                            }
-                        }
-                        c = n.child[first];
-                        continue;
-                    }
-                    // Two to four children entered: sort them near to far (insertion sort
-                    // on at most four), visit the nearest, push the rest far to near.
-                    let mut ids = [first; 4];
-                    let mut k = 1;
+    ) -> bool {
+        let c = w.c;
+        if c & LEAF == 0 {
+            let n = &self.wide[c as usize];
+            let (mut m, te) = slab4(&w.ray, &n.min, &n.max, w.tmax);
+            if m != 0 {
+                let first = m.trailing_zeros() as usize;
+                m &= m - 1;
+                if m == 0 {
+                    w.c = n.child[first];
+                    return false;
+                }
+                if ANY {
+                    // Any hit ends the query, so the order does not matter: push the
+                    // other entered children unsorted.
                     while m != 0 {
                         let l = m.trailing_zeros() as usize;
                         m &= m - 1;
-                        let mut j = k;
-                        while j > 0 && te[ids[j - 1]] > te[l] {
-                            ids[j] = ids[j - 1];
-                            j -= 1;
-                        }
-                        ids[j] = l;
-                        k += 1;
-                    }
-                    for &l in ids[1..k].iter().rev() {
-                        if sp < stack.len() {
-                            stack[sp] = (n.child[l], te[l]);
-                            sp += 1;
+                        if w.sp < stack.len() {
+                            stack[w.sp] = (n.child[l], te[l]);
+                            w.sp += 1;
                         }
                     }
-                    c = n.child[ids[0]];
-                    continue;
+                    w.c = n.child[first];
+                    return false;
                 }
-            } else {
-                let q = &self.wide_tris[((c & !LEAF) >> 3) as usize];
-                let found = tri4::<ANY, KX, KY, KZ>(r, q, (c & 7) as usize, &mut tmax, |t, u, v, l| {
-                    best = Some(Hit {
-                        t,
-                        prim: q.prim[l],
-                        u,
-                        v,
-                    })
-                });
-                if ANY && found {
-                    return best;
+                // Two to four children entered: sort them near to far (insertion sort
+                // on at most four), visit the nearest, push the rest far to near.
+                let mut ids = [first; 4];
+                let mut k = 1;
+                while m != 0 {
+                    let l = m.trailing_zeros() as usize;
+                    m &= m - 1;
+                    let mut j = k;
+                    while j > 0 && te[ids[j - 1]] > te[l] {
+                        ids[j] = ids[j - 1];
+                        j -= 1;
+                    }
+                    ids[j] = l;
+                    k += 1;
                 }
+                for &l in ids[1..k].iter().rev() {
+                    if w.sp < stack.len() {
+                        stack[w.sp] = (n.child[l], te[l]);
+                        w.sp += 1;
+                    }
+                }
+                w.c = n.child[ids[0]];
+                return false;
             }
-            while sp > 0 {
-                sp -= 1;
-                let (n, t) = stack[sp];
-                if t <= tmax {
-                    c = n;
-                    continue 'outer;
-                }
+        } else {
+            let q = &self.wide_tris[((c & !LEAF) >> 3) as usize];
+            let best = &mut w.best;
+            let found = tri4::<ANY, P>(r, axes, q, (c & 7) as usize, &mut w.tmax, |t, u, v, l| {
+                *best = Some(Hit {
+                    t,
+                    prim: q.prim[l],
+                    u,
+                    v,
+                })
+            });
+            if ANY && found {
+                return true;
             }
-            return best;
         }
+        while w.sp > 0 {
+            w.sp -= 1;
+            let (n, t) = stack[w.sp];
+            if t <= w.tmax {
+                w.c = n;
+                return false;
+            }
+        }
+        true
     }
 }

@@ -1,0 +1,67 @@
+//! Two independent rays traced in one interleaved loop: one node (or leaf) step of the
+//! first, then one of the second, and so on. A single ray's walk down the 4-wide tree is a
+//! dependent chain (load a node, slab test, mask, child index, load the next node), so a
+//! core running one ray waits on that chain's latency; the other ray's step has no data
+//! dependence on it, and the out-of-order core overlaps the two (software pipelining of
+//! independent chains, the motivation of ray streams: Wald et al. 2014, "Embree: A Kernel
+//! Framework for Efficient CPU Ray Tracing", section 4; docs/path_tracing.md, fourth
+//! round, has the measurements). Each ray gets its own stack and exactly the node order,
+//! hits and `tmax` updates of a single-ray query, so the answers are bit for bit those of
+//! `intersect` and `occluded`.
+
+use super::lanes::Dyn;
+use super::traverse::{with_stacks, RayPre};
+use super::wide::Walk;
+use super::{Bvh, Hit};
+use crate::nodes::trace::sampling::V3;
+
+/// A ray segment to trace: origin, direction, and the far end of the ray parameter
+/// (hits count for `0 < t < tmax`).
+pub type Segment = (V3, V3, f32);
+
+impl Bvh {
+    /// The closest hit along `a` and whether anything blocks `b` (an any-hit query), the
+    /// two traced interleaved: the same answers as `intersect(a)` and `occluded(b)`.
+    #[inline]
+    pub fn intersect_occluded(&self, a: Segment, b: Segment) -> (Option<Hit>, bool) {
+        let (ha, hb) = self.trace_pair::<false, true>(a, b);
+        (ha, hb.is_some())
+    }
+
+    /// The closest hits along `a` and `b`, traced interleaved: the same answers as two
+    /// calls of `intersect`.
+    #[inline]
+    pub fn intersect_pair(&self, a: Segment, b: Segment) -> (Option<Hit>, Option<Hit>) {
+        self.trace_pair::<false, false>(a, b)
+    }
+
+    fn trace_pair<const ANY_A: bool, const ANY_B: bool>(
+        &self,
+        a: Segment,
+        b: Segment,
+    ) -> (Option<Hit>, Option<Hit>) {
+        if self.wide.is_empty() || self.one_at_a_time {
+            return (
+                self.traverse::<ANY_A>(a.0, a.1, a.2),
+                self.traverse::<ANY_B>(b.0, b.1, b.2),
+            );
+        }
+        let (ra, rb) = (RayPre::new(a.0, a.1), RayPre::new(b.0, b.1));
+        let (pa, pb) = (Dyn(ra.kx, ra.ky, ra.kz), Dyn(rb.kx, rb.ky, rb.kz));
+        with_stacks(|sa, sb| {
+            let mut wa = Walk::new(&ra, a.2);
+            let mut wb = Walk::new(&rb, b.2);
+            loop {
+                if self.step4::<ANY_A, _>(&ra, pa, &mut wa, sa) {
+                    while !self.step4::<ANY_B, _>(&rb, pb, &mut wb, sb) {}
+                    break;
+                }
+                if self.step4::<ANY_B, _>(&rb, pb, &mut wb, sb) {
+                    while !self.step4::<ANY_A, _>(&ra, pa, &mut wa, sa) {}
+                    break;
+                }
+            }
+            (wa.best(), wb.best())
+        })
+    }
+}

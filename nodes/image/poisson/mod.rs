@@ -194,9 +194,6 @@ pub fn cached_factor_keyed(
         Solver::Auto => auto_solver(shape),
         s => s,
     };
-    if solver == Solver::SineTransform && !matches!(key, ShapeKey::Rect { .. }) {
-        return Err(not_a_rectangle());
-    }
     let mg_key = (key.clone(), Solver::Multigrid);
     {
         let mut cache = CACHE.lock().unwrap_or_else(|e| e.into_inner());

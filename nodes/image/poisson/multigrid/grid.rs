@@ -191,13 +191,8 @@ pub(super) fn smooth_rows(
                                 }
                             }
                             if vertical {
-                                for c in 0..3 {
-                                    v[c] -= s[0] * up[x - 1][c]
-                                        + s[1] * up[x][c]
-                                        + s[2] * up[x + 1][c]
-                                        + s[6] * dn[x - 1][c]
-                                        + s[7] * dn[x][c]
-                                        + s[8] * dn[x + 1][c];
+                                for (c, v) in v.iter_mut().enumerate() {
+                                    *v -= off_rows(s, up, dn, x, c);
                                 }
                             }
                             let inv = 1.0 / s[4];
@@ -208,6 +203,17 @@ pub(super) fn smooth_rows(
             }
         }
     });
+}
+
+/// The six terms of a 9-point stencil `s` at `x` that read the rows above and below.
+#[inline(always)]
+fn off_rows(s: &[f32; 9], up: &[Q3], dn: &[Q3], x: usize, c: usize) -> f32 {
+    s[0] * up[x - 1][c]
+        + s[1] * up[x][c]
+        + s[2] * up[x + 1][c]
+        + s[6] * dn[x - 1][c]
+        + s[7] * dn[x][c]
+        + s[8] * dn[x + 1][c]
 }
 
 /// The colours `(x % 2, y % 2)` in forward order, as row parity and the x parities on it
@@ -244,15 +250,10 @@ pub(super) fn residual_row(level: &Level, y: usize, u: &Field<f32>, b: Option<&F
                     let s = &table[a[x] as usize];
                     let mut v = base(x);
                     for c in 0..3 {
-                        v[c] -= s[0] * up[x - 1][c]
-                            + s[1] * up[x][c]
-                            + s[2] * up[x + 1][c]
+                        v[c] -= off_rows(s, up, dn, x, c)
                             + s[3] * row[x - 1][c]
                             + s[4] * row[x][c]
-                            + s[5] * row[x + 1][c]
-                            + s[6] * dn[x - 1][c]
-                            + s[7] * dn[x][c]
-                            + s[8] * dn[x + 1][c];
+                            + s[5] * row[x + 1][c];
                     }
                     out[x] = v;
                 }
@@ -453,21 +454,25 @@ pub(super) fn to_f32(level: &Level, a: &Field<f64>, out: &mut Field<f32>) {
     }
 }
 
-/// Per channel, `zᵀ r` and `zᵀ A p` in one pass (the preconditioned residual against the
-/// residual and against the last step's `A p`, recomputed from `p`).
-pub(super) fn z_dots(level: &Level, z: &Field<f32>, r: &Field<f64>, p: &Field<f32>) -> (P3, P3) {
+/// Per channel, `zᵀ r` and (with `p`) `zᵀ A p` in one pass: the preconditioned residual
+/// against the residual and against the last step's `A p`, recomputed from `p` (zero
+/// without `p`, the first step's).
+pub(super) fn z_dots(level: &Level, z: &Field<f32>, r: &Field<f64>, p: Option<&Field<f32>>) -> (P3, P3) {
     let (w, m) = (level.w, fine_mask(level));
     sum_rows(level, |y| {
         let (zr, rr) = (z.row(y), r.row(y));
-        let (up, row, dn) = (p.row(y - 1), p.row(y), p.row(y + 1));
+        let rows = p.map(|p| (p.row(y - 1), p.row(y), p.row(y + 1)));
         let (mut a, mut b) = ([0.0; 3], [0.0; 3]);
         for x in 1..w - 1 {
             if m[y * w + x] {
-                let ap = fine_apply_at(up, row, dn, x);
                 for c in 0..3 {
-                    let zc = f64::from(zr[x][c]);
-                    a[c] += zc * rr[x][c];
-                    b[c] += zc * ap[c];
+                    a[c] += f64::from(zr[x][c]) * rr[x][c];
+                }
+                if let Some((up, row, dn)) = rows {
+                    let ap = fine_apply_at(up, row, dn, x);
+                    for c in 0..3 {
+                        b[c] += f64::from(zr[x][c]) * ap[c];
+                    }
                 }
             }
         }

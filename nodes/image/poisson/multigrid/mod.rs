@@ -293,7 +293,7 @@ impl Multigrid {
         to_f32(fine, &wk.res, &mut wk.b[0]);
         self.precondition(wk);
         next_direction(fine, &mut wk.p, &wk.u[0], [0.0; 3]);
-        let mut rz = z_dots(fine, &wk.u[0], &wk.res, &wk.p).0;
+        let mut rz = z_dots(fine, &wk.u[0], &wk.res, None).0;
         while rn > goal {
             if stats.iterations >= MAX_ITERATIONS {
                 return Err(format!(
@@ -320,7 +320,7 @@ impl Multigrid {
             // -α A p: it tolerates the f32 V-cycle being not exactly the same symmetric operator
             // every time (flexible CG; Notay 2000, "Flexible conjugate gradients", SIAM J. Sci.
             // Comput. 22(4)), and equals Fletcher and Reeves' β when it is
-            let (rz1, zq) = z_dots(fine, &wk.u[0], &wk.res, &wk.p);
+            let (rz1, zq) = z_dots(fine, &wk.u[0], &wk.res, Some(&wk.p));
             let beta = std::array::from_fn::<f64, 3, _>(|c| {
                 if rz[c] > 0.0 {
                     (-alpha[c] * zq[c] / rz[c]).max(0.0)

@@ -298,6 +298,8 @@ pub fn solve_keyed(
     let bn = (0..b.ncols())
         .into_par_iter()
         .map(|c| b.col(c).iter().map(|v| v * v).sum::<f64>())
+        .collect::<Vec<f64>>()
+        .iter()
         .sum::<f64>()
         .sqrt();
     let residual = if bn > 0.0 { r / bn } else { r };

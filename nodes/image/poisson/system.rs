@@ -324,7 +324,10 @@ pub fn residual_norm(shape: &MaskShape, x: MatRef<'_, f64>, b: MatRef<'_, f64>) 
             }
             sum
         })
+        .collect::<Vec<f64>>()
+        .iter()
         .sum();
+    // chunk sums added in order: the same bits on any number of threads
     sum.sqrt()
 }
 
@@ -360,7 +363,10 @@ fn rect_residual_norm(w: usize, h: usize, x: MatRef<'_, f64>, b: MatRef<'_, f64>
             }
             sum
         })
+        .collect::<Vec<f64>>()
+        .iter()
         .sum();
+    // row sums added in order: the same bits on any number of threads
     sum.sqrt()
 }
 

@@ -318,10 +318,13 @@ pub(super) fn for_rows_sum<F: Fn(usize, &mut [P3]) -> P3 + Sync + Send>(
     f: F,
 ) -> P3 {
     if par {
+        // per-row sums added in row order, as below: the same bits on any number of threads
         rows.par_chunks_mut(w)
             .enumerate()
             .map(|(i, r)| f(i, r))
-            .reduce(|| [0.0; 3], add3)
+            .collect::<Vec<_>>()
+            .into_iter()
+            .fold([0.0; 3], add3)
     } else {
         rows.chunks_mut(w)
             .enumerate()
@@ -350,7 +353,13 @@ fn sum_rows(level: &Level, f: impl Fn(usize) -> (P3, P3) + Sync + Send) -> (P3, 
     let add = |s: (P3, P3), t: (P3, P3)| (add3(s.0, t.0), add3(s.1, t.1));
     let zero = ([0.0; 3], [0.0; 3]);
     if level.par() {
-        (1..level.h - 1).into_par_iter().map(f).reduce(|| zero, add)
+        // per-row sums added in row order, as below: the same bits on any number of threads
+        (1..level.h - 1)
+            .into_par_iter()
+            .map(f)
+            .collect::<Vec<_>>()
+            .into_iter()
+            .fold(zero, add)
     } else {
         (1..level.h - 1).map(f).fold(zero, add)
     }
@@ -428,7 +437,9 @@ pub(super) fn cg_update(
                 .zip(br.par_chunks_mut(w))
                 .enumerate()
                 .map(f)
-                .reduce(|| [0.0; 3], add3)
+                .collect::<Vec<_>>()
+                .into_iter()
+                .fold([0.0; 3], add3)
         } else {
             xr.chunks_mut(w)
                 .zip(rr.chunks_mut(w))
@@ -514,14 +525,17 @@ pub(super) fn norms(a: &Field<f64>) -> P3 {
             [s[0] + u[0] * u[0], s[1] + u[1] * u[1], s[2] + u[2] * u[2]]
         })
     };
+    // chunk sums added in chunk order whether the chunks ran in parallel or not: the same
+    // bits on any number of threads
+    const CHUNK: usize = 1 << 13;
     let mut s = [0.0; 3];
     for x in &a.rows {
-        let t = if x.len() >= PAR_MIN / 2 {
-            x.par_chunks(1 << 13).map(sq).reduce(|| [0.0; 3], add3)
+        let parts: Vec<P3> = if x.len() >= PAR_MIN / 2 {
+            x.par_chunks(CHUNK).map(sq).collect()
         } else {
-            sq(x)
+            x.chunks(CHUNK).map(sq).collect()
         };
-        s = add3(s, t);
+        s = parts.into_iter().fold(s, add3);
     }
     s
 }

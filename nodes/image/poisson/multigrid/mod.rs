@@ -467,6 +467,33 @@ mod tests {
     }
 
     #[test]
+    fn one_and_two_threads_give_the_same_bits() {
+        // a disc of radius 80 (about 20k unknowns): its fine level (about 27k grid points)
+        // and the next (about 7k) run their rows on several threads; every sum is added in
+        // row order
+        let shape = disc(80.0);
+        let b = rhs(shape.len());
+        let solve = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            pool.install(|| {
+                let mg = Multigrid::new(&shape).unwrap();
+                assert!(mg.levels[0].par() && mg.levels[1].par());
+                let mut x = b.clone();
+                let stats = mg.solve_in_place(x.as_mut(), false).unwrap();
+                (x, stats.iterations)
+            })
+        };
+        let (one, it1) = solve(1);
+        for _ in 0..3 {
+            let (two, it2) = solve(2);
+            assert_eq!(it1, it2);
+            let same = (0..one.ncols())
+                .all(|c| (0..one.nrows()).all(|i| one[(i, c)].to_bits() == two[(i, c)].to_bits()));
+            assert!(same, "the two-thread solution differs from the one-thread one");
+        }
+    }
+
+    #[test]
     fn the_galerkin_operator_is_pt_a_p() {
         // A_c e_J = Pᵀ A P e_J checked by applying the fine operator to the prolongated unit
         // vector, on an irregular mask

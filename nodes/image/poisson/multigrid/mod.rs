@@ -49,8 +49,8 @@ const COARSE_SHIFT: f64 = 1e-10;
 
 /// Grid points from which a level's sweeps run their rows on several threads. At 4096 the
 /// course mask's fine level (19.5k points) and its first coarse level (4.9k) run on both
-/// cores: its multigrid paste took 5.3-6.3 ms instead of 7.0-7.5 at 32768 (no level
-/// parallel), the first paste with the hierarchy 7.6-7.9 instead of 9.4-10.5 (docs/image.md).
+/// cores: its multigrid paste took 5.3-6.3 ms instead of 7.4-7.5 at 32768 (no level
+/// parallel), the first paste with the hierarchy 7.6-7.9 instead of 10.0-10.5 (docs/image.md).
 const PAR_MIN: usize = 1 << 12;
 
 /// Gauss-Seidel sweeps before and after the coarse correction (`Multigrid::sweeps`).

@@ -23,7 +23,9 @@
 use crate::nodes::image::image_svd::svd::randomized::gaussian_matrix;
 use faer::diag::Diag;
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
-use faer::linalg::evd::{self_adjoint_evd, self_adjoint_evd_scratch, ComputeEigenvectors};
+use faer::linalg::evd::{
+    self_adjoint_evd, self_adjoint_evd_scratch, ComputeEigenvectors, SelfAdjointEvdParams,
+};
 use faer::linalg::matmul::matmul;
 use faer::linalg::matmul::triangular::{matmul as tri_matmul, BlockStructure};
 use faer::prelude::{default, Reborrow, ReborrowMut};
@@ -39,6 +41,12 @@ const OVERSAMPLE: usize = 8;
 const MAX_STEPS: usize = 4;
 /// Highest degree of one Chebyshev filter.
 const MAX_DEGREE: usize = 12;
+/// The tridiagonal reduction inside the eigensolver runs its trailing matrix-vector products
+/// on several threads only while more than this many rows remain (faer's default: 313). On
+/// two cores, 500 x 500 took 5.2 ms on one thread and 8.6-9.8 ms on two, 1000 x 1000 50 and
+/// 57 ms, 1500 x 1500 196 and 164 ms (faer 0.24, 2026-12-02, scratch timing of
+/// `tridiag_in_place`); the rest of the eigensolver keeps both threads.
+const TRIDIAG_PAR_MIN: usize = 1000;
 /// Accept when the Davis–Kahan bound ||R||_F / (θ_k - τ²) on the sine of the angle between
 /// the Ritz subspace and the kept eigenspace is below this.
 const ANGLE_TOL: f64 = 1e-10;
@@ -179,7 +187,9 @@ impl Thresholder {
             self.vecs = Mat::zeros(d, d);
             self.vals = Diag::zeros(d);
         }
-        let req = self_adjoint_evd_scratch::<f64>(d, ComputeEigenvectors::Yes, par, default());
+        let mut params: faer::Spec<SelfAdjointEvdParams, f64> = default();
+        params.config.tridiag.par_threshold = TRIDIAG_PAR_MIN * TRIDIAG_PAR_MIN / 2;
+        let req = self_adjoint_evd_scratch::<f64>(d, ComputeEigenvectors::Yes, par, params);
         if req.size_bytes() > self.stack_bytes {
             self.stack = MemBuffer::new(req);
             self.stack_bytes = req.size_bytes();
@@ -190,7 +200,7 @@ impl Thresholder {
             Some(self.vecs.as_mut()),
             par,
             MemStack::new(&mut self.stack),
-            default(),
+            params,
         )
         .is_ok()
     }
@@ -243,7 +253,7 @@ fn apply_filter(
         } else {
             (filter.as_ref(), x)
         };
-        matmul(out, Accum::Replace, a, b, 1.0, par);
+        matmul_by_row_blocks(out, a, b, par);
         return;
     }
     let v = v.rb();
@@ -252,6 +262,33 @@ fn apply_filter(
         matmul(out, Accum::Replace, x * v, scaled.transpose(), 1.0, par);
     } else {
         matmul(out, Accum::Replace, scaled, v.transpose() * x, 1.0, par);
+    }
+}
+
+/// Rows of `out` per product call in `matmul_by_row_blocks`. faer's one-thread product
+/// (private-gemm-x86's AVX-512 kernels) slows down when the output's rows and the inner
+/// dimension are both between about 416 and 511: on the AVX-512 Xeon of 2026-12-02, 500 x 500
+/// x 500 ran at 48-57 GFlop/s, 250 x 500 x 500 and 512 x 512 x 512 at 95-102 (scratch timing).
+/// In blocks of at most 320 rows the 500 x 500 filter product took 2.5 instead of 4.5 ms, and
+/// a full thresholding step 28 instead of 30 ms.
+const ROW_BLOCK: usize = 320;
+
+/// `out = a b`, by blocks of at most `ROW_BLOCK` rows of `out` and `a`.
+fn matmul_by_row_blocks(mut out: MatMut<'_, f64>, a: MatRef<'_, f64>, b: MatRef<'_, f64>, par: Par) {
+    let m = a.nrows();
+    let blocks = m.div_ceil(ROW_BLOCK).max(1);
+    let mut r0 = 0;
+    for i in 0..blocks {
+        let r1 = m * (i + 1) / blocks;
+        matmul(
+            out.rb_mut().subrows_mut(r0, r1 - r0),
+            Accum::Replace,
+            a.subrows(r0, r1 - r0),
+            b,
+            1.0,
+            par,
+        );
+        r0 = r1;
     }
 }
 
@@ -450,6 +487,16 @@ mod tests {
                 let scale = x.norm_max();
                 assert!((&a - &b).norm_max() < 1e-10 * scale, "{m}x{n} tau {tau}");
             }
+        }
+    }
+
+    #[test]
+    fn row_blocks_give_the_plain_product() {
+        for m in [1, 319, 320, 321, 700] {
+            let (a, b) = (gaussian_matrix(m, 40, 7), gaussian_matrix(40, 30, 8));
+            let mut out = Mat::zeros(m, 30);
+            matmul_by_row_blocks(out.as_mut(), a.as_ref(), b.as_ref(), Par::Seq);
+            assert!((&out - &a * &b).norm_max() < 1e-12, "{m} rows");
         }
     }
 

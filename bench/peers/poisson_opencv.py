@@ -10,7 +10,9 @@ chained the same way): the first factors the Poisson matrix (or builds the multi
 hierarchy), the others reuse it (their `table` says `reused = 1`), except where `solver: auto`
 switches a large irregular mask from multigrid to Cholesky after three pastes (one more
 factorization). "first" is the first paste, "reused" the median of the last four (a drag's
-steady state); the solver column lists each paste's solver and iterations.
+steady state); the solver column lists each paste's solver and iterations. The timed graph
+saves no images (a save would encode one paste's PNG on the other core while the next paste
+runs); a second run of the same graph with the saves gives the images compared.
 
 Each chain starts after a warm-up paste, the first of the process ("cold first"): Ω eroded by
 one pixel (another shape), with the target's own pixels as the source, so that its result is
@@ -114,23 +116,32 @@ def cgnodes_pastes(cv2, np, d, target, source, mask, offsets, mode, threads):
         if os.environ.get("POISSON_SOLVER"):
             nodes[f"b{i}"]["params"]["solver"] = os.environ["POISSON_SOLVER"]
         nodes[f"w{i}"] = {"type": "table_write", "params": {"path": f"t{i}.csv"}, "inputs": {"value": f"b{i}.table"}}
-        nodes[f"i{i}"] = {"type": "image_save", "params": {"path": f"out{i}.png"}, "inputs": {"image": f"b{i}.image"}}
-    g = os.path.join(d, "g.json")
-    with open(g, "w") as f:
-        json.dump({"format": "cgnodes-graph", "version": 1, "nodes": nodes}, f)
-    out = os.path.join(d, "out")
-    run = subprocess.run([_images.cgnodes_bin(), "run", g, "--out", out, "--threads", str(threads)], capture_output=True, text=True)
-    if run.returncode != 0:
-        sys.exit(f"cgnodes failed on {g}:\n{run.stderr}")
+
+    def run(name, nodes):
+        g = os.path.join(d, f"{name}.json")
+        with open(g, "w") as f:
+            json.dump({"format": "cgnodes-graph", "version": 1, "nodes": nodes}, f)
+        out = os.path.join(d, name)
+        r = subprocess.run([_images.cgnodes_bin(), "run", g, "--out", out, "--threads", str(threads)], capture_output=True, text=True)
+        if r.returncode != 0:
+            sys.exit(f"cgnodes failed on {g}:\n{r.stderr}")
+        return out
+
+    # timed without saving the pastes: an `image_save` of one paste would encode its PNG on
+    # the other core while the next paste runs (OpenCV's calls are timed alone); the same
+    # graph with the saves then gives the images (its times are not used)
+    timed = run("timed", nodes)
+    saves = {f"i{i}": {"type": "image_save", "params": {"path": f"out{i}.png"}, "inputs": {"image": f"b{i}.image"}} for i in range(len(offsets))}
+    images = run("images", {**nodes, **saves})
 
     def row(name):
-        with open(os.path.join(out, name)) as f:
+        with open(os.path.join(timed, name)) as f:
             return {k: float(v) for k, v in next(csv.DictReader(f)).items()}
 
     rows = []
     for i in range(len(offsets)):
         rows.append(row(f"t{i}.csv"))
-        rows[-1]["image"] = cv2.imread(os.path.join(out, f"out{i}.png"))
+        rows[-1]["image"] = cv2.imread(os.path.join(images, f"out{i}.png"))
     return row("warm.csv"), rows
 
 

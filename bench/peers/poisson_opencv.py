@@ -14,8 +14,8 @@ steady state); the solver column lists each paste's solver and iterations. The t
 saves no images (a save would encode one paste's PNG on the other core while the next paste
 runs); a second run of the same graph with the saves gives the images compared.
 
-Each chain starts after a warm-up paste, the first of the process ("cold first"): Ω eroded by
-one pixel (another shape), with the target's own pixels as the source, so that its result is
+Each chain starts after a warm-up paste, the first of the process ("cold first", seamless in
+both modes): Ω eroded by one pixel (another shape), with the target's own pixels as the source, so that its result is
 the target again and the timed chain starts from the same image as OpenCV's. The timed first
 paste is then a new shape in a running process, as OpenCV's calls are (its first call of the
 process, printed below the table, is often slower than the rest). cgnodes gets as many threads as OpenCV uses
@@ -165,7 +165,8 @@ def main():
             for off in offsets:
                 out, ms = opencv_paste(cv2, base, source, mask, off, flag)
                 cv_times.append(ms)
-                opencv_first = ms if opencv_first is None else opencv_first
+                if opencv_first is None:
+                    opencv_first = ms
                 cv_out.append(out)
                 base = out
             with tempfile.TemporaryDirectory() as d:

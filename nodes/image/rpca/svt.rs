@@ -274,8 +274,8 @@ fn apply_filter(
 /// (private-gemm-x86's AVX-512 kernels) slows down when the output's rows and the inner
 /// dimension are both between about 416 and 511: on the AVX-512 Xeon of 2026-12-02, 500 x 500
 /// x 500 ran at 48-57 GFlop/s, 250 x 500 x 500 and 512 x 512 x 512 at 95-102 (scratch timing).
-/// In blocks of at most 320 rows the 500 x 500 filter product took 2.5 instead of 4.5 ms, and
-/// a full thresholding step 28 instead of 30 ms.
+/// With the 500 x 500 filter product in blocks of at most 320 rows, the filter (W Wᵀ and X F)
+/// took 4.85 instead of 6.6 ms per step.
 const ROW_BLOCK: usize = 320;
 
 /// `out = a b`, by blocks of at most `ROW_BLOCK` rows of `out` and `a`.
@@ -428,14 +428,15 @@ fn eigenvalues_above(g: MatRef<'_, f64>, threshold: f64) -> Option<usize> {
     Inertia::default().eigenvalues_above(g, threshold, Par::Seq)
 }
 
-/// The L B Lᵀ factorization's buffers, kept between warm starts (fresh pages for the d x d
-/// copy took about 0.7 ms at d = 500, a third of the factorization).
+/// The L B Lᵀ factorization's buffers, kept between warm starts: the count used to copy G
+/// twice into fresh d x d matrices, each about 0.7 ms of page faults at d = 500 (scratch
+/// timing), in a count of about 2 ms.
 struct Inertia {
     a: Mat<f64>,
     subdiag: Diag<f64>,
     perm: Vec<usize>,
     perm_inv: Vec<usize>,
-    stack: Option<MemBuffer>,
+    stack: MemBuffer,
 }
 
 impl Default for Inertia {
@@ -445,14 +446,13 @@ impl Default for Inertia {
             subdiag: Diag::zeros(0),
             perm: Vec::new(),
             perm_inv: Vec::new(),
-            stack: None,
+            stack: MemBuffer::new(StackReq::EMPTY),
         }
     }
 }
 
 impl Inertia {
-    /// The number of eigenvalues of the symmetric `g` above
-    /// `threshold`: the positive eigenvalues of g - threshold I, counted on the 1x1 and 2x2
+    /// The number of eigenvalues of the symmetric `g` above `threshold`: the positive eigenvalues of g - threshold I, counted on the 1x1 and 2x2
     /// blocks of its L B Lᵀ factorization (Sylvester's law of inertia). `None` if a pivot is
     /// not finite.
     fn eigenvalues_above(&mut self, g: MatRef<'_, f64>, threshold: f64, par: Par) -> Option<usize> {
@@ -466,20 +466,19 @@ impl Inertia {
             self.perm = vec![0; d];
             self.perm_inv = vec![0; d];
             let req = cholesky_in_place_scratch::<usize, f64>(d, par, default());
-            self.stack = Some(MemBuffer::new(req));
+            self.stack = MemBuffer::new(req);
         }
         self.a.copy_from(g);
         for j in 0..d {
             self.a[(j, j)] -= threshold;
         }
-        let stack = self.stack.as_mut()?;
         cholesky_in_place(
             self.a.as_mut(),
             self.subdiag.as_mut(),
             &mut self.perm,
             &mut self.perm_inv,
             par,
-            MemStack::new(stack),
+            MemStack::new(&mut self.stack),
             default(),
         );
         let sub = self.subdiag.column_vector();

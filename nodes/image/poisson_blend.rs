@@ -11,27 +11,46 @@ use poisson::{MaskShape, Mode, ShapeKey, Solver};
 use rayon::prelude::*;
 use std::sync::{Mutex, Weak};
 
-/// The first non-finite pixel of `img`, as an error message.
-fn check_finite(img: &Image) -> Result<(), String> {
-    // fast pass in parallel chunks: a float is NaN or infinite exactly when its exponent
-    // bits are all ones (an OR over comparisons, which vectorizes)
+/// Whether any value of `pixels` is NaN or infinite: exactly when its exponent bits are all
+/// ones (an OR over comparisons, which vectorizes).
+fn any_non_finite(pixels: &[[f32; 4]]) -> bool {
     const EXP: u32 = 0x7f80_0000;
-    let bad = img.pixels.par_chunks(1 << 14).any(|c| {
-        c.iter()
-            .flatten()
-            .fold(false, |acc, v| acc | (v.to_bits() & EXP == EXP))
-    });
+    pixels
+        .iter()
+        .flatten()
+        .fold(false, |acc, v| acc | (v.to_bits() & EXP == EXP))
+}
+
+/// The first non-finite pixel of `img` in row-major order within `[x0, y0, x1, y1]`
+/// (inclusive, clipped to the image), as an error message.
+fn check_finite_in(img: &Image, [x0, y0, x1, y1]: [i64; 4]) -> Result<(), String> {
+    let (w, h) = (i64::from(img.width), i64::from(img.height));
+    let (x0, x1) = (x0.clamp(0, w) as usize, (x1 + 1).clamp(0, w) as usize);
+    let (y0, y1) = (y0.clamp(0, h) as usize, (y1 + 1).clamp(0, h) as usize);
+    if x0 >= x1 || y0 >= y1 {
+        return Ok(());
+    }
+    let row = |y: usize| &img.pixels[y * w as usize + x0..y * w as usize + x1];
+    // rows in parallel tasks of about 16k pixels
+    let min_rows = (1 << 14) / (x1 - x0);
+    let bad = (y0..y1)
+        .into_par_iter()
+        .with_min_len(min_rows.max(1))
+        .any(|y| any_non_finite(row(y)));
     if !bad {
         return Ok(());
     }
-    match img.pixels.iter().position(|p| p.iter().any(|v| !v.is_finite())) {
-        Some(i) => Err(format!(
-            "pixel ({}, {}) is not finite",
-            i % img.width.max(1) as usize,
-            i / img.width.max(1) as usize
-        )),
-        None => Ok(()),
+    for y in y0..y1 {
+        if let Some(i) = row(y).iter().position(|p| p.iter().any(|v| !v.is_finite())) {
+            return Err(format!("pixel ({}, {y}) is not finite", x0 + i));
+        }
     }
+    Ok(())
+}
+
+/// The first non-finite pixel of `img`, as an error message.
+fn check_finite(img: &Image) -> Result<(), String> {
+    check_finite_in(img, [0, 0, i64::from(img.width) - 1, i64::from(img.height) - 1])
 }
 
 /// The result of `poisson_blend`: the image, and the table's facts.
@@ -102,8 +121,6 @@ pub fn blend_region(
     mode: Mode,
     solver: Solver,
 ) -> Result<Blend, NodeError> {
-    check_finite(target).map_err(|e| NodeError::invalid("target", e))?;
-    check_finite(source).map_err(|e| NodeError::invalid("source", e))?;
     if offset.iter().any(|v| !v.is_finite()) {
         return Err(NodeError::invalid("offset", "the offset is not finite"));
     }
@@ -118,6 +135,7 @@ pub fn blend_region(
         ));
     }
     if shape.is_empty() {
+        check_finite(target).map_err(|e| NodeError::invalid("target", e))?;
         return Ok(Blend {
             image: target.clone(),
             solution: None,
@@ -150,13 +168,22 @@ pub fn blend_region(
             ),
         ));
     }
+    // the pixels the right-hand side reads: Ω and its four neighbours in both images (the
+    // rest of the target is checked as `compose` copies it)
+    let [x0, y0, x1, y1] = shape.bbox().map_or([0; 4], |b| b.map(i64::from));
+    let around = [x0 - 1, y0 - 1, x1 + 1, y1 + 1];
+    check_finite_in(source, around).map_err(|e| NodeError::invalid("source", e))?;
+    let moved = [around[0] + off[0], around[1] + off[1], around[2] + off[0], around[3] + off[1]];
+    check_finite_in(target, moved).map_err(|e| NodeError::invalid("target", e))?;
     if solver == Solver::SineTransform && shape.rectangle().is_none() {
         return Err(NodeError::invalid("solver", poisson::not_a_rectangle()));
     }
     let sol = poisson::solve_keyed(shape, &region.key, target, source, off, mode, solver)
         .map_err(|e| NodeError::singular(format!("Poisson system: {e}")))?;
+    let image = poisson::compose(target, shape, off, &sol.values)
+        .map_err(|e| NodeError::invalid("target", e))?;
     Ok(Blend {
-        image: poisson::compose(target, shape, off, &sol.values),
+        image,
         pixels: shape.len(),
         solution: Some(sol),
     })
@@ -196,7 +223,10 @@ fn declare(b: &mut NodeBuilder) {
     b.add_input::<Image>("target")
         .doc("The image pasted into; its pixels around the mask are the boundary values.");
     b.add_input::<Image>("source")
-        .doc("The image whose gradients are pasted (same size as the mask).");
+        .doc(
+            "The image whose gradients are pasted (same size as the mask); its pixels under \
+             the mask and their neighbours must be finite.",
+        );
     b.add_input::<Image>("mask").optional().doc(
         "Inside where alpha > 0.5, or, for an opaque mask, where luminance > 0.5. \
          Default: the source's alpha (the whole source when it is opaque).",

@@ -54,39 +54,44 @@ pub fn right_hand_side_into(
 ) {
     let (sw, sh) = (source.width as i64, source.height as i64);
     let tw = target.width as i64;
-    // pixel indices: the source clamped to its edge, the target shifted by the offset
-    let sidx = |x: i64, y: i64| (y.clamp(0, sh - 1) * sw + x.clamp(0, sw - 1)) as usize;
-    let tidx = |x: i64, y: i64| ((y + offset[1]) * tw + x + offset[0]) as usize;
     let n = shape.len();
+    let mixed = mode == Mode::Mixed;
     let row_of = |k: usize| {
         let [px, py] = shape.inside[k];
-        let mut row = [0.0f64; 3];
         let (px, py) = (px as i64, py as i64);
-        let gp = source.pixels[sidx(px, py)];
-        let fp = target.pixels[tidx(px, py)];
+        let s0 = (py * sw + px) as usize;
+        let t0 = ((py + offset[1]) * tw + px + offset[0]) as usize;
+        let (gp, fp) = (source.pixels[s0], target.pixels[t0]);
+        // neighbours right, left, below, above; the source clamped to its edge (a zero
+        // source gradient there)
+        let s_of = |q: usize| match q {
+            0 if px + 1 < sw => s0 + 1,
+            1 if px > 0 => s0 - 1,
+            2 if py + 1 < sh => s0 + sw as usize,
+            3 if py > 0 => s0 - sw as usize,
+            _ => s0,
+        };
+        let t_of = [t0 + 1, t0 - 1, t0 + tw as usize, t0 - tw as usize];
         let nb = shape.neighbours(k);
-        for (q, (dx, dy)) in [(1, 0), (-1, 0), (0, 1), (0, -1)].into_iter().enumerate() {
-            let (qx, qy) = (px + dx, py + dy);
-            let gq = source.pixels[sidx(qx, qy)];
-            let fq = target.pixels[tidx(qx, qy)];
-            let boundary = nb[q] == u32::MAX;
-            for c in 0..3 {
+        let mut row = [0.0f64; 4];
+        for q in 0..4 {
+            let gq = source.pixels[s_of(q)];
+            let fq = target.pixels[t_of[q]];
+            let boundary = if nb[q] == u32::MAX { 1.0 } else { 0.0 };
+            // all four lanes, then selects: LLVM makes vector blends of these, where a
+            // branch per channel would mispredict on mixed gradients
+            let mut v = [0.0f64; 4];
+            for c in 0..4 {
                 let vs = f64::from(gp[c]) - f64::from(gq[c]);
-                let v = match mode {
-                    Mode::Seamless => vs,
-                    Mode::Mixed => {
-                        let vt = f64::from(fp[c]) - f64::from(fq[c]);
-                        if vt.abs() > vs.abs() {
-                            vt
-                        } else {
-                            vs
-                        }
-                    }
-                };
-                row[c] += v + if boundary { f64::from(fq[c]) } else { 0.0 };
+                let vt = f64::from(fp[c]) - f64::from(fq[c]);
+                let take_t = mixed && vt.abs() > vs.abs();
+                v[c] = if take_t { vt } else { vs };
+            }
+            for c in 0..4 {
+                row[c] += v[c] + boundary * f64::from(fq[c]);
             }
         }
-        row
+        [row[0], row[1], row[2]]
     };
     // the three channel columns filled in parallel chunks of unknowns (every entry written)
     if (b.nrows(), b.ncols()) != (n, 3) {
@@ -116,7 +121,7 @@ pub fn right_hand_side_into(
 }
 
 /// Unknowns per parallel task.
-const CHUNK: usize = 1 << 14;
+const CHUNK: usize = 1 << 12;
 
 #[cfg(test)]
 mod tests {

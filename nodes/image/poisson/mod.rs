@@ -317,10 +317,17 @@ pub fn solve_keyed(
 }
 
 /// The target with the solved RGB values written over Ω (alpha kept from the target).
-/// Values are not clamped (the image is linear; `image_save` clamps when it encodes).
-pub fn compose(target: &Image, shape: &MaskShape, offset: [i64; 2], values: &Mat<f64>) -> Image {
+/// Values are not clamped (the image is linear; `image_save` clamps when it encodes). Checks
+/// the target as it copies it: its first non-finite pixel is an error.
+pub fn compose(
+    target: &Image,
+    shape: &MaskShape,
+    offset: [i64; 2],
+    values: &Mat<f64>,
+) -> Result<Image, String> {
     let mut out = Image::new(target.width, target.height, [0.0; 4]);
     let (tw, mw) = (target.width as usize, shape.width as usize);
+    let bad = std::sync::atomic::AtomicBool::new(false);
     // one target row per task: copied, then the mask row it overlaps written over it
     out.pixels
         .par_chunks_mut(tw)
@@ -328,6 +335,9 @@ pub fn compose(target: &Image, shape: &MaskShape, offset: [i64; 2], values: &Mat
         .enumerate()
         .for_each(|(ty, (row, src))| {
             row.copy_from_slice(src);
+            if super::any_non_finite(src) {
+                bad.store(true, std::sync::atomic::Ordering::Relaxed);
+            }
             let my = ty as i64 - offset[1];
             if my < 0 || my >= i64::from(shape.height) {
                 return;
@@ -343,5 +353,10 @@ pub fn compose(target: &Image, shape: &MaskShape, offset: [i64; 2], values: &Mat
                 }
             }
         });
-    out
+    if bad.into_inner() {
+        if let Some(i) = target.pixels.iter().position(|p| p.iter().any(|v| !v.is_finite())) {
+            return Err(format!("pixel ({}, {}) is not finite", i % tw, i / tw));
+        }
+    }
+    Ok(out)
 }

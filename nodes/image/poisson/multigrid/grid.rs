@@ -20,10 +20,31 @@ pub(super) struct Field<T> {
 
 impl<T: Copy + Default> Field<T> {
     pub(super) fn zeros(w: usize, h: usize) -> Field<T> {
-        let z = [T::default(); 3];
-        Field {
+        let mut f = Field {
             w,
-            rows: [vec![z; w * h.div_ceil(2)], vec![z; w * (h / 2)]],
+            rows: [Vec::new(), Vec::new()],
+        };
+        f.reset(w, h);
+        f
+    }
+
+    /// Zeros on a `w x h` grid in the same allocations (new ones when those are too small,
+    /// or more than four times too large, so that a small shape does not hold a large one's
+    /// memory).
+    pub(super) fn reset(&mut self, w: usize, h: usize) {
+        let z = [T::default(); 3];
+        self.w = w;
+        for (r, n) in self.rows.iter_mut().zip([w * h.div_ceil(2), w * (h / 2)]) {
+            r.clear();
+            if r.capacity() > 4 * n.max(1024) {
+                *r = Vec::new();
+            }
+            // a quarter more than asked when growing, so that the next shape a little larger
+            // still fits the written memory
+            if r.capacity() < n {
+                r.reserve_exact(n + n / 4);
+            }
+            r.resize(n, z);
         }
     }
 
@@ -539,3 +560,4 @@ pub(super) fn norms(a: &Field<f64>) -> P3 {
     }
     s
 }
+

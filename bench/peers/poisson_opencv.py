@@ -15,10 +15,11 @@ saves no images (a save would encode one paste's PNG on the other core while the
 runs); a second run of the same graph with the saves gives the images compared.
 
 Each chain starts after a warm-up paste, the first of the process ("cold first", seamless in
-both modes): Ω eroded by one pixel (another shape), with the target's own pixels as the source, so that its result is
-the target again and the timed chain starts from the same image as OpenCV's. The timed first
-paste is then a new shape in a running process, as OpenCV's calls are (its first call of the
-process, printed below the table, is often slower than the rest). cgnodes gets as many threads as OpenCV uses
+both modes): Ω eroded by one pixel (another shape), with the target's own pixels as the
+source, so that its result is the target again and the timed chain starts from the same image
+as OpenCV's. The timed first paste is then a new shape in a running process, as OpenCV's calls
+are (its first call of the process, printed below the table, is often slower than the rest).
+cgnodes gets as many threads as OpenCV uses
 (`cv2.getNumThreads()`), or `--threads N` for both. Times are the node's own `time_ms`
 (checks, right-hand side, factorization or cache lookup, solve, composing the image); OpenCV's
 the `seamlessClone` call on decoded arrays (median of the offsets). The mean difference is

@@ -354,9 +354,7 @@ pub fn compose(
             }
         });
     if bad.into_inner() {
-        if let Some(i) = target.pixels.iter().position(|p| p.iter().any(|v| !v.is_finite())) {
-            return Err(format!("pixel ({}, {}) is not finite", i % tw, i / tw));
-        }
+        super::check_finite(target)?;
     }
     Ok(out)
 }

@@ -452,9 +452,9 @@ impl Default for Inertia {
 }
 
 impl Inertia {
-    /// The number of eigenvalues of the symmetric `g` above `threshold`: the positive eigenvalues of g - threshold I, counted on the 1x1 and 2x2
-    /// blocks of its L B Lᵀ factorization (Sylvester's law of inertia). `None` if a pivot is
-    /// not finite.
+    /// The number of eigenvalues of the symmetric `g` above `threshold`: the positive
+    /// eigenvalues of g - threshold I, counted on the 1x1 and 2x2 blocks of its L B Lᵀ
+    /// factorization (Sylvester's law of inertia). `None` if a pivot is not finite.
     fn eigenvalues_above(&mut self, g: MatRef<'_, f64>, threshold: f64, par: Par) -> Option<usize> {
         use faer::linalg::cholesky::lblt::factor::{
             cholesky_in_place, cholesky_in_place_scratch,

@@ -560,4 +560,3 @@ pub(super) fn norms(a: &Field<f64>) -> P3 {
     }
     s
 }
-

@@ -85,9 +85,9 @@ struct Work {
 }
 
 /// The work buffers of the last finished solve, of whatever shape: the next solve reshapes
-/// them instead of page-faulting fresh memory. A new shape's first multigrid paste of the
-/// course mask spent 5.5-6.0 ms in its solve with fresh buffers against 4.0-4.3 with
-/// written ones (docs/image.md).
+/// them instead of page-faulting fresh memory. With buffers of its own, a new shape's first
+/// multigrid paste of the course mask spent 5.5-5.8 ms in its solve, the same shape's later
+/// pastes 4.0-4.3 (docs/image.md).
 static SPARE: Mutex<Option<Work>> = Mutex::new(None);
 
 /// Source of `Multigrid::id`.
@@ -275,7 +275,12 @@ impl Multigrid {
     }
 
     /// `solve_in_place` in the work buffers `wk` (shaped for this hierarchy).
-    fn solve_with(&self, wk: &mut Work, mut x: MatMut<'_, f64>, warm: bool) -> Result<Stats, String> {
+    fn solve_with(
+        &self,
+        wk: &mut Work,
+        mut x: MatMut<'_, f64>,
+        warm: bool,
+    ) -> Result<Stats, String> {
         let mut stats = Stats::default();
         let ncols = x.ncols();
         for g in (0..ncols).step_by(3) {

@@ -11,8 +11,10 @@ hierarchy), the others reuse it (their `table` says `reused = 1`), except where 
 switches a large irregular mask from multigrid to Cholesky after three pastes (one more
 factorization). "first" is the first paste, "reused" the median of the last four (a drag's
 steady state); the solver column lists each paste's solver and iterations. The timed graph
-saves no images (a save would encode one paste's PNG on the other core while the next paste
-runs); a second run of the same graph with the saves gives the images compared.
+has no writer nodes: a writer of one paste's table or image would run on the other core
+while the next paste runs (and every written file is synced to disk), where OpenCV's calls
+are timed alone. A second run of the same graph with the writers gives the tables (solver,
+iterations, residual) and the images compared.
 
 Each chain starts after a warm-up paste, the first of the process ("cold first", seamless in
 both modes): Ω eroded by one pixel (another shape), with the target's own pixels as the
@@ -20,12 +22,13 @@ source, so that its result is the target again and the timed chain starts from t
 as OpenCV's. The timed first paste is then a new shape in a running process, as OpenCV's calls
 are (its first call of the process, printed below the table, is often slower than the rest).
 cgnodes gets as many threads as OpenCV uses
-(`cv2.getNumThreads()`), or `--threads N` for both. Times are the node's own `time_ms`
-(checks, right-hand side, factorization or cache lookup, solve, composing the image); OpenCV's
-the `seamlessClone` call on decoded arrays (median of the offsets). The mean difference is
-between the two 8-bit results over the mask, in 8-bit units: OpenCV solves on sRGB-encoded
-bytes with its own solver and boundary (it also drops the mask's outer pixel ring), cgnodes on
-linear values, so the two differ by design.
+(`cv2.getNumThreads()`), or `--threads N` for both. cgnodes' times are each paste node's wall
+time in the timed run's profile (`--profile-json`): the node's work (checks, right-hand side,
+factorization or cache lookup, solve, the output image) plus the runtime's bookkeeping around
+it (0.02 ms); OpenCV's the `seamlessClone` call on decoded arrays (median of the offsets). The
+mean difference is between the two 8-bit results over the mask, in 8-bit units: OpenCV solves
+on sRGB-encoded bytes with its own solver and boundary (it also drops the mask's outer pixel
+ring), cgnodes on linear values, so the two differ by design.
 
     python3 bench/peers/poisson_opencv.py [--threads N]   # needs target/release/cgnodes (or $CGNODES)
 
@@ -106,6 +109,8 @@ def cgnodes_pastes(cv2, np, d, target, source, mask, offsets, mode, threads):
             "params": {"offset": [float(ox), float(oy)], "mode": "seamless"},
             "inputs": {"target": "t.image", "source": "ws.image", "mask": "wm.image"},
         },
+    }
+    writers = {
         "ww": {"type": "table_write", "params": {"path": "warm.csv"}, "inputs": {"value": "warm.table"}},
     }
     for i, (ox, oy) in enumerate(offsets):
@@ -116,34 +121,43 @@ def cgnodes_pastes(cv2, np, d, target, source, mask, offsets, mode, threads):
         }
         if os.environ.get("POISSON_SOLVER"):
             nodes[f"b{i}"]["params"]["solver"] = os.environ["POISSON_SOLVER"]
-        nodes[f"w{i}"] = {"type": "table_write", "params": {"path": f"t{i}.csv"}, "inputs": {"value": f"b{i}.table"}}
+        writers[f"w{i}"] = {
+            "type": "table_write", "params": {"path": f"t{i}.csv"}, "inputs": {"value": f"b{i}.table"},
+        }
+        writers[f"i{i}"] = {
+            "type": "image_save", "params": {"path": f"out{i}.png"}, "inputs": {"image": f"b{i}.image"},
+        }
 
-    def run(name, nodes):
+    def run(name, nodes, extra=()):
         g = os.path.join(d, f"{name}.json")
         with open(g, "w") as f:
             json.dump({"format": "cgnodes-graph", "version": 1, "nodes": nodes}, f)
         out = os.path.join(d, name)
-        r = subprocess.run([_images.cgnodes_bin(), "run", g, "--out", out, "--threads", str(threads)], capture_output=True, text=True)
+        cmd = [_images.cgnodes_bin(), "run", g, "--out", out, "--threads", str(threads), *extra]
+        r = subprocess.run(cmd, capture_output=True, text=True)
         if r.returncode != 0:
             sys.exit(f"cgnodes failed on {g}:\n{r.stderr}")
         return out
 
-    # timed without saving the pastes: an `image_save` of one paste would encode its PNG on
-    # the other core while the next paste runs (OpenCV's calls are timed alone); the same
-    # graph with the saves then gives the images (its times are not used)
-    timed = run("timed", nodes)
-    saves = {f"i{i}": {"type": "image_save", "params": {"path": f"out{i}.png"}, "inputs": {"image": f"b{i}.image"}} for i in range(len(offsets))}
-    images = run("images", {**nodes, **saves})
+    # timed without writers (see the module comment): the last paste as the target, the
+    # times from the profile; the same graph with the writers gives the tables and images
+    profile = os.path.join(d, "profile.json")
+    run("timed", nodes, ["--target", f"b{len(offsets) - 1}", "--profile-json", profile])
+    with open(profile) as f:
+        ms = {n["id"]: n["ms"] for n in json.load(f)[0]["nodes"]}
+    images = run("images", {**nodes, **writers})
 
-    def row(name):
-        with open(os.path.join(timed, name)) as f:
-            return {k: float(v) for k, v in next(csv.DictReader(f)).items()}
+    def row(name, node):
+        with open(os.path.join(images, name)) as f:
+            r = {k: float(v) for k, v in next(csv.DictReader(f)).items()}
+        r["time_ms"] = ms[node]
+        return r
 
     rows = []
     for i in range(len(offsets)):
-        rows.append(row(f"t{i}.csv"))
+        rows.append(row(f"t{i}.csv", f"b{i}"))
         rows[-1]["image"] = cv2.imread(os.path.join(images, f"out{i}.png"))
-    return row("warm.csv"), rows
+    return row("warm.csv", "warm"), rows
 
 
 def main():

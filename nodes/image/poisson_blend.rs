@@ -178,10 +178,15 @@ pub fn blend_region(
     if solver == Solver::SineTransform && shape.rectangle().is_none() {
         return Err(NodeError::invalid("solver", poisson::not_a_rectangle()));
     }
-    let sol = poisson::solve_keyed(shape, &region.key, target, source, off, mode, solver)
-        .map_err(|e| NodeError::singular(format!("Poisson system: {e}")))?;
-    let image = poisson::compose(target, shape, off, &sol.values)
-        .map_err(|e| NodeError::invalid("target", e))?;
+    // the target's copy (fresh pages: on the course's target as long as the reused solve) on
+    // the other core while this one solves
+    let (sol, copy) = rayon::join(
+        || poisson::solve_keyed(shape, &region.key, target, source, off, mode, solver),
+        || poisson::copy_target(target),
+    );
+    let sol = sol.map_err(|e| NodeError::singular(format!("Poisson system: {e}")))?;
+    let mut image = copy.map_err(|e| NodeError::invalid("target", e))?;
+    poisson::write_solution(&mut image, shape, off, &sol.values);
     Ok(Blend {
         image,
         pixels: shape.len(),
@@ -284,6 +289,9 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
             )
         });
     ctx.set_output("image", r.image);
+    if let Some(s) = r.solution {
+        poisson::recycle(s.values);
+    }
     ctx.set_output(
         "table",
         Table::from_row(&[

@@ -63,6 +63,7 @@ pub fn factor(shape: &MaskShape) -> Result<PoissonFactor, String> {
             kind: Kind::Amd(f),
             order: Vec::new(),
             scratch: Mutex::new(Mat::new()),
+            work3: Mutex::new(Vec::new()),
         });
     }
     factor_nested(shape, ND_LEAF, TWO_DOMAIN_MIN)
@@ -84,6 +85,7 @@ fn factor_nested(shape: &MaskShape, leaf: usize, two_min: usize) -> Result<Poiss
         kind,
         order: order.iter().map(|&v| v as u32).collect(),
         scratch: Mutex::new(Mat::new()),
+        work3: Mutex::new(Vec::new()),
     })
 }
 
@@ -95,6 +97,8 @@ pub struct PoissonFactor {
     order: Vec<u32>,
     /// The right-hand sides in elimination order, kept between solves (no fresh pages).
     scratch: Mutex<Mat<f64>>,
+    /// `SpdFactor::solve3`'s interleaved values, kept between solves.
+    work3: Mutex<Vec<[f64; 3]>>,
 }
 
 /// One factor (AMD, or nested dissection on one core) or two domains and their separator.
@@ -108,6 +112,14 @@ enum Kind {
 impl PoissonFactor {
     /// Solves `A X = B` in place, every column of `x` (one per channel).
     pub fn solve_in_place(&self, mut x: MatMut<'_, f64>) {
+        if let Kind::Amd(f) = &self.kind {
+            // three channels at once on this core (the caller copies the target on the other)
+            if let Ok(mut w) = self.work3.try_lock() {
+                if f.solve3(x.as_mut(), &mut w) {
+                    return;
+                }
+            }
+        }
         let (f, two) = match &self.kind {
             Kind::Amd(f) if x.nrows() >= SPLIT_SOLVE_ROWS && x.ncols() > 1 => {
                 let (a, b) = x.split_at_col_mut(1);
@@ -471,5 +483,58 @@ mod tests {
         f.solve_in_place(x.as_mut());
         let r = apply(&shape, x.as_ref()) - &b;
         assert!(r.norm_l2() < 1e-12 * b.norm_l2());
+    }
+
+    /// Timings of the reused course paste's stages on the course's images (not a check; run
+    /// with `cargo test --release --lib course_solve_timing -- --ignored --nocapture`): the
+    /// three-channel `solve3` against faer's solve of the three columns on one core, the
+    /// right-hand sides and the residual (best of 200 each).
+    #[test]
+    #[ignore]
+    fn course_solve_timing() {
+        use crate::nodes::image::image_load::{decode_image, ColorSpace};
+        let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/images/");
+        let load = |name: &str, space| {
+            decode_image(&std::fs::read(format!("{dir}{name}")).unwrap(), space).unwrap()
+        };
+        let shape = MaskShape::from_image(&load("BearInWater_mask.png", ColorSpace::Raw));
+        let (target, source) = (
+            load("NewBackGround.jpg", ColorSpace::Srgb),
+            load("BearInWater.jpg", ColorSpace::Srgb),
+        );
+        let best = |f: &mut dyn FnMut()| {
+            (0..200)
+                .map(|_| {
+                    let t = std::time::Instant::now();
+                    f();
+                    t.elapsed().as_secs_f64() * 1e3
+                })
+                .fold(f64::MAX, f64::min)
+        };
+        let f = factor(&shape).unwrap();
+        let Kind::Amd(g) = &f.kind else { panic!("the course mask is factored by AMD") };
+        let mut b = Mat::new();
+        use super::super::{guidance::right_hand_side_into, Mode};
+        for mode in [Mode::Seamless, Mode::Mixed] {
+            let ms = best(&mut || {
+                right_hand_side_into(&shape, &target, &source, [62, 162], mode, &mut b)
+            });
+            eprintln!("right-hand side, {mode:?}: {ms:.3} ms");
+        }
+        let (mut x, mut work) = (b.clone(), Vec::new());
+        let ms = best(&mut || {
+            x.copy_from(&b);
+            assert!(g.solve3(x.as_mut(), &mut work));
+        });
+        eprintln!("solve3: {ms:.3} ms ({} factor entries)", g.factor_nnz());
+        let ms = best(&mut || {
+            x.copy_from(&b);
+            g.solve_in_place(x.as_mut());
+        });
+        eprintln!("faer, three columns on one core: {ms:.3} ms");
+        let ms = best(&mut || {
+            std::hint::black_box(residual_norm(&shape, x.as_ref(), b.as_ref()));
+        });
+        eprintln!("residual: {ms:.3} ms");
     }
 }

@@ -41,6 +41,9 @@ pub struct SpdFactor {
     dropped: Vec<usize>,
     /// Whether `columns` is kept (see `prepare_many_solves`).
     many_solves: bool,
+    /// A simplicial factor's copy for `solve3`, made at its first call after each
+    /// factorization.
+    interleaved: std::sync::OnceLock<solve::Compact>,
     /// The matrix (one triangle, compressed columns), kept for numeric refactorization.
     matrix: SparseColMat<usize, f64>,
     /// Which triangle `matrix` holds.
@@ -86,6 +89,7 @@ impl SpdFactor {
             gather: Vec::new(),
             dropped: Vec::new(),
             many_solves: false,
+            interleaved: std::sync::OnceLock::new(),
             matrix: a,
             side: Side::Lower,
             slot,
@@ -147,6 +151,7 @@ impl SpdFactor {
             gather: Vec::new(),
             dropped: Vec::new(),
             many_solves: false,
+            interleaved: std::sync::OnceLock::new(),
             symbolic,
             slot: (0..a.val().len()).collect(),
             matrix: a,
@@ -210,6 +215,7 @@ impl SpdFactor {
         if self.many_solves {
             self.update_columns();
         }
+        self.interleaved = std::sync::OnceLock::new();
         Ok(())
     }
 

@@ -636,7 +636,8 @@ mod tests {
         assert!(r.powf(1.0 / stats.iterations as f64) < 0.15, "{r:.2e} {stats:?}");
     }
 
-    /// Timings of V(1,1) and V(2,2) on a 0.84-megapixel ellipse (not a check; run with
+    /// Convergence factors and timings of V(1,1) and V(2,2) on a 0.84-megapixel ellipse (not a
+    /// check; run with
     /// `cargo test --release --lib multigrid_timing -- --ignored --nocapture`).
     #[test]
     #[ignore]
@@ -646,6 +647,15 @@ mod tests {
             dx * dx + dy * dy < 1.0
         });
         let b = rhs(shape.len());
+        // the plain cycle's convergence factor on the ellipse and on its bounding rectangle
+        let rect = mask(1200, 900, |x, y| (3..1197).contains(&x) && (3..897).contains(&y));
+        for (name, sh) in [("ellipse", &shape), ("rectangle", &rect)] {
+            for sweeps in [1, 2] {
+                let mg = Multigrid::new(sh).unwrap().with_sweeps(sweeps);
+                let rate = mg.vcycle_rate(rhs(sh.len()).as_ref(), 10);
+                eprintln!("{name}: V({sweeps},{sweeps}) convergence factor {rate:.3}");
+            }
+        }
         let t = std::time::Instant::now();
         let f = system::factor(&shape).unwrap();
         eprintln!("cholesky factor {:.0} ms", t.elapsed().as_secs_f64() * 1e3);

@@ -248,7 +248,7 @@ fn declare(b: &mut NodeBuilder) {
     b.add_choice::<Solver>("solver").doc(
         "auto: sine transforms for a rectangular mask, multigrid for a mask of at least 4096 \
          pixels filling a quarter of its bounding box (switching to sparse Cholesky after 3 \
-         pastes of one shape, 12 from 100k pixels), sparse Cholesky otherwise; cholesky: \
+         pastes of one shape, 6 from 100k pixels), sparse Cholesky otherwise; cholesky: \
          sparse Cholesky (fastest when one large mask shape is pasted many times); multigrid: \
          geometric multigrid-preconditioned conjugate gradients (fastest first paste of a \
          large mask); sine_transform: rectangular masks only (an error otherwise).",

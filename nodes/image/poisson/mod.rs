@@ -68,9 +68,10 @@ pub const MULTIGRID_MIN_UNKNOWNS: usize = 4096;
 pub const AUTO_CHOLESKY_AFTER: usize = 3;
 
 /// `AUTO_CHOLESKY_AFTER` for a shape of at least `system::ND_MIN_UNKNOWNS` unknowns: on the
-/// 0.84-megapixel ellipse the factorization costs about 1.5 s and a multigrid paste about
-/// 0.1 s more than a reused Cholesky one (0.6 against 0.49 s, docs/image.md).
-pub const AUTO_CHOLESKY_AFTER_LARGE: usize = 12;
+/// 0.84-megapixel ellipse the first Cholesky paste takes about 0.74 s and a reused one 0.13 s
+/// (so the factorization about 0.6 s), a multigrid paste about 0.22 s, 0.09 s more than a
+/// reused Cholesky one: 0.6 / 0.09 ≈ 6 pastes (docs/image.md).
+pub const AUTO_CHOLESKY_AFTER_LARGE: usize = 6;
 
 /// How many multigrid pastes `auto` makes of a shape of `unknowns` before it factors.
 pub fn auto_cholesky_after(unknowns: usize) -> usize {

@@ -147,51 +147,44 @@ impl Bsdf {
     /// side); zero for delta lobes.
     #[inline]
     pub fn eval(&self, albedo: V3, ng: V3, ns: V3, wo: V3, wi: V3) -> V3 {
-        let Some((g, n)) = sides(ng, ns, wo) else {
-            return [0.0; 3];
-        };
-        let ci = dot(n, wi);
-        if ci <= 0.0 || dot(g, wi) <= 0.0 {
-            return [0.0; 3];
-        }
-        match *self {
-            Bsdf::Diffuse => scale(albedo, ci * FRAC_1_PI),
-            Bsdf::Conductor { alpha } => {
-                let (t, b) = onb(n);
-                let lo = to_local(wo, t, b, n);
-                let li = to_local(wi, t, b, n);
-                let h = normalize(add(lo, li));
-                let g2 = 1.0 / (1.0 + ggx_lambda(lo, alpha) + ggx_lambda(li, alpha));
-                let d = ggx_d(h, alpha);
-                let f = schlick(albedo, dot(li, h));
-                scale(f, d * g2 / (4.0 * lo[2]))
-            }
-            _ => [0.0; 3],
-        }
+        self.eval_pdf(albedo, ng, ns, wo, wi).0
     }
 
     /// Solid-angle density with which `sample` returns `wi`; zero for delta lobes.
     #[inline]
     pub fn pdf(&self, ng: V3, ns: V3, wo: V3, wi: V3) -> f32 {
+        self.eval_pdf([0.0; 3], ng, ns, wo, wi).1
+    }
+
+    /// `eval` and `pdf` together (as Mitsuba 3's `eval_pdf`): next-event estimation with
+    /// MIS needs both for the same pair of directions, and they share the side tests and,
+    /// for GGX, the local frame, the half vector and the masking terms.
+    #[inline]
+    pub fn eval_pdf(&self, albedo: V3, ng: V3, ns: V3, wo: V3, wi: V3) -> (V3, f32) {
         let Some((g, n)) = sides(ng, ns, wo) else {
-            return 0.0;
+            return ([0.0; 3], 0.0);
         };
         let ci = dot(n, wi);
         if ci <= 0.0 || dot(g, wi) <= 0.0 {
-            return 0.0;
+            return ([0.0; 3], 0.0);
         }
         match *self {
-            Bsdf::Diffuse => ci * FRAC_1_PI,
+            Bsdf::Diffuse => (scale(albedo, ci * FRAC_1_PI), ci * FRAC_1_PI),
             Bsdf::Conductor { alpha } => {
                 let (t, b) = onb(n);
                 let lo = to_local(wo, t, b, n);
                 let li = to_local(wi, t, b, n);
                 let h = normalize(add(lo, li));
+                let (lam_o, lam_i) = (ggx_lambda(lo, alpha), ggx_lambda(li, alpha));
+                let d = ggx_d(h, alpha);
+                let g2 = 1.0 / (1.0 + lam_o + lam_i);
+                let f = schlick(albedo, dot(li, h));
                 // Visible-normal density over the reflection Jacobian 1 / (4 wo.h).
-                let g1 = 1.0 / (1.0 + ggx_lambda(lo, alpha));
-                g1 * ggx_d(h, alpha) / (4.0 * lo[2])
+                let g1 = 1.0 / (1.0 + lam_o);
+                let q = d / (4.0 * lo[2]);
+                (scale(f, g2 * q), g1 * q)
             }
-            _ => 0.0,
+            _ => ([0.0; 3], 0.0),
         }
     }
 

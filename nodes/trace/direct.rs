@@ -100,7 +100,8 @@ pub fn environment_nee(sc: &RenderScene, v: &Vertex, u: [f32; 2], mis: bool) -> 
     if es.pdf.is_nan() || es.pdf <= 0.0 || max_comp(es.le) <= 0.0 {
         return [0.0; 3];
     }
-    let f = v.f(es.wi);
+    let sp = v.sp;
+    let (f, bsdf_pdf) = v.bsdf.eval_pdf(sp.albedo, sp.ng, sp.ns, v.wo, es.wi);
     if max_comp(f) <= 0.0 {
         return [0.0; 3];
     }
@@ -108,8 +109,7 @@ pub fn environment_nee(sc: &RenderScene, v: &Vertex, u: [f32; 2], mis: bool) -> 
         return [0.0; 3];
     }
     let w = if mis {
-        let sp = v.sp;
-        power_heuristic(es.pdf, v.bsdf.pdf(sp.ng, sp.ns, v.wo, es.wi))
+        power_heuristic(es.pdf, bsdf_pdf)
     } else {
         1.0
     };

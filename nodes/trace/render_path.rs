@@ -225,7 +225,7 @@ pub fn radiance(
                         let le = sc.emitted(ls.tri, scale(wi, -1.0));
                         let cos_l = dot(ls.n, wi).abs();
                         if max_comp(le) > 0.0 && cos_l > 0.0 {
-                            let f = bsdf.eval(albedo, ng, ns, wo, wi);
+                            let (f, bsdf_pdf) = bsdf.eval_pdf(albedo, ng, ns, wo, wi);
                             if max_comp(f) > 0.0 {
                                 let side = if dot(ng, wi) > 0.0 {
                                     ng
@@ -235,7 +235,7 @@ pub fn radiance(
                                 let o = sc.offset(p, side);
                                 let p_light = ls.pdf_area * dist2 / cos_l;
                                 let w = if s.strategy == Strategy::Mis {
-                                    power_heuristic(p_light, bsdf.pdf(ng, ns, wo, wi))
+                                    power_heuristic(p_light, bsdf_pdf)
                                 } else {
                                     1.0
                                 };

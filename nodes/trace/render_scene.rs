@@ -218,6 +218,10 @@ pub struct RenderScene {
     pub normals: Vec<V3>,
     /// Unit shading normals at each triangle's corners.
     pub corner_normals: Vec<[V3; 3]>,
+    /// Per triangle: whether its shading point is its plain geometric normal and material
+    /// albedo (corner normals within 2e-7 of the normal's direction, no texture or normal
+    /// map), so `surface` skips the interpolation: every triangle of a flat-shaded scene.
+    pub plain: Vec<bool>,
     /// UVs at each triangle's corners (NaN when its mesh has none).
     pub corner_uvs: Vec<[[f32; 2]; 3]>,
     /// Tangents with handedness at each triangle's corners (empty when no material has a
@@ -300,6 +304,17 @@ impl RenderScene {
         let corner_tangents = if any_nmap { g.tan } else { Vec::new() };
         let bvh = Bvh::build(&tris);
         let normals: Vec<V3> = tris.iter().map(|t| normalize(triangle_normal(t))).collect();
+        let plain: Vec<bool> = corner_normals
+            .iter()
+            .zip(&normals)
+            .zip(&tri_mat)
+            .map(|((c, &n), &m)| {
+                let tx = &textures[m as usize];
+                tx.base.is_none()
+                    && tx.normal.is_none()
+                    && c.iter().all(|&k| dot(k, n) >= 1.0 - 2e-7)
+            })
+            .collect();
         let areas: Vec<f32> = tris
             .iter()
             .map(|t| 0.5 * length(triangle_normal(t)))
@@ -362,6 +377,7 @@ impl RenderScene {
             tris,
             normals,
             corner_normals,
+            plain,
             corner_uvs,
             corner_tangents,
             textures,
@@ -396,6 +412,10 @@ impl RenderScene {
     pub fn surface(&self, hit: &Hit) -> SurfacePoint {
         let t = hit.prim as usize;
         let ng = self.normals[t];
+        if self.plain[t] {
+            let albedo = self.materials[self.tri_mat[t] as usize].albedo;
+            return SurfacePoint { ng, ns: ng, albedo };
+        }
         let (b1, b2) = (hit.u, hit.v);
         let b0 = 1.0 - b1 - b2;
         let c = &self.corner_normals[t];

@@ -90,21 +90,30 @@ pub fn cosine_hemisphere(n: V3, u: [f32; 2]) -> V3 {
     let (t, b) = onb(n);
     let ox = 2.0 * u[0] - 1.0;
     let oy = 2.0 * u[1] - 1.0;
-    let (r, phi) = if ox == 0.0 && oy == 0.0 {
+    // phi = pi/4 (oy/ox), or pi/2 - pi/4 (ox/oy), so sin and cos are only needed on
+    // [-pi/4, pi/4] (the second case swaps them), where short Taylor series are exact to
+    // f32 precision and cheaper than the library's `sin_cos`.
+    let (x, y) = if ox == 0.0 && oy == 0.0 {
         (0.0, 0.0)
     } else if ox.abs() > oy.abs() {
-        (ox, std::f32::consts::FRAC_PI_4 * (oy / ox))
+        let (s, c) = sin_cos_quarter(std::f32::consts::FRAC_PI_4 * (oy / ox));
+        (ox * c, ox * s)
     } else {
-        (
-            oy,
-            std::f32::consts::FRAC_PI_2 - std::f32::consts::FRAC_PI_4 * (ox / oy),
-        )
+        let (s, c) = sin_cos_quarter(std::f32::consts::FRAC_PI_4 * (ox / oy));
+        (oy * s, oy * c)
     };
-    let (s, c) = phi.sin_cos();
-    let x = r * c;
-    let y = r * s;
     let z = (1.0 - x * x - y * y).max(0.0).sqrt();
     add(add(scale(t, x), scale(b, y)), scale(n, z))
+}
+
+/// `(sin a, cos a)` for `|a| <= pi/4`: Taylor series to the a^7 and a^8 terms, whose
+/// truncation errors there are below 3.2e-7 and 2.5e-8 (about 2 and 0.2 ulp of 0.7).
+#[inline(always)]
+pub fn sin_cos_quarter(a: f32) -> (f32, f32) {
+    let a2 = a * a;
+    let s = a * (1.0 - a2 / 6.0 * (1.0 - a2 / 20.0 * (1.0 - a2 / 42.0)));
+    let c = 1.0 - a2 / 2.0 * (1.0 - a2 / 12.0 * (1.0 - a2 / 30.0 * (1.0 - a2 / 56.0)));
+    (s, c)
 }
 
 /// Uniform barycentrics on a triangle (Heitz 2019, "A Low-Distortion Map Between Triangle
@@ -227,6 +236,18 @@ mod tests {
         ];
         for w in want {
             assert_eq!(r.next_u32(), w);
+        }
+    }
+
+    #[test]
+    fn quarter_sin_cos_matches_the_library() {
+        // The series against f64 sin and cos on [-pi/4, pi/4], ends included.
+        let q = std::f64::consts::FRAC_PI_4;
+        for i in 0..=10_000 {
+            let a = (-q + 2.0 * q * i as f64 / 10_000.0) as f32;
+            let (s, c) = sin_cos_quarter(a);
+            assert!((s as f64 - (a as f64).sin()).abs() < 4e-7, "sin {a}: {s}");
+            assert!((c as f64 - (a as f64).cos()).abs() < 1.5e-7, "cos {a}: {c}");
         }
     }
 

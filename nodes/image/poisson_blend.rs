@@ -169,7 +169,7 @@ pub fn blend_region(
         ));
     }
     // the pixels the right-hand side reads: Ω and its four neighbours in both images (the
-    // rest of the target is checked as `compose` copies it)
+    // rest of the target is checked as `copy_target` copies it)
     let [x0, y0, x1, y1] = shape.bbox().map_or([0; 4], |b| b.map(i64::from));
     let around = [x0 - 1, y0 - 1, x1 + 1, y1 + 1];
     check_finite_in(source, around).map_err(|e| NodeError::invalid("source", e))?;

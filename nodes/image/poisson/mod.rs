@@ -231,19 +231,39 @@ pub fn cached_factor_keyed(
     Ok((f, false))
 }
 
-/// The last paste's right-hand side buffer (`n x 3`), kept for the next paste: at a megapixel
-/// it is 25 MB that would otherwise be fresh memory, page-faulted in again on every paste.
-static RHS_BUFFER: Mutex<Option<Mat<f64>>> = Mutex::new(None);
+/// A matrix kept between pastes so that the next one reuses its memory instead of fresh,
+/// page-faulted pages; `take` and `keep` skip it when another paste holds it.
+struct Spare(Mutex<Option<Mat<f64>>>);
+
+impl Spare {
+    const fn new() -> Spare {
+        Spare(Mutex::new(None))
+    }
+
+    /// The kept matrix, or an empty one.
+    fn take(&self) -> Mat<f64> {
+        self.0.try_lock().ok().and_then(|mut k| k.take()).unwrap_or_else(Mat::new)
+    }
+
+    /// Keeps `m` for the next `take`.
+    fn keep(&self, m: Mat<f64>) {
+        if let Ok(mut k) = self.0.try_lock() {
+            *k = Some(m);
+        }
+    }
+}
+
+/// The last paste's right-hand side buffer (`n x 3`): at a megapixel it is 25 MB that would
+/// otherwise be fresh memory, page-faulted in again on every paste.
+static RHS_BUFFER: Spare = Spare::new();
 
 /// A solution matrix given back (`recycle`) once its values are in the image, for the next
 /// paste to solve in: on the course mask a fresh one cost 0.13-0.15 ms of page faults.
-static SOLUTION_BUFFER: Mutex<Option<Mat<f64>>> = Mutex::new(None);
+static SOLUTION_BUFFER: Spare = Spare::new();
 
 /// Gives a solved paste's values back for the next paste's solve (see `SOLUTION_BUFFER`).
 pub fn recycle(values: Mat<f64>) {
-    if let Ok(mut k) = SOLUTION_BUFFER.try_lock() {
-        *k = Some(values);
-    }
+    SOLUTION_BUFFER.keep(values);
 }
 
 /// A solved paste: the values of the unknowns before they are written into the image.
@@ -297,12 +317,11 @@ pub fn solve_keyed(
         return Err("source and mask sizes differ".into());
     }
     // the right-hand side in the last paste's buffer when it is free (see `RHS_BUFFER`)
-    let kept = RHS_BUFFER.try_lock().ok().and_then(|mut k| k.take());
-    let mut b = kept.unwrap_or_else(Mat::new);
+    let mut b = RHS_BUFFER.take();
     guidance::right_hand_side_into(shape, target, source, offset, mode, &mut b);
     let (factor, reused) = cached_factor_keyed(shape, key, solver)?;
     // x = b, in the last solution's memory when it was given back
-    let mut x = SOLUTION_BUFFER.try_lock().ok().and_then(|mut k| k.take()).unwrap_or_else(Mat::new);
+    let mut x = SOLUTION_BUFFER.take();
     if (x.nrows(), x.ncols()) == (b.nrows(), b.ncols()) {
         x.copy_from(&b);
     } else {
@@ -320,9 +339,7 @@ pub fn solve_keyed(
         .sum::<f64>()
         .sqrt();
     let residual = if bn > 0.0 { r / bn } else { r };
-    if let Ok(mut k) = RHS_BUFFER.try_lock() {
-        *k = Some(b);
-    }
+    RHS_BUFFER.keep(b);
     Ok(Solution {
         values: x,
         residual,
@@ -333,23 +350,9 @@ pub fn solve_keyed(
     })
 }
 
-/// The target with the solved RGB values written over Ω (alpha kept from the target).
-/// Values are not clamped (the image is linear; `image_save` clamps when it encodes). Checks
-/// the target as it copies it: its first non-finite pixel is an error.
-pub fn compose(
-    target: &Image,
-    shape: &MaskShape,
-    offset: [i64; 2],
-    values: &Mat<f64>,
-) -> Result<Image, String> {
-    let mut out = copy_target(target)?;
-    write_solution(&mut out, shape, offset, values);
-    Ok(out)
-}
-
 /// A copy of `target`, checked as it is copied (its first non-finite pixel is an error):
-/// the first half of `compose`, which a paste runs on the other core while it solves (the
-/// copy's fresh pages cost about as much as the course mask's solve).
+/// a paste runs it on the other core while it solves (the copy's fresh pages cost about as
+/// much as the course mask's solve), then `write_solution` puts the solved values over Ω.
 pub fn copy_target(target: &Image) -> Result<Image, String> {
     let mut out = Image::new(target.width, target.height, [0.0; 4]);
     let tw = (target.width as usize).max(1);
@@ -374,8 +377,8 @@ pub fn copy_target(target: &Image) -> Result<Image, String> {
 /// over part of the copy when it finishes first.
 const COPY_ROWS: usize = 8;
 
-/// The solved RGB values written over Ω in `out` (a copy of the target): the second half of
-/// `compose`.
+/// The solved RGB values written over Ω in `out` (a copy of the target, `copy_target`),
+/// alpha kept; not clamped (the image is linear; `image_save` clamps when it encodes).
 pub fn write_solution(out: &mut Image, shape: &MaskShape, offset: [i64; 2], values: &Mat<f64>) {
     let (tw, mw) = ((out.width as usize).max(1), shape.width as usize);
     out.pixels.par_chunks_mut(tw).enumerate().for_each(|(ty, row)| {

@@ -114,10 +114,7 @@ fn sweep_split(info: &[PrimInfo], ids: &[u32], bounds: &Aabb) -> Option<(Vec<u32
     let mut sorted: [Vec<u32>; 3] = [ids.to_vec(), ids.to_vec(), ids.to_vec()];
     let mut right_area = vec![0.0f32; n];
     for (axis, order) in sorted.iter_mut().enumerate() {
-        order.sort_by(|&a, &b| {
-            let (ca, cb) = (info[a as usize].centroid[axis], info[b as usize].centroid[axis]);
-            ca.total_cmp(&cb).then(a.cmp(&b))
-        });
+        sort_on_axis(info, order, axis);
         let mut acc = Aabb::EMPTY;
         for k in (1..n).rev() {
             acc = acc.union(&info[order[k] as usize].bounds);
@@ -144,6 +141,29 @@ fn sweep_split(info: &[PrimInfo], ids: &[u32], bounds: &Aabb) -> Option<(Vec<u32
     Some((order, right))
 }
 
+/// Sorts `ids` by their centroids' coordinate on `axis` (ties by index, so the order is
+/// the same on every run).
+fn sort_on_axis(info: &[PrimInfo], ids: &mut [u32], axis: usize) {
+    ids.sort_by(|&a, &b| {
+        let (ca, cb) = (info[a as usize].centroid[axis], info[b as usize].centroid[axis]);
+        ca.total_cmp(&cb).then(a.cmp(&b))
+    });
+}
+
+/// A triangle's box and centroid for the build. The vertex centroid (not the box centre)
+/// tells apart the two halves of a quad, whose boxes coincide.
+fn prim_info(t: &[V3; 3]) -> PrimInfo {
+    let mut bounds = Aabb::EMPTY;
+    for p in t {
+        bounds.grow(*p);
+    }
+    let c = |k: usize| (t[0][k] + t[1][k] + t[2][k]) / 3.0;
+    PrimInfo {
+        bounds,
+        centroid: [c(0), c(1), c(2)],
+    }
+}
+
 fn join_children(info: &[PrimInfo], bounds: Aabb, left: Vec<u32>, right: Vec<u32>) -> BuildNode {
     let (l, r) = if left.len() + right.len() > PAR_THRESHOLD {
         rayon::join(|| build_rec(info, left), || build_rec(info, right))
@@ -157,25 +177,7 @@ impl Bvh {
     /// Builds the BVH over `tris` (any order; degenerate triangles are kept and never hit),
     /// and its 4-wide form (`widen`), which the queries traverse.
     pub fn build(tris: &[[V3; 3]]) -> Bvh {
-        let info: Vec<PrimInfo> = tris
-            .iter()
-            .map(|t| {
-                let mut b = Aabb::EMPTY;
-                for p in t {
-                    b.grow(*p);
-                }
-                // The vertex centroid (not the box centre) tells apart the two halves of
-                // a quad, whose boxes coincide.
-                PrimInfo {
-                    bounds: b,
-                    centroid: [
-                        (t[0][0] + t[1][0] + t[2][0]) / 3.0,
-                        (t[0][1] + t[1][1] + t[2][1]) / 3.0,
-                        (t[0][2] + t[1][2] + t[2][2]) / 3.0,
-                    ],
-                }
-            })
-            .collect();
+        let info: Vec<PrimInfo> = tris.iter().map(prim_info).collect();
         let mut bvh = Bvh::default();
         if tris.is_empty() {
             return bvh;
@@ -230,20 +232,6 @@ mod tests {
     use super::*;
     use crate::nodes::trace::sampling::Pcg32;
 
-    fn info_of(tris: &[[V3; 3]]) -> Vec<PrimInfo> {
-        tris.iter()
-            .map(|t| {
-                let mut b = Aabb::EMPTY;
-                t.iter().for_each(|p| b.grow(*p));
-                let c = |k: usize| (t[0][k] + t[1][k] + t[2][k]) / 3.0;
-                PrimInfo {
-                    bounds: b,
-                    centroid: [c(0), c(1), c(2)],
-                }
-            })
-            .collect()
-    }
-
     fn sah(info: &[PrimInfo], ids: &[u32]) -> f32 {
         let mut b = Aabb::EMPTY;
         ids.iter().for_each(|&i| b = b.union(&info[i as usize].bounds));
@@ -268,17 +256,14 @@ mod tests {
                     t
                 })
                 .collect();
-            let info = info_of(&tris);
+            let info: Vec<PrimInfo> = tris.iter().map(prim_info).collect();
             let ids: Vec<u32> = (0..n as u32).collect();
             let mut bounds = Aabb::EMPTY;
             ids.iter().for_each(|&i| bounds = bounds.union(&info[i as usize].bounds));
             let mut naive = f32::INFINITY;
             for axis in 0..3 {
                 let mut o = ids.clone();
-                o.sort_by(|&a, &b| {
-                    let (ca, cb) = (info[a as usize].centroid[axis], info[b as usize].centroid[axis]);
-                    ca.total_cmp(&cb).then(a.cmp(&b))
-                });
+                sort_on_axis(&info, &mut o, axis);
                 for k in 1..n {
                     naive = naive.min(sah(&info, &o[..k]) + sah(&info, &o[k..]));
                 }

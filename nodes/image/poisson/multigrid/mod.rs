@@ -636,9 +636,9 @@ mod tests {
         assert!(r.powf(1.0 / stats.iterations as f64) < 0.15, "{r:.2e} {stats:?}");
     }
 
-    /// Convergence factors and timings of V(1,1) and V(2,2) on a 0.84-megapixel ellipse (not a
-    /// check; run with
-    /// `cargo test --release --lib multigrid_timing -- --ignored --nocapture`).
+    /// Convergence factors and timings of V(1,1) and V(2,2) on a 0.84-megapixel ellipse (not
+    /// a check; run with `cargo test --release --lib multigrid_timing -- --ignored
+    /// --nocapture`).
     #[test]
     #[ignore]
     fn multigrid_timing() {

@@ -193,6 +193,117 @@ fn add_igea(scene: &mut Scene, path: &Path) {
     });
 }
 
+/// Rays as a path tracer meets them, bounce by bounce (camera rays, then cosine-sampled
+/// bounces and shadow rays to the light from every hit), traced one at a time
+/// (`intersect`, `occluded`) and as streams of several lengths (`intersect_stream`,
+/// `occluded_stream`), on this thread (wall time, best of five). Prints millions of rays
+/// per second.
+fn ray_streams(sc: &RenderScene, cam: &PinholeCamera) {
+    use cgnodes::nodes::trace::bvh::Segment;
+    use cgnodes::nodes::trace::sampling::{cosine_hemisphere, Pcg32};
+    let mut rng = Pcg32::new(5, 7);
+    let mut closest: Vec<Vec<Segment>> = vec![(0..256 * 256)
+        .map(|p| {
+            let (x, y) = ((p % 256) as f32 + 0.5, (p / 256) as f32 + 0.5);
+            (cam.eye, cam.ray_dir(x, y), cam.far)
+        })
+        .collect()];
+    let mut shadow: Vec<Vec<Segment>> = Vec::new();
+    for _ in 0..3 {
+        let (mut next, mut sh) = (Vec::new(), Vec::new());
+        for r in closest.last().unwrap() {
+            let Some(h) = sc.bvh.intersect(r.0, r.1, r.2) else { continue };
+            let p = [0, 1, 2].map(|k| r.0[k] + h.t * r.1[k]);
+            let ng = sc.normals[h.prim as usize];
+            let side = if ng.iter().zip(&r.1).map(|(a, b)| a * b).sum::<f32>() < 0.0 {
+                ng
+            } else {
+                ng.map(|x| -x)
+            };
+            let o = sc.offset(p, side);
+            next.push((o, cosine_hemisphere(side, rng.next_2d()), f32::INFINITY));
+            if let Some(ls) = sc.sample_emitter(rng.next_f32(), rng.next_2d()) {
+                sh.push((o, [0, 1, 2].map(|k| ls.p[k] - o[k]), 1.0 - 1e-4));
+            }
+        }
+        closest.push(next);
+        shadow.push(sh);
+    }
+    let nc: usize = closest.iter().map(|v| v.len()).sum();
+    let ns: usize = shadow.iter().map(|v| v.len()).sum();
+    println!("{nc} closest-hit rays, {ns} shadow rays (camera and three bounces)");
+    let time = |f: &mut dyn FnMut() -> usize| {
+        let mut best = f64::INFINITY;
+        let mut n = 0;
+        for _ in 0..5 {
+            let c0 = Instant::now();
+            n = f();
+            best = best.min(c0.elapsed().as_secs_f64());
+        }
+        (best, n)
+    };
+    let (t1, h1) = time(&mut || {
+        let a = closest.iter().flatten();
+        let hits = a.filter(|r| sc.bvh.intersect(r.0, r.1, r.2).is_some()).count();
+        hits + shadow.iter().flatten().filter(|r| sc.bvh.occluded(r.0, r.1, r.2)).count()
+    });
+    println!(
+        "one at a time: {:.2} Mrays/s ({h1} hits)",
+        (nc + ns) as f64 / t1 / 1e6
+    );
+    {
+        // The same rays sorted by direction (coherent): what incoherence costs.
+        let key = |r: &Segment| {
+            let q = |x: f32| ((x + 1.0) * 8.0) as u32;
+            (q(r.1[0]), q(r.1[1]), q(r.1[2]), q(r.0[0] / 2.0), q(r.0[1] / 2.0))
+        };
+        let mut cs: Vec<Segment> = closest.iter().flatten().copied().collect();
+        let mut ss: Vec<Segment> = shadow.iter().flatten().copied().collect();
+        cs.sort_by_key(key);
+        ss.sort_by_key(key);
+        let (t2, h2) = time(&mut || {
+            let hits = cs.iter().filter(|r| sc.bvh.intersect(r.0, r.1, r.2).is_some()).count();
+            hits + ss.iter().filter(|r| sc.bvh.occluded(r.0, r.1, r.2)).count()
+        });
+        println!(
+            "one at a time, sorted by direction: {:.2} Mrays/s ({h2} hits), {:.2}x",
+            (nc + ns) as f64 / t2 / 1e6,
+            t1 / t2
+        );
+    }
+    for b in [64usize, 256, 1024, 4096, 16384] {
+        let (t, h) = time(&mut || {
+            let mut n = 0;
+            for level in &closest {
+                for c in level.chunks(b) {
+                    let mut out = vec![None; c.len()];
+                    sc.bvh.intersect_stream(c, &mut out);
+                    n += out.iter().filter(|h| h.is_some()).count();
+                }
+            }
+            for level in &shadow {
+                for c in level.chunks(b) {
+                    let mut out = vec![false; c.len()];
+                    sc.bvh.occluded_stream(c, &mut out);
+                    n += out.iter().filter(|&&h| h).count();
+                }
+            }
+            n
+        });
+        {
+            use cgnodes::nodes::trace::bvh::stream::{LEAF_TESTS, NODE_TESTS};
+            use std::sync::atomic::Ordering::Relaxed;
+            let r = (nc + ns) as f64 * 5.0;
+            println!("  per ray: {:.2} nodes {:.2} leaves", NODE_TESTS.swap(0, Relaxed) as f64 / r, LEAF_TESTS.swap(0, Relaxed) as f64 / r);
+        }
+        println!(
+            "streams of {b:5}: {:.2} Mrays/s ({h} hits), {:.2}x",
+            (nc + ns) as f64 / t / 1e6,
+            t1 / t
+        );
+    }
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let get = |k: &str| {
@@ -269,6 +380,10 @@ fn main() {
         let cpu = cpu_seconds() - c0;
         (img, var, secs, cpu)
     };
+    if args.iter().any(|a| a == "--rays") {
+        ray_streams(&sc, &cam);
+        return;
+    }
     if quick {
         let (_, _, secs, cpu) = run(64, 1);
         let paths = 256.0 * 256.0 * 64.0;

@@ -10,6 +10,7 @@
 mod build;
 mod lanes;
 mod pair;
+pub mod stream;
 #[cfg(test)]
 mod tests;
 mod traverse;

@@ -17,7 +17,9 @@
 //! to measure what `Bvh::intersect_occluded` buys), `--scene igea`
 //! (the box with the 154k-triangle igea scan standing in it, white diffuse, as
 //! `trace_mitsuba.py --scene igea` builds it; `--igea PATH`, default
-//! `/work/shared/assets/meshes/igea_front.obj`). The SVG chart is written for the plain box
+//! `/work/shared/assets/meshes/igea_front.obj`), `--rays` (traversal alone, no shading:
+//! path-like rays traced one at a time, in wavefront order and sorted by direction; see
+//! `traversal_only`). The SVG chart is written for the plain box
 //! only.
 
 use cgnodes::nodes::mesh::obj::load_obj;
@@ -193,12 +195,12 @@ fn add_igea(scene: &mut Scene, path: &Path) {
     });
 }
 
-/// Rays as a path tracer meets them, bounce by bounce (camera rays, then cosine-sampled
-/// bounces and shadow rays to the light from every hit), traced one at a time
-/// (`intersect`, `occluded`) and as streams of several lengths (`intersect_stream`,
-/// `occluded_stream`), on this thread (wall time, best of five). Prints millions of rays
-/// per second.
-fn ray_streams(sc: &RenderScene, cam: &PinholeCamera) {
+/// Traversal alone: rays as a path tracer meets them (camera rays, then three bounces of
+/// cosine-sampled rays and shadow rays to the light from every hit), traced with
+/// `intersect` and `occluded` on this thread (wall time, best of five), in the order a
+/// wavefront would hold them (bounce by bounce, pixel order) and sorted by direction (the
+/// same rays made coherent). Prints millions of rays per second.
+fn traversal_only(sc: &RenderScene, cam: &PinholeCamera, dump: &Path) {
     use cgnodes::nodes::trace::bvh::Segment;
     use cgnodes::nodes::trace::sampling::{cosine_hemisphere, Pcg32};
     let mut rng = Pcg32::new(5, 7);
@@ -212,7 +214,9 @@ fn ray_streams(sc: &RenderScene, cam: &PinholeCamera) {
     for _ in 0..3 {
         let (mut next, mut sh) = (Vec::new(), Vec::new());
         for r in closest.last().unwrap() {
-            let Some(h) = sc.bvh.intersect(r.0, r.1, r.2) else { continue };
+            let Some(h) = sc.bvh.intersect(r.0, r.1, r.2) else {
+                continue;
+            };
             let p = [0, 1, 2].map(|k| r.0[k] + h.t * r.1[k]);
             let ng = sc.normals[h.prim as usize];
             let side = if ng.iter().zip(&r.1).map(|(a, b)| a * b).sum::<f32>() < 0.0 {
@@ -232,6 +236,17 @@ fn ray_streams(sc: &RenderScene, cam: &PinholeCamera) {
     let nc: usize = closest.iter().map(|v| v.len()).sum();
     let ns: usize = shadow.iter().map(|v| v.len()).sum();
     println!("{nc} closest-hit rays, {ns} shadow rays (camera and three bounces)");
+    // For bench/peers/rays_mitsuba.py: the counts (u32), then per ray origin, direction and
+    // tmax (7 f32), closest-hit rays first, little endian.
+    let mut bytes = Vec::with_capacity(8 + 28 * (nc + ns));
+    bytes.extend((nc as u32).to_le_bytes());
+    bytes.extend((ns as u32).to_le_bytes());
+    for r in closest.iter().chain(&shadow).flatten() {
+        for x in r.0.iter().chain(&r.1).chain([&r.2]) {
+            bytes.extend(x.to_le_bytes());
+        }
+    }
+    std::fs::write(dump, bytes).unwrap();
     let time = |f: &mut dyn FnMut() -> usize| {
         let mut best = f64::INFINITY;
         let mut n = 0;
@@ -244,62 +259,47 @@ fn ray_streams(sc: &RenderScene, cam: &PinholeCamera) {
     };
     let (t1, h1) = time(&mut || {
         let a = closest.iter().flatten();
-        let hits = a.filter(|r| sc.bvh.intersect(r.0, r.1, r.2).is_some()).count();
-        hits + shadow.iter().flatten().filter(|r| sc.bvh.occluded(r.0, r.1, r.2)).count()
+        let hits = a
+            .filter(|r| sc.bvh.intersect(r.0, r.1, r.2).is_some())
+            .count();
+        hits + shadow
+            .iter()
+            .flatten()
+            .filter(|r| sc.bvh.occluded(r.0, r.1, r.2))
+            .count()
     });
     println!(
-        "one at a time: {:.2} Mrays/s ({h1} hits)",
+        "bounce by bounce, pixel order: {:.2} Mrays/s ({h1} hits)",
         (nc + ns) as f64 / t1 / 1e6
     );
     {
         // The same rays sorted by direction (coherent): what incoherence costs.
         let key = |r: &Segment| {
             let q = |x: f32| ((x + 1.0) * 8.0) as u32;
-            (q(r.1[0]), q(r.1[1]), q(r.1[2]), q(r.0[0] / 2.0), q(r.0[1] / 2.0))
+            (
+                q(r.1[0]),
+                q(r.1[1]),
+                q(r.1[2]),
+                q(r.0[0] / 2.0),
+                q(r.0[1] / 2.0),
+            )
         };
         let mut cs: Vec<Segment> = closest.iter().flatten().copied().collect();
         let mut ss: Vec<Segment> = shadow.iter().flatten().copied().collect();
         cs.sort_by_key(key);
         ss.sort_by_key(key);
         let (t2, h2) = time(&mut || {
-            let hits = cs.iter().filter(|r| sc.bvh.intersect(r.0, r.1, r.2).is_some()).count();
+            let hits = cs
+                .iter()
+                .filter(|r| sc.bvh.intersect(r.0, r.1, r.2).is_some())
+                .count();
             hits + ss.iter().filter(|r| sc.bvh.occluded(r.0, r.1, r.2)).count()
         });
+        assert_eq!(h1, h2, "the sorted rays found other hits");
         println!(
-            "one at a time, sorted by direction: {:.2} Mrays/s ({h2} hits), {:.2}x",
+            "sorted by direction: {:.2} Mrays/s, {:.2}x",
             (nc + ns) as f64 / t2 / 1e6,
             t1 / t2
-        );
-    }
-    for b in [64usize, 256, 1024, 4096, 16384] {
-        let (t, h) = time(&mut || {
-            let mut n = 0;
-            for level in &closest {
-                for c in level.chunks(b) {
-                    let mut out = vec![None; c.len()];
-                    sc.bvh.intersect_stream(c, &mut out);
-                    n += out.iter().filter(|h| h.is_some()).count();
-                }
-            }
-            for level in &shadow {
-                for c in level.chunks(b) {
-                    let mut out = vec![false; c.len()];
-                    sc.bvh.occluded_stream(c, &mut out);
-                    n += out.iter().filter(|&&h| h).count();
-                }
-            }
-            n
-        });
-        {
-            use cgnodes::nodes::trace::bvh::stream::{LEAF_TESTS, NODE_TESTS};
-            use std::sync::atomic::Ordering::Relaxed;
-            let r = (nc + ns) as f64 * 5.0;
-            println!("  per ray: {:.2} nodes {:.2} leaves", NODE_TESTS.swap(0, Relaxed) as f64 / r, LEAF_TESTS.swap(0, Relaxed) as f64 / r);
-        }
-        println!(
-            "streams of {b:5}: {:.2} Mrays/s ({h} hits), {:.2}x",
-            (nc + ns) as f64 / t / 1e6,
-            t1 / t
         );
     }
 }
@@ -381,7 +381,8 @@ fn main() {
         (img, var, secs, cpu)
     };
     if args.iter().any(|a| a == "--rays") {
-        ray_streams(&sc, &cam);
+        // (writes the rays to target/trace_bench/rays_<scene>.bin for the Mitsuba peer)
+        traversal_only(&sc, &cam, &out.join(format!("rays_{which}.bin")));
         return;
     }
     if quick {

@@ -35,6 +35,9 @@ ensure("numpy", "numpy")
 ensure("mitsuba", "mitsuba")
 import mitsuba as mi  # noqa: E402
 
+from _mitsuba_scene import scene_dict  # noqa: E402
+
+
 ap = argparse.ArgumentParser()
 ap.add_argument("--spp", default="4,16,64")
 ap.add_argument("--variants", default="scalar_rgb,llvm_ad_rgb")
@@ -61,17 +64,7 @@ for variant in a.variants.split(","):
         print(f"{variant}: unavailable ({err})")
         continue
     mi.set_variant(variant)
-    d = mi.cornell_box()
-    d["sensor"]["film"]["rfilter"] = {"type": "box"}
-    if a.scene == "igea":
-        import numpy as np
-        v = np.array([[float(x) for x in ln.split()[1:4]] for ln in open(a.igea) if ln.startswith("v ")])
-        lo, hi = v.min(axis=0), v.max(axis=0)
-        s = 0.8 / (hi - lo).max()
-        T = mi.ScalarTransform4f
-        d["igea"] = {"type": "obj", "filename": a.igea, "bsdf": {"type": "ref", "id": "white"},
-                     "to_world": T().translate([0.0, -0.2, 0.2]).scale([float(s)] * 3).translate((-(lo + hi) / 2).tolist())}
-    scene = mi.load_dict(d)
+    scene = mi.load_dict(scene_dict(mi, a.scene, a.igea))
     mi.render(scene, spp=1, seed=0)  # warm up (JIT, thread pool)
     for spp in [int(s) for s in a.spp.split(",")]:
         c0 = time.process_time()

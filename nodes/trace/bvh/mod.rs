@@ -10,7 +10,6 @@
 mod build;
 mod lanes;
 mod pair;
-pub mod stream;
 #[cfg(test)]
 mod tests;
 mod traverse;

@@ -9,6 +9,7 @@
 
 mod build;
 mod lanes;
+mod packet;
 mod pair;
 #[cfg(test)]
 mod tests;

@@ -273,26 +273,6 @@ fn traversal_only(sc: &RenderScene, cam: &PinholeCamera, dump: &Path) {
         (nc + ns) as f64 / t1 / 1e6
     );
     {
-        let (t3, h3) = time(&mut || {
-            let mut n = 0;
-            let mut out = [None; 16];
-            for c in closest.iter().flat_map(|l| l.chunks(16)) {
-                sc.bvh.trace_packet::<false>(c, &mut out);
-                n += out[..c.len()].iter().filter(|h| h.is_some()).count();
-            }
-            for c in shadow.iter().flat_map(|l| l.chunks(16)) {
-                sc.bvh.trace_packet::<true>(c, &mut out);
-                n += out[..c.len()].iter().filter(|h| h.is_some()).count();
-            }
-            n
-        });
-        println!(
-            "packets of 16: {:.2} Mrays/s ({h3} hits), {:.2}x",
-            (nc + ns) as f64 / t3 / 1e6,
-            t1 / t3
-        );
-    }
-    {
         // The same rays sorted by direction (coherent): what incoherence costs.
         let key = |r: &Segment| {
             let q = |x: f32| ((x + 1.0) * 8.0) as u32;
@@ -316,24 +296,6 @@ fn traversal_only(sc: &RenderScene, cam: &PinholeCamera, dump: &Path) {
             hits + ss.iter().filter(|r| sc.bvh.occluded(r.0, r.1, r.2)).count()
         });
         assert_eq!(h1, h2, "the sorted rays found other hits");
-        let (t4, h4) = time(&mut || {
-            let mut n = 0;
-            let mut out = [None; 16];
-            for c in cs.chunks(16) {
-                sc.bvh.trace_packet::<false>(c, &mut out);
-                n += out[..c.len()].iter().filter(|h| h.is_some()).count();
-            }
-            for c in ss.chunks(16) {
-                sc.bvh.trace_packet::<true>(c, &mut out);
-                n += out[..c.len()].iter().filter(|h| h.is_some()).count();
-            }
-            n
-        });
-        println!(
-            "sorted, packets of 16: {:.2} Mrays/s ({h4} hits), {:.2}x",
-            (nc + ns) as f64 / t4 / 1e6,
-            t1 / t4
-        );
         println!(
             "sorted by direction: {:.2} Mrays/s, {:.2}x",
             (nc + ns) as f64 / t2 / 1e6,

@@ -9,7 +9,6 @@
 
 mod build;
 mod lanes;
-mod packet;
 mod pair;
 #[cfg(test)]
 mod tests;

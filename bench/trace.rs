@@ -202,106 +202,86 @@ fn add_igea(scene: &mut Scene, path: &Path) {
 /// same rays made coherent). Prints millions of rays per second.
 fn traversal_only(sc: &RenderScene, cam: &PinholeCamera, dump: &Path) {
     use cgnodes::nodes::trace::bvh::Segment;
-    use cgnodes::nodes::trace::sampling::{cosine_hemisphere, Pcg32};
+    use cgnodes::nodes::trace::sampling::{add, cosine_hemisphere, dot, scale, sub, Pcg32};
     let mut rng = Pcg32::new(5, 7);
-    let mut closest: Vec<Vec<Segment>> = vec![(0..256 * 256)
+    let mut level: Vec<Segment> = (0..256 * 256)
         .map(|p| {
             let (x, y) = ((p % 256) as f32 + 0.5, (p / 256) as f32 + 0.5);
             (cam.eye, cam.ray_dir(x, y), cam.far)
         })
-        .collect()];
-    let mut shadow: Vec<Vec<Segment>> = Vec::new();
+        .collect();
+    // Bounce by bounce, pixel order: the order a wavefront would hold them in.
+    let (mut closest, mut shadow) = (Vec::new(), Vec::new());
     for _ in 0..3 {
-        let (mut next, mut sh) = (Vec::new(), Vec::new());
-        for r in closest.last().unwrap() {
+        let mut next = Vec::new();
+        for r in &level {
             let Some(h) = sc.bvh.intersect(r.0, r.1, r.2) else {
                 continue;
             };
-            let p = [0, 1, 2].map(|k| r.0[k] + h.t * r.1[k]);
             let ng = sc.normals[h.prim as usize];
-            let side = if ng.iter().zip(&r.1).map(|(a, b)| a * b).sum::<f32>() < 0.0 {
+            let side = if dot(ng, r.1) < 0.0 {
                 ng
             } else {
-                ng.map(|x| -x)
+                scale(ng, -1.0)
             };
-            let o = sc.offset(p, side);
+            let o = sc.offset(add(r.0, scale(r.1, h.t)), side);
             next.push((o, cosine_hemisphere(side, rng.next_2d()), f32::INFINITY));
             if let Some(ls) = sc.sample_emitter(rng.next_f32(), rng.next_2d()) {
-                sh.push((o, [0, 1, 2].map(|k| ls.p[k] - o[k]), 1.0 - 1e-4));
+                shadow.push((o, sub(ls.p, o), 1.0 - 1e-4));
             }
         }
-        closest.push(next);
-        shadow.push(sh);
+        closest.append(&mut level);
+        level = next;
     }
-    let nc: usize = closest.iter().map(|v| v.len()).sum();
-    let ns: usize = shadow.iter().map(|v| v.len()).sum();
+    closest.append(&mut level);
+    let (nc, ns) = (closest.len(), shadow.len());
     println!("{nc} closest-hit rays, {ns} shadow rays (camera and three bounces)");
     // For bench/peers/rays_mitsuba.py: the counts (u32), then per ray origin, direction and
     // tmax (7 f32), closest-hit rays first, little endian.
     let mut bytes = Vec::with_capacity(8 + 28 * (nc + ns));
     bytes.extend((nc as u32).to_le_bytes());
     bytes.extend((ns as u32).to_le_bytes());
-    for r in closest.iter().chain(&shadow).flatten() {
+    for r in closest.iter().chain(&shadow) {
         for x in r.0.iter().chain(&r.1).chain([&r.2]) {
             bytes.extend(x.to_le_bytes());
         }
     }
     std::fs::write(dump, bytes).unwrap();
-    let time = |f: &mut dyn FnMut() -> usize| {
+    // Best wall time of five runs of both queries over all rays, and the hits found.
+    let time = |cs: &[Segment], ss: &[Segment]| {
         let mut best = f64::INFINITY;
-        let mut n = 0;
+        let mut hits = 0;
         for _ in 0..5 {
             let c0 = Instant::now();
-            n = f();
+            hits = cs
+                .iter()
+                .filter(|r| sc.bvh.intersect(r.0, r.1, r.2).is_some())
+                .count()
+                + ss.iter().filter(|r| sc.bvh.occluded(r.0, r.1, r.2)).count();
             best = best.min(c0.elapsed().as_secs_f64());
         }
-        (best, n)
+        (best, hits)
     };
-    let (t1, h1) = time(&mut || {
-        let a = closest.iter().flatten();
-        let hits = a
-            .filter(|r| sc.bvh.intersect(r.0, r.1, r.2).is_some())
-            .count();
-        hits + shadow
-            .iter()
-            .flatten()
-            .filter(|r| sc.bvh.occluded(r.0, r.1, r.2))
-            .count()
-    });
+    let (t1, h1) = time(&closest, &shadow);
     println!(
         "bounce by bounce, pixel order: {:.2} Mrays/s ({h1} hits)",
         (nc + ns) as f64 / t1 / 1e6
     );
-    {
-        // The same rays sorted by direction (coherent): what incoherence costs.
-        let key = |r: &Segment| {
-            let q = |x: f32| ((x + 1.0) * 8.0) as u32;
-            (
-                q(r.1[0]),
-                q(r.1[1]),
-                q(r.1[2]),
-                q(r.0[0] / 2.0),
-                q(r.0[1] / 2.0),
-            )
-        };
-        let mut cs: Vec<Segment> = closest.iter().flatten().copied().collect();
-        let mut ss: Vec<Segment> = shadow.iter().flatten().copied().collect();
-        cs.sort_by_key(key);
-        ss.sort_by_key(key);
-        let (t2, h2) = time(&mut || {
-            let hits = cs
-                .iter()
-                .filter(|r| sc.bvh.intersect(r.0, r.1, r.2).is_some())
-                .count();
-            hits + ss.iter().filter(|r| sc.bvh.occluded(r.0, r.1, r.2)).count()
-        });
-        assert_eq!(h1, h2, "the sorted rays found other hits");
-        println!(
-            "sorted by direction: {:.2} Mrays/s, {:.2}x",
-            (nc + ns) as f64 / t2 / 1e6,
-            t1 / t2
-        );
-    }
+    // The same rays sorted by direction (coherent): what incoherence costs.
+    let key = |r: &Segment| {
+        let q = |x: f32| ((x + 1.0) * 8.0) as u32;
+        let (o, d) = (r.0, r.1);
+        (q(d[0]), q(d[1]), q(d[2]), q(o[0] / 2.0), q(o[1] / 2.0))
+    };
+    closest.sort_by_key(key);
+    shadow.sort_by_key(key);
+    let (t2, h2) = time(&closest, &shadow);
+    assert_eq!(h1, h2, "the sorted rays found other hits");
+    println!(
+        "sorted by direction: {:.2} Mrays/s, {:.2}x",
+        (nc + ns) as f64 / t2 / 1e6,
+        t1 / t2
+    );
 }
 
 fn main() {

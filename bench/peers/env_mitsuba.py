@@ -46,7 +46,6 @@ Installs mitsuba and numpy into target/peers-venv when they are missing (PyPI);
 llvm_ad_rgb needs LLVM 19 (Debian's libllvm19), as in trace_mitsuba.py.
 """
 import argparse
-import glob
 import json
 import os
 import resource
@@ -58,11 +57,9 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.abspath(os.path.join(HERE, "..", ".."))
 sys.path.insert(0, HERE)
 import _images  # noqa: E402
+import _mitsuba  # noqa: E402
 
-if "DRJIT_LIBLLVM_PATH" not in os.environ:
-    found = sorted(glob.glob("/usr/lib/*/libLLVM.so.19*") + glob.glob("/usr/lib/*/libLLVM-19.so"))
-    if found:
-        os.environ["DRJIT_LIBLLVM_PATH"] = found[0]
+_mitsuba.point_at_llvm()
 
 SEGS, RINGS = 48, 24
 EYE, TARGET, FOV = [0.0, 1.4, 4.6], [0.0, -0.25, 0.0], 38.0

@@ -4,31 +4,21 @@ that run wrote (target/trace_bench/rays_<scene>.bin: camera rays, three bounces 
 cosine-sampled rays and shadow rays to the light, as a path tracer meets them) through the
 same scene with `llvm_ad_rgb` (Embree under Dr.Jit's wavefront), closest hits with
 `ray_intersect_preliminary` and shadow rays with `ray_test`, and prints millions of rays
-per CPU-second and the hit count beside ours.
+per CPU-second and the hit count (the bench prints ours).
 
     python3 bench/peers/rays_mitsuba.py [--scene box|igea] [--igea PATH] [--variant V]
 
 Timing: process CPU seconds (Dr.Jit's worker threads included) of each of five runs after a
 warm-up run that compiles the kernels, best of five. Installs `mitsuba` and `numpy` with
-pip if they are missing; LLVM is found as in trace_mitsuba.py.
+pip if they are missing (`_mitsuba.py`).
 """
-import argparse, glob, os, subprocess, sys, time
+import argparse, os, time
 
-if "DRJIT_LIBLLVM_PATH" not in os.environ:
-    found = sorted(glob.glob("/usr/lib/*/libLLVM.so.19*") + glob.glob("/usr/lib/*/libLLVM-19.so"))
-    if found:
-        os.environ["DRJIT_LIBLLVM_PATH"] = found[0]
+from _mitsuba import import_mitsuba, scene_dict
 
-for mod in ["numpy", "mitsuba"]:
-    try:
-        __import__(mod)
-    except ImportError:
-        subprocess.check_call([sys.executable, "-m", "pip", "install", "-q", mod])
+mi = import_mitsuba()
 import numpy as np  # noqa: E402
 import drjit as dr  # noqa: E402
-import mitsuba as mi  # noqa: E402
-
-from _mitsuba_scene import scene_dict  # noqa: E402
 
 ap = argparse.ArgumentParser()
 ap.add_argument("--scene", default="box", choices=["box", "igea"])

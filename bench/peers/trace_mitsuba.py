@@ -16,26 +16,11 @@ largest extent is 0.8 with its box centre at (0, -0.2, 0.2), as `cargo bench --b
 Installs `mitsuba` and `numpy` with pip if they are missing. llvm_ad_rgb needs LLVM
 (Debian's libllvm19); a variant that fails to load is skipped and reported.
 """
-import argparse, glob, json, os, subprocess, sys, time
+import argparse, json, os, subprocess, sys, time
 
-# Dr.Jit finds LLVM through DRJIT_LIBLLVM_PATH; Debian bookworm's default LLVM 15 aborts in
-# llvm_ad_rgb, so point it at libllvm19 (apt-get install libllvm19) when that is installed.
-if "DRJIT_LIBLLVM_PATH" not in os.environ:
-    found = sorted(glob.glob("/usr/lib/*/libLLVM.so.19*") + glob.glob("/usr/lib/*/libLLVM-19.so"))
-    if found:
-        os.environ["DRJIT_LIBLLVM_PATH"] = found[0]
+from _mitsuba import import_mitsuba, scene_dict
 
-def ensure(mod, pkg):
-    try:
-        __import__(mod)
-    except ImportError:
-        subprocess.check_call([sys.executable, "-m", "pip", "install", "-q", pkg])
-
-ensure("numpy", "numpy")
-ensure("mitsuba", "mitsuba")
-import mitsuba as mi  # noqa: E402
-
-from _mitsuba_scene import scene_dict  # noqa: E402
+mi = import_mitsuba()
 
 
 ap = argparse.ArgumentParser()

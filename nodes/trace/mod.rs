@@ -1,4 +1,4 @@
-//! Ray and path tracing: a binned-SAH BVH with watertight intersection, sampling
+//! Ray and path tracing: a BVH (PLOC clustering) with watertight intersection, sampling
 //! routines, BSDFs, an environment light, an OBJ + MTL scene loader, a Whitted ray tracer
 //! and a path tracer.
 

@@ -1,8 +1,7 @@
-//! A bounding volume hierarchy over triangles, built top-down with the binned surface area
-//! heuristic (Wald 2007, "On fast Construction of SAH-based Bounding Volume Hierarchies"),
-//! subtrees built in parallel with rayon, and traversed front to back with the watertight
-//! ray-triangle test of Woop, Benthin and Wald 2013 ("Watertight Ray/Triangle
-//! Intersection", JCGT 2(1)).
+//! A bounding volume hierarchy over triangles, built bottom up by locally-ordered
+//! clustering with reinsertion (`build.rs`, through the `obvhs` crate), collapsed to four
+//! children per node, and traversed front to back with the watertight ray-triangle test of
+//! Woop, Benthin and Wald 2013 ("Watertight Ray/Triangle Intersection", JCGT 2(1)).
 //!
 //! Everything is f32: the triangles are copied into BVH order so a leaf's triangles are
 //! contiguous in memory, and traversal allocates nothing.

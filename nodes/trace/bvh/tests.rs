@@ -93,7 +93,7 @@ fn empty_box_is_the_union_identity() {
 }
 
 #[test]
-fn parallel_build_matches_counts() {
+fn large_build_holds_every_triangle_once() {
     let tris = random_tris(20_000, 11);
     let bvh = Bvh::build(&tris);
     let mut seen = vec![false; tris.len()];

@@ -1,9 +1,9 @@
-//! Four-lane building blocks of the 4-wide BVH: `[f32; 4]` helpers written as plain
-//! lane-wise comparisons (`if a < b { a } else { b }`), which LLVM turns into packed SSE
-//! (`minps`, `maxps`, `cmpps` + `movmskps`) on baseline x86_64 without `unsafe` or target
-//! features (`f32::min`/`max` would not: their NaN rules block the packed forms); the
-//! four-box slab test; and the watertight ray-triangle test of Woop, Benthin and Wald 2013
-//! run on four triangles stored axis by axis (`Tri4`).
+//! Four-lane building blocks of the 4-wide BVH: `[f32; 4]` helpers computed as packed SSE
+//! through the `wide` crate (safe code; `minps`, `maxps`, and comparisons straight to a bit
+//! mask with `cmpps` + `movmskps`, which LLVM had turned into four `ucomiss` and `set`s per
+//! mask when they were written as plain lane-wise Rust: docs/path_tracing.md, ninth round);
+//! the four-box slab test; and the watertight ray-triangle test of Woop, Benthin and Wald
+//! 2013 run on four triangles stored axis by axis (`Tri4`).
 //!
 //! Every lane computes exactly the operations of the scalar `tri_test`, in the same order
 //! (Rust never contracts to FMA), so a lane's result is bit for bit the scalar one; the
@@ -11,6 +11,7 @@
 
 use super::traverse::{intersect_triangle, tri_test, RayPre};
 use crate::nodes::trace::sampling::V3;
+use wide::f32x4;
 
 /// The axis permutation of the watertight test (`RayPre`'s kx, ky, kz): fixed at compile
 /// time (`Fixed`, constant indices into a `Tri4`) for the single-ray traversal, which is
@@ -56,45 +57,69 @@ impl Axes for Dyn {
 /// Four floats, one per lane.
 pub type F4 = [f32; 4];
 
+/// The lanes as an SSE register (`wide`, already a dependency through nalgebra's simba):
+/// its packed operations and comparisons are safe code, and `to_bitmask` is `movmskps`.
 #[inline(always)]
-fn map2(a: F4, b: F4, f: impl Fn(f32, f32) -> f32) -> F4 {
-    [f(a[0], b[0]), f(a[1], b[1]), f(a[2], b[2]), f(a[3], b[3])]
+fn w(a: F4) -> f32x4 {
+    f32x4::new(a)
 }
 
 #[inline(always)]
 fn sub4(a: F4, b: F4) -> F4 {
-    map2(a, b, |x, y| x - y)
+    (w(a) - w(b)).to_array()
 }
 
 #[inline(always)]
 fn mul4(a: F4, b: F4) -> F4 {
-    map2(a, b, |x, y| x * y)
+    (w(a) * w(b)).to_array()
 }
 
 #[inline(always)]
 fn add4(a: F4, b: F4) -> F4 {
-    map2(a, b, |x, y| x + y)
+    (w(a) + w(b)).to_array()
 }
 
-/// `if a > b { a } else { b }` per lane (`maxps`: a NaN in `a` keeps `b`).
+/// `if a > b { a } else { b }` per lane (`maxps`: a NaN in either keeps `b`).
 #[inline(always)]
 fn max4(a: F4, b: F4) -> F4 {
-    map2(a, b, |x, y| if x > y { x } else { y })
+    w(a).fast_max(w(b)).to_array()
 }
 
-/// `if a < b { a } else { b }` per lane (`minps`: a NaN in `a` keeps `b`).
+/// `if a < b { a } else { b }` per lane (`minps`: a NaN in either keeps `b`).
 #[inline(always)]
 fn min4(a: F4, b: F4) -> F4 {
-    map2(a, b, |x, y| if x < y { x } else { y })
+    w(a).fast_min(w(b)).to_array()
 }
 
-/// The lanes where `f(a, b)` holds, as the low four bits (`cmpps` + `movmskps`).
+/// The lanes where `a < b`, as the low four bits (`cmpltps` + `movmskps`; false on NaN,
+/// as the scalar comparison; so are the others).
 #[inline(always)]
-fn mask(a: F4, b: F4, f: impl Fn(f32, f32) -> bool) -> u32 {
-    (f(a[0], b[0]) as u32)
-        | (f(a[1], b[1]) as u32) << 1
-        | (f(a[2], b[2]) as u32) << 2
-        | (f(a[3], b[3]) as u32) << 3
+fn lt_mask(a: F4, b: F4) -> u32 {
+    w(a).simd_lt(w(b)).to_bitmask()
+}
+
+/// The lanes where `a <= b`.
+#[inline(always)]
+fn le_mask(a: F4, b: F4) -> u32 {
+    w(a).simd_le(w(b)).to_bitmask()
+}
+
+/// The lanes where `a > b`.
+#[inline(always)]
+fn gt_mask(a: F4, b: F4) -> u32 {
+    w(a).simd_gt(w(b)).to_bitmask()
+}
+
+/// The lanes where `a >= b`.
+#[inline(always)]
+fn ge_mask(a: F4, b: F4) -> u32 {
+    w(a).simd_ge(w(b)).to_bitmask()
+}
+
+/// The lanes where `a == b`.
+#[inline(always)]
+fn eq_mask(a: F4, b: F4) -> u32 {
+    w(a).simd_eq(w(b)).to_bitmask()
 }
 
 /// A ray broadcast to four lanes for the box test: origin and inverse direction per axis,
@@ -137,7 +162,7 @@ pub fn slab4(r: &Ray4, min: &[F4; 3], max: &[F4; 3], tmax: f32) -> (u32, F4) {
         t1 = min4(mul4(sub4(far, r.org[k]), r.inv[k]), t1);
     }
     let t1 = mul4(t1, [1.000_000_4; 4]);
-    (mask(t0, t1, |a, b| a <= b), t0)
+    (le_mask(t0, t1), t0)
 }
 
 /// Up to four triangles of a leaf, axis by axis: `v[corner][axis][lane]`, and the
@@ -220,9 +245,9 @@ pub fn tri4<const ANY: bool, P: Axes>(
     let v = sub4(mul4(ax, cy), mul4(ay, cx));
     let w = sub4(mul4(bx, ay), mul4(by, ax));
     let live = (1u32 << count) - 1;
-    let eq = |a: F4| mask(a, z, |x, y| x == y);
-    let lt = |a: F4| mask(a, z, |x, y| x < y);
-    let gt = |a: F4| mask(a, z, |x, y| x > y);
+    let eq = |a: F4| eq_mask(a, z);
+    let lt = |a: F4| lt_mask(a, z);
+    let gt = |a: F4| gt_mask(a, z);
     // Lanes on an edge go to the scalar test's double-precision fallback (section 3.3).
     let edge = (eq(u) | eq(v) | eq(w)) & live;
     let outside = (lt(u) | lt(v) | lt(w)) & (gt(u) | gt(v) | gt(w));
@@ -236,8 +261,8 @@ pub fn tri4<const ANY: bool, P: Axes>(
     // it here fails it for every smaller `tmax` too, so only the rest are looked at again.
     let td = mul4([*tmax; 4], det);
     let pos = gt(det);
-    let reject_pos = mask(t, z, |a, b| a <= b) | mask(t, td, |a, b| a >= b);
-    let reject_neg = mask(t, z, |a, b| a >= b) | mask(t, td, |a, b| a <= b);
+    let reject_pos = le_mask(t, z) | ge_mask(t, td);
+    let reject_neg = ge_mask(t, z) | le_mask(t, td);
     let depth = (pos & !reject_pos) | (!pos & !reject_neg);
     let mut cand = (live & !edge & !outside & !eq(det) & depth) | edge;
     while cand != 0 {

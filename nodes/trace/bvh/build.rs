@@ -8,8 +8,8 @@
 //! tree order, and collapsed to four children per node (`wide.rs`).
 //!
 //! Why not top-down SAH: our binned and swept SAH tree (Wald 2007; MacDonald and Booth 1990)
-//! had a lower SAH cost on the igea scene than PLOC's, but its rays visited 1.3x as many
-//! nodes and 2.3-4.7x as many leaves, and traced 1.6x slower (docs/path_tracing.md, ninth
+//! had a lower SAH cost on the igea scene than PLOC's, but its rays visited 1.2-1.7x as many
+//! nodes and 2.5-4.6x as many leaves, and traced 1.6x slower (docs/path_tracing.md, ninth
 //! round): the cost model counts rays that pass through, while most rays of a path tracer
 //! start on a surface and end on the next one, where PLOC's compact clusters pay.
 

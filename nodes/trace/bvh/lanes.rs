@@ -91,35 +91,29 @@ fn min4(a: F4, b: F4) -> F4 {
     w(a).fast_min(w(b)).to_array()
 }
 
-/// The lanes where `a < b`, as the low four bits (`cmpltps` + `movmskps`; false on NaN,
-/// as the scalar comparison; so are the others).
-#[inline(always)]
-fn lt_mask(a: F4, b: F4) -> u32 {
-    w(a).simd_lt(w(b)).to_bitmask()
+/// A lane comparison; every one is false on NaN, as the scalar comparison is.
+#[derive(Clone, Copy, Debug)]
+enum Cmp {
+    Lt,
+    Le,
+    Gt,
+    Ge,
+    Eq,
 }
 
-/// The lanes where `a <= b`.
+/// The lanes where `a op b` holds, as the low four bits (`cmpps` + `movmskps`; `op` is a
+/// constant at every call, so the match folds away).
 #[inline(always)]
-fn le_mask(a: F4, b: F4) -> u32 {
-    w(a).simd_le(w(b)).to_bitmask()
-}
-
-/// The lanes where `a > b`.
-#[inline(always)]
-fn gt_mask(a: F4, b: F4) -> u32 {
-    w(a).simd_gt(w(b)).to_bitmask()
-}
-
-/// The lanes where `a >= b`.
-#[inline(always)]
-fn ge_mask(a: F4, b: F4) -> u32 {
-    w(a).simd_ge(w(b)).to_bitmask()
-}
-
-/// The lanes where `a == b`.
-#[inline(always)]
-fn eq_mask(a: F4, b: F4) -> u32 {
-    w(a).simd_eq(w(b)).to_bitmask()
+fn mask(a: F4, op: Cmp, b: F4) -> u32 {
+    let (a, b) = (w(a), w(b));
+    let m = match op {
+        Cmp::Lt => a.simd_lt(b),
+        Cmp::Le => a.simd_le(b),
+        Cmp::Gt => a.simd_gt(b),
+        Cmp::Ge => a.simd_ge(b),
+        Cmp::Eq => a.simd_eq(b),
+    };
+    m.to_bitmask()
 }
 
 /// A ray broadcast to four lanes for the box test: origin and inverse direction per axis,
@@ -162,7 +156,7 @@ pub fn slab4(r: &Ray4, min: &[F4; 3], max: &[F4; 3], tmax: f32) -> (u32, F4) {
         t1 = min4(mul4(sub4(far, r.org[k]), r.inv[k]), t1);
     }
     let t1 = mul4(t1, [1.000_000_4; 4]);
-    (le_mask(t0, t1), t0)
+    (mask(t0, Cmp::Le, t1), t0)
 }
 
 /// Up to four triangles of a leaf, axis by axis: `v[corner][axis][lane]`, and the
@@ -245,9 +239,9 @@ pub fn tri4<const ANY: bool, P: Axes>(
     let v = sub4(mul4(ax, cy), mul4(ay, cx));
     let w = sub4(mul4(bx, ay), mul4(by, ax));
     let live = (1u32 << count) - 1;
-    let eq = |a: F4| eq_mask(a, z);
-    let lt = |a: F4| lt_mask(a, z);
-    let gt = |a: F4| gt_mask(a, z);
+    let eq = |a: F4| mask(a, Cmp::Eq, z);
+    let lt = |a: F4| mask(a, Cmp::Lt, z);
+    let gt = |a: F4| mask(a, Cmp::Gt, z);
     // Lanes on an edge go to the scalar test's double-precision fallback (section 3.3).
     let edge = (eq(u) | eq(v) | eq(w)) & live;
     let outside = (lt(u) | lt(v) | lt(w)) & (gt(u) | gt(v) | gt(w));
@@ -261,8 +255,8 @@ pub fn tri4<const ANY: bool, P: Axes>(
     // it here fails it for every smaller `tmax` too, so only the rest are looked at again.
     let td = mul4([*tmax; 4], det);
     let pos = gt(det);
-    let reject_pos = le_mask(t, z) | ge_mask(t, td);
-    let reject_neg = ge_mask(t, z) | le_mask(t, td);
+    let reject_pos = mask(t, Cmp::Le, z) | mask(t, Cmp::Ge, td);
+    let reject_neg = mask(t, Cmp::Ge, z) | mask(t, Cmp::Le, td);
     let depth = (pos & !reject_pos) | (!pos & !reject_neg);
     let mut cand = (live & !edge & !outside & !eq(det) & depth) | edge;
     while cand != 0 {

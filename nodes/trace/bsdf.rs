@@ -159,7 +159,10 @@ impl Bsdf {
     /// `eval` and `pdf` together (as Mitsuba 3's `eval_pdf`): next-event estimation with
     /// MIS needs both for the same pair of directions, and they share the side tests and,
     /// for GGX, the local frame, the half vector and the masking terms.
-    #[inline]
+    ///
+    /// Inlined (the diffuse case is a few multiplies; a call returned its pair through
+    /// memory, read back before the stores had landed), the GGX case out of line.
+    #[inline(always)]
     pub fn eval_pdf(&self, albedo: V3, ng: V3, ns: V3, wo: V3, wi: V3) -> (V3, f32) {
         let Some((g, n)) = sides(ng, ns, wo) else {
             return ([0.0; 3], 0.0);
@@ -170,20 +173,7 @@ impl Bsdf {
         }
         match *self {
             Bsdf::Diffuse => (scale(albedo, ci * FRAC_1_PI), ci * FRAC_1_PI),
-            Bsdf::Conductor { alpha } => {
-                let (t, b) = onb(n);
-                let lo = to_local(wo, t, b, n);
-                let li = to_local(wi, t, b, n);
-                let h = normalize(add(lo, li));
-                let (lam_o, lam_i) = (ggx_lambda(lo, alpha), ggx_lambda(li, alpha));
-                let d = ggx_d(h, alpha);
-                let g2 = 1.0 / (1.0 + lam_o + lam_i);
-                let f = schlick(albedo, dot(li, h));
-                // Visible-normal density over the reflection Jacobian 1 / (4 wo.h).
-                let g1 = 1.0 / (1.0 + lam_o);
-                let q = d / (4.0 * lo[2]);
-                (scale(f, g2 * q), g1 * q)
-            }
+            Bsdf::Conductor { alpha } => ggx_eval_pdf(albedo, alpha, n, wo, wi),
             _ => ([0.0; 3], 0.0),
         }
     }
@@ -276,6 +266,24 @@ fn sides(ng: V3, ns: V3, wo: V3) -> Option<(V3, V3)> {
     let g = scale(ng, s);
     let n = scale(ns, s);
     Some(if dot(n, wo) <= 1e-4 { (g, g) } else { (g, n) })
+}
+
+/// The GGX conductor's f cos and visible-normal density for `wo`, `wi` on the side of the
+/// unit shading normal `n` (Heitz 2018, eq. 17 over the reflection Jacobian 1 / (4 wo.h)).
+#[inline(never)]
+fn ggx_eval_pdf(albedo: V3, alpha: f32, n: V3, wo: V3, wi: V3) -> (V3, f32) {
+    let (t, b) = onb(n);
+    let lo = to_local(wo, t, b, n);
+    let li = to_local(wi, t, b, n);
+    let h = normalize(add(lo, li));
+    let (lam_o, lam_i) = (ggx_lambda(lo, alpha), ggx_lambda(li, alpha));
+    let d = ggx_d(h, alpha);
+    let g2 = 1.0 / (1.0 + lam_o + lam_i);
+    let f = schlick(albedo, dot(li, h));
+    // Visible-normal density over the reflection Jacobian 1 / (4 wo.h).
+    let g1 = 1.0 / (1.0 + lam_o);
+    let q = d / (4.0 * lo[2]);
+    (scale(f, g2 * q), g1 * q)
 }
 
 /// Smooth dielectric sampling about unit normal `n` on `wo`'s side, relative index

@@ -15,7 +15,8 @@
 //! splatted into the neighbouring pixels and normalised by the summed filter weights.
 
 use super::direct::{delta_lights, environment_nee, Vertex};
-use super::bvh::Segment;
+use super::bvh::{Segment, TraceStacks};
+use super::path_lanes::{self, Job, Sample};
 use super::render_scene::{prepare, PinholeCamera, RenderScene};
 use super::sampling::{add, dot, max_comp, mul, power_heuristic, scale, sub, Pcg32, V3};
 use super::tracer_node::{crease_input, declare_crease, reserve_image, trace_error};
@@ -129,6 +130,7 @@ impl Deferred {
 }
 
 /// Radiance arriving at `org` from direction `-dir` (unit `dir`), estimated with one path.
+/// `stacks` are the traversal stacks the path's rays use (one set per thread, reused).
 pub fn radiance(
     sc: &RenderScene,
     org: V3,
@@ -136,6 +138,7 @@ pub fn radiance(
     tmax: f32,
     rng: &mut Pcg32,
     s: &PathSettings,
+    stacks: &mut TraceStacks,
 ) -> V3 {
     let mut l = [0.0f32; 3];
     let mut thr = [1.0f32; 3];
@@ -151,7 +154,10 @@ pub fn radiance(
             None => sc.intersect(org, dir, tmax),
             Some(d) => {
                 let (hit, blocked) = match d.nee {
-                    Some((shadow, _)) => sc.bvh.intersect_occluded((org, dir, tmax), shadow),
+                    Some((shadow, _)) => {
+                        sc.bvh
+                            .intersect_occluded_in(stacks, (org, dir, tmax), shadow)
+                    }
                     None => (sc.intersect(org, dir, tmax), false),
                 };
                 l = d.add_to(l, blocked);
@@ -254,7 +260,9 @@ pub fn radiance(
                 sp: &sp,
                 bsdf,
             };
-            d.delta = mul(thr, delta_lights(sc, &v));
+            if !sc.lights.is_empty() {
+                d.delta = mul(thr, delta_lights(sc, &v));
+            }
             if sc.env.is_some() && s.strategy != Strategy::Bsdf {
                 let u = rng.next_2d();
                 let le = environment_nee(sc, &v, u, s.strategy == Strategy::Mis);
@@ -324,13 +332,35 @@ struct TileOut {
 
 /// Renders `cam`'s view of `sc`. Returns the colour image (linear radiance) and, per
 /// pixel, the variance of the pixel's estimate (sample variance of its own samples over
-/// spp, before filtering). `progress` receives the fraction of tiles done.
+/// spp, before filtering). `progress` receives the fraction of tiles done. Scenes the
+/// four-lane loop handles (`path_lanes::handles`) are traced four paths at a time, with
+/// the same result bit for bit.
 pub fn render(
     sc: &RenderScene,
     cam: &PinholeCamera,
     s: &PathSettings,
     progress: &(dyn Fn(f64) + Sync),
 ) -> (Image, Image) {
+    render_opts(sc, cam, s, progress, true)
+}
+
+/// `render`, with the four-lane loop allowed (`lanes`) or not (to measure what it buys
+/// and to check that both loops agree).
+pub fn render_opts(
+    sc: &RenderScene,
+    cam: &PinholeCamera,
+    s: &PathSettings,
+    progress: &(dyn Fn(f64) + Sync),
+    lanes: bool,
+) -> (Image, Image) {
+    let lanes = lanes && path_lanes::handles(sc, s);
+    // Pixels per batch of samples for the four-lane loop (about 16k samples, so lanes
+    // seldom wait for a batch's last paths; the scalar loop goes pixel by pixel).
+    let ppc = if lanes {
+        (16384 / s.spp as usize).max(1)
+    } else {
+        1
+    };
     let (w, h) = (cam.width, cam.height);
     let mut tiles = Vec::new();
     for y0 in (0..h).step_by(TILE as usize) {
@@ -348,17 +378,37 @@ pub fn render(
             let y1 = (y0 + TILE).min(h);
             let mut splat = vec![[0.0f32; 4]; pw * pw];
             let mut var = Vec::with_capacity(((x1 - x0) * (y1 - y0)) as usize);
-            for y in y0..y1 {
-                for x in x0..x1 {
-                    let pix = y as u64 * w as u64 + x as u64;
+            let mut stacks = TraceStacks::new();
+            let pixels: Vec<(u32, u32)> =
+                (y0..y1).flat_map(|y| (x0..x1).map(move |x| (x, y))).collect();
+            let mut samples: Vec<Sample> = Vec::new();
+            for chunk in pixels.chunks(ppc) {
+                if lanes {
+                    let jobs: Vec<Job> = chunk
+                        .iter()
+                        .flat_map(|&(x, y)| (0..s.spp).map(move |k| (x, y, k)))
+                        .collect();
+                    samples = path_lanes::trace(sc, cam, s, &jobs, &mut stacks);
+                } else {
+                    samples.clear();
+                    for &(x, y) in chunk {
+                        let pix = y as u64 * w as u64 + x as u64;
+                        for k in 0..s.spp {
+                            let mut rng = Pcg32::for_sample(pix, k as u64, s.seed);
+                            let [ux, uy] = rng.next_2d();
+                            let fx = x as f32 + ux;
+                            let fy = y as f32 + uy;
+                            let dir = cam.ray_dir(fx, fy);
+                            let c = radiance(sc, cam.eye, dir, cam.far, &mut rng, s, &mut stacks);
+                            samples.push(Sample { c, fx, fy });
+                        }
+                    }
+                }
+                for (j, &(x, y)) in chunk.iter().enumerate() {
                     let (mut s1, mut s2) = ([0.0f64; 3], [0.0f64; 3]);
-                    for k in 0..s.spp {
-                        let mut rng = Pcg32::for_sample(pix, k as u64, s.seed);
-                        let [ux, uy] = rng.next_2d();
-                        let fx = x as f32 + ux;
-                        let fy = y as f32 + uy;
-                        let dir = cam.ray_dir(fx, fy);
-                        let mut c = radiance(sc, cam.eye, dir, cam.far, &mut rng, s);
+                    let own = &samples[j * s.spp as usize..(j + 1) * s.spp as usize];
+                    for &Sample { c, fx, fy } in own {
+                        let mut c = c;
                         if !c.iter().all(|v| v.is_finite()) {
                             c = [0.0; 3];
                         }

@@ -408,7 +408,7 @@ impl RenderScene {
     /// interpolated with the hit's barycentrics (Phong 1975), perturbed by the normal map,
     /// and kept on the geometric normal's side (a shading normal facing away from the
     /// geometric one would light the back of the surface).
-    #[inline]
+    #[inline(always)]
     pub fn surface(&self, hit: &Hit) -> SurfacePoint {
         let t = hit.prim as usize;
         let ng = self.normals[t];
@@ -416,6 +416,14 @@ impl RenderScene {
             let albedo = self.materials[self.tri_mat[t] as usize].albedo;
             return SurfacePoint { ng, ns: ng, albedo };
         }
+        self.surface_interpolated(hit, ng)
+    }
+
+    /// `surface` for a triangle that is not plain (its own call: inlining it into every
+    /// caller would crowd the flat-shaded case).
+    #[inline(never)]
+    fn surface_interpolated(&self, hit: &Hit, ng: V3) -> SurfacePoint {
+        let t = hit.prim as usize;
         let (b1, b2) = (hit.u, hit.v);
         let b0 = 1.0 - b1 - b2;
         let c = &self.corner_normals[t];

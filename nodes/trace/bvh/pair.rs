@@ -10,7 +10,7 @@
 //! `intersect` and `occluded`.
 
 use super::lanes::Dyn;
-use super::traverse::{with_stacks, RayPre};
+use super::traverse::{with_stacks, RayPre, TraceStacks};
 use super::wide::Walk;
 use super::{Bvh, Hit};
 use crate::nodes::trace::sampling::V3;
@@ -24,7 +24,22 @@ impl Bvh {
     /// two traced interleaved: the same answers as `intersect(a)` and `occluded(b)`.
     #[inline]
     pub fn intersect_occluded(&self, a: Segment, b: Segment) -> (Option<Hit>, bool) {
-        let (ha, hb) = self.trace_pair::<false, true>(a, b);
+        with_stacks(|sa, sb| {
+            let (ha, hb) = self.trace_pair::<false, true>(a, b, sa, sb);
+            (ha, hb.is_some())
+        })
+    }
+
+    /// `intersect_occluded` on the caller's stacks, for a loop that traces many pairs.
+    #[inline(always)]
+    pub fn intersect_occluded_in(
+        &self,
+        st: &mut TraceStacks,
+        a: Segment,
+        b: Segment,
+    ) -> (Option<Hit>, bool) {
+        let (sa, sb) = st.split();
+        let (ha, hb) = self.trace_pair::<false, true>(a, b, sa, sb);
         (ha, hb.is_some())
     }
 
@@ -32,13 +47,16 @@ impl Bvh {
     /// calls of `intersect`.
     #[inline]
     pub fn intersect_pair(&self, a: Segment, b: Segment) -> (Option<Hit>, Option<Hit>) {
-        self.trace_pair::<false, false>(a, b)
+        with_stacks(|sa, sb| self.trace_pair::<false, false>(a, b, sa, sb))
     }
 
+    #[inline(always)]
     fn trace_pair<const ANY_A: bool, const ANY_B: bool>(
         &self,
         a: Segment,
         b: Segment,
+        sa: &mut [(u32, f32)],
+        sb: &mut [(u32, f32)],
     ) -> (Option<Hit>, Option<Hit>) {
         if self.wide.is_empty() || self.one_at_a_time {
             return (
@@ -48,20 +66,18 @@ impl Bvh {
         }
         let (ra, rb) = (RayPre::new(a.0, a.1), RayPre::new(b.0, b.1));
         let (pa, pb) = (Dyn(ra.kx, ra.ky, ra.kz), Dyn(rb.kx, rb.ky, rb.kz));
-        with_stacks(|sa, sb| {
-            let mut wa = Walk::new(&ra, a.2);
-            let mut wb = Walk::new(&rb, b.2);
-            loop {
-                if self.step4::<ANY_A, _>(&ra, pa, &mut wa, sa) {
-                    while !self.step4::<ANY_B, _>(&rb, pb, &mut wb, sb) {}
-                    break;
-                }
-                if self.step4::<ANY_B, _>(&rb, pb, &mut wb, sb) {
-                    while !self.step4::<ANY_A, _>(&ra, pa, &mut wa, sa) {}
-                    break;
-                }
+        let mut wa = Walk::new(&ra, a.2);
+        let mut wb = Walk::new(&rb, b.2);
+        loop {
+            if self.step4::<ANY_A, _>(&ra, pa, &mut wa, sa) {
+                while !self.step4::<ANY_B, _>(&rb, pb, &mut wb, sb) {}
+                break;
             }
-            (wa.best(), wb.best())
-        })
+            if self.step4::<ANY_B, _>(&rb, pb, &mut wb, sb) {
+                while !self.step4::<ANY_A, _>(&ra, pa, &mut wa, sa) {}
+                break;
+            }
+        }
+        (wa.best(), wb.best())
     }
 }

@@ -28,6 +28,40 @@ pub(super) fn with_stack<R>(f: impl FnOnce(&mut [(u32, f32)]) -> R) -> R {
     })
 }
 
+/// A traversal stack: (node, entry distance) entries.
+pub(super) type Stack = [(u32, f32)];
+
+/// Two traversal stacks owned by the caller, for a loop that traces many pairs of rays
+/// (`Bvh::intersect_occluded_in`): reaching the thread's own stacks costs a thread-local
+/// lookup and a borrow per query, and their answers come back through memory from a
+/// function that cannot be inlined (docs/path_tracing.md, tenth round).
+pub struct TraceStacks {
+    a: [(u32, f32); STACK],
+    b: [(u32, f32); STACK],
+}
+
+impl TraceStacks {
+    /// Fresh stacks (2 KiB, zeroed once).
+    pub fn new() -> TraceStacks {
+        TraceStacks {
+            a: [(0, 0.0); STACK],
+            b: [(0, 0.0); STACK],
+        }
+    }
+
+    /// The two stacks, apart.
+    #[inline(always)]
+    pub(super) fn split(&mut self) -> (&mut Stack, &mut Stack) {
+        (&mut self.a, &mut self.b)
+    }
+}
+
+impl Default for TraceStacks {
+    fn default() -> Self {
+        TraceStacks::new()
+    }
+}
+
 /// Runs `f` with this thread's two traversal stacks (fresh ones if they are in use).
 #[inline(always)]
 pub(super) fn with_stacks<R>(f: impl FnOnce(&mut [(u32, f32)], &mut [(u32, f32)]) -> R) -> R {

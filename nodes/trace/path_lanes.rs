@@ -1,0 +1,524 @@
+//! `render_path`'s estimator run on four paths at a time: the scalar work of a path vertex
+//! (tracing, random numbers, material and emitter look-ups) stays per path, and the
+//! arithmetic of shading it (next-event geometry, the diffuse BSDF's value and density,
+//! the power heuristic, cosine-weighted sampling, ray offsets) runs on four SSE lanes, one
+//! path per lane, with masks in place of branches. A lane whose path ends takes the next
+//! pixel sample at once, so the lanes stay full (the "regeneration" of wavefront path
+//! tracers: Laine, Karras and Aila 2013, "Megakernels Considered Harmful", section 4).
+//!
+//! Every lane performs the scalar `radiance`'s floating-point operations in the same order
+//! (Rust never contracts to FMA; SSE's add, multiply, divide and square root are IEEE
+//! correctly rounded like their scalar forms) and draws the same random numbers from the
+//! path's own stream, so a sample's radiance is bit for bit the scalar one
+//! (`tests::lanes_match_the_scalar_estimator`). It covers the common case, scenes whose
+//! materials are all diffuse and untextured, lit by area emitters only, under MIS
+//! (`handles`); `render_path` uses the scalar loop for everything else.
+
+use super::bsdf::Bsdf;
+use super::bvh::{Hit, TraceStacks};
+use super::render_path::{PathSettings, Strategy};
+use super::render_scene::{PinholeCamera, RenderScene};
+use super::sampling::{add, dot, max_comp, mul, power_heuristic, scale, Pcg32, V3};
+use std::f32::consts::{FRAC_1_PI, FRAC_PI_4};
+use wide::f32x4;
+
+/// Paths in flight (one per SSE lane).
+const L: usize = 4;
+
+/// Four floats, one per path.
+type F = f32x4;
+/// A 3-vector per lane, axis by axis.
+type F3 = [F; 3];
+
+/// One pixel sample to trace: pixel column, row and sample index.
+pub type Job = (u32, u32, u32);
+
+/// A traced sample: its radiance and film position.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Sample {
+    /// Radiance estimate (may be non-finite; the caller discards those).
+    pub c: V3,
+    /// Film position, pixels.
+    pub fx: f32,
+    /// Film position, pixels.
+    pub fy: f32,
+}
+
+/// Whether the four-lane loop renders `sc` under `s` exactly as the scalar loop would:
+/// MIS, no environment or point/directional lights, every material diffuse without
+/// textures (smooth shading normals are fine).
+pub fn handles(sc: &RenderScene, s: &PathSettings) -> bool {
+    s.strategy == Strategy::Mis
+        && sc.env.is_none()
+        && sc.lights.is_empty()
+        && sc.materials.iter().all(|m| m.bsdf == Bsdf::Diffuse)
+        && sc
+            .textures
+            .iter()
+            .all(|t| t.base.is_none() && t.normal.is_none())
+}
+
+#[inline(always)]
+fn add3(a: F3, b: F3) -> F3 {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+#[inline(always)]
+fn sub3(a: F3, b: F3) -> F3 {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+#[inline(always)]
+fn mul3(a: F3, b: F3) -> F3 {
+    [a[0] * b[0], a[1] * b[1], a[2] * b[2]]
+}
+#[inline(always)]
+fn scale3(a: F3, s: F) -> F3 {
+    [a[0] * s, a[1] * s, a[2] * s]
+}
+#[inline(always)]
+fn dot3(a: F3, b: F3) -> F {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+/// `a[0].max(a[1]).max(a[2])` per lane (`max` returns the other operand on NaN, as
+/// `f32::max` does).
+#[inline(always)]
+fn max3(a: F3) -> F {
+    a[0].max(a[1]).max(a[2])
+}
+/// `m ? a : b` per lane.
+#[inline(always)]
+fn sel3(m: F, a: F3, b: F3) -> F3 {
+    [m.select(a[0], b[0]), m.select(a[1], b[1]), m.select(a[2], b[2])]
+}
+#[inline(always)]
+fn splat(x: f32) -> F {
+    F::splat(x)
+}
+/// Lane mask as four bools.
+#[inline(always)]
+fn bits(m: F) -> u32 {
+    m.to_bitmask()
+}
+/// `RenderScene::offset` per lane.
+#[inline(always)]
+fn offset4(eps: f32, p: F3, n: F3) -> F3 {
+    let m = p[0].abs().max(p[1].abs()).max(p[2].abs());
+    add3(p, scale3(n, splat(eps) + splat(4e-7) * m))
+}
+
+/// `sampling::power_heuristic` per lane.
+#[inline(always)]
+fn power4(pa: F, pb: F) -> F {
+    let a = pa * pa;
+    let b = pb * pb;
+    let s = a + b;
+    let first = s.simd_gt(splat(0.0)) & a.is_finite();
+    first.select(a / s, a.is_inf().select(splat(1.0), splat(0.0)))
+}
+
+/// `sampling::sin_cos_quarter` per lane (the same series, the same operation order).
+#[inline(always)]
+fn sin_cos_quarter4(a: F) -> (F, F) {
+    let one = splat(1.0);
+    let a2 = a * a;
+    let s = a * (one - a2 / splat(6.0) * (one - a2 / splat(20.0) * (one - a2 / splat(42.0))));
+    let c = one
+        - a2 / splat(2.0)
+            * (one - a2 / splat(12.0) * (one - a2 / splat(30.0) * (one - a2 / splat(56.0))));
+    (s, c)
+}
+
+/// `sampling::cosine_hemisphere` per lane: the orthonormal basis of Duff et al. 2017 and
+/// Malley's method over the concentric map, both branches computed and selected.
+#[inline(always)]
+fn cosine_hemisphere4(n: F3, u: [F; 2]) -> F3 {
+    let one = splat(1.0);
+    let sign = n[2].is_sign_negative().select(splat(-1.0), one);
+    let a = splat(-1.0) / (sign + n[2]);
+    let b = n[0] * n[1] * a;
+    let t = [one + sign * n[0] * n[0] * a, sign * b, -sign * n[0]];
+    let bt = [b, sign + n[1] * n[1] * a, -n[1]];
+    let two = splat(2.0);
+    let ox = two * u[0] - one;
+    let oy = two * u[1] - one;
+    let zero = splat(0.0);
+    let origin = ox.simd_eq(zero) & oy.simd_eq(zero);
+    // Each lane evaluates the series once, at its own branch's angle.
+    let wide_x = ox.abs().simd_gt(oy.abs());
+    let ratio = wide_x.select(oy, ox) / wide_x.select(ox, oy);
+    let (sn, cs) = sin_cos_quarter4(splat(FRAC_PI_4) * ratio);
+    let x = wide_x.select(ox * cs, oy * sn);
+    let y = wide_x.select(ox * sn, oy * cs);
+    let x = origin.select(zero, x);
+    let y = origin.select(zero, y);
+    let z = (one - x * x - y * y).max(zero).sqrt();
+    add3(add3(scale3(t, x), scale3(bt, y)), scale3(n, z))
+}
+
+/// Per-lane inputs of the shading step, gathered by the scalar part.
+#[derive(Default)]
+struct Gather {
+    /// Hit distance.
+    t: [f32; L],
+    ng: [[f32; L]; 3],
+    ns: [[f32; L]; 3],
+    albedo: [[f32; L]; 3],
+    /// The emitter sample (point, normal, area density, emission, two-sided), if any.
+    has_ls: [bool; L],
+    ls_p: [[f32; L]; 3],
+    ls_n: [[f32; L]; 3],
+    ls_pdf: [f32; L],
+    ls_le: [[f32; L]; 3],
+    ls_two: [bool; L],
+    /// The two numbers of the BSDF sample.
+    bsdf_uv: [[f32; L]; 2],
+}
+
+/// What the lanes carry between segments; vectors axis by axis (`[axis][lane]`), so the
+/// shading step loads and stores them whole.
+struct Lanes {
+    /// Index of the job in each lane (`IDLE` when none).
+    job: [usize; L],
+    rng: [Pcg32; L],
+    org: [[f32; L]; 3],
+    dir: [[f32; L]; 3],
+    tmax: [f32; L],
+    thr: [[f32; L]; 3],
+    l: [V3; L],
+    eta: [f32; L],
+    prev_pdf: [f32; L],
+    prev_delta: [bool; L],
+    depth: [u32; L],
+    /// Direct light estimated at the previous vertex waiting for its shadow ray (as
+    /// `render_path::Deferred`): whether there is one, whether it has an emitter sample,
+    /// that sample's shadow segment and its contribution when unblocked.
+    pending: [bool; L],
+    nee: [bool; L],
+    seg_o: [[f32; L]; 3],
+    seg_d: [[f32; L]; 3],
+    nee_c: [[f32; L]; 3],
+}
+
+const IDLE: usize = usize::MAX;
+/// The shadow segment's far end (the emitter point itself is excluded).
+const SEG_T: f32 = 1.0 - 1e-4;
+
+#[inline(always)]
+fn f4(a: &[f32; L]) -> F {
+    F::new(*a)
+}
+#[inline(always)]
+fn f43(a: &[[f32; L]; 3]) -> F3 {
+    [f4(&a[0]), f4(&a[1]), f4(&a[2])]
+}
+#[inline(always)]
+fn store3(a: &mut [[f32; L]; 3], v: F3) {
+    for k in 0..3 {
+        a[k] = v[k].to_array();
+    }
+}
+#[inline(always)]
+fn put(a: &mut [[f32; L]; 3], i: usize, v: V3) {
+    a[0][i] = v[0];
+    a[1][i] = v[1];
+    a[2][i] = v[2];
+}
+#[inline(always)]
+fn get(a: &[[f32; L]; 3], i: usize) -> V3 {
+    [a[0][i], a[1][i], a[2][i]]
+}
+
+impl Lanes {
+    fn new() -> Lanes {
+        Lanes {
+            job: [IDLE; L],
+            rng: std::array::from_fn(|_| Pcg32::new(0, 0)),
+            org: [[0.0; L]; 3],
+            dir: [[0.0; L]; 3],
+            tmax: [0.0; L],
+            thr: [[0.0; L]; 3],
+            l: [[0.0; 3]; L],
+            eta: [1.0; L],
+            prev_pdf: [0.0; L],
+            prev_delta: [true; L],
+            depth: [0; L],
+            pending: [false; L],
+            nee: [false; L],
+            seg_o: [[0.0; L]; 3],
+            seg_d: [[0.0; L]; 3],
+            nee_c: [[0.0; L]; 3],
+        }
+    }
+
+    /// `Deferred::add_to`: the emitter sample's contribution unless blocked, plus the
+    /// (zero) delta-light term.
+    #[inline(always)]
+    fn add_pending(&mut self, i: usize, blocked: bool) {
+        if self.nee[i] && !blocked {
+            self.l[i] = add(self.l[i], get(&self.nee_c, i));
+        }
+        self.l[i] = add(self.l[i], [0.0; 3]);
+        self.pending[i] = false;
+    }
+
+    /// Ends lane `i`'s path: traces a pending shadow ray alone and stores the radiance.
+    fn finish(&mut self, i: usize, sc: &RenderScene, out: &mut [Sample]) {
+        if self.pending[i] {
+            let blocked = self.nee[i]
+                && sc
+                    .bvh
+                    .occluded(get(&self.seg_o, i), get(&self.seg_d, i), SEG_T);
+            self.add_pending(i, blocked);
+        }
+        out[self.job[i]].c = self.l[i];
+        self.job[i] = IDLE;
+    }
+}
+
+/// Traces `jobs` (pixel samples) and returns their radiance and film positions, in
+/// `jobs`' order, as `render_path`'s per-sample loop computes them.
+pub fn trace(
+    sc: &RenderScene,
+    cam: &PinholeCamera,
+    s: &PathSettings,
+    jobs: &[Job],
+    stacks: &mut TraceStacks,
+) -> Vec<Sample> {
+    let mut out = vec![Sample::default(); jobs.len()];
+    let mut ln = Lanes::new();
+    let mut next = 0usize;
+    let mut g = Gather::default();
+    loop {
+        // Idle lanes take the next pixel samples (the camera ray, as `render` makes it).
+        for i in 0..L {
+            if ln.job[i] != IDLE || next == jobs.len() {
+                continue;
+            }
+            let (x, y, k) = jobs[next];
+            let pix = y as u64 * cam.width as u64 + x as u64;
+            let mut rng = Pcg32::for_sample(pix, k as u64, s.seed);
+            let [ux, uy] = rng.next_2d();
+            let (fx, fy) = (x as f32 + ux, y as f32 + uy);
+            out[next].fx = fx;
+            out[next].fy = fy;
+            ln.job[i] = next;
+            ln.rng[i] = rng;
+            put(&mut ln.org, i, cam.eye);
+            put(&mut ln.dir, i, cam.ray_dir(fx, fy));
+            ln.tmax[i] = cam.far;
+            put(&mut ln.thr, i, [1.0; 3]);
+            ln.l[i] = [0.0; 3];
+            ln.eta[i] = 1.0;
+            ln.prev_pdf[i] = 0.0;
+            ln.prev_delta[i] = true;
+            ln.depth[i] = 0;
+            ln.pending[i] = false;
+            next += 1;
+        }
+        if ln.job.iter().all(|&j| j == IDLE) {
+            break;
+        }
+        let mut go = [false; L];
+        for (i, go) in go.iter_mut().enumerate() {
+            *go = ln.job[i] != IDLE && visit(sc, s, &mut ln, i, &mut g, stacks, &mut out);
+        }
+        if go.iter().any(|&b| b) {
+            shade(sc, s, &mut ln, &g, go, &mut out);
+        }
+    }
+    out
+}
+
+/// The scalar part of a vertex on lane `i`: trace the segment (with the pending shadow
+/// ray), add emission found, and gather what the shading step needs, drawing the vertex's
+/// random numbers in the scalar loop's order. Returns false when the path has ended.
+#[inline(always)]
+fn visit(
+    sc: &RenderScene,
+    s: &PathSettings,
+    ln: &mut Lanes,
+    i: usize,
+    g: &mut Gather,
+    stacks: &mut TraceStacks,
+    out: &mut [Sample],
+) -> bool {
+    let (org, dir, tmax) = (get(&ln.org, i), get(&ln.dir, i), ln.tmax[i]);
+    let hit: Option<Hit> = if ln.pending[i] {
+        let (hit, blocked) = if ln.nee[i] {
+            let shadow = (get(&ln.seg_o, i), get(&ln.seg_d, i), SEG_T);
+            sc.bvh.intersect_occluded_in(stacks, (org, dir, tmax), shadow)
+        } else {
+            (sc.intersect(org, dir, tmax), false)
+        };
+        ln.add_pending(i, blocked);
+        hit
+    } else {
+        sc.intersect(org, dir, tmax)
+    };
+    let Some(hit) = hit else {
+        ln.finish(i, sc, out);
+        return false;
+    };
+    let tri = hit.prim;
+    let mat = sc.material(tri);
+    if mat.is_emitter() {
+        let wo = scale(dir, -1.0);
+        let le = sc.emitted(tri, wo);
+        if max_comp(le) > 0.0 {
+            let w = if ln.depth[i] == 0 || ln.prev_delta[i] {
+                1.0
+            } else {
+                let ng = sc.normals[tri as usize];
+                let cos_l = dot(ng, wo).abs();
+                let p_light = sc.light_pdf_area[tri as usize] * hit.t * hit.t / cos_l;
+                power_heuristic(ln.prev_pdf[i], p_light)
+            };
+            ln.l[i] = add(ln.l[i], scale(mul(get(&ln.thr, i), le), w));
+        }
+    }
+    if ln.depth[i] + 1 >= s.max_depth {
+        ln.finish(i, sc, out);
+        return false;
+    }
+    let sp = sc.surface(&hit);
+    g.t[i] = hit.t;
+    put(&mut g.ng, i, sp.ng);
+    put(&mut g.ns, i, sp.ns);
+    put(&mut g.albedo, i, sp.albedo);
+    let rng = &mut ln.rng[i];
+    let u = rng.next_f32();
+    let uv = rng.next_2d();
+    g.has_ls[i] = false;
+    if let Some(ls) = sc.sample_emitter(u, uv) {
+        let m = sc.material(ls.tri);
+        g.has_ls[i] = true;
+        put(&mut g.ls_p, i, ls.p);
+        put(&mut g.ls_n, i, ls.n);
+        g.ls_pdf[i] = ls.pdf_area;
+        put(&mut g.ls_le, i, m.emission);
+        g.ls_two[i] = m.two_sided_emission;
+    }
+    // The BSDF sample's first number picks a lobe, which a diffuse surface does not need.
+    let _ = rng.next_f32();
+    let [a, b] = rng.next_2d();
+    g.bsdf_uv[0][i] = a;
+    g.bsdf_uv[1][i] = b;
+    true
+}
+
+/// The lane-parallel part of a vertex for the lanes in `go`: next-event estimation
+/// towards the gathered emitter sample, the BSDF sample for the next segment, Russian
+/// roulette, and the next ray's origin.
+#[inline(always)]
+fn shade(
+    sc: &RenderScene,
+    s: &PathSettings,
+    ln: &mut Lanes,
+    g: &Gather,
+    go: [bool; L],
+    out: &mut [Sample],
+) {
+    let zero = splat(0.0);
+    let neg = splat(-1.0);
+    let org = f43(&ln.org);
+    let dir = f43(&ln.dir);
+    let thr = f43(&ln.thr);
+    let p = add3(org, scale3(dir, f4(&g.t)));
+    let wo = scale3(dir, neg);
+    let ng = f43(&g.ng);
+    let ns = f43(&g.ns);
+    let albedo = f43(&g.albedo);
+    // `bsdf::sides`: the normals flipped to wo's side, the shading normal replaced by the
+    // geometric one when wo is below its hemisphere; no lobe when wo grazes the surface.
+    let co = dot3(ng, wo);
+    let sides_ok = co.simd_ne(zero) & co.is_finite();
+    let sgn = co.simd_lt(zero).select(neg, splat(1.0));
+    let gside = scale3(ng, sgn);
+    let n = scale3(ns, sgn);
+    let n = sel3(dot3(n, wo).simd_le(splat(1e-4)), gside, n);
+
+    // Next-event estimation (`radiance`'s emitter sample, MIS-weighted).
+    let ls_p = f43(&g.ls_p);
+    let ls_n = f43(&g.ls_n);
+    let has_ls = F::new(g.has_ls.map(|b| if b { f32::from_bits(!0) } else { 0.0 }));
+    let two = F::new(g.ls_two.map(|b| if b { f32::from_bits(!0) } else { 0.0 }));
+    let dv = sub3(ls_p, p);
+    let dist2 = dot3(dv, dv);
+    let dist = dist2.sqrt();
+    let wi = scale3(dv, splat(1.0) / dist);
+    let front = two | dot3(ls_n, scale3(wi, neg)).simd_gt(zero);
+    let le = sel3(front, f43(&g.ls_le), [zero; 3]);
+    let cos_l = dot3(ls_n, wi).abs();
+    // `Bsdf::eval_pdf` for the diffuse lobe.
+    let ci = dot3(n, wi);
+    let lit = sides_ok & !(ci.simd_le(zero) | dot3(gside, wi).simd_le(zero));
+    let cpi = ci * splat(FRAC_1_PI);
+    let f = sel3(lit, scale3(albedo, cpi), [zero; 3]);
+    let bsdf_pdf = lit.select(cpi, zero);
+    let nee_ok = has_ls
+        & dist.simd_gt(zero)
+        & max3(le).simd_gt(zero)
+        & cos_l.simd_gt(zero)
+        & max3(f).simd_gt(zero);
+    let side = sel3(dot3(ng, wi).simd_gt(zero), ng, scale3(ng, neg));
+    let o = offset4(sc.eps, p, side);
+    let p_light = f4(&g.ls_pdf) * dist2 / cos_l;
+    let w = power4(p_light, bsdf_pdf);
+    let c = scale3(mul3(thr, mul3(f, le)), w / p_light);
+    let seg_d = sub3(ls_p, o);
+    let nee_bits = bits(nee_ok);
+
+    // BSDF sampling (`Bsdf::sample`, diffuse): a cosine-weighted direction about n.
+    let uv = [f4(&g.bsdf_uv[0]), f4(&g.bsdf_uv[1])];
+    let wi2 = cosine_hemisphere4(n, uv);
+    let ci2 = dot3(n, wi2);
+    let sampled = sides_ok & !(ci2.simd_le(zero) | dot3(gside, wi2).simd_le(zero));
+    let sampled_bits = bits(sampled);
+    let pdf2 = ci2 * splat(FRAC_1_PI);
+    let thr2 = mul3(thr, albedo);
+    let tmaxc = max3(thr2);
+    let side2 = sel3(dot3(ng, wi2).simd_gt(zero), ng, scale3(ng, neg));
+    let org2 = offset4(sc.eps, p, side2);
+
+    // Lanes outside `go` are idle, so whole vectors are stored; the per-lane loop below
+    // only decides which paths end and applies Russian roulette.
+    store3(&mut ln.seg_o, o);
+    store3(&mut ln.seg_d, seg_d);
+    store3(&mut ln.nee_c, c);
+    store3(&mut ln.thr, thr2);
+    store3(&mut ln.org, org2);
+    store3(&mut ln.dir, wi2);
+    let pdf2 = pdf2.to_array();
+    let tmaxc = tmaxc.to_array();
+    for i in 0..L {
+        if !go[i] {
+            continue;
+        }
+        ln.pending[i] = true;
+        ln.nee[i] = nee_bits & (1 << i) != 0;
+        if sampled_bits & (1 << i) == 0 {
+            ln.finish(i, sc, out);
+            continue;
+        }
+        // A diffuse sample crosses no interface: eta stays (the scalar loop multiplies
+        // it by 1.0, which is exact).
+        ln.prev_pdf[i] = pdf2[i];
+        ln.prev_delta[i] = false;
+        ln.depth[i] += 1;
+        let tm = tmaxc[i];
+        if ln.depth[i] >= s.rr_depth {
+            let eta = ln.eta[i];
+            let q = (tm * eta * eta).min(0.95);
+            if ln.rng[i].next_f32() >= q {
+                ln.finish(i, sc, out);
+                continue;
+            }
+            let t = scale(get(&ln.thr, i), 1.0 / q);
+            put(&mut ln.thr, i, t);
+        }
+        if tm <= 0.0 || !tm.is_finite() {
+            ln.finish(i, sc, out);
+            continue;
+        }
+        ln.tmax[i] = f32::INFINITY;
+    }
+}

@@ -3,19 +3,22 @@
 //! arithmetic of shading it (next-event geometry, the diffuse BSDF's value and density,
 //! the power heuristic, cosine-weighted sampling, ray offsets) runs on four SSE lanes, one
 //! path per lane, with masks in place of branches. A lane whose path ends takes the next
-//! pixel sample at once, so the lanes stay full (the "regeneration" of wavefront path
-//! tracers: Laine, Karras and Aila 2013, "Megakernels Considered Harmful", section 4).
+//! pixel sample at once, so the lanes stay full (the path regeneration of wavefront path
+//! tracers: Laine, Karras and Aila 2013, "Megakernels Considered Harmful").
 //!
 //! Every lane performs the scalar `radiance`'s floating-point operations in the same order
 //! (Rust never contracts to FMA; SSE's add, multiply, divide and square root are IEEE
 //! correctly rounded like their scalar forms) and draws the same random numbers from the
 //! path's own stream, so a sample's radiance is bit for bit the scalar one
-//! (`tests::lanes_match_the_scalar_estimator`). It covers the common case, scenes whose
-//! materials are all diffuse and untextured, lit by area emitters only, under MIS
-//! (`handles`); `render_path` uses the scalar loop for everything else.
+//! (`four_lane_paths_change_no_bit` in `tests/it/trace.rs`). It covers scenes whose
+//! materials are all diffuse (textured or not), under any strategy and any lights: the
+//! point, directional and environment lights' estimates are made per lane, in the scalar
+//! loop's code. Scenes with a glossy or specular material take the scalar loop
+//! (`handles`).
 
 use super::bsdf::Bsdf;
 use super::bvh::{Hit, TraceStacks};
+use super::direct::{delta_lights, environment_nee, Vertex};
 use super::render_path::{PathSettings, Strategy};
 use super::render_scene::{PinholeCamera, RenderScene};
 use super::sampling::{add, dot, max_comp, mul, power_heuristic, scale, Pcg32, V3};
@@ -44,18 +47,10 @@ pub struct Sample {
     pub fy: f32,
 }
 
-/// Whether the four-lane loop renders `sc` under `s` exactly as the scalar loop would:
-/// MIS, no environment or point/directional lights, every material diffuse without
-/// textures (smooth shading normals are fine).
-pub fn handles(sc: &RenderScene, s: &PathSettings) -> bool {
-    s.strategy == Strategy::Mis
-        && sc.env.is_none()
-        && sc.lights.is_empty()
-        && sc.materials.iter().all(|m| m.bsdf == Bsdf::Diffuse)
-        && sc
-            .textures
-            .iter()
-            .all(|t| t.base.is_none() && t.normal.is_none())
+/// Whether the four-lane loop renders `sc`: every material is diffuse (the loop's
+/// shading arithmetic is the diffuse lobe's); every strategy, filter and light is handled.
+pub fn handles(sc: &RenderScene) -> bool {
+    sc.materials.iter().all(|m| m.bsdf == Bsdf::Diffuse)
 }
 
 #[inline(always)]
@@ -171,6 +166,10 @@ struct Gather {
     ls_two: [bool; L],
     /// The two numbers of the BSDF sample.
     bsdf_uv: [[f32; L]; 2],
+    /// The point and directional lights' estimate (times the throughput), and the
+    /// environment sample's, when one was drawn.
+    delta: [V3; L],
+    env: [Option<V3>; L],
 }
 
 /// What the lanes carry between segments; vectors axis by axis (`[axis][lane]`), so the
@@ -193,6 +192,8 @@ struct Lanes {
     /// that sample's shadow segment and its contribution when unblocked.
     pending: [bool; L],
     nee: [bool; L],
+    delta: [V3; L],
+    env: [Option<V3>; L],
     seg_o: [[f32; L]; 3],
     seg_d: [[f32; L]; 3],
     nee_c: [[f32; L]; 3],
@@ -243,20 +244,25 @@ impl Lanes {
             depth: [0; L],
             pending: [false; L],
             nee: [false; L],
+            delta: [[0.0; 3]; L],
+            env: [None; L],
             seg_o: [[0.0; L]; 3],
             seg_d: [[0.0; L]; 3],
             nee_c: [[0.0; L]; 3],
         }
     }
 
-    /// `Deferred::add_to`: the emitter sample's contribution unless blocked, plus the
-    /// (zero) delta-light term.
+    /// `Deferred::add_to`: the emitter sample's contribution unless blocked, then the
+    /// delta lights' and the environment sample's.
     #[inline(always)]
     fn add_pending(&mut self, i: usize, blocked: bool) {
         if self.nee[i] && !blocked {
             self.l[i] = add(self.l[i], get(&self.nee_c, i));
         }
-        self.l[i] = add(self.l[i], [0.0; 3]);
+        self.l[i] = add(self.l[i], self.delta[i]);
+        if let Some(e) = self.env[i] {
+            self.l[i] = add(self.l[i], e);
+        }
         self.pending[i] = false;
     }
 
@@ -354,23 +360,43 @@ fn visit(
     } else {
         sc.intersect(org, dir, tmax)
     };
+    let first = ln.depth[i] == 0 || ln.prev_delta[i];
     let Some(hit) = hit else {
+        // The ray escapes: the environment's radiance, weighted like an emitter hit.
+        if let Some(env) = &sc.env {
+            let w = if first {
+                1.0
+            } else {
+                match s.strategy {
+                    Strategy::Bsdf => 1.0,
+                    Strategy::Nee => 0.0,
+                    Strategy::Mis => power_heuristic(ln.prev_pdf[i], env.pdf(dir)),
+                }
+            };
+            ln.l[i] = add(ln.l[i], scale(mul(get(&ln.thr, i), env.eval(dir)), w));
+        }
         ln.finish(i, sc, out);
         return false;
     };
     let tri = hit.prim;
     let mat = sc.material(tri);
+    let wo = scale(dir, -1.0);
     if mat.is_emitter() {
-        let wo = scale(dir, -1.0);
         let le = sc.emitted(tri, wo);
         if max_comp(le) > 0.0 {
-            let w = if ln.depth[i] == 0 || ln.prev_delta[i] {
+            let w = if first {
                 1.0
             } else {
-                let ng = sc.normals[tri as usize];
-                let cos_l = dot(ng, wo).abs();
-                let p_light = sc.light_pdf_area[tri as usize] * hit.t * hit.t / cos_l;
-                power_heuristic(ln.prev_pdf[i], p_light)
+                match s.strategy {
+                    Strategy::Bsdf => 1.0,
+                    Strategy::Nee => 0.0,
+                    Strategy::Mis => {
+                        let ng = sc.normals[tri as usize];
+                        let cos_l = dot(ng, wo).abs();
+                        let p_light = sc.light_pdf_area[tri as usize] * hit.t * hit.t / cos_l;
+                        power_heuristic(ln.prev_pdf[i], p_light)
+                    }
+                }
             };
             ln.l[i] = add(ln.l[i], scale(mul(get(&ln.thr, i), le), w));
         }
@@ -385,17 +411,40 @@ fn visit(
     put(&mut g.ns, i, sp.ns);
     put(&mut g.albedo, i, sp.albedo);
     let rng = &mut ln.rng[i];
-    let u = rng.next_f32();
-    let uv = rng.next_2d();
     g.has_ls[i] = false;
-    if let Some(ls) = sc.sample_emitter(u, uv) {
-        let m = sc.material(ls.tri);
-        g.has_ls[i] = true;
-        put(&mut g.ls_p, i, ls.p);
-        put(&mut g.ls_n, i, ls.n);
-        g.ls_pdf[i] = ls.pdf_area;
-        put(&mut g.ls_le, i, m.emission);
-        g.ls_two[i] = m.two_sided_emission;
+    if s.strategy != Strategy::Bsdf {
+        let u = rng.next_f32();
+        let uv = rng.next_2d();
+        if let Some(ls) = sc.sample_emitter(u, uv) {
+            let m = sc.material(ls.tri);
+            g.has_ls[i] = true;
+            put(&mut g.ls_p, i, ls.p);
+            put(&mut g.ls_n, i, ls.n);
+            g.ls_pdf[i] = ls.pdf_area;
+            put(&mut g.ls_le, i, m.emission);
+            g.ls_two[i] = m.two_sided_emission;
+        }
+    }
+    // Point and directional lights, and one environment sample, per lane in the scalar
+    // loop's code (their shadow rays are traced here, as there).
+    g.delta[i] = [0.0; 3];
+    g.env[i] = None;
+    if !sc.lights.is_empty() || sc.env.is_some() {
+        let thr = get(&ln.thr, i);
+        let v = Vertex {
+            p: add(org, scale(dir, hit.t)),
+            wo,
+            sp: &sp,
+            bsdf: Bsdf::Diffuse,
+        };
+        if !sc.lights.is_empty() {
+            g.delta[i] = mul(thr, delta_lights(sc, &v));
+        }
+        if sc.env.is_some() && s.strategy != Strategy::Bsdf {
+            let u = rng.next_2d();
+            let le = environment_nee(sc, &v, u, s.strategy == Strategy::Mis);
+            g.env[i] = Some(mul(thr, le));
+        }
     }
     // The BSDF sample's first number picks a lobe, which a diffuse surface does not need.
     let _ = rng.next_f32();
@@ -462,7 +511,11 @@ fn shade(
     let side = sel3(dot3(ng, wi).simd_gt(zero), ng, scale3(ng, neg));
     let o = offset4(sc.eps, p, side);
     let p_light = f4(&g.ls_pdf) * dist2 / cos_l;
-    let w = power4(p_light, bsdf_pdf);
+    let w = if s.strategy == Strategy::Mis {
+        power4(p_light, bsdf_pdf)
+    } else {
+        splat(1.0)
+    };
     let c = scale3(mul3(thr, mul3(f, le)), w / p_light);
     let seg_d = sub3(ls_p, o);
     let nee_bits = bits(nee_ok);
@@ -495,6 +548,8 @@ fn shade(
         }
         ln.pending[i] = true;
         ln.nee[i] = nee_bits & (1 << i) != 0;
+        ln.delta[i] = g.delta[i];
+        ln.env[i] = g.env[i];
         if sampled_bits & (1 << i) == 0 {
             ln.finish(i, sc, out);
             continue;

@@ -333,8 +333,8 @@ struct TileOut {
 /// Renders `cam`'s view of `sc`. Returns the colour image (linear radiance) and, per
 /// pixel, the variance of the pixel's estimate (sample variance of its own samples over
 /// spp, before filtering). `progress` receives the fraction of tiles done. Scenes the
-/// four-lane loop handles (`path_lanes::handles`) are traced four paths at a time, with
-/// the same result bit for bit.
+/// four-lane loop handles (`path_lanes::handles`: every material diffuse) are traced four
+/// paths at a time, with the same result bit for bit.
 pub fn render(
     sc: &RenderScene,
     cam: &PinholeCamera,
@@ -353,7 +353,7 @@ pub fn render_opts(
     progress: &(dyn Fn(f64) + Sync),
     lanes: bool,
 ) -> (Image, Image) {
-    let lanes = lanes && path_lanes::handles(sc, s);
+    let lanes = lanes && path_lanes::handles(sc);
     // Pixels per batch of samples for the four-lane loop (about 16k samples, so lanes
     // seldom wait for a batch's last paths; the scalar loop goes pixel by pixel).
     let ppc = if lanes {

@@ -220,10 +220,12 @@ fn interleaved_shadow_rays_change_no_bit() {
 }
 
 /// The four-lane loop (`path_lanes`) renders exactly the scalar loop's image, bit for bit:
-/// the Cornell box as shipped (flat, diffuse), and with a smooth-shaded sphere (corner
-/// normals interpolated) and a two-sided emitter inside it, under both filters, at spp
-/// and sizes that leave lanes idle at the ends of batches, with Russian roulette from the
-/// first bounce, a short depth limit and none.
+/// the Cornell box as shipped (flat, diffuse); with a smooth-shaded sphere (corner normals
+/// interpolated) and a two-sided emitter inside it; and with a textured quad, a point and
+/// a directional light and the HDR sky of `assets/envmaps/sky.exr` through the open front.
+/// Under both filters, all three strategies, at spp and sizes that leave lanes idle at the
+/// ends of batches, with Russian roulette from the first bounce, a short depth limit and
+/// none.
 #[test]
 fn four_lane_paths_change_no_bit() {
     use cgnodes::nodes::trace::path_lanes::handles;
@@ -245,41 +247,81 @@ fn four_lane_paths_change_no_bit() {
         mesh: Arc::new(sphere([0.4, 0.3, 0.2], 0.08, 6, false)),
         material: Some(mat(MaterialKind::Diffuse, 0.5, 3.0)),
     });
-    let cases = [
-        (&plain, 5, 8, 5, Filter::Box, 60.0, 19),
-        (&plain, 3, u32::MAX, 1, Filter::Gaussian, 60.0, 21),
-        (&smooth, 7, 8, 2, Filter::Gaussian, 60.0, 17),
-        (&smooth, 2, 3, 1, Filter::Box, 60.0, 18),
+    let mut lit = smooth.clone();
+    let mut quad = crate::trace_shading::uv_quad();
+    for p in &mut quad.positions {
+        *p = [0.3 * p[0] + 0.3, 0.3 * p[1] + 0.2, -0.6];
+    }
+    let mut tex = Image::new(4, 4, [0.0, 0.0, 0.0, 1.0]);
+    for (k, px) in tex.pixels.iter_mut().enumerate() {
+        *px = [0.2 + 0.05 * k as f32, 0.9 - 0.05 * k as f32, 0.5, 1.0];
+    }
+    lit.objects.push(SceneObject {
+        mesh: Arc::new(quad),
+        material: Some(Arc::new(Material {
+            base_color: [0.9, 0.8, 1.0],
+            base_color_texture: Some(Arc::new(tex)),
+            ..Default::default()
+        })),
+    });
+    let bytes = std::fs::read(root().join("assets/envmaps/sky.exr")).unwrap();
+    let sky = cgnodes::nodes::image::image_load::decode_image(
+        &bytes,
+        cgnodes::nodes::image::image_load::ColorSpace::Raw,
+    )
+    .unwrap();
+    lit.lights = vec![
+        cgnodes::types::Light::Point {
+            position: [-0.4, 0.6, 0.4],
+            color: [1.0, 0.9, 0.8],
+            intensity: 1.5,
+        },
+        cgnodes::types::Light::Directional {
+            direction: [0.2, -0.3, -1.0],
+            color: [0.8, 0.9, 1.0],
+            intensity: 2.0,
+        },
+        cgnodes::types::Light::Environment {
+            image: Some(Arc::new(sky)),
+            color: [1.0; 3],
+            intensity: 0.5,
+            rotation_deg: 30.0,
+        },
     ];
-    for (scene, spp, max_depth, rr_depth, filter, crease, size) in cases {
+    let mis = Strategy::Mis;
+    let cases = [
+        (&plain, mis, 5, 8, 5, Filter::Box, 19),
+        (&plain, mis, 3, u32::MAX, 1, Filter::Gaussian, 21),
+        (&smooth, mis, 7, 8, 2, Filter::Gaussian, 17),
+        (&smooth, mis, 2, 3, 1, Filter::Box, 18),
+        (&lit, mis, 3, 8, 2, Filter::Gaussian, 20),
+        (&lit, Strategy::Nee, 3, 8, 1, Filter::Box, 17),
+        (&lit, Strategy::Bsdf, 3, u32::MAX, 3, Filter::Gaussian, 18),
+        (&plain, Strategy::Nee, 2, 8, 5, Filter::Box, 16),
+    ];
+    for (scene, strategy, spp, max_depth, rr_depth, filter, size) in cases {
         let cam = cornell_camera(size, size);
-        let (sc, pc) = prepare(scene, Some(&cam), crease).unwrap();
+        let (sc, pc) = prepare(scene, Some(&cam), 60.0).unwrap();
         let s = PathSettings {
             rr_depth,
-            crease_deg: crease,
-            ..settings(spp, max_depth, Strategy::Mis, filter)
+            ..settings(spp, max_depth, strategy, filter)
         };
-        assert!(handles(&sc, &s), "the four-lane loop takes this scene");
+        assert!(handles(&sc), "the four-lane loop takes this scene");
         let (lanes, lanes_var) = render_opts(&sc, &pc, &s, &noop, true);
         let (scalar, scalar_var) = render_opts(&sc, &pc, &s, &noop, false);
         assert!(mean(&scalar)[0] > 0.01, "the render is black");
-        assert_eq!(
-            bits(&lanes),
-            bits(&scalar),
-            "spp {spp}, max_depth {max_depth}"
-        );
-        assert_eq!(bits(&lanes_var), bits(&scalar_var));
+        let what = format!("{strategy:?}, spp {spp}, max_depth {max_depth}");
+        assert_eq!(bits(&lanes), bits(&scalar), "{what}");
+        assert_eq!(bits(&lanes_var), bits(&scalar_var), "{what}");
     }
-    // What it does not take: other strategies, other materials.
+    // What it does not take: a glossy material.
     let cam = cornell_camera(8, 8);
-    let (sc, _) = prepare(&plain, Some(&cam), 60.0).unwrap();
-    assert!(!handles(&sc, &settings(1, 8, Strategy::Nee, Filter::Box)));
     let mut glossy = cornell_scene();
     let mut m = (**glossy.objects[0].material.as_ref().unwrap()).clone();
     m.kind = MaterialKind::Conductor { roughness: 0.3 };
     glossy.objects[0].material = Some(Arc::new(m));
     let (sc, _) = prepare(&glossy, Some(&cam), 60.0).unwrap();
-    assert!(!handles(&sc, &settings(1, 8, Strategy::Mis, Filter::Box)));
+    assert!(!handles(&sc));
 }
 
 /// Emitter sampling alone, BSDF sampling alone and their MIS combination estimate the same

@@ -117,7 +117,7 @@ fn smooth_normals_remove_the_facet_steps() {
 }
 
 /// A 2 x 2 quad in the z = 0 plane facing +z, with UVs 0..1 over it (v up).
-fn uv_quad() -> cgnodes::types::Mesh {
+pub(crate) fn uv_quad() -> cgnodes::types::Mesh {
     use cgnodes::types::{Attribute, Domain, Mesh};
     let p = vec![
         [-1.0, -1.0, 0.0],

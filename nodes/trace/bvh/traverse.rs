@@ -32,9 +32,8 @@ pub(super) fn with_stack<R>(f: impl FnOnce(&mut [(u32, f32)]) -> R) -> R {
 pub(super) type Stack = [(u32, f32)];
 
 /// Two traversal stacks owned by the caller, for a loop that traces many pairs of rays
-/// (`Bvh::intersect_occluded_in`): reaching the thread's own stacks costs a thread-local
-/// lookup and a borrow per query, and their answers come back through memory from a
-/// function that cannot be inlined (docs/path_tracing.md, tenth round).
+/// (`Bvh::intersect_occluded_in`): it takes them once instead of the thread's own stacks
+/// (a thread-local look-up and a borrow) per query.
 pub struct TraceStacks {
     a: [(u32, f32); STACK],
     b: [(u32, f32); STACK],

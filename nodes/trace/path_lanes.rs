@@ -19,9 +19,9 @@
 use super::bsdf::Bsdf;
 use super::bvh::{Hit, TraceStacks};
 use super::direct::{delta_lights, environment_nee, Vertex};
-use super::render_path::{PathSettings, Strategy};
+use super::render_path::{found_weight, PathSettings, Strategy};
 use super::render_scene::{PinholeCamera, RenderScene};
-use super::sampling::{add, dot, max_comp, mul, power_heuristic, scale, Pcg32, V3};
+use super::sampling::{add, dot, max_comp, mul, scale, Pcg32, V3};
 use std::f32::consts::{FRAC_1_PI, FRAC_PI_4};
 use wide::f32x4;
 
@@ -364,15 +364,7 @@ fn visit(
     let Some(hit) = hit else {
         // The ray escapes: the environment's radiance, weighted like an emitter hit.
         if let Some(env) = &sc.env {
-            let w = if first {
-                1.0
-            } else {
-                match s.strategy {
-                    Strategy::Bsdf => 1.0,
-                    Strategy::Nee => 0.0,
-                    Strategy::Mis => power_heuristic(ln.prev_pdf[i], env.pdf(dir)),
-                }
-            };
+            let w = found_weight(s.strategy, first, ln.prev_pdf[i], || env.pdf(dir));
             ln.l[i] = add(ln.l[i], scale(mul(get(&ln.thr, i), env.eval(dir)), w));
         }
         ln.finish(i, sc, out);
@@ -384,20 +376,10 @@ fn visit(
     if mat.is_emitter() {
         let le = sc.emitted(tri, wo);
         if max_comp(le) > 0.0 {
-            let w = if first {
-                1.0
-            } else {
-                match s.strategy {
-                    Strategy::Bsdf => 1.0,
-                    Strategy::Nee => 0.0,
-                    Strategy::Mis => {
-                        let ng = sc.normals[tri as usize];
-                        let cos_l = dot(ng, wo).abs();
-                        let p_light = sc.light_pdf_area[tri as usize] * hit.t * hit.t / cos_l;
-                        power_heuristic(ln.prev_pdf[i], p_light)
-                    }
-                }
-            };
+            let w = found_weight(s.strategy, first, ln.prev_pdf[i], || {
+                let cos_l = dot(sc.normals[tri as usize], wo).abs();
+                sc.light_pdf_area[tri as usize] * hit.t * hit.t / cos_l
+            });
             ln.l[i] = add(ln.l[i], scale(mul(get(&ln.thr, i), le), w));
         }
     }

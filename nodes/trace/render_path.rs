@@ -129,6 +129,27 @@ impl Deferred {
     }
 }
 
+/// The weight of radiance that a BSDF-sampled ray found on an emitter or in the environment
+/// (Veach 1997, eq. 9.13): 1 for the camera ray and after a delta bounce (`first`), else
+/// by strategy; `light_pdf` gives the solid-angle density with which light sampling would
+/// have chosen the same direction.
+#[inline(always)]
+pub(crate) fn found_weight(
+    strategy: Strategy,
+    first: bool,
+    prev_pdf: f32,
+    light_pdf: impl FnOnce() -> f32,
+) -> f32 {
+    if first {
+        return 1.0;
+    }
+    match strategy {
+        Strategy::Bsdf => 1.0,
+        Strategy::Nee => 0.0,
+        Strategy::Mis => power_heuristic(prev_pdf, light_pdf()),
+    }
+}
+
 /// Radiance arriving at `org` from direction `-dir` (unit `dir`), estimated with one path.
 /// `stacks` are the traversal stacks the path's rays use (one set per thread, reused).
 pub fn radiance(
@@ -167,15 +188,8 @@ pub fn radiance(
         let Some(hit) = hit else {
             // The ray escapes: the environment's radiance, weighted like an emitter hit.
             if let Some(env) = &sc.env {
-                let w = if depth == 0 || prev_delta {
-                    1.0
-                } else {
-                    match s.strategy {
-                        Strategy::Bsdf => 1.0,
-                        Strategy::Nee => 0.0,
-                        Strategy::Mis => power_heuristic(prev_pdf, env.pdf(dir)),
-                    }
-                };
+                let first = depth == 0 || prev_delta;
+                let w = found_weight(s.strategy, first, prev_pdf, || env.pdf(dir));
                 l = add(l, scale(mul(thr, env.eval(dir)), w));
             }
             break;
@@ -190,19 +204,11 @@ pub fn radiance(
         if mat.is_emitter() {
             let le = sc.emitted(tri, wo);
             if max_comp(le) > 0.0 {
-                let w = if depth == 0 || prev_delta {
-                    1.0
-                } else {
-                    match s.strategy {
-                        Strategy::Bsdf => 1.0,
-                        Strategy::Nee => 0.0,
-                        Strategy::Mis => {
-                            let cos_l = dot(ng, wo).abs();
-                            let p_light = sc.light_pdf_area[tri as usize] * hit.t * hit.t / cos_l;
-                            power_heuristic(prev_pdf, p_light)
-                        }
-                    }
-                };
+                let first = depth == 0 || prev_delta;
+                let w = found_weight(s.strategy, first, prev_pdf, || {
+                    let cos_l = dot(ng, wo).abs();
+                    sc.light_pdf_area[tri as usize] * hit.t * hit.t / cos_l
+                });
                 l = add(l, scale(mul(thr, le), w));
             }
         }

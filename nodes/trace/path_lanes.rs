@@ -183,9 +183,10 @@ struct Lanes {
     tmax: [f32; L],
     thr: [[f32; L]; 3],
     l: [V3; L],
-    eta: [f32; L],
+    /// The density of the BSDF sample that led to the current vertex. Every bounce is
+    /// diffuse, so the scalar loop's `prev_delta` is "depth is 0" here, and its `eta`
+    /// stays 1.
     prev_pdf: [f32; L],
-    prev_delta: [bool; L],
     depth: [u32; L],
     /// Direct light estimated at the previous vertex waiting for its shadow ray (as
     /// `render_path::Deferred`): whether there is one, whether it has an emitter sample,
@@ -238,9 +239,7 @@ impl Lanes {
             tmax: [0.0; L],
             thr: [[0.0; L]; 3],
             l: [[0.0; 3]; L],
-            eta: [1.0; L],
             prev_pdf: [0.0; L],
-            prev_delta: [true; L],
             depth: [0; L],
             pending: [false; L],
             nee: [false; L],
@@ -313,9 +312,7 @@ pub fn trace(
             ln.tmax[i] = cam.far;
             put(&mut ln.thr, i, [1.0; 3]);
             ln.l[i] = [0.0; 3];
-            ln.eta[i] = 1.0;
             ln.prev_pdf[i] = 0.0;
-            ln.prev_delta[i] = true;
             ln.depth[i] = 0;
             ln.pending[i] = false;
             next += 1;
@@ -360,7 +357,7 @@ fn visit(
     } else {
         sc.intersect(org, dir, tmax)
     };
-    let first = ln.depth[i] == 0 || ln.prev_delta[i];
+    let first = ln.depth[i] == 0;
     let Some(hit) = hit else {
         // The ray escapes: the environment's radiance, weighted like an emitter hit.
         if let Some(env) = &sc.env {
@@ -536,15 +533,12 @@ fn shade(
             ln.finish(i, sc, out);
             continue;
         }
-        // A diffuse sample crosses no interface: eta stays (the scalar loop multiplies
-        // it by 1.0, which is exact).
         ln.prev_pdf[i] = pdf2[i];
-        ln.prev_delta[i] = false;
         ln.depth[i] += 1;
         let tm = tmaxc[i];
         if ln.depth[i] >= s.rr_depth {
-            let eta = ln.eta[i];
-            let q = (tm * eta * eta).min(0.95);
+            // The scalar loop's (tm eta eta).min(0.95) with eta = 1 (exact).
+            let q = tm.min(0.95);
             if ln.rng[i].next_f32() >= q {
                 ln.finish(i, sc, out);
                 continue;

@@ -9,20 +9,18 @@
 //! bounces have been sampled, with survival probability min(max(throughput) eta^2, 0.95).
 //!
 //! Each pixel sample draws its random numbers from its own PCG32 stream seeded by a hash of
-//! (pixel, sample index, seed), so images are identical whatever the thread count. Tiles of
-//! 16x16 pixels render in parallel with rayon. The reconstruction filter is a box (the plain
-//! per-pixel average) or Mitsuba's Gaussian (stddev 0.5 px, radius 2 px), whose samples are
-//! splatted into the neighbouring pixels and normalised by the summed filter weights.
+//! (pixel, sample index, seed), so images are identical whatever the thread count. This
+//! file holds the estimator for one path (`radiance`) and the node; the film (tiles, the
+//! box or Gaussian reconstruction filter, variance) is `path_film.rs`, and the estimator
+//! run on four paths at a time for diffuse scenes is `path_lanes.rs`.
 
 use super::direct::{delta_lights, environment_nee, Vertex};
 use super::bvh::{Segment, TraceStacks};
-use super::path_lanes::{self, Job, Sample};
-use super::render_scene::{prepare, PinholeCamera, RenderScene};
+pub use super::path_film::{render, render_opts};
+use super::render_scene::{prepare, RenderScene};
 use super::sampling::{add, dot, max_comp, mul, power_heuristic, scale, sub, Pcg32, V3};
 use super::tracer_node::{crease_input, declare_crease, reserve_image, trace_error};
 use crate::prelude::*;
-use rayon::prelude::*;
-use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// Which sampling strategies the estimator combines (MIS is the default; the others are
 /// for teaching and for checking that all three agree in expectation).
@@ -313,214 +311,6 @@ pub fn radiance(
         l = d.finish(sc, l);
     }
     l
-}
-
-/// Mitsuba's Gaussian filter: exp(-x^2 / (2 sigma^2)) minus its value at the radius,
-/// sigma = 0.5 px, radius 2 px.
-#[inline]
-fn gaussian_1d(x: f32) -> f32 {
-    const INV_2S2: f32 = 1.0 / (2.0 * 0.25);
-    let edge = (-4.0 * INV_2S2).exp();
-    ((-x * x * INV_2S2).exp() - edge).max(0.0)
-}
-
-const TILE: u32 = 16;
-const MARGIN: i64 = 2;
-
-struct TileOut {
-    x0: u32,
-    y0: u32,
-    /// Splat sums (r, g, b, weight) over the tile grown by MARGIN on each side.
-    splat: Vec<[f32; 4]>,
-    /// Per own pixel: variance of the pixel mean.
-    var: Vec<[f32; 3]>,
-}
-
-/// Renders `cam`'s view of `sc`. Returns the colour image (linear radiance) and, per
-/// pixel, the variance of the pixel's estimate (sample variance of its own samples over
-/// spp, before filtering). `progress` receives the fraction of tiles done. Scenes the
-/// four-lane loop handles (`path_lanes::handles`: every material diffuse) are traced four
-/// paths at a time, with the same result bit for bit.
-pub fn render(
-    sc: &RenderScene,
-    cam: &PinholeCamera,
-    s: &PathSettings,
-    progress: &(dyn Fn(f64) + Sync),
-) -> (Image, Image) {
-    render_opts(sc, cam, s, progress, true)
-}
-
-/// `render`, with the four-lane loop allowed (`lanes`) or not (to measure what it buys
-/// and to check that both loops agree).
-pub fn render_opts(
-    sc: &RenderScene,
-    cam: &PinholeCamera,
-    s: &PathSettings,
-    progress: &(dyn Fn(f64) + Sync),
-    lanes: bool,
-) -> (Image, Image) {
-    let lanes = lanes && path_lanes::handles(sc);
-    // Pixels per batch of samples for the four-lane loop (about 16k samples, so lanes
-    // seldom wait for a batch's last paths; the scalar loop goes pixel by pixel).
-    let ppc = if lanes {
-        (16384 / s.spp as usize).max(1)
-    } else {
-        1
-    };
-    let (w, h) = (cam.width, cam.height);
-    let mut tiles = Vec::new();
-    for y0 in (0..h).step_by(TILE as usize) {
-        for x0 in (0..w).step_by(TILE as usize) {
-            tiles.push((x0, y0));
-        }
-    }
-    let done = AtomicUsize::new(0);
-    let ntiles = tiles.len();
-    let pw = (TILE as i64 + 2 * MARGIN) as usize;
-    let outs: Vec<TileOut> = tiles
-        .par_iter()
-        .map(|&(x0, y0)| {
-            let x1 = (x0 + TILE).min(w);
-            let y1 = (y0 + TILE).min(h);
-            let mut splat = vec![[0.0f32; 4]; pw * pw];
-            let mut var = Vec::with_capacity(((x1 - x0) * (y1 - y0)) as usize);
-            let mut stacks = TraceStacks::new();
-            let pixels: Vec<(u32, u32)> =
-                (y0..y1).flat_map(|y| (x0..x1).map(move |x| (x, y))).collect();
-            let mut samples: Vec<Sample> = Vec::new();
-            for chunk in pixels.chunks(ppc) {
-                if lanes {
-                    let jobs: Vec<Job> = chunk
-                        .iter()
-                        .flat_map(|&(x, y)| (0..s.spp).map(move |k| (x, y, k)))
-                        .collect();
-                    samples = path_lanes::trace(sc, cam, s, &jobs, &mut stacks);
-                } else {
-                    samples.clear();
-                    for &(x, y) in chunk {
-                        let pix = y as u64 * w as u64 + x as u64;
-                        for k in 0..s.spp {
-                            let mut rng = Pcg32::for_sample(pix, k as u64, s.seed);
-                            let [ux, uy] = rng.next_2d();
-                            let fx = x as f32 + ux;
-                            let fy = y as f32 + uy;
-                            let dir = cam.ray_dir(fx, fy);
-                            let c = radiance(sc, cam.eye, dir, cam.far, &mut rng, s, &mut stacks);
-                            samples.push(Sample { c, fx, fy });
-                        }
-                    }
-                }
-                for (j, &(x, y)) in chunk.iter().enumerate() {
-                    let (mut s1, mut s2) = ([0.0f64; 3], [0.0f64; 3]);
-                    let own = &samples[j * s.spp as usize..(j + 1) * s.spp as usize];
-                    for &Sample { c, fx, fy } in own {
-                        let mut c = c;
-                        if !c.iter().all(|v| v.is_finite()) {
-                            c = [0.0; 3];
-                        }
-                        for j in 0..3 {
-                            s1[j] += c[j] as f64;
-                            s2[j] += (c[j] as f64) * (c[j] as f64);
-                        }
-                        match s.filter {
-                            Filter::Box => {
-                                let i = (y - y0) as usize + MARGIN as usize;
-                                let jx = (x - x0) as usize + MARGIN as usize;
-                                let a = &mut splat[i * pw + jx];
-                                a[0] += c[0];
-                                a[1] += c[1];
-                                a[2] += c[2];
-                                a[3] += 1.0;
-                            }
-                            Filter::Gaussian => {
-                                // Pixels whose centres lie within the radius.
-                                let cx0 = (fx - 0.5 - 2.0).ceil() as i64;
-                                let cy0 = (fy - 0.5 - 2.0).ceil() as i64;
-                                let mut wx = [0.0f32; 5];
-                                let mut wy = [0.0f32; 5];
-                                for k in 0..5 {
-                                    wx[k] = gaussian_1d((cx0 + k as i64) as f32 + 0.5 - fx);
-                                    wy[k] = gaussian_1d((cy0 + k as i64) as f32 + 0.5 - fy);
-                                }
-                                for (ky, wyk) in wy.iter().enumerate() {
-                                    let py = cy0 + ky as i64;
-                                    if *wyk <= 0.0 || py < 0 || py >= h as i64 {
-                                        continue;
-                                    }
-                                    let i = (py - y0 as i64 + MARGIN) as usize;
-                                    for (kx, wxk) in wx.iter().enumerate() {
-                                        let px = cx0 + kx as i64;
-                                        if *wxk <= 0.0 || px < 0 || px >= w as i64 {
-                                            continue;
-                                        }
-                                        let jx = (px - x0 as i64 + MARGIN) as usize;
-                                        let wt = wxk * wyk;
-                                        let a = &mut splat[i * pw + jx];
-                                        a[0] += c[0] * wt;
-                                        a[1] += c[1] * wt;
-                                        a[2] += c[2] * wt;
-                                        a[3] += wt;
-                                    }
-                                }
-                            }
-                        }
-                    }
-                    let n = s.spp as f64;
-                    let mut v = [0.0f32; 3];
-                    if s.spp > 1 {
-                        for j in 0..3 {
-                            let m = s1[j] / n;
-                            v[j] = (((s2[j] / n - m * m) * n / (n - 1.0)).max(0.0) / n) as f32;
-                        }
-                    }
-                    var.push(v);
-                }
-            }
-            let d = done.fetch_add(1, Ordering::Relaxed) + 1;
-            progress(d as f64 / ntiles as f64);
-            TileOut { x0, y0, splat, var }
-        })
-        .collect();
-    // Gather the splats (in tile order, so the sums are deterministic).
-    let mut acc = vec![[0.0f64; 4]; (w * h) as usize];
-    let mut variance = Image::new(w, h, [0.0, 0.0, 0.0, 1.0]);
-    for t in &outs {
-        for i in 0..pw {
-            let py = t.y0 as i64 - MARGIN + i as i64;
-            if py < 0 || py >= h as i64 {
-                continue;
-            }
-            for j in 0..pw {
-                let px = t.x0 as i64 - MARGIN + j as i64;
-                if px < 0 || px >= w as i64 {
-                    continue;
-                }
-                let a = &mut acc[py as usize * w as usize + px as usize];
-                let sv = t.splat[i * pw + j];
-                for k in 0..4 {
-                    a[k] += sv[k] as f64;
-                }
-            }
-        }
-        let tw = (t.x0 + TILE).min(w) - t.x0;
-        for (k, v) in t.var.iter().enumerate() {
-            let x = t.x0 + k as u32 % tw;
-            let y = t.y0 + k as u32 / tw;
-            variance.set(x, y, [v[0], v[1], v[2], 1.0]);
-        }
-    }
-    let mut color = Image::new(w, h, [0.0, 0.0, 0.0, 1.0]);
-    for (px, a) in color.pixels.iter_mut().zip(&acc) {
-        if a[3] > 0.0 {
-            *px = [
-                (a[0] / a[3]) as f32,
-                (a[1] / a[3]) as f32,
-                (a[2] / a[3]) as f32,
-                1.0,
-            ];
-        }
-    }
-    (color, variance)
 }
 
 /// Flattens `scene` and renders it from `camera` (or the scene's own camera).

@@ -1,0 +1,263 @@
+//! `render_path`'s film: the image cut into 16x16-pixel tiles rendered in parallel, each
+//! pixel's samples traced (four paths at a time by `path_lanes` where it applies, else one
+//! at a time by `render_path::radiance`), splatted through the reconstruction filter, and
+//! the per-pixel variance of the estimate. Tiles are summed in a fixed order, so images do
+//! not depend on the thread count.
+
+use super::bvh::TraceStacks;
+use super::path_lanes::{self, Job, Sample};
+use super::render_path::{radiance, Filter, PathSettings};
+use super::render_scene::{PinholeCamera, RenderScene};
+use super::sampling::Pcg32;
+use crate::types::Image;
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+/// Mitsuba's Gaussian filter: exp(-x^2 / (2 sigma^2)) minus its value at the radius,
+/// sigma = 0.5 px, radius 2 px.
+#[inline]
+fn gaussian_1d(x: f32) -> f32 {
+    const INV_2S2: f32 = 1.0 / (2.0 * 0.25);
+    let edge = (-4.0 * INV_2S2).exp();
+    ((-x * x * INV_2S2).exp() - edge).max(0.0)
+}
+
+const TILE: u32 = 16;
+const MARGIN: i64 = 2;
+/// Width of a tile's splat buffer (the tile grown by MARGIN on each side).
+const PW: usize = (TILE as i64 + 2 * MARGIN) as usize;
+
+struct TileOut {
+    x0: u32,
+    y0: u32,
+    /// Splat sums (r, g, b, weight) over the tile grown by MARGIN on each side.
+    splat: Vec<[f32; 4]>,
+    /// Per own pixel: variance of the pixel mean.
+    var: Vec<[f32; 3]>,
+}
+
+/// Renders `cam`'s view of `sc`. Returns the colour image (linear radiance) and, per
+/// pixel, the variance of the pixel's estimate (sample variance of its own samples over
+/// spp, before filtering). `progress` receives the fraction of tiles done. Scenes the
+/// four-lane loop handles (`path_lanes::handles`: every material diffuse) are traced four
+/// paths at a time, with the same result bit for bit.
+pub fn render(
+    sc: &RenderScene,
+    cam: &PinholeCamera,
+    s: &PathSettings,
+    progress: &(dyn Fn(f64) + Sync),
+) -> (Image, Image) {
+    render_opts(sc, cam, s, progress, true)
+}
+
+/// `render`, with the four-lane loop allowed (`lanes`) or not (to measure what it buys
+/// and to check that both loops agree).
+pub fn render_opts(
+    sc: &RenderScene,
+    cam: &PinholeCamera,
+    s: &PathSettings,
+    progress: &(dyn Fn(f64) + Sync),
+    lanes: bool,
+) -> (Image, Image) {
+    let lanes = lanes && path_lanes::handles(sc);
+    let (w, h) = (cam.width, cam.height);
+    let mut tiles = Vec::new();
+    for y0 in (0..h).step_by(TILE as usize) {
+        for x0 in (0..w).step_by(TILE as usize) {
+            tiles.push((x0, y0));
+        }
+    }
+    let done = AtomicUsize::new(0);
+    let ntiles = tiles.len();
+    let outs: Vec<TileOut> = tiles
+        .par_iter()
+        .map(|&(x0, y0)| {
+            let out = render_tile(sc, cam, s, (x0, y0), lanes);
+            let d = done.fetch_add(1, Ordering::Relaxed) + 1;
+            progress(d as f64 / ntiles as f64);
+            out
+        })
+        .collect();
+    gather(&outs, w, h)
+}
+
+/// Traces and splats the samples of the tile whose top-left pixel is `(x0, y0)`.
+fn render_tile(
+    sc: &RenderScene,
+    cam: &PinholeCamera,
+    s: &PathSettings,
+    (x0, y0): (u32, u32),
+    lanes: bool,
+) -> TileOut {
+    let x1 = (x0 + TILE).min(cam.width);
+    let y1 = (y0 + TILE).min(cam.height);
+    let mut t = TileOut {
+        x0,
+        y0,
+        splat: vec![[0.0f32; 4]; PW * PW],
+        var: Vec::with_capacity(((x1 - x0) * (y1 - y0)) as usize),
+    };
+    // Pixels per batch of samples for the four-lane loop (about 16k samples, so lanes
+    // seldom wait for a batch's last paths; the scalar loop goes pixel by pixel).
+    let ppc = if lanes {
+        (16384 / s.spp as usize).max(1)
+    } else {
+        1
+    };
+    let mut stacks = TraceStacks::new();
+    let pixels: Vec<(u32, u32)> = (y0..y1).flat_map(|y| (x0..x1).map(move |x| (x, y))).collect();
+    let mut samples: Vec<Sample> = Vec::new();
+    let spp = s.spp as usize;
+    for chunk in pixels.chunks(ppc) {
+        if lanes {
+            let jobs: Vec<Job> = chunk
+                .iter()
+                .flat_map(|&(x, y)| (0..s.spp).map(move |k| (x, y, k)))
+                .collect();
+            samples = path_lanes::trace(sc, cam, s, &jobs, &mut stacks);
+        } else {
+            samples.clear();
+            for &(x, y) in chunk {
+                let pix = y as u64 * cam.width as u64 + x as u64;
+                for k in 0..s.spp {
+                    let mut rng = Pcg32::for_sample(pix, k as u64, s.seed);
+                    let [ux, uy] = rng.next_2d();
+                    let fx = x as f32 + ux;
+                    let fy = y as f32 + uy;
+                    let dir = cam.ray_dir(fx, fy);
+                    let c = radiance(sc, cam.eye, dir, cam.far, &mut rng, s, &mut stacks);
+                    samples.push(Sample { c, fx, fy });
+                }
+            }
+        }
+        for (j, &(x, y)) in chunk.iter().enumerate() {
+            let v = t.add_pixel(cam, s.filter, (x, y), &samples[j * spp..(j + 1) * spp]);
+            t.var.push(v);
+        }
+    }
+    t
+}
+
+impl TileOut {
+    /// Splats pixel `(x, y)`'s samples (non-finite ones as black) and returns the variance
+    /// of the pixel's mean.
+    fn add_pixel(
+        &mut self,
+        cam: &PinholeCamera,
+        filter: Filter,
+        (x, y): (u32, u32),
+        own: &[Sample],
+    ) -> [f32; 3] {
+        let (mut s1, mut s2) = ([0.0f64; 3], [0.0f64; 3]);
+        for &Sample { c, fx, fy } in own {
+            let c = if c.iter().all(|v| v.is_finite()) {
+                c
+            } else {
+                [0.0; 3]
+            };
+            for j in 0..3 {
+                s1[j] += c[j] as f64;
+                s2[j] += (c[j] as f64) * (c[j] as f64);
+            }
+            match filter {
+                Filter::Box => {
+                    let i = (y - self.y0) as usize + MARGIN as usize;
+                    let jx = (x - self.x0) as usize + MARGIN as usize;
+                    let a = &mut self.splat[i * PW + jx];
+                    a[0] += c[0];
+                    a[1] += c[1];
+                    a[2] += c[2];
+                    a[3] += 1.0;
+                }
+                Filter::Gaussian => self.splat_gaussian(cam, c, fx, fy),
+            }
+        }
+        let n = own.len() as f64;
+        let mut v = [0.0f32; 3];
+        if own.len() > 1 {
+            for j in 0..3 {
+                let m = s1[j] / n;
+                v[j] = (((s2[j] / n - m * m) * n / (n - 1.0)).max(0.0) / n) as f32;
+            }
+        }
+        v
+    }
+
+    /// Adds radiance `c` sampled at film position (`fx`, `fy`) to the pixels whose
+    /// centres lie within the Gaussian's radius, with their filter weights.
+    fn splat_gaussian(&mut self, cam: &PinholeCamera, c: [f32; 3], fx: f32, fy: f32) {
+        let (w, h) = (cam.width as i64, cam.height as i64);
+        let cx0 = (fx - 0.5 - 2.0).ceil() as i64;
+        let cy0 = (fy - 0.5 - 2.0).ceil() as i64;
+        let mut wx = [0.0f32; 5];
+        let mut wy = [0.0f32; 5];
+        for k in 0..5 {
+            wx[k] = gaussian_1d((cx0 + k as i64) as f32 + 0.5 - fx);
+            wy[k] = gaussian_1d((cy0 + k as i64) as f32 + 0.5 - fy);
+        }
+        for (ky, wyk) in wy.iter().enumerate() {
+            let py = cy0 + ky as i64;
+            if *wyk <= 0.0 || py < 0 || py >= h {
+                continue;
+            }
+            let i = (py - self.y0 as i64 + MARGIN) as usize;
+            for (kx, wxk) in wx.iter().enumerate() {
+                let px = cx0 + kx as i64;
+                if *wxk <= 0.0 || px < 0 || px >= w {
+                    continue;
+                }
+                let jx = (px - self.x0 as i64 + MARGIN) as usize;
+                let wt = wxk * wyk;
+                let a = &mut self.splat[i * PW + jx];
+                a[0] += c[0] * wt;
+                a[1] += c[1] * wt;
+                a[2] += c[2] * wt;
+                a[3] += wt;
+            }
+        }
+    }
+}
+
+/// Sums the tiles' splats (in tile order, so the sums are deterministic), normalises each
+/// pixel by its filter weight and places the variances.
+fn gather(outs: &[TileOut], w: u32, h: u32) -> (Image, Image) {
+    let mut acc = vec![[0.0f64; 4]; (w * h) as usize];
+    let mut variance = Image::new(w, h, [0.0, 0.0, 0.0, 1.0]);
+    for t in outs {
+        for i in 0..PW {
+            let py = t.y0 as i64 - MARGIN + i as i64;
+            if py < 0 || py >= h as i64 {
+                continue;
+            }
+            for j in 0..PW {
+                let px = t.x0 as i64 - MARGIN + j as i64;
+                if px < 0 || px >= w as i64 {
+                    continue;
+                }
+                let a = &mut acc[py as usize * w as usize + px as usize];
+                let sv = t.splat[i * PW + j];
+                for k in 0..4 {
+                    a[k] += sv[k] as f64;
+                }
+            }
+        }
+        let tw = (t.x0 + TILE).min(w) - t.x0;
+        for (k, v) in t.var.iter().enumerate() {
+            let x = t.x0 + k as u32 % tw;
+            let y = t.y0 + k as u32 / tw;
+            variance.set(x, y, [v[0], v[1], v[2], 1.0]);
+        }
+    }
+    let mut color = Image::new(w, h, [0.0, 0.0, 0.0, 1.0]);
+    for (px, a) in color.pixels.iter_mut().zip(&acc) {
+        if a[3] > 0.0 {
+            *px = [
+                (a[0] / a[3]) as f32,
+                (a[1] / a[3]) as f32,
+                (a[2] / a[3]) as f32,
+                1.0,
+            ];
+        }
+    }
+    (color, variance)
+}

@@ -15,7 +15,8 @@
 //! tree buys; `--wide-bvh`, the default, is accepted and does nothing), `--no-interleave`
 //! (trace a path's shadow ray and its next ray one after the other instead of interleaved,
 //! to measure what `Bvh::intersect_occluded` buys), `--scalar-paths` (one path at a time
-//! instead of four on SSE lanes, `path_lanes`, to measure what the lanes buy), `--scene igea`
+//! instead of four on SSE lanes, `path_lanes`, to measure what the lanes buy),
+//! `--bvh-camera-rays` (camera rays through the BVH instead of `CameraGrid`), `--scene igea`
 //! (the box with the 154k-triangle igea scan standing in it, white diffuse, as
 //! `trace_mitsuba.py --scene igea` builds it; `--igea PATH`, default
 //! `/work/shared/assets/meshes/igea_front.obj`), `--rays` (traversal alone, no shading:
@@ -24,7 +25,7 @@
 //! only.
 
 use cgnodes::nodes::mesh::obj::load_obj;
-use cgnodes::nodes::trace::render_path::{render_opts, Filter, PathSettings, Strategy};
+use cgnodes::nodes::trace::render_path::{render_opts, Filter, PathSettings, Shortcuts, Strategy};
 use cgnodes::nodes::trace::render_scene::{PinholeCamera, RenderScene};
 use cgnodes::nodes::trace::scene_load::load_obj_scene;
 use cgnodes::types::{Camera, FovAxis, Image, Material, Scene, SceneObject};
@@ -353,11 +354,14 @@ fn main() {
         ..Default::default()
     };
     let threads = rayon::current_num_threads();
-    let lanes = !args.iter().any(|a| a == "--scalar-paths");
+    let opts = Shortcuts {
+        lanes: !args.iter().any(|a| a == "--scalar-paths"),
+        camera_grid: !args.iter().any(|a| a == "--bvh-camera-rays"),
+    };
     let run = |spp: u32, seed: u64| {
         let c0 = cpu_seconds();
         let t0 = Instant::now();
-        let (img, var) = render_opts(&sc, &cam, &settings(spp, seed), &|_| {}, lanes);
+        let (img, var) = render_opts(&sc, &cam, &settings(spp, seed), &|_| {}, opts);
         let secs = t0.elapsed().as_secs_f64();
         let cpu = cpu_seconds() - c0;
         (img, var, secs, cpu)

@@ -4,11 +4,12 @@
 //! the per-pixel variance of the estimate. Tiles are summed in a fixed order, so images do
 //! not depend on the thread count.
 
-use super::bvh::TraceStacks;
+use super::bvh::{Hit, TraceStacks};
+use super::camera_grid::CameraGrid;
 use super::path_lanes::{self, Job, Sample};
 use super::render_path::{radiance, Filter, PathSettings};
 use super::render_scene::{PinholeCamera, RenderScene};
-use super::sampling::Pcg32;
+use super::sampling::{Pcg32, V3};
 use crate::types::Image;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -47,20 +48,49 @@ pub fn render(
     s: &PathSettings,
     progress: &(dyn Fn(f64) + Sync),
 ) -> (Image, Image) {
-    render_opts(sc, cam, s, progress, true)
+    render_opts(sc, cam, s, progress, Shortcuts::default())
 }
 
-/// `render`, with the four-lane loop allowed (`lanes`) or not (to measure what it buys
-/// and to check that both loops agree).
+/// The ways `render` may take to the same estimate; all are on by default, and switched
+/// off to measure what each buys and to check that they change nothing.
+#[derive(Clone, Copy, Debug)]
+pub struct Shortcuts {
+    /// Four paths at a time on SSE lanes where `path_lanes::handles` the scene (the image
+    /// is the one-at-a-time loop's bit for bit).
+    pub lanes: bool,
+    /// Camera rays' first hits from per-pixel candidate lists (`CameraGrid`) instead of
+    /// the BVH (the same hits but for ties between triangles at equal distance).
+    pub camera_grid: bool,
+}
+
+impl Default for Shortcuts {
+    fn default() -> Self {
+        Shortcuts {
+            lanes: true,
+            camera_grid: true,
+        }
+    }
+}
+
+/// `render` with a choice of `Shortcuts`.
 pub fn render_opts(
     sc: &RenderScene,
     cam: &PinholeCamera,
     s: &PathSettings,
     progress: &(dyn Fn(f64) + Sync),
-    lanes: bool,
+    opts: Shortcuts,
 ) -> (Image, Image) {
-    let lanes = lanes && path_lanes::handles(sc);
+    let lanes = opts.lanes && path_lanes::handles(sc);
     let (w, h) = (cam.width, cam.height);
+    // The grid costs about as much per triangle as it saves per 2.7 camera rays (igea,
+    // docs/path_tracing.md, eleventh round): build it when there are enough rays.
+    let rays = w as u64 * h as u64 * s.spp as u64;
+    let grid = if opts.camera_grid && rays >= 4 * sc.tris.len() as u64 {
+        CameraGrid::build(&sc.tris, cam)
+    } else {
+        None
+    };
+    let grid = grid.as_ref();
     let mut tiles = Vec::new();
     for y0 in (0..h).step_by(TILE as usize) {
         for x0 in (0..w).step_by(TILE as usize) {
@@ -72,7 +102,7 @@ pub fn render_opts(
     let outs: Vec<TileOut> = tiles
         .par_iter()
         .map(|&(x0, y0)| {
-            let out = render_tile(sc, cam, s, (x0, y0), lanes);
+            let out = render_tile(sc, cam, grid, s, (x0, y0), lanes);
             let d = done.fetch_add(1, Ordering::Relaxed) + 1;
             progress(d as f64 / ntiles as f64);
             out
@@ -81,10 +111,26 @@ pub fn render_opts(
     gather(&outs, w, h)
 }
 
+/// The first hit of the camera ray through pixel `(x, y)` in direction `dir`.
+#[inline]
+pub(crate) fn camera_hit(
+    sc: &RenderScene,
+    cam: &PinholeCamera,
+    grid: Option<&CameraGrid>,
+    px: (u32, u32),
+    dir: V3,
+) -> Option<Hit> {
+    match grid {
+        Some(g) => g.intersect(&sc.tris, px, cam.eye, dir, cam.far),
+        None => sc.intersect(cam.eye, dir, cam.far),
+    }
+}
+
 /// Traces and splats the samples of the tile whose top-left pixel is `(x0, y0)`.
 fn render_tile(
     sc: &RenderScene,
     cam: &PinholeCamera,
+    grid: Option<&CameraGrid>,
     s: &PathSettings,
     (x0, y0): (u32, u32),
     lanes: bool,
@@ -114,7 +160,7 @@ fn render_tile(
                 .iter()
                 .flat_map(|&(x, y)| (0..s.spp).map(move |k| (x, y, k)))
                 .collect();
-            samples = path_lanes::trace(sc, cam, s, &jobs, &mut stacks);
+            samples = path_lanes::trace(sc, cam, grid, s, &jobs, &mut stacks);
         } else {
             samples.clear();
             for &(x, y) in chunk {
@@ -125,7 +171,8 @@ fn render_tile(
                     let fx = x as f32 + ux;
                     let fy = y as f32 + uy;
                     let dir = cam.ray_dir(fx, fy);
-                    let c = radiance(sc, cam.eye, dir, cam.far, &mut rng, s, &mut stacks);
+                    let hit = camera_hit(sc, cam, grid, (x, y), dir);
+                    let c = radiance(sc, cam.eye, dir, cam.far, hit, &mut rng, s, &mut stacks);
                     samples.push(Sample { c, fx, fy });
                 }
             }

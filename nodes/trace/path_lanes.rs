@@ -18,7 +18,9 @@
 
 use super::bsdf::Bsdf;
 use super::bvh::{Hit, TraceStacks};
+use super::camera_grid::CameraGrid;
 use super::direct::{delta_lights, environment_nee, Vertex};
+use super::path_film::camera_hit;
 use super::render_path::{found_weight, PathSettings, Strategy};
 use super::render_scene::{PinholeCamera, RenderScene};
 use super::sampling::{add, dot, max_comp, mul, scale, Pcg32, V3};
@@ -191,6 +193,8 @@ struct Lanes {
     /// Direct light estimated at the previous vertex waiting for its shadow ray (as
     /// `render_path::Deferred`): whether there is one, whether it has an emitter sample,
     /// that sample's shadow segment and its contribution when unblocked.
+    /// The camera ray's hit, found when the lane took the sample.
+    first: [Option<Hit>; L],
     pending: [bool; L],
     nee: [bool; L],
     delta: [V3; L],
@@ -241,6 +245,7 @@ impl Lanes {
             l: [[0.0; 3]; L],
             prev_pdf: [0.0; L],
             depth: [0; L],
+            first: [None; L],
             pending: [false; L],
             nee: [false; L],
             delta: [[0.0; 3]; L],
@@ -284,6 +289,7 @@ impl Lanes {
 pub fn trace(
     sc: &RenderScene,
     cam: &PinholeCamera,
+    grid: Option<&CameraGrid>,
     s: &PathSettings,
     jobs: &[Job],
     stacks: &mut TraceStacks,
@@ -308,8 +314,10 @@ pub fn trace(
             ln.job[i] = next;
             ln.rng[i] = rng;
             put(&mut ln.org, i, cam.eye);
-            put(&mut ln.dir, i, cam.ray_dir(fx, fy));
+            let dir = cam.ray_dir(fx, fy);
+            put(&mut ln.dir, i, dir);
             ln.tmax[i] = cam.far;
+            ln.first[i] = camera_hit(sc, cam, grid, (x, y), dir);
             put(&mut ln.thr, i, [1.0; 3]);
             ln.l[i] = [0.0; 3];
             ln.prev_pdf[i] = 0.0;
@@ -354,6 +362,8 @@ fn visit(
         };
         ln.add_pending(i, blocked);
         hit
+    } else if ln.depth[i] == 0 {
+        ln.first[i]
     } else {
         sc.intersect(org, dir, tmax)
     };

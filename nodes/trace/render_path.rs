@@ -15,8 +15,8 @@
 //! run on four paths at a time for diffuse scenes is `path_lanes.rs`.
 
 use super::direct::{delta_lights, environment_nee, Vertex};
-use super::bvh::{Segment, TraceStacks};
-pub use super::path_film::{render, render_opts};
+use super::bvh::{Hit, Segment, TraceStacks};
+pub use super::path_film::{render, render_opts, Shortcuts};
 use super::render_scene::{prepare, RenderScene};
 use super::sampling::{add, dot, max_comp, mul, power_heuristic, scale, sub, Pcg32, V3};
 use super::tracer_node::{crease_input, declare_crease, reserve_image, trace_error};
@@ -148,13 +148,16 @@ pub(crate) fn found_weight(
     }
 }
 
-/// Radiance arriving at `org` from direction `-dir` (unit `dir`), estimated with one path.
+/// Radiance arriving at `org` from direction `-dir` (unit `dir`), estimated with one path
+/// whose first segment (`org + t dir`, `t < tmax`) hits `first` (the caller traced it).
 /// `stacks` are the traversal stacks the path's rays use (one set per thread, reused).
+#[allow(clippy::too_many_arguments)]
 pub fn radiance(
     sc: &RenderScene,
     org: V3,
     dir: V3,
     tmax: f32,
+    first: Option<Hit>,
     rng: &mut Pcg32,
     s: &PathSettings,
     stacks: &mut TraceStacks,
@@ -168,9 +171,13 @@ pub fn radiance(
     let (mut org, mut dir, mut tmax) = (org, dir, tmax);
     // The previous vertex's direct light, waiting for its shadow ray.
     let mut pending: Option<Deferred> = None;
+    let mut first = Some(first);
     loop {
         let hit = match pending.take() {
-            None => sc.intersect(org, dir, tmax),
+            None => match first.take() {
+                Some(hit) => hit,
+                None => sc.intersect(org, dir, tmax),
+            },
             Some(d) => {
                 let (hit, blocked) = match d.nee {
                     Some((shadow, _)) => {

@@ -6,6 +6,7 @@
 use super::bsdf::Bsdf;
 use super::environment::Environment;
 use super::bvh::{triangle_normal, Bvh, Hit};
+use super::camera_grid::Frame;
 use super::sampling::{
     add, dot, length, luminance, max_comp, normalize, scale, sub, uniform_triangle, v3,
     Distribution1D, V3,
@@ -204,6 +205,18 @@ impl PinholeCamera {
         let sx = (2.0 * x / self.width as f32 - 1.0) * self.tan_x;
         let sy = (1.0 - 2.0 * y / self.height as f32) * self.tan_y;
         self.basis.ray_dir(sx, sy)
+    }
+
+    /// The camera's frame in f64, for projecting the scene onto the film
+    /// (`CameraGrid::build`).
+    pub fn frame(&self) -> Frame {
+        let d = |a: V3| a.map(|x| x as f64);
+        Frame {
+            eye: d(self.basis.eye),
+            axes: [d(self.basis.right), d(self.basis.up), d(self.basis.forward)],
+            focal: 0.5 * self.height as f64 / self.tan_y as f64,
+            size: (self.width, self.height),
+        }
     }
 }
 

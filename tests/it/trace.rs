@@ -225,11 +225,12 @@ fn interleaved_shadow_rays_change_no_bit() {
 /// a directional light and the HDR sky of `assets/envmaps/sky.exr` through the open front.
 /// Under both filters, all three strategies, at spp and sizes that leave lanes idle at the
 /// ends of batches, with Russian roulette from the first bounce, a short depth limit and
-/// none.
+/// none. Camera rays through the BVH instead of the per-pixel candidates of `CameraGrid`
+/// change no bit either.
 #[test]
 fn four_lane_paths_change_no_bit() {
     use cgnodes::nodes::trace::path_lanes::handles;
-    use cgnodes::nodes::trace::render_path::render_opts;
+    use cgnodes::nodes::trace::render_path::{render_opts, Shortcuts};
     use cgnodes::nodes::trace::render_scene::prepare;
     let bits = |i: &Image| {
         i.pixels
@@ -307,12 +308,27 @@ fn four_lane_paths_change_no_bit() {
             ..settings(spp, max_depth, strategy, filter)
         };
         assert!(handles(&sc), "the four-lane loop takes this scene");
-        let (lanes, lanes_var) = render_opts(&sc, &pc, &s, &noop, true);
-        let (scalar, scalar_var) = render_opts(&sc, &pc, &s, &noop, false);
+        let lanes_on = |lanes| Shortcuts {
+            lanes,
+            ..Default::default()
+        };
+        let (lanes, lanes_var) = render_opts(&sc, &pc, &s, &noop, lanes_on(true));
+        let (scalar, scalar_var) = render_opts(&sc, &pc, &s, &noop, lanes_on(false));
         assert!(mean(&scalar)[0] > 0.01, "the render is black");
         let what = format!("{strategy:?}, spp {spp}, max_depth {max_depth}");
         assert_eq!(bits(&lanes), bits(&scalar), "{what}");
         assert_eq!(bits(&lanes_var), bits(&scalar_var), "{what}");
+        // Camera rays through the BVH instead of `CameraGrid`: the same hits.
+        let bvh_rays = Shortcuts {
+            camera_grid: false,
+            ..Default::default()
+        };
+        let (plain, _) = render_opts(&sc, &pc, &s, &noop, bvh_rays);
+        assert_eq!(
+            bits(&plain),
+            bits(&lanes),
+            "{what}, camera rays through the BVH"
+        );
     }
     // What it does not take: a glossy material.
     let cam = cornell_camera(8, 8);

@@ -88,6 +88,12 @@ pub struct RayPre {
 }
 
 impl RayPre {
+    /// The axis permutation (kx, ky, kz) of the watertight test: `kz` the dominant axis.
+    #[inline(always)]
+    pub fn axes(&self) -> (usize, usize, usize) {
+        (self.kx, self.ky, self.kz)
+    }
+
     /// Precomputes the ray `org + t dir`.
     #[inline]
     pub fn new(org: V3, dir: V3) -> RayPre {
@@ -136,9 +142,10 @@ pub fn intersect_triangle(r: &RayPre, tri: &[V3; 3], tmax: f32) -> Option<(f32, 
     }
 }
 
-/// The test with the axis permutation fixed at compile time (no indexed loads).
+/// `intersect_triangle` with the ray's axis permutation (`RayPre`'s kx, ky, kz) fixed at
+/// compile time (no indexed loads), for loops over many triangles.
 #[inline(always)]
-pub(super) fn tri_test<const KX: usize, const KY: usize, const KZ: usize>(
+pub fn tri_test<const KX: usize, const KY: usize, const KZ: usize>(
     r: &RayPre,
     tri: &[V3; 3],
     tmax: f32,

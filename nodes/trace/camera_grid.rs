@@ -1,0 +1,487 @@
+//! Camera rays' closest hits without the BVH. Every camera ray of a pinhole camera starts at
+//! the eye and passes through a known pixel, so the triangles it can hit are those whose
+//! projection overlaps that pixel: the hybrid renderers' rasterised primary visibility
+//! (e.g. Barré-Brisebois et al. 2019, "Hybrid Rendering for Real-Time Ray Tracing", Ray
+//! Tracing Gems ch. 25), made exact for a ray tracer. `CameraGrid::build` rasterises every
+//! triangle conservatively into per-pixel candidate lists, each sorted by a lower bound of
+//! the triangle's distance from the eye; `CameraGrid::intersect` runs the BVH's own
+//! watertight test on a pixel's candidates, nearest first, and stops once the next one
+//! starts beyond the closest hit. The answer is the BVH's closest hit (the same triangle
+//! test on every triangle the ray can reach; where two triangles tie at the same distance,
+//! either may be reported, as either may by the BVH).
+//!
+//! Triangles are clipped to the plane `z = z_near` in camera space before projecting. A
+//! camera ray meets the part in front of that plane only inside a tiny pyramid at the eye;
+//! triangles that reach into it are kept on a list every camera ray tests. Scenes whose
+//! projected triangles would cover too many pixels (huge triangles over a huge film) get no
+//! grid, and their camera rays take the BVH.
+
+use super::bvh::{tri_test, Hit, RayPre};
+use super::render_scene::PinholeCamera;
+use super::sampling::V3;
+use rayon::prelude::*;
+
+/// Per-pixel candidate triangles of the camera rays.
+#[derive(Clone, Debug)]
+pub struct CameraGrid {
+    width: u32,
+    /// Start of each pixel's candidates in `cand` (`width * height + 1` entries).
+    start: Vec<u32>,
+    /// (lower bound of the eye's distance to the triangle, triangle), nearest first within
+    /// each pixel.
+    cand: Vec<(f32, u32)>,
+    /// Triangles reaching into the pyramid in front of `z_near`: tested by every ray.
+    near: Vec<u32>,
+}
+
+/// Room left around a pixel (in pixels) for the round-off of projecting in f64 and of the
+/// f32 ray directions (about 1e-5 px at 16384 px).
+const PIXEL_MARGIN: f64 = 0.02;
+
+/// The camera frame in f64: the eye, right, up and forward axes, and the focal length in
+/// pixels (a camera-space point `(x, y, z)` lands at `(w/2 + f x/z, h/2 - f y/z)`).
+#[derive(Clone, Copy, Debug)]
+pub struct Frame {
+    /// Eye.
+    pub eye: [f64; 3],
+    /// Right, up, forward (unit, camera space x, y, z).
+    pub axes: [[f64; 3]; 3],
+    /// Focal length in pixels.
+    pub focal: f64,
+    /// Film width and height in pixels.
+    pub size: (u32, u32),
+}
+
+impl Frame {
+    /// `p` in camera space.
+    fn view(&self, p: V3) -> [f64; 3] {
+        let d = [
+            p[0] as f64 - self.eye[0],
+            p[1] as f64 - self.eye[1],
+            p[2] as f64 - self.eye[2],
+        ];
+        self.axes.map(|a| a[0] * d[0] + a[1] * d[1] + a[2] * d[2])
+    }
+
+    /// Film position of camera-space point `v` (`v[2] > 0`).
+    fn film(&self, v: [f64; 3]) -> [f64; 2] {
+        let (w, h) = (self.size.0 as f64, self.size.1 as f64);
+        [
+            0.5 * w + self.focal * v[0] / v[2],
+            0.5 * h - self.focal * v[1] / v[2],
+        ]
+    }
+}
+
+/// The part of the triangle `v` (camera space) with `z >= z0`: a convex polygon of 0, 3 or
+/// 4 corners (Sutherland and Hodgman 1974, one plane), and its corner count.
+fn clip_near(v: [[f64; 3]; 3], z0: f64) -> ([[f64; 3]; 4], usize) {
+    let mut out = [[0.0; 3]; 4];
+    let mut n = 0;
+    for k in 0..3 {
+        let (a, b) = (v[k], v[(k + 1) % 3]);
+        let (ina, inb) = (a[2] >= z0, b[2] >= z0);
+        if ina {
+            out[n] = a;
+            n += 1;
+        }
+        if ina != inb {
+            let s = (z0 - a[2]) / (b[2] - a[2]);
+            out[n] = [a[0] + s * (b[0] - a[0]), a[1] + s * (b[1] - a[1]), z0];
+            n += 1;
+        }
+    }
+    (out, n)
+}
+
+/// A convex polygon on the film: up to four corners.
+#[derive(Clone, Copy, Debug)]
+struct Poly {
+    p: [[f64; 2]; 4],
+    n: usize,
+}
+
+impl Poly {
+    fn lo(&self, k: usize) -> f64 {
+        self.p[..self.n].iter().map(|q| q[k]).fold(f64::INFINITY, f64::min)
+    }
+    fn hi(&self, k: usize) -> f64 {
+        self.p[..self.n].iter().map(|q| q[k]).fold(f64::NEG_INFINITY, f64::max)
+    }
+}
+
+/// Pixels a convex film polygon may cover, grown by `PIXEL_MARGIN`: calls `f(pixel)` for
+/// each pixel whose grown square the polygon overlaps (separating axes: the square's two
+/// and the polygon's edge normals). A polygon of (almost) no area covers its bounds.
+fn cover(poly: &Poly, size: (u32, u32), mut f: impl FnMut(usize)) {
+    let (w, h) = (size.0 as f64, size.1 as f64);
+    let m = PIXEL_MARGIN;
+    let x0 = (poly.lo(0) - m).floor().max(0.0);
+    let y0 = (poly.lo(1) - m).floor().max(0.0);
+    let x1 = (poly.hi(0) + m).floor().min(w - 1.0);
+    let y1 = (poly.hi(1) + m).floor().min(h - 1.0);
+    if !(x0 <= x1 && y0 <= y1) {
+        return;
+    }
+    // Edge lines `n . q + c >= 0` inside, for either winding.
+    let (p, n) = (&poly.p, poly.n);
+    let mut area = 0.0;
+    for k in 0..n {
+        let (a, b) = (p[k], p[(k + 1) % n]);
+        area += a[0] * b[1] - b[0] * a[1];
+    }
+    let scale = (poly.hi(0) - poly.lo(0)).max(poly.hi(1) - poly.lo(1)).max(1.0);
+    let mut edges = [(0.0f64, 0.0f64, 0.0f64); 4];
+    let mut ne = 0;
+    if area.abs() > 1e-9 * scale * scale {
+        let sgn = area.signum();
+        for k in 0..n {
+            let (a, b) = (p[k], p[(k + 1) % n]);
+            let (nx, ny) = (-(b[1] - a[1]) * sgn, (b[0] - a[0]) * sgn);
+            edges[k] = (nx, ny, -(nx * a[0] + ny * a[1]));
+        }
+        ne = n;
+    }
+    for y in y0 as usize..=y1 as usize {
+        for x in x0 as usize..=x1 as usize {
+            let (sx0, sy0) = (x as f64 - m, y as f64 - m);
+            let (sx1, sy1) = (x as f64 + 1.0 + m, y as f64 + 1.0 + m);
+            let outside = edges[..ne].iter().any(|&(nx, ny, c)| {
+                let qx = if nx > 0.0 { sx1 } else { sx0 };
+                let qy = if ny > 0.0 { sy1 } else { sy0 };
+                nx * qx + ny * qy + c < 0.0
+            });
+            if !outside {
+                f(y * size.0 as usize + x);
+            }
+        }
+    }
+}
+
+/// Lower bound of the distance from `e` to the box around triangle `t`, shrunk by a
+/// relative 1e-4 so that the f32 hit distances of the triangle test stay above it.
+fn eye_distance(e: [f64; 3], t: &[V3; 3]) -> f32 {
+    let mut d2 = 0.0;
+    for k in 0..3 {
+        let lo = t.iter().map(|p| p[k] as f64).fold(f64::INFINITY, f64::min);
+        let hi = t.iter().map(|p| p[k] as f64).fold(f64::NEG_INFINITY, f64::max);
+        let g = (lo - e[k]).max(e[k] - hi).max(0.0);
+        d2 += g * g;
+    }
+    (d2.sqrt() * (1.0 - 1e-4)) as f32
+}
+
+impl CameraGrid {
+    /// Rasterises `tris` for the camera `cam`; `None` when the candidate lists would exceed
+    /// eight entries per pixel plus a million (huge triangles over a huge film), or the
+    /// scene is empty: the camera rays take the BVH then.
+    pub fn build(tris: &[[V3; 3]], cam: &PinholeCamera) -> Option<CameraGrid> {
+        let fr = cam.frame();
+        let (w, h) = fr.size;
+        let pixels = w as usize * h as usize;
+        if tris.is_empty() {
+            return None;
+        }
+        // The clipping plane: far below any distance that matters in the scene, far above
+        // the round-off of the view transform.
+        let mut ext = 0.0f64;
+        for t in tris {
+            for p in t {
+                for (x, e) in p.iter().zip(fr.eye) {
+                    ext = ext.max((*x as f64 - e).abs());
+                }
+            }
+        }
+        if !ext.is_finite() {
+            return None;
+        }
+        let z0 = (1e-5 * ext).max(f64::MIN_POSITIVE);
+        // The pyramid in front of z0 that camera rays cross, as a box (with room).
+        let half = [
+            1.01 * z0 * 0.5 * w as f64 / fr.focal,
+            1.01 * z0 * 0.5 * h as f64 / fr.focal,
+        ];
+        // Per triangle, in parallel: whether it reaches into the pyramid in front of z0,
+        // and the film polygon of its part behind z0 when that lies on the film.
+        let project = |t: &[V3; 3]| -> (bool, Option<Poly>) {
+            let v = t.map(|p| fr.view(p));
+            let lo = |k: usize| v[0][k].min(v[1][k]).min(v[2][k]);
+            let hi = |k: usize| v[0][k].max(v[1][k]).max(v[2][k]);
+            let near = lo(2) < z0
+                && hi(2) >= 0.0
+                && lo(0) <= half[0]
+                && hi(0) >= -half[0]
+                && lo(1) <= half[1]
+                && hi(1) >= -half[1];
+            if hi(2) < z0 {
+                return (near, None);
+            }
+            let (c, n) = clip_near(v, z0);
+            let mut poly = Poly {
+                p: [[0.0; 2]; 4],
+                n,
+            };
+            for (q, c) in poly.p.iter_mut().zip(&c[..n]) {
+                *q = fr.film(*c);
+            }
+            if n < 3 || poly.p[..n].iter().any(|q| !q[0].is_finite() || !q[1].is_finite()) {
+                return (near, None);
+            }
+            let on_film = poly.hi(0) >= -1.0
+                && poly.lo(0) <= w as f64 + 1.0
+                && poly.hi(1) >= -1.0
+                && poly.lo(1) <= h as f64 + 1.0;
+            (near, on_film.then_some(poly))
+        };
+        let projected: Vec<(bool, Option<Poly>)> = tris.par_iter().map(project).collect();
+        let near: Vec<u32> = (0..tris.len() as u32)
+            .filter(|&i| projected[i as usize].0)
+            .collect();
+        // The polygons' bounds on the film bound their pixel count.
+        let mut budget = 8 * pixels + 1_000_000;
+        for p in projected.iter().filter_map(|p| p.1.as_ref()) {
+            let (x0, x1) = (p.lo(0).max(0.0), p.hi(0).min(w as f64));
+            let (y0, y1) = (p.lo(1).max(0.0), p.hi(1).min(h as f64));
+            let n = ((x1 - x0 + 2.0).max(0.0) * (y1 - y0 + 2.0).max(0.0)).min(pixels as f64);
+            budget = budget.checked_sub(n as usize)?;
+        }
+        // Nearest first, so that each pixel's list is filled in order.
+        let mut order: Vec<(f32, u32)> = (0..tris.len() as u32)
+            .filter(|&i| projected[i as usize].1.is_some())
+            .map(|i| (eye_distance(fr.eye, &tris[i as usize]), i))
+            .collect();
+        order.par_sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        // The pixels of each triangle, in parallel in chunks of that order...
+        let hits: Vec<Vec<(u32, u32)>> = order
+            .par_chunks(4096)
+            .enumerate()
+            .map(|(c, chunk)| {
+                let mut out = Vec::new();
+                for (k, &(_, i)) in chunk.iter().enumerate() {
+                    let rank = (c * 4096 + k) as u32;
+                    if let Some(p) = &projected[i as usize].1 {
+                        cover(p, fr.size, |px| out.push((px as u32, rank)));
+                    }
+                }
+                out
+            })
+            .collect();
+        // ...then sorted into compressed rows by pixel, stably (a counting sort).
+        let mut start = vec![0u32; pixels + 1];
+        for &(px, _) in hits.iter().flatten() {
+            start[px as usize + 1] += 1;
+        }
+        for k in 0..pixels {
+            start[k + 1] += start[k];
+        }
+        let mut fill = start.clone();
+        let mut cand = vec![(0.0f32, 0u32); start[pixels] as usize];
+        for &(px, rank) in hits.iter().flatten() {
+            cand[fill[px as usize] as usize] = order[rank as usize];
+            fill[px as usize] += 1;
+        }
+        Some(CameraGrid {
+            width: w,
+            start,
+            cand,
+            near,
+        })
+    }
+
+    /// The closest hit of the camera ray `eye + t dir`, `0 < t < tmax`, through film
+    /// position (x + a, y + b) with 0 <= a, b <= 1, of the triangles `tris` the grid was
+    /// built from, for the camera it was built for. `dir` is unit length.
+    #[inline]
+    pub fn intersect(
+        &self,
+        tris: &[[V3; 3]],
+        (x, y): (u32, u32),
+        eye: V3,
+        dir: V3,
+        tmax: f32,
+    ) -> Option<Hit> {
+        let r = RayPre::new(eye, dir);
+        let px = y as usize * self.width as usize + x as usize;
+        let cand = &self.cand[self.start[px] as usize..self.start[px + 1] as usize];
+        match r.axes() {
+            (1, 2, 0) => self.closest::<1, 2, 0>(tris, &r, cand, tmax),
+            (2, 1, 0) => self.closest::<2, 1, 0>(tris, &r, cand, tmax),
+            (2, 0, 1) => self.closest::<2, 0, 1>(tris, &r, cand, tmax),
+            (0, 2, 1) => self.closest::<0, 2, 1>(tris, &r, cand, tmax),
+            (0, 1, 2) => self.closest::<0, 1, 2>(tris, &r, cand, tmax),
+            _ => self.closest::<1, 0, 2>(tris, &r, cand, tmax),
+        }
+    }
+
+    /// The closest hit among the near triangles and a pixel's candidates, with the ray's
+    /// axis permutation fixed at compile time.
+    #[inline(always)]
+    fn closest<const KX: usize, const KY: usize, const KZ: usize>(
+        &self,
+        tris: &[[V3; 3]],
+        r: &RayPre,
+        cand: &[(f32, u32)],
+        mut tmax: f32,
+    ) -> Option<Hit> {
+        let mut best: Option<Hit> = None;
+        let mut test = |i: u32, tmax: &mut f32| {
+            if let Some((t, u, v)) = tri_test::<KX, KY, KZ>(r, &tris[i as usize], *tmax) {
+                *tmax = t;
+                best = Some(Hit { t, prim: i, u, v });
+            }
+        };
+        for &i in &self.near {
+            test(i, &mut tmax);
+        }
+        for &(key, i) in cand {
+            if key >= tmax {
+                break;
+            }
+            test(i, &mut tmax);
+        }
+        best
+    }
+
+    /// Candidate entries over all pixels (for the benchmarks' notes).
+    pub fn entries(&self) -> usize {
+        self.cand.len()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::nodes::trace::bvh::Bvh;
+    use crate::nodes::trace::sampling::Pcg32;
+    use crate::types::Camera;
+
+    fn camera(eye: [f64; 3], target: [f64; 3], w: u32, h: u32, fov: f64) -> PinholeCamera {
+        PinholeCamera::new(&Camera {
+            eye,
+            target,
+            width: w,
+            height: h,
+            fov_deg: fov,
+            far: 1e30,
+            ..Default::default()
+        })
+        .unwrap()
+    }
+
+    /// A soup of triangles of every size around `c` (some far larger than the view, some
+    /// behind the eye, some through the plane of the eye), and a closed sphere mesh (shared
+    /// edges, where ties happen).
+    fn soup(rng: &mut Pcg32, eye: V3) -> Vec<[V3; 3]> {
+        let mut tris = Vec::new();
+        let mut r = |s: f32| (rng.next_f32() * 2.0 - 1.0) * s;
+        for k in 0..300 {
+            let s = [0.02, 0.3, 3.0, 40.0][k % 4];
+            let c = [r(3.0), r(3.0), r(3.0)];
+            tris.push([0, 1, 2].map(|_| [c[0] + r(s), c[1] + r(s), c[2] + r(s)]));
+        }
+        // Triangles passing a hair in front of, beside and behind the eye.
+        for k in 0..20 {
+            let d = [1e-6, 1e-4, 1e-2][k % 3];
+            let c = [eye[0] + r(d), eye[1] + r(d), eye[2] + r(d)];
+            // Centred on c, so its plane passes within d of the eye.
+            let (e, f) = ([r(1.0), r(1.0), r(1.0)], [r(1.0), r(1.0), r(1.0)]);
+            tris.push([
+                [c[0] + e[0], c[1] + e[1], c[2] + e[2]],
+                [c[0] + f[0], c[1] + f[1], c[2] + f[2]],
+                [c[0] - e[0] - f[0], c[1] - e[1] - f[1], c[2] - e[2] - f[2]],
+            ]);
+        }
+        let (n, m) = (12, 24);
+        let at = |i: usize, j: usize| {
+            let (th, ph) = (
+                std::f32::consts::PI * i as f32 / n as f32,
+                std::f32::consts::TAU * j as f32 / m as f32,
+            );
+            [th.sin() * ph.cos(), th.cos(), th.sin() * ph.sin() - 0.5]
+        };
+        for i in 0..n {
+            for j in 0..m {
+                tris.push([at(i, j), at(i + 1, j), at(i + 1, j + 1)]);
+                tris.push([at(i, j), at(i + 1, j + 1), at(i, j + 1)]);
+            }
+        }
+        tris
+    }
+
+    /// Every camera ray's grid answer is the BVH's: the same distance bit for bit, and the
+    /// same triangle unless another one ties with it at that distance; over cameras outside,
+    /// inside and at the edge of the soup, wide and narrow, square and not.
+    #[test]
+    fn grid_hits_are_the_bvh_hits() {
+        let mut rng = Pcg32::new(7, 11);
+        let cams = [
+            ([0.0, 0.0, 6.0], [0.0, 0.0, 0.0], 48, 40, 45.0),
+            ([0.3, 0.2, 0.4], [0.0, -0.3, -1.0], 40, 40, 120.0),
+            ([4.0, 3.0, -2.0], [0.0, 0.0, 0.0], 64, 24, 10.0),
+            ([0.0, 0.0, 0.2], [0.0, 0.0, -2.0], 30, 50, 170.0),
+        ];
+        let (mut hits, mut ties) = (0, 0);
+        for (eye, target, w, h, fov) in cams {
+            let cam = camera(eye, target, w, h, fov);
+            let tris = soup(&mut rng, cam.eye);
+            let bvh = Bvh::build(&tris);
+            let grid = CameraGrid::build(&tris, &cam).expect("the soup fits the budget");
+            for y in 0..h {
+                for x in 0..w {
+                    for s in 0..4 {
+                        // Jittered, plus the pixel's corners and edges.
+                        let (a, b) = match s {
+                            0 => (0.0, 0.0),
+                            1 => (1.0 - f32::EPSILON, 0.5),
+                            _ => (rng.next_f32(), rng.next_f32()),
+                        };
+                        let dir = cam.ray_dir(x as f32 + a, y as f32 + b);
+                        let want = bvh.intersect(cam.eye, dir, cam.far);
+                        let got = grid.intersect(&tris, (x, y), cam.eye, dir, cam.far);
+                        match (want, got) {
+                            (None, None) => {}
+                            (Some(p), Some(q)) => {
+                                assert_eq!(p.t.to_bits(), q.t.to_bits(), "pixel {x},{y}");
+                                hits += 1;
+                                if p.prim != q.prim {
+                                    let r = RayPre::new(cam.eye, dir);
+                                    let t = crate::nodes::trace::bvh::intersect_triangle(
+                                        &r,
+                                        &tris[p.prim as usize],
+                                        f32::INFINITY,
+                                    );
+                                    assert_eq!(t.map(|t| t.0.to_bits()), Some(q.t.to_bits()));
+                                    ties += 1;
+                                }
+                            }
+                            _ => panic!("pixel {x},{y}: BVH {want:?}, grid {got:?}"),
+                        }
+                    }
+                }
+            }
+        }
+        assert!(hits > 10_000, "{hits} hits");
+        assert!(ties < hits / 100, "{ties} ties in {hits} hits");
+    }
+
+    /// Clipping at the eye's plane keeps what is in front: a triangle through the eye's
+    /// plane covers exactly its visible part.
+    #[test]
+    fn clipping_keeps_the_front() {
+        let (p, n) = clip_near([[0.0, 0.0, -1.0], [1.0, 0.0, 1.0], [0.0, 1.0, 1.0]], 0.5);
+        assert_eq!(n, 4);
+        assert!(p[..n].iter().all(|q| q[2] >= 0.5));
+        assert_eq!(clip_near([[0.0, 0.0, -1.0]; 3], 0.5).1, 0);
+        assert_eq!(clip_near([[0.0, 0.0, 1.0]; 3], 0.5).1, 3);
+    }
+
+    /// Far more coverage than the film has pixels: no grid, the camera rays take the BVH.
+    #[test]
+    fn overfull_grid_is_refused() {
+        let cam = camera([0.0, 0.0, 3.0], [0.0; 3], 64, 64, 45.0);
+        let big = [[-50.0, -50.0, 0.0], [50.0, -50.0, 0.0], [0.0, 50.0, 0.0]];
+        assert!(CameraGrid::build(&vec![big; 10], &cam).is_some());
+        assert!(CameraGrid::build(&vec![big; 400], &cam).is_none());
+        assert!(CameraGrid::build(&[], &cam).is_none());
+    }
+}

@@ -38,6 +38,14 @@ pub struct CameraGrid {
 /// f32 ray directions (about 1e-5 px at 16384 px).
 const PIXEL_MARGIN: f64 = 0.02;
 
+/// Film coordinates (pixels) beyond which a projected corner is not trusted: f64 places
+/// an edge through such corners to about 1e-16 of their size, 1e-4 px here.
+const FILM_LIMIT: f64 = 1e12;
+
+/// The most triangles the list that every camera ray tests may hold; a scene with more
+/// (triangles through the eye, or thrown far out) gets no grid.
+const MAX_NEAR: usize = 64;
+
 /// The camera frame in f64: the eye, right, up and forward axes, and the focal length in
 /// pixels (a camera-space point `(x, y, z)` lands at `(w/2 + f x/z, h/2 - f y/z)`).
 #[derive(Clone, Copy, Debug)]
@@ -173,8 +181,9 @@ fn eye_distance(e: [f64; 3], t: &[V3; 3]) -> f32 {
 
 impl CameraGrid {
     /// Rasterises `tris` for the camera `cam`; `None` when the candidate lists would exceed
-    /// eight entries per pixel plus a million (huge triangles over a huge film), or the
-    /// scene is empty: the camera rays take the BVH then.
+    /// eight entries per pixel plus a million (huge triangles over a huge film), when more
+    /// than `MAX_NEAR` triangles would have to be tested by every ray, or when the scene is
+    /// empty: the camera rays take the BVH then.
     pub fn build(tris: &[[V3; 3]], cam: &PinholeCamera) -> Option<CameraGrid> {
         let fr = cam.frame();
         let (w, h) = fr.size;
@@ -182,8 +191,10 @@ impl CameraGrid {
         if tris.is_empty() {
             return None;
         }
-        // The clipping plane: far below any distance that matters in the scene, far above
-        // the round-off of the view transform.
+        // The clipping plane: far below any distance that matters in the scene (1e-7 of its
+        // extent from the eye), while the film positions behind it stay within about
+        // 1e7 focal lengths, where f64 places a polygon's edges to far better than the
+        // pixel margin.
         let mut ext = 0.0f64;
         for t in tris {
             for p in t {
@@ -195,7 +206,7 @@ impl CameraGrid {
         if !ext.is_finite() {
             return None;
         }
-        let z0 = (1e-5 * ext).max(f64::MIN_POSITIVE);
+        let z0 = (1e-7 * ext).max(f64::MIN_POSITIVE);
         // The pyramid in front of z0 that camera rays cross, as a box (with room).
         let half = [
             1.01 * z0 * 0.5 * w as f64 / fr.focal,
@@ -224,8 +235,13 @@ impl CameraGrid {
             for (q, c) in poly.p.iter_mut().zip(&c[..n]) {
                 *q = fr.film(*c);
             }
-            if n < 3 || poly.p[..n].iter().any(|q| !q[0].is_finite() || !q[1].is_finite()) {
+            if n < 3 {
                 return (near, None);
+            }
+            // Film positions too far out to place the edges precisely (or not finite):
+            // the triangle goes on the list every ray tests.
+            if poly.p[..n].iter().flatten().any(|x| x.is_nan() || x.abs() > FILM_LIMIT) {
+                return (true, None);
             }
             let on_film = poly.hi(0) >= -1.0
                 && poly.lo(0) <= w as f64 + 1.0
@@ -237,6 +253,9 @@ impl CameraGrid {
         let near: Vec<u32> = (0..tris.len() as u32)
             .filter(|&i| projected[i as usize].0)
             .collect();
+        if near.len() > MAX_NEAR {
+            return None;
+        }
         // The polygons' bounds on the film bound their pixel count.
         let mut budget = 8 * pixels + 1_000_000;
         for p in projected.iter().filter_map(|p| p.1.as_ref()) {
@@ -368,11 +387,15 @@ mod tests {
         .unwrap()
     }
 
-    /// A soup of triangles of every size around `c` (some far larger than the view, some
-    /// behind the eye, some through the plane of the eye), and a closed sphere mesh (shared
-    /// edges, where ties happen).
-    fn soup(rng: &mut Pcg32, eye: V3) -> Vec<[V3; 3]> {
+    /// A soup of triangles of every size (some far larger than the view, some behind the
+    /// eye, some through the plane of the eye), a closed sphere mesh (shared edges, where
+    /// ties happen), and optionally a huge ground plane.
+    fn soup(rng: &mut Pcg32, eye: V3, ground: bool) -> Vec<[V3; 3]> {
         let mut tris = Vec::new();
+        if ground {
+            // A ground plane 1e5 units across: the clipping plane moves out to 0.01.
+            tris.push([[-1e5, -4.0, -1e5], [0.0, -4.0, 1e5], [1e5, -4.0, -1e5]]);
+        }
         let mut r = |s: f32| (rng.next_f32() * 2.0 - 1.0) * s;
         for k in 0..300 {
             let s = [0.02, 0.3, 3.0, 40.0][k % 4];
@@ -423,7 +446,7 @@ mod tests {
         let (mut hits, mut ties) = (0, 0);
         for (eye, target, w, h, fov) in cams {
             let cam = camera(eye, target, w, h, fov);
-            let tris = soup(&mut rng, cam.eye);
+            let tris = soup(&mut rng, cam.eye, fov > 100.0);
             let bvh = Bvh::build(&tris);
             let grid = CameraGrid::build(&tris, &cam).expect("the soup fits the budget");
             for y in 0..h {
@@ -483,5 +506,9 @@ mod tests {
         assert!(CameraGrid::build(&vec![big; 10], &cam).is_some());
         assert!(CameraGrid::build(&vec![big; 400], &cam).is_none());
         assert!(CameraGrid::build(&[], &cam).is_none());
+        // Many triangles through the eye: no grid either.
+        let through = [[-1.0, -1.0, 3.0], [1.0, -1.0, 3.0], [0.0, 1.0, 3.0]];
+        assert!(CameraGrid::build(&vec![through; 10], &cam).is_some());
+        assert!(CameraGrid::build(&vec![through; 100], &cam).is_none());
     }
 }

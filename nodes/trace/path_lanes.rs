@@ -190,11 +190,11 @@ struct Lanes {
     /// stays 1.
     prev_pdf: [f32; L],
     depth: [u32; L],
+    /// The camera ray's hit, found when the lane took the sample.
+    first: [Option<Hit>; L],
     /// Direct light estimated at the previous vertex waiting for its shadow ray (as
     /// `render_path::Deferred`): whether there is one, whether it has an emitter sample,
     /// that sample's shadow segment and its contribution when unblocked.
-    /// The camera ray's hit, found when the lane took the sample.
-    first: [Option<Hit>; L],
     pending: [bool; L],
     nee: [bool; L],
     delta: [V3; L],

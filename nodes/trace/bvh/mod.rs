@@ -14,7 +14,8 @@ mod tests;
 mod traverse;
 mod wide;
 
-pub use traverse::{intersect_triangle, tri_test, RayPre, TraceStacks};
+pub(crate) use traverse::tri_test;
+pub use traverse::{intersect_triangle, RayPre, TraceStacks};
 pub use lanes::Tri4;
 pub use pair::Segment;
 pub use wide::Node4;

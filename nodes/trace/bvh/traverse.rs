@@ -142,10 +142,11 @@ pub fn intersect_triangle(r: &RayPre, tri: &[V3; 3], tmax: f32) -> Option<(f32, 
     }
 }
 
-/// `intersect_triangle` with the ray's axis permutation (`RayPre`'s kx, ky, kz) fixed at
-/// compile time (no indexed loads), for loops over many triangles.
+/// `intersect_triangle` with the ray's axis permutation (`RayPre::axes`) fixed at compile
+/// time (no indexed loads), for loops over many triangles; any other permutation gives
+/// wrong answers, so callers match on `RayPre::axes` first.
 #[inline(always)]
-pub fn tri_test<const KX: usize, const KY: usize, const KZ: usize>(
+pub(crate) fn tri_test<const KX: usize, const KY: usize, const KZ: usize>(
     r: &RayPre,
     tri: &[V3; 3],
     tmax: f32,

@@ -360,11 +360,6 @@ impl CameraGrid {
         }
         best
     }
-
-    /// Candidate entries over all pixels (for the benchmarks' notes).
-    pub fn entries(&self) -> usize {
-        self.cand.len()
-    }
 }
 
 #[cfg(test)]

@@ -4,7 +4,7 @@
 //! Guibas 1995). Area emitters are handled in `render_path` itself.
 
 use super::bsdf::Bsdf;
-use super::render_scene::{RenderScene, SurfacePoint};
+use super::render_scene::{RenderScene, SurfacePoint, SHADOW_END};
 use super::sampling::{add, dot, length, max_comp, mul, power_heuristic, scale, sub, v3, V3};
 use crate::types::Light;
 
@@ -78,7 +78,7 @@ pub fn delta_lights(sc: &RenderScene, v: &Vertex) -> V3 {
         }
         let o = v.origin(sc, wi);
         let blocked = match target {
-            Some(lp) => sc.bvh.occluded(o, sub(lp, o), 1.0 - 1e-4),
+            Some(lp) => sc.bvh.occluded(o, sub(lp, o), SHADOW_END),
             None => sc.bvh.occluded(o, wi, f32::INFINITY),
         };
         if !blocked {

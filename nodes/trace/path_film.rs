@@ -112,18 +112,41 @@ pub fn render_opts(
     gather(&outs, w, h)
 }
 
-/// The first hit of the camera ray through pixel `(x, y)` in direction `dir`.
+/// The start of one pixel sample's path: its random stream (after the film position's two
+/// numbers), film position, camera ray direction and that ray's first hit.
+pub(crate) struct CameraSample {
+    pub rng: Pcg32,
+    pub fx: f32,
+    pub fy: f32,
+    pub dir: V3,
+    pub hit: Option<Hit>,
+}
+
+/// Starts sample `k` of pixel `(x, y)`: both path loops begin here, so they draw the same
+/// numbers and trace the same camera ray (through `grid` when there is one).
 #[inline]
-pub(crate) fn camera_hit(
+pub(crate) fn camera_sample(
     sc: &RenderScene,
     cam: &PinholeCamera,
     grid: Option<&CameraGrid>,
-    px: (u32, u32),
-    dir: V3,
-) -> Option<Hit> {
-    match grid {
-        Some(g) => g.intersect(&sc.tris, px, cam.eye, dir, cam.far),
+    seed: u64,
+    (x, y, k): Job,
+) -> CameraSample {
+    let pix = y as u64 * cam.width as u64 + x as u64;
+    let mut rng = Pcg32::for_sample(pix, k as u64, seed);
+    let [ux, uy] = rng.next_2d();
+    let (fx, fy) = (x as f32 + ux, y as f32 + uy);
+    let dir = cam.ray_dir(fx, fy);
+    let hit = match grid {
+        Some(g) => g.intersect(&sc.tris, (x, y), cam.eye, dir, cam.far),
         None => sc.intersect(cam.eye, dir, cam.far),
+    };
+    CameraSample {
+        rng,
+        fx,
+        fy,
+        dir,
+        hit,
     }
 }
 
@@ -165,16 +188,15 @@ fn render_tile(
         } else {
             samples.clear();
             for &(x, y) in chunk {
-                let pix = y as u64 * cam.width as u64 + x as u64;
                 for k in 0..s.spp {
-                    let mut rng = Pcg32::for_sample(pix, k as u64, s.seed);
-                    let [ux, uy] = rng.next_2d();
-                    let fx = x as f32 + ux;
-                    let fy = y as f32 + uy;
-                    let dir = cam.ray_dir(fx, fy);
-                    let hit = camera_hit(sc, cam, grid, (x, y), dir);
-                    let c = radiance(sc, cam.eye, dir, cam.far, hit, &mut rng, s, &mut stacks);
-                    samples.push(Sample { c, fx, fy });
+                    let mut cs = camera_sample(sc, cam, grid, s.seed, (x, y, k));
+                    let (dir, far) = (cs.dir, cam.far);
+                    let c = radiance(sc, cam.eye, dir, far, cs.hit, &mut cs.rng, s, &mut stacks);
+                    samples.push(Sample {
+                        c,
+                        fx: cs.fx,
+                        fy: cs.fy,
+                    });
                 }
             }
         }

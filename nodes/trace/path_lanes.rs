@@ -20,9 +20,9 @@ use super::bsdf::Bsdf;
 use super::bvh::{Hit, TraceStacks};
 use super::camera_grid::CameraGrid;
 use super::direct::{delta_lights, environment_nee, Vertex};
-use super::path_film::camera_hit;
+use super::path_film::camera_sample;
 use super::render_path::{found_weight, PathSettings, Strategy};
-use super::render_scene::{PinholeCamera, RenderScene};
+use super::render_scene::{PinholeCamera, RenderScene, OFFSET_REL, SHADOW_END};
 use super::sampling::{add, dot, max_comp, mul, scale, Pcg32, V3};
 use std::f32::consts::{FRAC_1_PI, FRAC_PI_4};
 use wide::f32x4;
@@ -90,7 +90,7 @@ fn sel3(m: F, a: F3, b: F3) -> F3 {
 fn splat(x: f32) -> F {
     F::splat(x)
 }
-/// Lane mask as four bools.
+/// The lanes where `m` is set, as the low four bits.
 #[inline(always)]
 fn bits(m: F) -> u32 {
     m.to_bitmask()
@@ -99,7 +99,7 @@ fn bits(m: F) -> u32 {
 #[inline(always)]
 fn offset4(eps: f32, p: F3, n: F3) -> F3 {
     let m = p[0].abs().max(p[1].abs()).max(p[2].abs());
-    add3(p, scale3(n, splat(eps) + splat(4e-7) * m))
+    add3(p, scale3(n, splat(eps) + splat(OFFSET_REL) * m))
 }
 
 /// `sampling::power_heuristic` per lane.
@@ -205,8 +205,6 @@ struct Lanes {
 }
 
 const IDLE: usize = usize::MAX;
-/// The shadow segment's far end (the emitter point itself is excluded).
-const SEG_T: f32 = 1.0 - 1e-4;
 
 #[inline(always)]
 fn f4(a: &[f32; L]) -> F {
@@ -276,7 +274,7 @@ impl Lanes {
             let blocked = self.nee[i]
                 && sc
                     .bvh
-                    .occluded(get(&self.seg_o, i), get(&self.seg_d, i), SEG_T);
+                    .occluded(get(&self.seg_o, i), get(&self.seg_d, i), SHADOW_END);
             self.add_pending(i, blocked);
         }
         out[self.job[i]].c = self.l[i];
@@ -304,20 +302,15 @@ pub fn trace(
             if ln.job[i] != IDLE || next == jobs.len() {
                 continue;
             }
-            let (x, y, k) = jobs[next];
-            let pix = y as u64 * cam.width as u64 + x as u64;
-            let mut rng = Pcg32::for_sample(pix, k as u64, s.seed);
-            let [ux, uy] = rng.next_2d();
-            let (fx, fy) = (x as f32 + ux, y as f32 + uy);
-            out[next].fx = fx;
-            out[next].fy = fy;
+            let cs = camera_sample(sc, cam, grid, s.seed, jobs[next]);
+            out[next].fx = cs.fx;
+            out[next].fy = cs.fy;
             ln.job[i] = next;
-            ln.rng[i] = rng;
+            ln.rng[i] = cs.rng;
             put(&mut ln.org, i, cam.eye);
-            let dir = cam.ray_dir(fx, fy);
-            put(&mut ln.dir, i, dir);
+            put(&mut ln.dir, i, cs.dir);
             ln.tmax[i] = cam.far;
-            ln.first[i] = camera_hit(sc, cam, grid, (x, y), dir);
+            ln.first[i] = cs.hit;
             put(&mut ln.thr, i, [1.0; 3]);
             ln.l[i] = [0.0; 3];
             ln.prev_pdf[i] = 0.0;
@@ -355,7 +348,7 @@ fn visit(
     let (org, dir, tmax) = (get(&ln.org, i), get(&ln.dir, i), ln.tmax[i]);
     let hit: Option<Hit> = if ln.pending[i] {
         let (hit, blocked) = if ln.nee[i] {
-            let shadow = (get(&ln.seg_o, i), get(&ln.seg_d, i), SEG_T);
+            let shadow = (get(&ln.seg_o, i), get(&ln.seg_d, i), SHADOW_END);
             sc.bvh.intersect_occluded_in(stacks, (org, dir, tmax), shadow)
         } else {
             (sc.intersect(org, dir, tmax), false)

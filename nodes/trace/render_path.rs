@@ -17,7 +17,7 @@
 use super::direct::{delta_lights, environment_nee, Vertex};
 use super::bvh::{Hit, Segment, TraceStacks};
 pub use super::path_film::{render, render_opts, Shortcuts};
-use super::render_scene::{prepare, RenderScene};
+use super::render_scene::{prepare, RenderScene, SHADOW_END};
 use super::sampling::{add, dot, max_comp, mul, power_heuristic, scale, sub, Pcg32, V3};
 use super::tracer_node::{crease_input, declare_crease, reserve_image, trace_error};
 use crate::prelude::*;
@@ -257,7 +257,7 @@ pub fn radiance(
                                     1.0
                                 };
                                 let c = scale(mul(thr, mul(f, le)), w / p_light);
-                                d.nee = Some(((o, sub(ls.p, o), 1.0 - 1e-4), c));
+                                d.nee = Some(((o, sub(ls.p, o), SHADOW_END), c));
                             }
                         }
                     }

@@ -220,6 +220,14 @@ impl PinholeCamera {
     }
 }
 
+/// The part of a point's largest coordinate added to `RenderScene::eps` when a ray leaves
+/// a surface (`RenderScene::offset`): f32 round-off grows with the coordinates.
+pub const OFFSET_REL: f32 = 4e-7;
+
+/// Where a shadow segment `o + t (q - o)` towards a light point `q` stops: short of the
+/// point, so the light's own surface does not block it.
+pub const SHADOW_END: f32 = 1.0 - 1e-4;
+
 /// The flattened scene.
 #[derive(Clone, Debug)]
 pub struct RenderScene {
@@ -476,7 +484,7 @@ impl RenderScene {
     #[inline]
     pub fn offset(&self, p: V3, n: V3) -> V3 {
         let m = p[0].abs().max(p[1].abs()).max(p[2].abs());
-        add(p, scale(n, self.eps + 4e-7 * m))
+        add(p, scale(n, self.eps + OFFSET_REL * m))
     }
 
     /// Samples a point on the emitters by power (one triangle by area times luminance,

@@ -17,7 +17,7 @@
 //! reflection or refraction.
 
 use super::bsdf::{fresnel_dielectric, reflect, Bsdf};
-use super::render_scene::{prepare, PinholeCamera, RenderScene};
+use super::render_scene::{prepare, PinholeCamera, RenderScene, SHADOW_END};
 use super::sampling::{add, dot, max_comp, mul, normalize, scale, sub, uniform_triangle, v3, V3};
 use super::tracer_node::{crease_input, declare_crease, reserve_image, trace_error};
 use crate::prelude::*;
@@ -179,7 +179,7 @@ pub fn trace(
                 let lp = v3(*position);
                 let d = sub(lp, p);
                 let r2 = dot(d, d);
-                if r2 > 0.0 && !sc.bvh.occluded(o, sub(lp, o), 1.0 - 1e-4) {
+                if r2 > 0.0 && !sc.bvh.occluded(o, sub(lp, o), SHADOW_END) {
                     let e = scale(v3(*color), *intensity as f32 / r2);
                     l = add(l, shade(scale(d, 1.0 / r2.sqrt()), e));
                 }
@@ -222,7 +222,7 @@ pub fn trace(
             if max_comp(le) <= 0.0 || dot(n, wi) <= 0.0 || dot(ns, wi) <= 0.0 {
                 continue;
             }
-            if !sc.bvh.occluded(o, sub(q, o), 1.0 - 1e-4) {
+            if !sc.bvh.occluded(o, sub(q, o), SHADOW_END) {
                 l = add(l, shade(wi, scale(le, w * cl / r2)));
             }
         }

@@ -239,7 +239,12 @@ pub fn radiance(
                     let dist = dist2.sqrt();
                     if dist > 0.0 {
                         let wi = scale(dv, 1.0 / dist);
-                        let le = sc.emitted(ls.tri, scale(wi, -1.0));
+                        // `RenderScene::emitted`, from the sample's own record.
+                        let le = if ls.two_sided || dot(ls.n, scale(wi, -1.0)) > 0.0 {
+                            ls.le
+                        } else {
+                            [0.0; 3]
+                        };
                         let cos_l = dot(ls.n, wi).abs();
                         if max_comp(le) > 0.0 && cos_l > 0.0 {
                             let (f, bsdf_pdf) = bsdf.eval_pdf(albedo, ng, ns, wo, wi);

@@ -9,7 +9,7 @@ use super::bvh::{triangle_normal, Bvh, Hit};
 use super::camera_grid::Frame;
 use super::sampling::{
     add, dot, length, luminance, max_comp, normalize, scale, sub, uniform_triangle, v3,
-    Distribution1D, V3,
+    AliasTable, V3,
 };
 use crate::nodes::render::raster::geometry::{normal_mapped, scene_geometry_creased};
 use crate::nodes::render::raster::texture::{MipTexture, Wrap};
@@ -134,6 +134,30 @@ pub struct LightSample {
     pub tri: u32,
     /// Density per unit area (selection probability over the triangle's area).
     pub pdf_area: f32,
+    /// The triangle's emitted radiance (toward its front, or both sides).
+    pub le: V3,
+    /// Whether it emits on both sides.
+    pub two_sided: bool,
+}
+
+/// An emissive triangle as light sampling reads it: corners, normal, density and
+/// emission in one record, so that a sample touches nothing else (the chain of look-ups
+/// through triangle, normal, density and material arrays was about a tenth of the box
+/// render's time: docs/path_tracing.md, twelfth round).
+#[derive(Clone, Copy, Debug)]
+pub struct EmitterRecord {
+    /// Corners.
+    pub corners: [V3; 3],
+    /// Unit geometric normal.
+    pub n: V3,
+    /// Triangle index.
+    pub tri: u32,
+    /// Density per unit area of sampling a point on it.
+    pub pdf_area: f32,
+    /// Emitted radiance.
+    pub le: V3,
+    /// Whether it emits on both sides.
+    pub two_sided: bool,
 }
 
 /// A pinhole camera (Mitsuba `perspective` without depth of field).
@@ -257,7 +281,9 @@ pub struct RenderScene {
     /// Emissive triangles.
     pub emitters: Vec<u32>,
     /// Emitter distribution over `emitters` (area times luminance of the emission).
-    pub emitter_dist: Distribution1D,
+    pub emitter_table: AliasTable,
+    /// What sampling a point on `emitters[k]` reads, in one record per emitter.
+    pub emitter_recs: Vec<EmitterRecord>,
     /// Per triangle: density per unit area of sampling a point on it (0 for non-emitters).
     pub light_pdf_area: Vec<f32>,
     /// Point and directional lights.
@@ -350,10 +376,22 @@ impl RenderScene {
                 weights.push(areas[i] as f64 * sides * (luminance(mat.emission) as f64).max(1e-6));
             }
         }
-        let emitter_dist = Distribution1D::new(&weights);
+        let emitter_table = AliasTable::new(&weights);
+        let total: f64 = weights.iter().sum();
         let mut light_pdf_area = vec![0.0f32; tris.len()];
+        let mut emitter_recs = Vec::with_capacity(emitters.len());
         for (k, &e) in emitters.iter().enumerate() {
-            light_pdf_area[e as usize] = emitter_dist.pmf(k) / areas[e as usize];
+            let e = e as usize;
+            light_pdf_area[e] = (weights[k] / total) as f32 / areas[e];
+            let m = &materials[tri_mat[e] as usize];
+            emitter_recs.push(EmitterRecord {
+                corners: tris[e],
+                n: normals[e],
+                tri: e as u32,
+                pdf_area: light_pdf_area[e],
+                le: m.emission,
+                two_sided: m.two_sided_emission,
+            });
         }
         let b = bvh.bounds();
         let diag = if tris.is_empty() {
@@ -405,7 +443,8 @@ impl RenderScene {
             tri_mat,
             materials,
             emitters,
-            emitter_dist,
+            emitter_table,
+            emitter_recs,
             light_pdf_area,
             lights,
             env,
@@ -492,12 +531,11 @@ impl RenderScene {
     /// lighting calculations").
     #[inline]
     pub fn sample_emitter(&self, u: f32, uv: [f32; 2]) -> Option<LightSample> {
-        if self.emitter_dist.is_empty() {
+        if self.emitter_table.is_empty() {
             return None;
         }
-        let k = self.emitter_dist.sample(u);
-        let tri = self.emitters[k];
-        let t = &self.tris[tri as usize];
+        let e = &self.emitter_recs[self.emitter_table.sample(u)];
+        let t = &e.corners;
         let (b1, b2) = uniform_triangle(uv);
         let p = add(
             add(scale(t[0], 1.0 - b1 - b2), scale(t[1], b1)),
@@ -505,9 +543,11 @@ impl RenderScene {
         );
         Some(LightSample {
             p,
-            n: self.normals[tri as usize],
-            tri,
-            pdf_area: self.light_pdf_area[tri as usize],
+            n: e.n,
+            tri: e.tri,
+            pdf_area: e.pdf_area,
+            le: e.le,
+            two_sided: e.two_sided,
         })
     }
 

@@ -219,6 +219,93 @@ impl Distribution1D {
     }
 }
 
+/// One bin of an `AliasTable`: keep this index when the remapped number is below `q`,
+/// else take `alias`.
+#[derive(Clone, Copy, Debug)]
+pub struct AliasBin {
+    /// Probability of keeping the bin's own index.
+    pub q: f32,
+    /// The index taken otherwise.
+    pub alias: u32,
+}
+
+/// A discrete distribution sampled in constant time by the alias method (Walker 1977,
+/// built as in Vose 1991; pbrt-v4 section A.1): one bin per index, so a sample reads one
+/// bin instead of walking a binary search (docs/path_tracing.md, twelfth round).
+#[derive(Clone, Debug, Default)]
+pub struct AliasTable {
+    bins: Vec<AliasBin>,
+}
+
+impl AliasTable {
+    /// The table for the distribution proportional to `weights` (negative or non-finite
+    /// weights count as zero). Empty when no weight is positive.
+    pub fn new(weights: &[f64]) -> AliasTable {
+        if weights.len() >= u32::MAX as usize {
+            return AliasTable::default();
+        }
+        let w: Vec<f64> = weights
+            .iter()
+            .map(|&w| if w.is_finite() && w > 0.0 { w } else { 0.0 })
+            .collect();
+        let total: f64 = w.iter().sum();
+        if !(total > 0.0 && total.is_finite()) {
+            return AliasTable::default();
+        }
+        let n = w.len();
+        // Scaled probabilities p_i n: a bin below 1 takes its remainder from one above.
+        let mut p: Vec<f64> = w.iter().map(|x| x / total * n as f64).collect();
+        let mut bins: Vec<AliasBin> = (0..n).map(|i| AliasBin { q: 1.0, alias: i as u32 }).collect();
+        let (mut under, mut over): (Vec<usize>, Vec<usize>) = (0..n).partition(|&i| p[i] < 1.0);
+        while let (Some(&u), Some(&o)) = (under.last(), over.last()) {
+            under.pop();
+            over.pop();
+            bins[u] = AliasBin {
+                q: p[u] as f32,
+                alias: o as u32,
+            };
+            p[o] -= 1.0 - p[u];
+            if p[o] < 1.0 {
+                under.push(o);
+            } else {
+                over.push(o);
+            }
+        }
+        // What is left holds (up to round-off) exactly one bin's worth: keep it. A
+        // zero-weight index left here by round-off would be drawn, so it goes to the
+        // largest weight instead.
+        let big = (0..n).max_by(|&a, &b| w[a].total_cmp(&w[b])).unwrap_or(0);
+        for i in under.into_iter().chain(over) {
+            bins[i] = if w[i] > 0.0 {
+                AliasBin { q: 1.0, alias: i as u32 }
+            } else {
+                AliasBin { q: 0.0, alias: big as u32 }
+            };
+        }
+        AliasTable { bins }
+    }
+
+    /// Whether nothing can be sampled.
+    pub fn is_empty(&self) -> bool {
+        self.bins.is_empty()
+    }
+
+    /// An index drawn from uniform `u` in [0, 1): `u n` picks a bin, its fraction decides
+    /// between the bin's index and its alias. Panics when the table is empty.
+    #[inline(always)]
+    pub fn sample(&self, u: f32) -> usize {
+        let n = self.bins.len();
+        let x = u * n as f32;
+        let k = (x as u32).min(n as u32 - 1) as usize;
+        let b = self.bins[k];
+        if x - (k as f32) < b.q {
+            k
+        } else {
+            b.alias as usize
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -287,6 +374,38 @@ mod tests {
         assert!((s0 / k as f64 - 1.0 / 3.0).abs() < 5e-3);
         assert!((s1 / k as f64 - 1.0 / 3.0).abs() < 5e-3);
         assert!((inside as f64 / k as f64 - 0.25).abs() < 5e-3);
+    }
+
+    #[test]
+    fn alias_table_draws_each_index_with_its_probability() {
+        // Weights with a zero, one dominant index, and many small ones.
+        let mut w = vec![0.0, 5.0, 1.0, 0.0, 2.5, 1e-3];
+        w.extend((0..20).map(|i| 0.1 + i as f64 * 0.05));
+        let total: f64 = w.iter().sum();
+        let t = AliasTable::new(&w);
+        let k = 2_000_000;
+        let mut count = vec![0usize; w.len()];
+        let mut r = Pcg32::new(7, 9);
+        for _ in 0..k {
+            count[t.sample(r.next_f32())] += 1;
+        }
+        for (i, (&c, &wi)) in count.iter().zip(&w).enumerate() {
+            let p = wi / total;
+            if wi == 0.0 {
+                assert_eq!(c, 0, "index {i} has no weight");
+            }
+            // Within 5 standard deviations of the binomial count.
+            let sd = (k as f64 * p * (1.0 - p)).sqrt();
+            assert!(
+                (c as f64 - k as f64 * p).abs() <= 5.0 * sd + 1.0,
+                "index {i}: {c} draws, expected {}",
+                k as f64 * p
+            );
+        }
+        // The last representable number below 1 stays in range.
+        assert!(t.sample(1.0 - f32::EPSILON / 2.0) < w.len());
+        assert!(AliasTable::new(&[0.0, -1.0, f64::NAN]).is_empty());
+        assert_eq!(AliasTable::new(&[3.0]).sample(0.7), 0);
     }
 
     #[test]

@@ -17,7 +17,7 @@
 //! (`handles`).
 
 use super::bsdf::Bsdf;
-use super::bvh::{Hit, TraceStacks};
+use super::bvh::{Hit, Segment, TraceStacks};
 use super::camera_grid::CameraGrid;
 use super::direct::{delta_lights, environment_nee, Vertex};
 use super::path_film::camera_sample;
@@ -202,9 +202,45 @@ struct Lanes {
     seg_o: [[f32; L]; 3],
     seg_d: [[f32; L]; 3],
     nee_c: [[f32; L]; 3],
+    /// Ended paths whose last shadow ray has not been traced yet (at most `ORPHANS`).
+    orphans: Vec<Orphan>,
 }
 
 const IDLE: usize = usize::MAX;
+
+/// Orphaned shadow rays kept at most; beyond, two are traced together.
+const ORPHANS: usize = 8;
+
+/// The last shadow ray of an ended path, kept until another lane traces a segment that
+/// has no shadow ray of its own, so that the two walks run interleaved instead of each
+/// alone (a tenth of the box render went to lone walks: docs/path_tracing.md, twelfth
+/// round). It holds what `Lanes::add_pending` adds, so the radiance stored is the same
+/// sum in the same order.
+#[derive(Clone, Copy, Debug)]
+struct Orphan {
+    seg: Segment,
+    l: V3,
+    nee_c: V3,
+    delta: V3,
+    env: Option<V3>,
+    job: usize,
+}
+
+impl Orphan {
+    /// Stores the path's radiance once its shadow ray is known to be `blocked` or not.
+    #[inline(always)]
+    fn resolve(&self, blocked: bool, out: &mut [Sample]) {
+        let mut l = self.l;
+        if !blocked {
+            l = add(l, self.nee_c);
+        }
+        l = add(l, self.delta);
+        if let Some(e) = self.env {
+            l = add(l, e);
+        }
+        out[self.job].c = l;
+    }
+}
 
 #[inline(always)]
 fn f4(a: &[f32; L]) -> F {
@@ -251,6 +287,42 @@ impl Lanes {
             seg_o: [[0.0; L]; 3],
             seg_d: [[0.0; L]; 3],
             nee_c: [[0.0; L]; 3],
+            orphans: Vec::with_capacity(ORPHANS + 1),
+        }
+    }
+
+    /// The closest hit along a segment that has no shadow ray beside it: traced together
+    /// with an orphaned shadow ray when there is one.
+    #[inline(always)]
+    fn lone(
+        &mut self,
+        sc: &RenderScene,
+        seg: Segment,
+        stacks: &mut TraceStacks,
+        out: &mut [Sample],
+    ) -> Option<Hit> {
+        match self.orphans.pop() {
+            Some(o) => {
+                let (hit, blocked) = sc.bvh.intersect_occluded_in(stacks, seg, o.seg);
+                o.resolve(blocked, out);
+                hit
+            }
+            None => sc.intersect(seg.0, seg.1, seg.2),
+        }
+    }
+
+    /// Traces the orphaned shadow rays two at a time until at most `keep` are left.
+    fn flush_orphans(&mut self, sc: &RenderScene, keep: usize, out: &mut [Sample]) {
+        while self.orphans.len() > keep {
+            let a = self.orphans.pop().expect("more than `keep` orphans");
+            match self.orphans.pop() {
+                Some(b) => {
+                    let (ba, bb) = sc.bvh.occluded_pair(a.seg, b.seg);
+                    a.resolve(ba, out);
+                    b.resolve(bb, out);
+                }
+                None => a.resolve(sc.bvh.occluded(a.seg.0, a.seg.1, a.seg.2), out),
+            }
         }
     }
 
@@ -268,14 +340,25 @@ impl Lanes {
         self.pending[i] = false;
     }
 
-    /// Ends lane `i`'s path: traces a pending shadow ray alone and stores the radiance.
+    /// Ends lane `i`'s path and stores its radiance, or, when a shadow ray is still to be
+    /// traced, leaves that to an `Orphan`.
     fn finish(&mut self, i: usize, sc: &RenderScene, out: &mut [Sample]) {
         if self.pending[i] {
-            let blocked = self.nee[i]
-                && sc
-                    .bvh
-                    .occluded(get(&self.seg_o, i), get(&self.seg_d, i), SHADOW_END);
-            self.add_pending(i, blocked);
+            if self.nee[i] {
+                self.orphans.push(Orphan {
+                    seg: (get(&self.seg_o, i), get(&self.seg_d, i), SHADOW_END),
+                    l: self.l[i],
+                    nee_c: get(&self.nee_c, i),
+                    delta: self.delta[i],
+                    env: self.env[i],
+                    job: self.job[i],
+                });
+                self.pending[i] = false;
+                self.job[i] = IDLE;
+                self.flush_orphans(sc, ORPHANS, out);
+                return;
+            }
+            self.add_pending(i, false);
         }
         out[self.job[i]].c = self.l[i];
         self.job[i] = IDLE;
@@ -360,6 +443,7 @@ fn trace_body(
             next += 1;
         }
         if ln.job.iter().all(|&j| j == IDLE) {
+            ln.flush_orphans(sc, 0, &mut out);
             break;
         }
         let mut go = [false; L];
@@ -392,14 +476,14 @@ fn visit(
             let shadow = (get(&ln.seg_o, i), get(&ln.seg_d, i), SHADOW_END);
             sc.bvh.intersect_occluded_in(stacks, (org, dir, tmax), shadow)
         } else {
-            (sc.intersect(org, dir, tmax), false)
+            (ln.lone(sc, (org, dir, tmax), stacks, out), false)
         };
         ln.add_pending(i, blocked);
         hit
     } else if ln.depth[i] == 0 {
         ln.first[i]
     } else {
-        sc.intersect(org, dir, tmax)
+        ln.lone(sc, (org, dir, tmax), stacks, out)
     };
     let first = ln.depth[i] == 0;
     let Some(hit) = hit else {

@@ -43,6 +43,16 @@ impl Bvh {
         (ha, hb.is_some())
     }
 
+    /// Whether anything blocks `a` and `b` (any-hit queries), traced interleaved: the same
+    /// answers as two calls of `occluded`.
+    #[inline]
+    pub fn occluded_pair(&self, a: Segment, b: Segment) -> (bool, bool) {
+        with_stacks(|sa, sb| {
+            let (ha, hb) = self.trace_pair::<true, true>(a, b, sa, sb);
+            (ha.is_some(), hb.is_some())
+        })
+    }
+
     /// The closest hits along `a` and `b`, traced interleaved: the same answers as two
     /// calls of `intersect`.
     #[inline]

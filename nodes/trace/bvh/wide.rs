@@ -226,8 +226,22 @@ impl Bvh {
                     w.c = n.child[first];
                     return false;
                 }
-                // Two to four children entered: sort them near to far (insertion sort
-                // on at most four), visit the nearest, push the rest far to near.
+                if m & (m - 1) == 0 {
+                    // Two children entered (the common case): visit the nearer, push the
+                    // other, chosen by selects rather than the sort's branches (ties keep
+                    // lane order, as the sort does).
+                    let second = m.trailing_zeros() as usize;
+                    let swap = te[second] < te[first];
+                    let (near, far) = if swap { (second, first) } else { (first, second) };
+                    if w.sp < stack.len() {
+                        stack[w.sp] = (n.child[far], te[far]);
+                        w.sp += 1;
+                    }
+                    w.c = n.child[near];
+                    return false;
+                }
+                // Three or four children entered: sort them near to far (insertion sort),
+                // visit the nearest, push the rest far to near.
                 let mut ids = [first; 4];
                 let mut k = 1;
                 while m != 0 {

@@ -365,6 +365,16 @@ impl Lanes {
     }
 }
 
+/// What one call of `trace` works on.
+#[derive(Clone, Copy)]
+struct Batch<'a> {
+    sc: &'a RenderScene,
+    cam: &'a PinholeCamera,
+    grid: Option<&'a CameraGrid>,
+    s: &'a PathSettings,
+    jobs: &'a [Job],
+}
+
 /// Traces `jobs` (pixel samples) and returns their radiance and film positions, in
 /// `jobs`' order, as `render_path`'s per-sample loop computes them.
 pub fn trace(
@@ -375,6 +385,13 @@ pub fn trace(
     jobs: &[Job],
     stacks: &mut TraceStacks,
 ) -> Vec<Sample> {
+    let b = Batch {
+        sc,
+        cam,
+        grid,
+        s,
+        jobs,
+    };
     #[cfg(target_arch = "x86_64")]
     if std::is_x86_feature_detected!("avx2")
         && std::is_x86_feature_detected!("fma")
@@ -384,9 +401,9 @@ pub fn trace(
         && std::is_x86_feature_detected!("popcnt")
     {
         // SAFETY: `trace_avx2` needs exactly these features, detected on this CPU.
-        return unsafe { trace_avx2(sc, cam, grid, s, jobs, stacks) };
+        return unsafe { trace_avx2(b, stacks) };
     }
-    trace_body(sc, cam, grid, s, jobs, stacks)
+    trace_body(b, stacks)
 }
 
 /// `trace` compiled for x86-64-v3 (AVX2 and its companions), chosen at run time so that
@@ -395,27 +412,20 @@ pub fn trace(
 /// in about 5 % fewer instructions (docs/path_tracing.md, twelfth round).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
-fn trace_avx2(
-    sc: &RenderScene,
-    cam: &PinholeCamera,
-    grid: Option<&CameraGrid>,
-    s: &PathSettings,
-    jobs: &[Job],
-    stacks: &mut TraceStacks,
-) -> Vec<Sample> {
-    trace_body(sc, cam, grid, s, jobs, stacks)
+fn trace_avx2(b: Batch, stacks: &mut TraceStacks) -> Vec<Sample> {
+    trace_body(b, stacks)
 }
 
 /// `trace`'s loop, inlined into both builds.
 #[inline(always)]
-fn trace_body(
-    sc: &RenderScene,
-    cam: &PinholeCamera,
-    grid: Option<&CameraGrid>,
-    s: &PathSettings,
-    jobs: &[Job],
-    stacks: &mut TraceStacks,
-) -> Vec<Sample> {
+fn trace_body(b: Batch, stacks: &mut TraceStacks) -> Vec<Sample> {
+    let Batch {
+        sc,
+        cam,
+        grid,
+        s,
+        jobs,
+    } = b;
     let mut out = vec![Sample::default(); jobs.len()];
     let mut ln = Lanes::new();
     let mut next = 0usize;

@@ -26,7 +26,7 @@
 
 use cgnodes::nodes::mesh::obj::load_obj;
 use cgnodes::nodes::trace::render_path::{render_opts, Filter, PathSettings, Shortcuts, Strategy};
-use cgnodes::nodes::trace::render_scene::{PinholeCamera, RenderScene};
+use cgnodes::nodes::trace::render_scene::{PinholeCamera, RenderScene, SHADOW_END};
 use cgnodes::nodes::trace::scene_load::load_obj_scene;
 use cgnodes::types::{Camera, FovAxis, Image, Material, Scene, SceneObject};
 use std::path::{Path, PathBuf};
@@ -229,7 +229,7 @@ fn traversal_only(sc: &RenderScene, cam: &PinholeCamera, dump: &Path) {
             let o = sc.offset(add(r.0, scale(r.1, h.t)), side);
             next.push((o, cosine_hemisphere(side, rng.next_2d()), f32::INFINITY));
             if let Some(ls) = sc.sample_emitter(rng.next_f32(), rng.next_2d()) {
-                shadow.push((o, sub(ls.p, o), 1.0 - 1e-4));
+                shadow.push((o, sub(ls.p, o), SHADOW_END));
             }
         }
         closest.append(&mut level);

@@ -5,5 +5,5 @@
 crate::node_domain! {
     category: "trace",
     nodes: [render_path, render_whitted, scene_load],
-    modules: [bsdf, bvh, camera_grid, direct, environment, path_film, path_lanes, render_scene, sampling, tracer_node, v3],
+    modules: [bsdf, bvh, camera_grid, direct, environment, lane_math, path_film, path_lanes, render_scene, sampling, tracer_node, v3],
 }

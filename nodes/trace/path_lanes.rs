@@ -21,19 +21,14 @@ use super::bvh::{Hit, Segment, TraceStacks};
 use super::camera_grid::CameraGrid;
 use super::direct::{delta_lights, environment_nee, Vertex};
 use super::path_film::camera_sample;
-use super::render_path::{found_weight, PathSettings, Strategy};
-use super::render_scene::{PinholeCamera, RenderScene, OFFSET_REL, SHADOW_END};
+use super::render_path::{found_weight, Deferred, PathSettings, Strategy};
+use super::lane_math::{
+    add3, bits, cosine_hemisphere4, dot3, f4, f43, get, max3, mul3, offset4, power4, put, scale3,
+    sel3, splat, store3, sub3, F, L,
+};
+use super::render_scene::{PinholeCamera, RenderScene, SHADOW_END};
 use super::sampling::{add, dot, max_comp, mul, scale, Pcg32, V3};
-use std::f32::consts::{FRAC_1_PI, FRAC_PI_4};
-use wide::f32x4;
-
-/// Paths in flight (one per SSE lane).
-const L: usize = 4;
-
-/// Four floats, one per path.
-type F = f32x4;
-/// A 3-vector per lane, axis by axis.
-type F3 = [F; 3];
+use std::f32::consts::FRAC_1_PI;
 
 /// One pixel sample to trace: pixel column, row and sample index.
 pub type Job = (u32, u32, u32);
@@ -53,102 +48,6 @@ pub struct Sample {
 /// shading arithmetic is the diffuse lobe's); every strategy, filter and light is handled.
 pub fn handles(sc: &RenderScene) -> bool {
     sc.materials.iter().all(|m| m.bsdf == Bsdf::Diffuse)
-}
-
-#[inline(always)]
-fn add3(a: F3, b: F3) -> F3 {
-    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
-}
-#[inline(always)]
-fn sub3(a: F3, b: F3) -> F3 {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-#[inline(always)]
-fn mul3(a: F3, b: F3) -> F3 {
-    [a[0] * b[0], a[1] * b[1], a[2] * b[2]]
-}
-#[inline(always)]
-fn scale3(a: F3, s: F) -> F3 {
-    [a[0] * s, a[1] * s, a[2] * s]
-}
-#[inline(always)]
-fn dot3(a: F3, b: F3) -> F {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-/// `a[0].max(a[1]).max(a[2])` per lane (`max` returns the other operand on NaN, as
-/// `f32::max` does).
-#[inline(always)]
-fn max3(a: F3) -> F {
-    a[0].max(a[1]).max(a[2])
-}
-/// `m ? a : b` per lane.
-#[inline(always)]
-fn sel3(m: F, a: F3, b: F3) -> F3 {
-    [m.select(a[0], b[0]), m.select(a[1], b[1]), m.select(a[2], b[2])]
-}
-#[inline(always)]
-fn splat(x: f32) -> F {
-    F::splat(x)
-}
-/// The lanes where `m` is set, as the low four bits.
-#[inline(always)]
-fn bits(m: F) -> u32 {
-    m.to_bitmask()
-}
-/// `RenderScene::offset` per lane.
-#[inline(always)]
-fn offset4(eps: f32, p: F3, n: F3) -> F3 {
-    let m = p[0].abs().max(p[1].abs()).max(p[2].abs());
-    add3(p, scale3(n, splat(eps) + splat(OFFSET_REL) * m))
-}
-
-/// `sampling::power_heuristic` per lane.
-#[inline(always)]
-fn power4(pa: F, pb: F) -> F {
-    let a = pa * pa;
-    let b = pb * pb;
-    let s = a + b;
-    let first = s.simd_gt(splat(0.0)) & a.is_finite();
-    first.select(a / s, a.is_inf().select(splat(1.0), splat(0.0)))
-}
-
-/// `sampling::sin_cos_quarter` per lane (the same series, the same operation order).
-#[inline(always)]
-fn sin_cos_quarter4(a: F) -> (F, F) {
-    let one = splat(1.0);
-    let a2 = a * a;
-    let s = a * (one - a2 / splat(6.0) * (one - a2 / splat(20.0) * (one - a2 / splat(42.0))));
-    let c = one
-        - a2 / splat(2.0)
-            * (one - a2 / splat(12.0) * (one - a2 / splat(30.0) * (one - a2 / splat(56.0))));
-    (s, c)
-}
-
-/// `sampling::cosine_hemisphere` per lane: the orthonormal basis of Duff et al. 2017 and
-/// Malley's method over the concentric map, both branches computed and selected.
-#[inline(always)]
-fn cosine_hemisphere4(n: F3, u: [F; 2]) -> F3 {
-    let one = splat(1.0);
-    let sign = n[2].is_sign_negative().select(splat(-1.0), one);
-    let a = splat(-1.0) / (sign + n[2]);
-    let b = n[0] * n[1] * a;
-    let t = [one + sign * n[0] * n[0] * a, sign * b, -sign * n[0]];
-    let bt = [b, sign + n[1] * n[1] * a, -n[1]];
-    let two = splat(2.0);
-    let ox = two * u[0] - one;
-    let oy = two * u[1] - one;
-    let zero = splat(0.0);
-    let origin = ox.simd_eq(zero) & oy.simd_eq(zero);
-    // Each lane evaluates the series once, at its own branch's angle.
-    let wide_x = ox.abs().simd_gt(oy.abs());
-    let ratio = wide_x.select(oy, ox) / wide_x.select(ox, oy);
-    let (sn, cs) = sin_cos_quarter4(splat(FRAC_PI_4) * ratio);
-    let x = wide_x.select(ox * cs, oy * sn);
-    let y = wide_x.select(ox * sn, oy * cs);
-    let x = origin.select(zero, x);
-    let y = origin.select(zero, y);
-    let z = (one - x * x - y * y).max(zero).sqrt();
-    add3(add3(scale3(t, x), scale3(bt, y)), scale3(n, z))
 }
 
 /// Per-lane inputs of the shading step, gathered by the scalar part.
@@ -214,57 +113,27 @@ const ORPHANS: usize = 8;
 /// The last shadow ray of an ended path, kept until another lane traces a segment that
 /// has no shadow ray of its own, so that the two walks run interleaved instead of each
 /// alone (a tenth of the box render went to lone walks: docs/path_tracing.md, twelfth
-/// round). It holds what `Lanes::add_pending` adds, so the radiance stored is the same
-/// sum in the same order.
+/// round). It holds the path's radiance so far and its direct light (whose `nee` is
+/// set), added by `Deferred::add_to` as `Lanes::add_pending` would.
 #[derive(Clone, Copy, Debug)]
 struct Orphan {
-    seg: Segment,
     l: V3,
-    nee_c: V3,
-    delta: V3,
-    env: Option<V3>,
+    d: Deferred,
     job: usize,
 }
 
 impl Orphan {
+    /// The shadow ray.
+    #[inline(always)]
+    fn seg(&self) -> Segment {
+        self.d.nee.expect("an orphan has an emitter sample").0
+    }
+
     /// Stores the path's radiance once its shadow ray is known to be `blocked` or not.
     #[inline(always)]
     fn resolve(&self, blocked: bool, out: &mut [Sample]) {
-        let mut l = self.l;
-        if !blocked {
-            l = add(l, self.nee_c);
-        }
-        l = add(l, self.delta);
-        if let Some(e) = self.env {
-            l = add(l, e);
-        }
-        out[self.job].c = l;
+        out[self.job].c = self.d.add_to(self.l, blocked);
     }
-}
-
-#[inline(always)]
-fn f4(a: &[f32; L]) -> F {
-    F::new(*a)
-}
-#[inline(always)]
-fn f43(a: &[[f32; L]; 3]) -> F3 {
-    [f4(&a[0]), f4(&a[1]), f4(&a[2])]
-}
-#[inline(always)]
-fn store3(a: &mut [[f32; L]; 3], v: F3) {
-    for k in 0..3 {
-        a[k] = v[k].to_array();
-    }
-}
-#[inline(always)]
-fn put(a: &mut [[f32; L]; 3], i: usize, v: V3) {
-    a[0][i] = v[0];
-    a[1][i] = v[1];
-    a[2][i] = v[2];
-}
-#[inline(always)]
-fn get(a: &[[f32; L]; 3], i: usize) -> V3 {
-    [a[0][i], a[1][i], a[2][i]]
 }
 
 impl Lanes {
@@ -303,7 +172,7 @@ impl Lanes {
     ) -> Option<Hit> {
         match self.orphans.pop() {
             Some(o) => {
-                let (hit, blocked) = sc.bvh.intersect_occluded_in(stacks, seg, o.seg);
+                let (hit, blocked) = sc.bvh.intersect_occluded_in(stacks, seg, o.seg());
                 o.resolve(blocked, out);
                 hit
             }
@@ -317,26 +186,36 @@ impl Lanes {
             let a = self.orphans.pop().expect("more than `keep` orphans");
             match self.orphans.pop() {
                 Some(b) => {
-                    let (ba, bb) = sc.bvh.occluded_pair(a.seg, b.seg);
+                    let (ba, bb) = sc.bvh.occluded_pair(a.seg(), b.seg());
                     a.resolve(ba, out);
                     b.resolve(bb, out);
                 }
-                None => a.resolve(sc.bvh.occluded(a.seg.0, a.seg.1, a.seg.2), out),
+                None => {
+                    let (o, d, t) = a.seg();
+                    a.resolve(sc.bvh.occluded(o, d, t), out)
+                }
             }
         }
     }
 
-    /// `Deferred::add_to`: the emitter sample's contribution unless blocked, then the
-    /// delta lights' and the environment sample's.
+    /// Lane `i`'s pending direct light as the scalar loop holds it.
+    #[inline(always)]
+    fn deferred(&self, i: usize) -> Deferred {
+        Deferred {
+            nee: self.nee[i].then(|| {
+                let seg = (get(&self.seg_o, i), get(&self.seg_d, i), SHADOW_END);
+                (seg, get(&self.nee_c, i))
+            }),
+            delta: self.delta[i],
+            env: self.env[i],
+        }
+    }
+
+    /// Adds lane `i`'s pending direct light (`Deferred::add_to`), the emitter sample's only
+    /// when its shadow ray is not `blocked`.
     #[inline(always)]
     fn add_pending(&mut self, i: usize, blocked: bool) {
-        if self.nee[i] && !blocked {
-            self.l[i] = add(self.l[i], get(&self.nee_c, i));
-        }
-        self.l[i] = add(self.l[i], self.delta[i]);
-        if let Some(e) = self.env[i] {
-            self.l[i] = add(self.l[i], e);
-        }
+        self.l[i] = self.deferred(i).add_to(self.l[i], blocked);
         self.pending[i] = false;
     }
 
@@ -346,11 +225,8 @@ impl Lanes {
         if self.pending[i] {
             if self.nee[i] {
                 self.orphans.push(Orphan {
-                    seg: (get(&self.seg_o, i), get(&self.seg_d, i), SHADOW_END),
                     l: self.l[i],
-                    nee_c: get(&self.nee_c, i),
-                    delta: self.delta[i],
-                    env: self.env[i],
+                    d: self.deferred(i),
                     job: self.job[i],
                 });
                 self.pending[i] = false;

@@ -95,19 +95,20 @@ impl Default for PathSettings {
 /// independent traversals interleaved) and added to the path's radiance before anything
 /// the next segment finds, in the order the estimates were made, so the sums are bit for
 /// bit those of tracing the shadow ray at once.
-struct Deferred {
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Deferred {
     /// The area emitter sample's shadow ray and its contribution when unblocked.
-    nee: Option<(Segment, V3)>,
+    pub nee: Option<(Segment, V3)>,
     /// Point and directional lights (their shadow rays already traced).
-    delta: V3,
+    pub delta: V3,
     /// The environment sample, when one was drawn.
-    env: Option<V3>,
+    pub env: Option<V3>,
 }
 
 impl Deferred {
     /// Adds the estimates to `l`, the emitter sample's only when `blocked` is false.
-    #[inline]
-    fn add_to(&self, l: V3, blocked: bool) -> V3 {
+    #[inline(always)]
+    pub(crate) fn add_to(&self, l: V3, blocked: bool) -> V3 {
         let mut l = l;
         if let (Some((_, c)), false) = (self.nee, blocked) {
             l = add(l, c);
@@ -239,12 +240,7 @@ pub fn radiance(
                     let dist = dist2.sqrt();
                     if dist > 0.0 {
                         let wi = scale(dv, 1.0 / dist);
-                        // `RenderScene::emitted`, from the sample's own record.
-                        let le = if ls.two_sided || dot(ls.n, scale(wi, -1.0)) > 0.0 {
-                            ls.le
-                        } else {
-                            [0.0; 3]
-                        };
+                        let le = ls.emitted(scale(wi, -1.0));
                         let cos_l = dot(ls.n, wi).abs();
                         if max_comp(le) > 0.0 && cos_l > 0.0 {
                             let (f, bsdf_pdf) = bsdf.eval_pdf(albedo, ng, ns, wo, wi);

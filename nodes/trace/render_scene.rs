@@ -140,6 +140,19 @@ pub struct LightSample {
     pub two_sided: bool,
 }
 
+impl LightSample {
+    /// Emitted radiance toward unit direction `w` (pointing away from the light):
+    /// `RenderScene::emitted` from the sample's own record.
+    #[inline(always)]
+    pub fn emitted(&self, w: V3) -> V3 {
+        if self.two_sided || dot(self.n, w) > 0.0 {
+            self.le
+        } else {
+            [0.0; 3]
+        }
+    }
+}
+
 /// An emissive triangle as light sampling reads it: corners, normal, density and
 /// emission in one record, so that a sample touches nothing else (the chain of look-ups
 /// through triangle, normal, density and material arrays was about a tenth of the box

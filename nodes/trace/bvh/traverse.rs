@@ -117,8 +117,8 @@ impl RayPre {
             std::mem::swap(&mut kx, &mut ky);
         }
         // One packed division for the three reciprocals; the shear takes the dominant
-        // axis' reciprocal instead of dividing again (divisions were a fifth of a box
-        // camera ray's time: docs/path_tracing.md, twelfth round).
+        // axis' reciprocal instead of dividing again (docs/path_tracing.md, twelfth
+        // round).
         let inv = (f32x4::splat(1.0) / f32x4::new([dir[0], dir[1], dir[2], 1.0])).to_array();
         let sz = inv[kz];
         RayPre {

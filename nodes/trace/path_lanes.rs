@@ -21,7 +21,7 @@ use super::bvh::{Hit, Segment, TraceStacks};
 use super::camera_grid::CameraGrid;
 use super::direct::{delta_lights, environment_nee, Vertex};
 use super::path_film::camera_sample;
-use super::render_path::{found_weight, Deferred, PathSettings, Strategy};
+use super::render_path::{add_direct, found_weight, PathSettings, Strategy};
 use super::lane_math::{
     add3, bits, cosine_hemisphere4, dot3, f4, f43, get, max3, mul3, offset4, power4, put, scale3,
     sel3, splat, store3, sub3, F, L,
@@ -113,26 +113,24 @@ const ORPHANS: usize = 8;
 /// The last shadow ray of an ended path, kept until another lane traces a segment that
 /// has no shadow ray of its own, so that the two walks run interleaved instead of each
 /// alone (a tenth of the box render went to lone walks: docs/path_tracing.md, twelfth
-/// round). It holds the path's radiance so far and its direct light (whose `nee` is
-/// set), added by `Deferred::add_to` as `Lanes::add_pending` would.
+/// round). It holds the path's radiance so far and its pending direct light, added by
+/// `add_direct` as `Lanes::add_pending` would.
 #[derive(Clone, Copy, Debug)]
 struct Orphan {
+    seg: Segment,
     l: V3,
-    d: Deferred,
+    nee_c: V3,
+    delta: V3,
+    env: Option<V3>,
     job: usize,
 }
 
 impl Orphan {
-    /// The shadow ray.
-    #[inline(always)]
-    fn seg(&self) -> Segment {
-        self.d.nee.expect("an orphan has an emitter sample").0
-    }
-
     /// Stores the path's radiance once its shadow ray is known to be `blocked` or not.
     #[inline(always)]
     fn resolve(&self, blocked: bool, out: &mut [Sample]) {
-        out[self.job].c = self.d.add_to(self.l, blocked);
+        let nee = (!blocked).then_some(self.nee_c);
+        out[self.job].c = add_direct(self.l, nee, self.delta, self.env);
     }
 }
 
@@ -172,7 +170,7 @@ impl Lanes {
     ) -> Option<Hit> {
         match self.orphans.pop() {
             Some(o) => {
-                let (hit, blocked) = sc.bvh.intersect_occluded_in(stacks, seg, o.seg());
+                let (hit, blocked) = sc.bvh.intersect_occluded_in(stacks, seg, o.seg);
                 o.resolve(blocked, out);
                 hit
             }
@@ -186,36 +184,21 @@ impl Lanes {
             let a = self.orphans.pop().expect("more than `keep` orphans");
             match self.orphans.pop() {
                 Some(b) => {
-                    let (ba, bb) = sc.bvh.occluded_pair(a.seg(), b.seg());
+                    let (ba, bb) = sc.bvh.occluded_pair(a.seg, b.seg);
                     a.resolve(ba, out);
                     b.resolve(bb, out);
                 }
-                None => {
-                    let (o, d, t) = a.seg();
-                    a.resolve(sc.bvh.occluded(o, d, t), out)
-                }
+                None => a.resolve(sc.bvh.occluded(a.seg.0, a.seg.1, a.seg.2), out),
             }
         }
     }
 
-    /// Lane `i`'s pending direct light as the scalar loop holds it.
-    #[inline(always)]
-    fn deferred(&self, i: usize) -> Deferred {
-        Deferred {
-            nee: self.nee[i].then(|| {
-                let seg = (get(&self.seg_o, i), get(&self.seg_d, i), SHADOW_END);
-                (seg, get(&self.nee_c, i))
-            }),
-            delta: self.delta[i],
-            env: self.env[i],
-        }
-    }
-
-    /// Adds lane `i`'s pending direct light (`Deferred::add_to`), the emitter sample's only
-    /// when its shadow ray is not `blocked`.
+    /// Adds lane `i`'s pending direct light (`add_direct`), the emitter sample's only when
+    /// it has one and its shadow ray is not `blocked`.
     #[inline(always)]
     fn add_pending(&mut self, i: usize, blocked: bool) {
-        self.l[i] = self.deferred(i).add_to(self.l[i], blocked);
+        let nee = (self.nee[i] && !blocked).then(|| get(&self.nee_c, i));
+        self.l[i] = add_direct(self.l[i], nee, self.delta[i], self.env[i]);
         self.pending[i] = false;
     }
 
@@ -225,8 +208,11 @@ impl Lanes {
         if self.pending[i] {
             if self.nee[i] {
                 self.orphans.push(Orphan {
+                    seg: (get(&self.seg_o, i), get(&self.seg_d, i), SHADOW_END),
                     l: self.l[i],
-                    d: self.deferred(i),
+                    nee_c: get(&self.nee_c, i),
+                    delta: self.delta[i],
+                    env: self.env[i],
                     job: self.job[i],
                 });
                 self.pending[i] = false;

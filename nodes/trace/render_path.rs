@@ -95,29 +95,21 @@ impl Default for PathSettings {
 /// independent traversals interleaved) and added to the path's radiance before anything
 /// the next segment finds, in the order the estimates were made, so the sums are bit for
 /// bit those of tracing the shadow ray at once.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct Deferred {
+struct Deferred {
     /// The area emitter sample's shadow ray and its contribution when unblocked.
-    pub nee: Option<(Segment, V3)>,
+    nee: Option<(Segment, V3)>,
     /// Point and directional lights (their shadow rays already traced).
-    pub delta: V3,
+    delta: V3,
     /// The environment sample, when one was drawn.
-    pub env: Option<V3>,
+    env: Option<V3>,
 }
 
 impl Deferred {
     /// Adds the estimates to `l`, the emitter sample's only when `blocked` is false.
-    #[inline(always)]
-    pub(crate) fn add_to(&self, l: V3, blocked: bool) -> V3 {
-        let mut l = l;
-        if let (Some((_, c)), false) = (self.nee, blocked) {
-            l = add(l, c);
-        }
-        l = add(l, self.delta);
-        if let Some(e) = self.env {
-            l = add(l, e);
-        }
-        l
+    #[inline]
+    fn add_to(&self, l: V3, blocked: bool) -> V3 {
+        let nee = self.nee.filter(|_| !blocked).map(|(_, c)| c);
+        add_direct(l, nee, self.delta, self.env)
     }
 
     /// Traces the shadow ray alone (the path ends here) and adds the estimates to `l`.
@@ -126,6 +118,22 @@ impl Deferred {
         let blocked = self.nee.is_some_and(|((o, d, t), _)| sc.bvh.occluded(o, d, t));
         self.add_to(l, blocked)
     }
+}
+
+/// `l` plus a vertex's direct light: the emitter sample's contribution (`nee`, when its
+/// shadow ray was not blocked), the point and directional lights' and the environment
+/// sample's, in this order (both path loops add them so, for the same bits).
+#[inline(always)]
+pub(crate) fn add_direct(l: V3, nee: Option<V3>, delta: V3, env: Option<V3>) -> V3 {
+    let mut l = l;
+    if let Some(c) = nee {
+        l = add(l, c);
+    }
+    l = add(l, delta);
+    if let Some(e) = env {
+        l = add(l, e);
+    }
+    l
 }
 
 /// The weight of radiance that a BSDF-sampled ray found on an emitter or in the environment

@@ -205,24 +205,23 @@ impl Lanes {
     /// Ends lane `i`'s path and stores its radiance, or, when a shadow ray is still to be
     /// traced, leaves that to an `Orphan`.
     fn finish(&mut self, i: usize, sc: &RenderScene, out: &mut [Sample]) {
-        if self.pending[i] {
-            if self.nee[i] {
-                self.orphans.push(Orphan {
-                    seg: (get(&self.seg_o, i), get(&self.seg_d, i), SHADOW_END),
-                    l: self.l[i],
-                    nee_c: get(&self.nee_c, i),
-                    delta: self.delta[i],
-                    env: self.env[i],
-                    job: self.job[i],
-                });
-                self.pending[i] = false;
-                self.job[i] = IDLE;
-                self.flush_orphans(sc, ORPHANS, out);
-                return;
+        if self.pending[i] && self.nee[i] {
+            self.orphans.push(Orphan {
+                seg: (get(&self.seg_o, i), get(&self.seg_d, i), SHADOW_END),
+                l: self.l[i],
+                nee_c: get(&self.nee_c, i),
+                delta: self.delta[i],
+                env: self.env[i],
+                job: self.job[i],
+            });
+            self.pending[i] = false;
+            self.flush_orphans(sc, ORPHANS, out);
+        } else {
+            if self.pending[i] {
+                self.add_pending(i, false);
             }
-            self.add_pending(i, false);
+            out[self.job[i]].c = self.l[i];
         }
-        out[self.job[i]].c = self.l[i];
         self.job[i] = IDLE;
     }
 }

@@ -11,7 +11,7 @@
 //!
 //! Options (after `--`): `--ref-spp N` (default 2048), `--spp a,b,c` (default 4,16,64,256),
 //! `--quick` (one 64-spp timing, no reference), `--binary-bvh` (traverse the binary BVH
-//! instead of the default one collapsed to 4 children per node, to measure what the wide
+//! instead of the default one collapsed to 8 children per node, to measure what the wide
 //! tree buys; `--wide-bvh`, the default, is accepted and does nothing), `--no-interleave`
 //! (trace a path's shadow ray and its next ray one after the other instead of interleaved,
 //! to measure what `Bvh::intersect_occluded` buys), `--scalar-paths` (one path at a time

@@ -5,7 +5,7 @@
 //! Optimization", Computer Graphics Forum 37(2)), and its leaves collapsed to at most four
 //! triangles by the surface area heuristic; all three from the `obvhs` crate. It is then
 //! laid out depth first, children of a node side by side, with the triangles copied into
-//! tree order, and collapsed to four children per node (`wide.rs`).
+//! tree order, and collapsed to eight children per node (`wide.rs`).
 //!
 //! Why not top-down SAH: our binned and swept SAH tree (Wald 2007; MacDonald and Booth 1990)
 //! had a lower SAH cost on the igea scene than PLOC's, but its rays visited 1.2-1.7x as many
@@ -47,7 +47,7 @@ fn tri_box(t: &[V3; 3], fallback: V3) -> Aabb {
 
 impl Bvh {
     /// Builds the BVH over `tris` (any order; degenerate triangles are kept and never hit),
-    /// and its 4-wide form (`widen`), which the queries traverse.
+    /// and its 8-wide form (`widen`), which the queries traverse.
     pub fn build(tris: &[[V3; 3]]) -> Bvh {
         let mut bvh = Bvh::default();
         if tris.is_empty() {
@@ -129,7 +129,11 @@ mod tests {
     fn small_and_odd_inputs_build_valid_trees() {
         let t = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
         let flat = [[2.0, 2.0, 2.0]; 3];
-        let bad = [[f32::NAN, 0.0, 0.0], [1.0, f32::INFINITY, 0.0], [0.0, 1.0, 0.0]];
+        let bad = [
+            [f32::NAN, 0.0, 0.0],
+            [1.0, f32::INFINITY, 0.0],
+            [0.0, 1.0, 0.0],
+        ];
         let cases: Vec<Vec<[V3; 3]>> = vec![
             vec![t],
             vec![t, t],
@@ -143,7 +147,8 @@ mod tests {
             let mut seen = vec![0; tris.len()];
             bvh.prim.iter().for_each(|&p| seen[p as usize] += 1);
             assert!(seen.iter().all(|&s| s == 1), "{seen:?}");
-            let inside = |a: &Aabb, b: &Aabb| (0..3).all(|k| a.min[k] <= b.min[k] && b.max[k] <= a.max[k]);
+            let inside =
+                |a: &Aabb, b: &Aabb| (0..3).all(|k| a.min[k] <= b.min[k] && b.max[k] <= a.max[k]);
             for n in &bvh.nodes {
                 if n.count == 0 {
                     let f = n.first as usize;

@@ -1,8 +1,8 @@
-//! Four-lane building blocks of the 4-wide BVH: `[f32; 4]` helpers computed as packed SSE
+//! Lane building blocks of the 8-wide BVH: `[f32; 4]` helpers computed as packed SSE
 //! through the `wide` crate (safe code; `minps`, `maxps`, and comparisons straight to a bit
 //! mask with `cmpps` + `movmskps`, which LLVM had turned into four `ucomiss` and `set`s per
 //! mask when they were written as plain lane-wise Rust: docs/path_tracing.md, ninth round);
-//! the four-box slab test; and the watertight ray-triangle test of Woop, Benthin and Wald
+//! the eight-box slab test; and the watertight ray-triangle test of Woop, Benthin and Wald
 //! 2013 run on four triangles stored axis by axis (`Tri4`).
 //!
 //! Every lane computes exactly the operations of the scalar `tri_test`, in the same order
@@ -11,7 +11,7 @@
 
 use super::traverse::{intersect_triangle, tri_test, RayPre};
 use crate::nodes::trace::sampling::V3;
-use wide::f32x4;
+use wide::{f32x4, f32x8};
 
 /// The axis permutation of the watertight test (`RayPre`'s kx, ky, kz): fixed at compile
 /// time (`Fixed`, constant indices into a `Tri4`) for the single-ray traversal, which is
@@ -79,18 +79,6 @@ fn add4(a: F4, b: F4) -> F4 {
     (w(a) + w(b)).to_array()
 }
 
-/// `if a > b { a } else { b }` per lane (`maxps`: a NaN in either keeps `b`).
-#[inline(always)]
-fn max4(a: F4, b: F4) -> F4 {
-    w(a).fast_max(w(b)).to_array()
-}
-
-/// `if a < b { a } else { b }` per lane (`minps`: a NaN in either keeps `b`).
-#[inline(always)]
-fn min4(a: F4, b: F4) -> F4 {
-    w(a).fast_min(w(b)).to_array()
-}
-
 /// A lane comparison; every one is false on NaN, as the scalar comparison is.
 #[derive(Clone, Copy, Debug)]
 enum Cmp {
@@ -116,47 +104,56 @@ fn mask(a: F4, op: Cmp, b: F4) -> u32 {
     m.to_bitmask()
 }
 
-/// A ray broadcast to four lanes for the box test: origin and inverse direction per axis,
-/// and per axis whether the direction is negative (then the near slab is the box's max).
+/// Eight floats, one per child box of a node.
+pub type F8 = [f32; 8];
+
+/// A ray for the box test: origin and inverse direction per axis, broadcast to the lanes
+/// where they are used, and per axis whether the direction is negative (then the near slab
+/// is the box's max).
 #[derive(Clone, Copy, Debug)]
-pub struct Ray4 {
-    org: [F4; 3],
-    inv: [F4; 3],
+pub struct RayBox {
+    org: V3,
+    inv: V3,
     neg: [bool; 3],
 }
 
-impl Ray4 {
-    /// Broadcasts the ray of `r`.
+impl RayBox {
+    /// The box-test form of the ray of `r`.
     #[inline(always)]
-    pub fn new(r: &RayPre) -> Ray4 {
-        Ray4 {
-            org: [[r.org[0]; 4], [r.org[1]; 4], [r.org[2]; 4]],
-            inv: [[r.inv[0]; 4], [r.inv[1]; 4], [r.inv[2]; 4]],
+    pub fn new(r: &RayPre) -> RayBox {
+        RayBox {
+            org: r.org,
+            inv: r.inv,
             neg: [r.inv[0] < 0.0, r.inv[1] < 0.0, r.inv[2] < 0.0],
         }
     }
 }
 
-/// Slab test of one ray against four boxes (`min[axis][lane]`, `max[axis][lane]`):
-/// the mask of the boxes entered before `tmax` and the entry distances. A NaN from
-/// `0 * inf` keeps the previous bound, and the exit distance is widened by 1 + 2 gamma(3)
-/// so round-off cannot cull a hit on a face (Ize 2013, "Robust BVH Ray Traversal"), as in
-/// the binary traversal. An empty lane (min = +inf, max = -inf) is never entered.
+/// Slab test of one ray against eight boxes (`min[axis][lane]`, `max[axis][lane]`) on
+/// eight lanes (`wide::f32x8`: two SSE registers in the baseline build, one AVX register
+/// where the lane loop is built for x86-64-v3): the mask of the boxes entered before
+/// `tmax` and the entry distances. A NaN from `0 * inf` keeps the previous bound (`maxps`
+/// and `minps` return their second operand then), and the exit distance is widened by
+/// 1 + 2 gamma(3) so round-off cannot cull a hit on a face (Ize 2013, "Robust BVH Ray
+/// Traversal"), as in the binary traversal. An empty lane (min = +inf, max = -inf) is
+/// never entered.
 #[inline(always)]
-pub fn slab4(r: &Ray4, min: &[F4; 3], max: &[F4; 3], tmax: f32) -> (u32, F4) {
-    let mut t0 = [0.0f32; 4];
-    let mut t1 = [tmax; 4];
+pub fn slab8(r: &RayBox, min: &[F8; 3], max: &[F8; 3], tmax: f32) -> (u32, F8) {
+    let mut t0 = f32x8::splat(0.0);
+    let mut t1 = f32x8::splat(tmax);
     for k in 0..3 {
         let (near, far) = if r.neg[k] {
             (max[k], min[k])
         } else {
             (min[k], max[k])
         };
-        t0 = max4(mul4(sub4(near, r.org[k]), r.inv[k]), t0);
-        t1 = min4(mul4(sub4(far, r.org[k]), r.inv[k]), t1);
+        let o = f32x8::splat(r.org[k]);
+        let inv = f32x8::splat(r.inv[k]);
+        t0 = ((f32x8::new(near) - o) * inv).fast_max(t0);
+        t1 = ((f32x8::new(far) - o) * inv).fast_min(t1);
     }
-    let t1 = mul4(t1, [1.000_000_4; 4]);
-    (mask(t0, Cmp::Le, t1), t0)
+    let t1 = t1 * f32x8::splat(1.000_000_4);
+    (t0.simd_le(t1).to_bitmask(), t0.to_array())
 }
 
 /// Up to four triangles of a leaf, axis by axis: `v[corner][axis][lane]`, and the

@@ -1,5 +1,5 @@
 //! A bounding volume hierarchy over triangles, built bottom up by locally-ordered
-//! clustering with reinsertion (`build.rs`, through the `obvhs` crate), collapsed to four
+//! clustering with reinsertion (`build.rs`, through the `obvhs` crate), collapsed to eight
 //! children per node, and traversed front to back with the watertight ray-triangle test of
 //! Woop, Benthin and Wald 2013 ("Watertight Ray/Triangle Intersection", JCGT 2(1)).
 //!
@@ -14,11 +14,11 @@ mod tests;
 mod traverse;
 mod wide;
 
-pub(crate) use traverse::tri_test;
-pub use traverse::{intersect_triangle, RayPre, TraceStacks};
 pub use lanes::Tri4;
 pub use pair::Segment;
-pub use wide::Node4;
+pub(crate) use traverse::tri_test;
+pub use traverse::{intersect_triangle, RayPre, TraceStacks};
+pub use wide::Node8;
 
 use super::sampling::{cross, sub, V3};
 
@@ -92,10 +92,10 @@ pub struct Bvh {
     pub tris: Vec<[V3; 3]>,
     /// Original index of each triangle in `tris`.
     pub prim: Vec<u32>,
-    /// The same tree collapsed to 4 children per node, filled by `widen` (called by
+    /// The same tree collapsed to 8 children per node, filled by `widen` (called by
     /// `build`; the queries traverse it when it is not empty, the binary tree otherwise).
-    pub wide: Vec<Node4>,
-    /// The 4-wide tree's leaves, four triangles each in structure of arrays.
+    pub wide: Vec<Node8>,
+    /// The 8-wide tree's leaves, four triangles each in structure of arrays.
     pub wide_tris: Vec<Tri4>,
     /// When set, the two-ray queries (`intersect_occluded`, `intersect_pair`) trace their
     /// rays one after the other instead of interleaved (same answers; to measure what the
@@ -117,13 +117,13 @@ pub struct Hit {
 }
 
 impl Bvh {
-    /// Collapses the tree to 4 children per node for the queries to traverse (left empty
+    /// Collapses the tree to 8 children per node for the queries to traverse (left empty
     /// when the leaves cannot be encoded: 2^28 triangles or more). `build` calls it.
     pub fn widen(&mut self) {
         (self.wide, self.wide_tris) = wide::collapse(self);
     }
 
-    /// Drops the 4-wide tree so that the queries traverse the binary one (to compare the
+    /// Drops the 8-wide tree so that the queries traverse the binary one (to compare the
     /// two; `build` makes both).
     pub fn narrow(&mut self) {
         self.wide = Vec::new();

@@ -1,5 +1,5 @@
 //! Two independent rays traced in one interleaved loop: one node (or leaf) step of the
-//! first, then one of the second, and so on. A single ray's walk down the 4-wide tree is a
+//! first, then one of the second, and so on. A single ray's walk down the 8-wide tree is a
 //! dependent chain (load a node, slab test, mask, child index, load the next node), so a
 //! core running one ray waits on that chain's latency; the other ray's step has no data
 //! dependence on it, and the out-of-order core overlaps the two (software pipelining of
@@ -79,12 +79,12 @@ impl Bvh {
         let mut wa = Walk::new(&ra, a.2);
         let mut wb = Walk::new(&rb, b.2);
         loop {
-            if self.step4::<ANY_A, _>(&ra, pa, &mut wa, sa) {
-                while !self.step4::<ANY_B, _>(&rb, pb, &mut wb, sb) {}
+            if self.step8::<ANY_A, _>(&ra, pa, &mut wa, sa) {
+                while !self.step8::<ANY_B, _>(&rb, pb, &mut wb, sb) {}
                 break;
             }
-            if self.step4::<ANY_B, _>(&rb, pb, &mut wb, sb) {
-                while !self.step4::<ANY_A, _>(&ra, pa, &mut wa, sa) {}
+            if self.step8::<ANY_B, _>(&rb, pb, &mut wb, sb) {
+                while !self.step8::<ANY_A, _>(&ra, pa, &mut wa, sa) {}
                 break;
             }
         }

@@ -114,7 +114,7 @@ fn large_build_holds_every_triangle_once() {
     }
 }
 
-/// The 4-wide tree holds every triangle exactly once, each leaf's triangles inside the
+/// The 8-wide tree holds every triangle exactly once, each leaf's triangles inside the
 /// box its parent stores for it, and answers every query as the binary tree does (same
 /// triangle, same distance) for closest and any hit, rays starting inside and outside.
 #[test]
@@ -130,7 +130,7 @@ fn wide_tree_matches_binary_tree() {
     let mut nodes_seen = vec![0u32; bvh.wide.len()];
     nodes_seen[0] = 1;
     for n in &bvh.wide {
-        for l in 0..4 {
+        for l in 0..wide::W {
             let c = n.child[l];
             if c == u32::MAX {
                 // An unused lane's box is empty, so no ray enters it.
@@ -156,9 +156,18 @@ fn wide_tree_matches_binary_tree() {
             }
         }
     }
-    assert!(seen.iter().all(|&s| s == 1), "a triangle missing or repeated");
-    assert!(nodes_seen.iter().all(|&s| s == 1), "a node unreachable or shared");
-    assert!(leaves_seen.iter().all(|&s| s == 1), "a leaf unreachable or shared");
+    assert!(
+        seen.iter().all(|&s| s == 1),
+        "a triangle missing or repeated"
+    );
+    assert!(
+        nodes_seen.iter().all(|&s| s == 1),
+        "a node unreachable or shared"
+    );
+    assert!(
+        leaves_seen.iter().all(|&s| s == 1),
+        "a leaf unreachable or shared"
+    );
     let mut r = Pcg32::new(21, 5);
     for i in 0..4000 {
         let org = if i % 2 == 0 {
@@ -175,8 +184,8 @@ fn wide_tree_matches_binary_tree() {
 }
 
 /// Rays through the shared vertex and edges of a fan (where the watertight test falls back
-/// to double precision, a lane at a time in the 4-wide tree) and grazing rays get the same
-/// distance from the 4-wide tree's four-lane tests as from the binary tree, never slip
+/// to double precision, a lane at a time in the 8-wide tree) and grazing rays get the same
+/// distance from the 8-wide tree's four-lane tests as from the binary tree, never slip
 /// through, and the reported triangle's own scalar test gives that hit.
 #[test]
 fn wide_tree_matches_binary_tree_on_shared_edges() {
@@ -204,7 +213,12 @@ fn wide_tree_matches_binary_tree_on_shared_edges() {
         // barycentrics.
         assert_eq!(a.is_some(), b.is_some(), "ray {i}");
         if let (Some(a), Some(b)) = (a, b) {
-            assert!((a.t - b.t).abs() <= 1e-6 * b.t, "ray {i}: {} against {}", a.t, b.t);
+            assert!(
+                (a.t - b.t).abs() <= 1e-6 * b.t,
+                "ray {i}: {} against {}",
+                a.t,
+                b.t
+            );
         }
         if let Some(h) = a {
             let own = intersect_triangle(&RayPre::new(org, dir), &tris[h.prim as usize], 10.0);
@@ -242,7 +256,11 @@ fn interleaved_pairs_match_single_queries() {
         } else {
             normalize([r.next_f32() - 0.5, r.next_f32() - 0.5, r.next_f32() - 0.3])
         };
-        let tmax = if i.is_multiple_of(4) { 1.5 } else { f32::INFINITY };
+        let tmax = if i.is_multiple_of(4) {
+            1.5
+        } else {
+            f32::INFINITY
+        };
         (org, dir, tmax)
     };
     let key = |h: Option<Hit>| h.map(|h| (h.t.to_bits(), h.prim, h.u.to_bits(), h.v.to_bits()));
@@ -255,7 +273,11 @@ fn interleaved_pairs_match_single_queries() {
         assert_eq!(key(pa), key(single_a), "pair {i}, first ray");
         assert_eq!(key(pb), key(single_b), "pair {i}, second ray");
         let (qa, occ) = bvh.intersect_occluded(a, b);
-        assert_eq!(key(qa), key(single_a), "pair {i}, closest hit beside a shadow ray");
+        assert_eq!(
+            key(qa),
+            key(single_a),
+            "pair {i}, closest hit beside a shadow ray"
+        );
         assert_eq!(occ, bvh.occluded(b.0, b.1, b.2), "pair {i}, shadow ray");
         // Brute force over the caller's triangles agrees on triangle and distance, except
         // through the fan's shared vertex: there the fan's triangles tie, the visiting
@@ -275,7 +297,10 @@ fn interleaved_pairs_match_single_queries() {
         blocked += occ as usize;
     }
     // Both outcomes occur often enough for the pairs to finish in either order.
-    assert!(hits > 300 && hits < 2900 && blocked > 300 && blocked < 2900, "{hits} {blocked}");
+    assert!(
+        hits > 300 && hits < 2900 && blocked > 300 && blocked < 2900,
+        "{hits} {blocked}"
+    );
 }
 
 fn fan(k: usize) -> Vec<[[f32; 3]; 3]> {

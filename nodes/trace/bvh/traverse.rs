@@ -6,10 +6,11 @@ use crate::nodes::trace::sampling::{sub, V3};
 use std::cell::RefCell;
 use wide::f32x4;
 
-/// Entries of a traversal stack: (node, entry distance). A 4-wide node adds at most three
-/// pending entries per level and a binary node one; SAH trees over millions of triangles
-/// stay far below this depth (a full stack drops entries rather than overflow).
-const STACK: usize = 128;
+/// Entries of a traversal stack: (node, entry distance). An 8-wide node adds at most seven
+/// pending entries per level and a binary node one, so 256 entries hold 36 levels of
+/// 8-wide nodes entered on every lane; trees over millions of triangles stay far below
+/// that (a full stack drops entries rather than overflow).
+const STACK: usize = 256;
 
 thread_local! {
     /// One traversal stack per thread, reused by every ray: a stack array local to the
@@ -41,7 +42,7 @@ pub struct TraceStacks {
 }
 
 impl TraceStacks {
-    /// Fresh stacks (2 KiB, zeroed once).
+    /// Fresh stacks (4 KiB, zeroed once).
     pub fn new() -> TraceStacks {
         TraceStacks {
             a: [(0, 0.0); STACK],
@@ -246,12 +247,12 @@ impl Bvh {
         let r = RayPre::new(org, dir);
         if !self.wide.is_empty() {
             return match (r.kx, r.ky, r.kz) {
-                (1, 2, 0) => self.traverse4::<ANY, 1, 2, 0>(&r, tmax),
-                (2, 1, 0) => self.traverse4::<ANY, 2, 1, 0>(&r, tmax),
-                (2, 0, 1) => self.traverse4::<ANY, 2, 0, 1>(&r, tmax),
-                (0, 2, 1) => self.traverse4::<ANY, 0, 2, 1>(&r, tmax),
-                (0, 1, 2) => self.traverse4::<ANY, 0, 1, 2>(&r, tmax),
-                _ => self.traverse4::<ANY, 1, 0, 2>(&r, tmax),
+                (1, 2, 0) => self.traverse8::<ANY, 1, 2, 0>(&r, tmax),
+                (2, 1, 0) => self.traverse8::<ANY, 2, 1, 0>(&r, tmax),
+                (2, 0, 1) => self.traverse8::<ANY, 2, 0, 1>(&r, tmax),
+                (0, 2, 1) => self.traverse8::<ANY, 0, 2, 1>(&r, tmax),
+                (0, 1, 2) => self.traverse8::<ANY, 0, 1, 2>(&r, tmax),
+                _ => self.traverse8::<ANY, 1, 0, 2>(&r, tmax),
             };
         }
         match (r.kx, r.ky, r.kz) {

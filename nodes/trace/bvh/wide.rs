@@ -1,15 +1,21 @@
-//! The 4-wide BVH (`Bvh::widen`): the binary SAH tree collapsed so that every node holds up
-//! to four children (Wald, Benthin and Boulos 2008, "Getting rid of packets"; Dammertz et
+//! The 8-wide BVH (`Bvh::widen`): the binary tree collapsed so that every node holds up
+//! to eight children (Wald, Benthin and Boulos 2008, "Getting rid of packets"; Dammertz et
 //! al. 2008, "Shallow bounding volume hierarchies for fast SIMD ray tracing of incoherent
-//! rays"), each node's four boxes stored axis by axis (structure of arrays) so that one ray
-//! is tested against all four on four SIMD lanes, and each leaf's (up to four) triangles
-//! stored the same way (`Tri4`) for a four-lane watertight test. A node is collapsed by
-//! opening, while fewer than four children remain, the interior child with the largest
-//! surface area (the one a random ray is most likely to enter).
+//! rays"; Embree's BVH8), each node's eight boxes stored axis by axis (structure of arrays)
+//! so that one ray is tested against all eight on eight SIMD lanes, and each leaf's (up to
+//! four) triangles stored the same way (`Tri4`) for a four-lane watertight test. A node is
+//! collapsed by opening, while fewer than eight children remain, the interior child with
+//! the largest surface area (the one a random ray is most likely to enter). Eight children
+//! rather than four: a walk takes fewer, dearer steps, and the steps' branches (leaf or
+//! node, how many children entered) are what the walk waits on (docs/path_tracing.md,
+//! fourteenth round).
 //!
 //! The lane arithmetic is in `lanes.rs`; docs/path_tracing.md has the measurements.
 
-use super::lanes::{slab4, tri4, Axes, Fixed, Ray4, Tri4};
+use super::lanes::{slab8, tri4, Axes, Fixed, RayBox, Tri4, F8};
+
+/// Children per node.
+pub const W: usize = 8;
 use super::{Bvh, BvhNode};
 use crate::nodes::trace::bvh::traverse::{with_stack, RayPre};
 use crate::nodes::trace::bvh::Hit;
@@ -22,29 +28,30 @@ pub(super) const LEAF: u32 = 1 << 31;
 /// Triangle counts at or above this cannot be encoded; such scenes keep the binary tree.
 pub(super) const MAX_TRIS: usize = 1 << 28;
 
-/// A node of the 4-wide BVH: four child boxes (per axis, per lane), and per child either
+/// A node of the 8-wide BVH: eight child boxes (per axis, per lane), and per child either
 /// an interior node (its index), a leaf (`LEAF | leaf << 3 | count`) or nothing (`EMPTY`,
-/// whose box is empty: min = +inf, max = -inf, so no ray enters it).
+/// whose box is empty: min = +inf, max = -inf, so no ray enters it). 224 bytes, aligned to
+/// a cache line.
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(64))]
-pub struct Node4 {
+pub struct Node8 {
     /// Lower corners, `min[axis][lane]`.
-    pub min: [[f32; 4]; 3],
+    pub min: [F8; 3],
     /// Upper corners, `max[axis][lane]`.
-    pub max: [[f32; 4]; 3],
+    pub max: [F8; 3],
     /// Child node index or leaf code.
-    pub child: [u32; 4],
+    pub child: [u32; W],
 }
 
 /// Collapses the binary tree of `bvh` (root first, children of an interior node at
-/// `first` and `first + 1`; leaves of at most 4 triangles) into 4-wide nodes, root first,
+/// `first` and `first + 1`; leaves of at most 4 triangles) into 8-wide nodes, root first,
 /// and the leaves' triangles packed four to a `Tri4`. A binary subtree over at most four
 /// triangles becomes one wide leaf (its triangles are contiguous, as the tree was flattened
 /// depth first): the four-lane test costs about the same for one triangle as for four, so
 /// fewer, fuller leaves mean fewer nodes visited. Empty when there is nothing to collapse
 /// or the leaves cannot be encoded (`MAX_TRIS` triangles or more, or a leaf over 4
 /// triangles): the binary tree is traversed then.
-pub fn collapse(bvh: &Bvh) -> (Vec<Node4>, Vec<Tri4>) {
+pub fn collapse(bvh: &Bvh) -> (Vec<Node8>, Vec<Tri4>) {
     let nodes = &bvh.nodes;
     let mut out = Vec::with_capacity(nodes.len() / 2 + 1);
     let mut leaves = Vec::with_capacity(nodes.len() / 2 + 1);
@@ -77,14 +84,17 @@ pub fn collapse(bvh: &Bvh) -> (Vec<Node4>, Vec<Tri4>) {
     while let Some((b, slot)) = todo.pop() {
         let first = nodes[b].first as usize;
         let mut kids = vec![first, first + 1];
-        while kids.len() < 4 {
+        while kids.len() < W {
             // Open the interior child of largest area.
             let pick = kids
                 .iter()
                 .enumerate()
                 .filter(|(_, &k)| !is_leaf(k))
                 .max_by(|a, b| {
-                    let (sa, sb) = (nodes[*a.1].bounds.half_area(), nodes[*b.1].bounds.half_area());
+                    let (sa, sb) = (
+                        nodes[*a.1].bounds.half_area(),
+                        nodes[*b.1].bounds.half_area(),
+                    );
                     sa.total_cmp(&sb)
                 })
                 .map(|(i, _)| i);
@@ -108,11 +118,11 @@ pub fn collapse(bvh: &Bvh) -> (Vec<Node4>, Vec<Tri4>) {
     (out, leaves)
 }
 
-fn empty_node() -> Node4 {
-    Node4 {
-        min: [[f32::INFINITY; 4]; 3],
-        max: [[f32::NEG_INFINITY; 4]; 3],
-        child: [EMPTY; 4],
+fn empty_node() -> Node8 {
+    Node8 {
+        min: [[f32::INFINITY; W]; 3],
+        max: [[f32::NEG_INFINITY; W]; 3],
+        child: [EMPTY; W],
     }
 }
 
@@ -120,7 +130,7 @@ fn empty_node() -> Node4 {
 /// four triangles (`under`: first, count) those packed into a new `Tri4` as a leaf (the
 /// caller sets an interior child's index).
 fn set_lane(
-    n: &mut Node4,
+    n: &mut Node8,
     lane: usize,
     bvh: &Bvh,
     k: usize,
@@ -140,10 +150,10 @@ fn set_lane(
     }
 }
 
-/// One ray's state in the 4-wide traversal, advanced one node or leaf at a time by
-/// `Bvh::step4` (so that two rays can be advanced in turn, `Bvh::trace_pair`).
+/// One ray's state in the 8-wide traversal, advanced one node or leaf at a time by
+/// `Bvh::step8` (so that two rays can be advanced in turn, `Bvh::trace_pair`).
 pub(super) struct Walk {
-    ray: Ray4,
+    ray: RayBox,
     tmax: f32,
     best: Option<Hit>,
     /// Entries on this ray's stack.
@@ -156,7 +166,7 @@ impl Walk {
     #[inline(always)]
     pub(super) fn new(r: &RayPre, tmax: f32) -> Walk {
         Walk {
-            ray: Ray4::new(r),
+            ray: RayBox::new(r),
             tmax,
             best: None,
             sp: 0,
@@ -172,29 +182,29 @@ impl Walk {
 }
 
 impl Bvh {
-    /// Closest-hit (or, with `ANY`, any-hit) traversal of the 4-wide tree, front to back:
-    /// the four boxes of a node are tested on four lanes, the entered children sorted by
+    /// Closest-hit (or, with `ANY`, any-hit) traversal of the 8-wide tree, front to back:
+    /// the eight boxes of a node are tested on eight lanes, the entered children sorted by
     /// entry distance (not for any-hit), the nearest visited next and the others pushed far
     /// to near; a popped entry is skipped once a hit closer than its entry distance has
     /// been found.
-    pub(super) fn traverse4<const ANY: bool, const KX: usize, const KY: usize, const KZ: usize>(
+    pub(super) fn traverse8<const ANY: bool, const KX: usize, const KY: usize, const KZ: usize>(
         &self,
         r: &RayPre,
         tmax: f32,
     ) -> Option<Hit> {
         with_stack(|stack| {
             let mut w = Walk::new(r, tmax);
-            while !self.step4::<ANY, _>(r, Fixed::<KX, KY, KZ>, &mut w, stack) {}
+            while !self.step8::<ANY, _>(r, Fixed::<KX, KY, KZ>, &mut w, stack) {}
             w.best
         })
     }
 
-    /// Advances `w` by one node (test its four boxes, go to the nearest entered child,
+    /// Advances `w` by one node (test its eight boxes, go to the nearest entered child,
     /// push the others) or one leaf (test its triangles), then, when nothing was entered,
     /// pops the next entry not farther than the closest hit. Returns true when the query
     /// is finished (stack empty, or an any-hit query found a hit); `w.best` is its answer.
     #[inline(always)]
-    pub(super) fn step4<const ANY: bool, P: Axes>(
+    pub(super) fn step8<const ANY: bool, P: Axes>(
         &self,
         r: &RayPre,
         axes: P,
@@ -204,7 +214,7 @@ impl Bvh {
         let c = w.c;
         if c & LEAF == 0 {
             let n = &self.wide[c as usize];
-            let (mut m, te) = slab4(&w.ray, &n.min, &n.max, w.tmax);
+            let (mut m, te) = slab8(&w.ray, &n.min, &n.max, w.tmax);
             if m != 0 {
                 let first = m.trailing_zeros() as usize;
                 m &= m - 1;
@@ -232,7 +242,11 @@ impl Bvh {
                     // lane order, as the sort does).
                     let second = m.trailing_zeros() as usize;
                     let swap = te[second] < te[first];
-                    let (near, far) = if swap { (second, first) } else { (first, second) };
+                    let (near, far) = if swap {
+                        (second, first)
+                    } else {
+                        (first, second)
+                    };
                     if w.sp < stack.len() {
                         stack[w.sp] = (n.child[far], te[far]);
                         w.sp += 1;
@@ -240,9 +254,9 @@ impl Bvh {
                     w.c = n.child[near];
                     return false;
                 }
-                // Three or four children entered: sort them near to far (insertion sort),
+                // Three or more children entered: sort them near to far (insertion sort),
                 // visit the nearest, push the rest far to near.
-                let mut ids = [first; 4];
+                let mut ids = [first; W];
                 let mut k = 1;
                 while m != 0 {
                     let l = m.trailing_zeros() as usize;

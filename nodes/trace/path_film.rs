@@ -124,7 +124,7 @@ pub(crate) struct CameraSample {
 
 /// Starts sample `k` of pixel `(x, y)`: both path loops begin here, so they draw the same
 /// numbers and trace the same camera ray (through `grid` when there is one).
-#[inline]
+#[inline(always)]
 pub(crate) fn camera_sample(
     sc: &RenderScene,
     cam: &PinholeCamera,

@@ -174,21 +174,28 @@ impl Lanes {
                 o.resolve(blocked, out);
                 hit
             }
-            None => sc.intersect(seg.0, seg.1, seg.2),
+            None => sc.bvh.single_in::<false>(stacks, seg),
         }
     }
 
     /// Traces the orphaned shadow rays two at a time until at most `keep` are left.
-    fn flush_orphans(&mut self, sc: &RenderScene, keep: usize, out: &mut [Sample]) {
+    #[inline(always)]
+    fn flush_orphans(
+        &mut self,
+        sc: &RenderScene,
+        keep: usize,
+        stacks: &mut TraceStacks,
+        out: &mut [Sample],
+    ) {
         while self.orphans.len() > keep {
             let a = self.orphans.pop().expect("more than `keep` orphans");
             match self.orphans.pop() {
                 Some(b) => {
-                    let (ba, bb) = sc.bvh.occluded_pair(a.seg, b.seg);
+                    let (ba, bb) = sc.bvh.occluded_pair_in(stacks, a.seg, b.seg);
                     a.resolve(ba, out);
                     b.resolve(bb, out);
                 }
-                None => a.resolve(sc.bvh.occluded(a.seg.0, a.seg.1, a.seg.2), out),
+                None => a.resolve(sc.bvh.single_in::<true>(stacks, a.seg).is_some(), out),
             }
         }
     }
@@ -204,7 +211,7 @@ impl Lanes {
 
     /// Ends lane `i`'s path and stores its radiance, or, when a shadow ray is still to be
     /// traced, leaves that to an `Orphan`.
-    fn finish(&mut self, i: usize, sc: &RenderScene, out: &mut [Sample]) {
+    fn finish(&mut self, i: usize, sc: &RenderScene, stacks: &mut TraceStacks, out: &mut [Sample]) {
         if self.pending[i] && self.nee[i] {
             self.orphans.push(Orphan {
                 seg: (get(&self.seg_o, i), get(&self.seg_d, i), SHADOW_END),
@@ -215,7 +222,7 @@ impl Lanes {
                 job: self.job[i],
             });
             self.pending[i] = false;
-            self.flush_orphans(sc, ORPHANS, out);
+            self.flush_orphans(sc, ORPHANS, stacks, out);
         } else {
             if self.pending[i] {
                 self.add_pending(i, false);
@@ -314,7 +321,7 @@ fn trace_body(b: Batch, stacks: &mut TraceStacks) -> Vec<Sample> {
             next += 1;
         }
         if ln.job.iter().all(|&j| j == IDLE) {
-            ln.flush_orphans(sc, 0, &mut out);
+            ln.flush_orphans(sc, 0, stacks, &mut out);
             break;
         }
         let mut go = [false; L];
@@ -322,7 +329,7 @@ fn trace_body(b: Batch, stacks: &mut TraceStacks) -> Vec<Sample> {
             *go = ln.job[i] != IDLE && visit(sc, s, &mut ln, i, &mut g, stacks, &mut out);
         }
         if go.iter().any(|&b| b) {
-            shade(sc, s, &mut ln, &g, go, &mut out);
+            shade(sc, s, &mut ln, &g, go, stacks, &mut out);
         }
     }
     out
@@ -363,7 +370,7 @@ fn visit(
             let w = found_weight(s.strategy, first, ln.prev_pdf[i], || env.pdf(dir));
             ln.l[i] = add(ln.l[i], scale(mul(get(&ln.thr, i), env.eval(dir)), w));
         }
-        ln.finish(i, sc, out);
+        ln.finish(i, sc, stacks, out);
         return false;
     };
     let tri = hit.prim;
@@ -380,7 +387,7 @@ fn visit(
         }
     }
     if ln.depth[i] + 1 >= s.max_depth {
-        ln.finish(i, sc, out);
+        ln.finish(i, sc, stacks, out);
         return false;
     }
     let sp = sc.surface(&hit);
@@ -441,6 +448,7 @@ fn shade(
     ln: &mut Lanes,
     g: &Gather,
     go: [bool; L],
+    stacks: &mut TraceStacks,
     out: &mut [Sample],
 ) {
     let zero = splat(0.0);
@@ -528,7 +536,7 @@ fn shade(
         ln.delta[i] = g.delta[i];
         ln.env[i] = g.env[i];
         if sampled_bits & (1 << i) == 0 {
-            ln.finish(i, sc, out);
+            ln.finish(i, sc, stacks, out);
             continue;
         }
         ln.prev_pdf[i] = pdf2[i];
@@ -538,14 +546,14 @@ fn shade(
             // The scalar loop's (tm eta eta).min(0.95) with eta = 1 (exact).
             let q = tm.min(0.95);
             if ln.rng[i].next_f32() >= q {
-                ln.finish(i, sc, out);
+                ln.finish(i, sc, stacks, out);
                 continue;
             }
             let t = scale(get(&ln.thr, i), 1.0 / q);
             put(&mut ln.thr, i, t);
         }
         if tm <= 0.0 || !tm.is_finite() {
-            ln.finish(i, sc, out);
+            ln.finish(i, sc, stacks, out);
             continue;
         }
         ln.tmax[i] = f32::INFINITY;

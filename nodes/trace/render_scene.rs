@@ -542,7 +542,7 @@ impl RenderScene {
     /// Samples a point on the emitters by power (one triangle by area times luminance,
     /// then uniformly on it; Shirley et al. 1996, "Monte Carlo techniques for direct
     /// lighting calculations").
-    #[inline]
+    #[inline(always)]
     pub fn sample_emitter(&self, u: f32, uv: [f32; 2]) -> Option<LightSample> {
         if self.emitter_table.is_empty() {
             return None;

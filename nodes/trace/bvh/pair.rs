@@ -43,6 +43,23 @@ impl Bvh {
         (ha, hb.is_some())
     }
 
+    /// The closest hit along `a` (or, with `ANY`, whether anything blocks it: `Some` then)
+    /// on the caller's stack, walked inline with the axis permutation read from the ray:
+    /// the same answer as `intersect` (`occluded`), in the caller's build (the four-lane
+    /// loop's x86-64-v3 one) instead of the baseline build's `traverse`.
+    #[inline(always)]
+    pub fn single_in<const ANY: bool>(&self, st: &mut TraceStacks, a: Segment) -> Option<Hit> {
+        if self.wide.is_empty() {
+            return self.traverse::<ANY>(a.0, a.1, a.2);
+        }
+        let r = RayPre::new(a.0, a.1);
+        let p = Dyn(r.kx, r.ky, r.kz);
+        let mut w = Walk::new(&r, a.2);
+        let (s, _) = st.split();
+        while !self.step8::<ANY, _>(&r, p, &mut w, s) {}
+        w.best()
+    }
+
     /// Whether anything blocks `a` and `b` (any-hit queries), traced interleaved: the same
     /// answers as two calls of `occluded`.
     #[inline]
@@ -51,6 +68,14 @@ impl Bvh {
             let (ha, hb) = self.trace_pair::<true, true>(a, b, sa, sb);
             (ha.is_some(), hb.is_some())
         })
+    }
+
+    /// `occluded_pair` on the caller's stacks.
+    #[inline(always)]
+    pub fn occluded_pair_in(&self, st: &mut TraceStacks, a: Segment, b: Segment) -> (bool, bool) {
+        let (sa, sb) = st.split();
+        let (ha, hb) = self.trace_pair::<true, true>(a, b, sa, sb);
+        (ha.is_some(), hb.is_some())
     }
 
     /// The closest hits along `a` and `b`, traced interleaved: the same answers as two

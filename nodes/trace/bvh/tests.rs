@@ -279,6 +279,25 @@ fn interleaved_pairs_match_single_queries() {
             "pair {i}, closest hit beside a shadow ray"
         );
         assert_eq!(occ, bvh.occluded(b.0, b.1, b.2), "pair {i}, shadow ray");
+        // The inline forms on the caller's stacks give the same answers.
+        let mut st = TraceStacks::new();
+        let single_in = bvh.single_in::<false>(&mut st, a);
+        assert_eq!(
+            key(single_in),
+            key(single_a),
+            "pair {i}, inline closest hit"
+        );
+        let occ_a = bvh.occluded(a.0, a.1, a.2);
+        assert_eq!(
+            bvh.single_in::<true>(&mut st, b).is_some(),
+            occ,
+            "pair {i}, inline shadow ray"
+        );
+        assert_eq!(
+            bvh.occluded_pair_in(&mut st, a, b),
+            (occ_a, occ),
+            "pair {i}, shadow pair"
+        );
         // Brute force over the caller's triangles agrees on triangle and distance, except
         // through the fan's shared vertex: there the fan's triangles tie, the visiting
         // order picks one, and each computes the distance with its own round-off.

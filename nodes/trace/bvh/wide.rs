@@ -6,19 +6,18 @@
 //! four) triangles stored the same way (`Tri4`) for a four-lane watertight test. A node is
 //! collapsed by opening, while fewer than eight children remain, the interior child with
 //! the largest surface area (the one a random ray is most likely to enter). Eight children
-//! rather than four: a walk takes fewer, dearer steps, and the steps' branches (leaf or
-//! node, how many children entered) are what the walk waits on (docs/path_tracing.md,
-//! fourteenth round).
+//! rather than four: a walk takes half as many node steps, each dearer, and the path
+//! tracer got 8-35 % faster (docs/path_tracing.md, fourteenth round).
 //!
 //! The lane arithmetic is in `lanes.rs`; docs/path_tracing.md has the measurements.
 
 use super::lanes::{slab8, tri4, Axes, Fixed, RayBox, Tri4, F8};
-
-/// Children per node.
-pub const W: usize = 8;
 use super::{Bvh, BvhNode};
 use crate::nodes::trace::bvh::traverse::{with_stack, RayPre};
 use crate::nodes::trace::bvh::Hit;
+
+/// Children per node.
+pub const W: usize = 8;
 
 /// Marks an unused child slot.
 const EMPTY: u32 = u32::MAX;
@@ -30,8 +29,8 @@ pub(super) const MAX_TRIS: usize = 1 << 28;
 
 /// A node of the 8-wide BVH: eight child boxes (per axis, per lane), and per child either
 /// an interior node (its index), a leaf (`LEAF | leaf << 3 | count`) or nothing (`EMPTY`,
-/// whose box is empty: min = +inf, max = -inf, so no ray enters it). 224 bytes, aligned to
-/// a cache line.
+/// whose box is empty: min = +inf, max = -inf, so no ray enters it). 224 bytes of data,
+/// padded to 256 so that every node starts on a cache line.
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(64))]
 pub struct Node8 {

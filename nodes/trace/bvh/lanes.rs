@@ -130,8 +130,9 @@ impl RayBox {
 }
 
 /// Slab test of one ray against eight boxes (`min[axis][lane]`, `max[axis][lane]`) on
-/// eight lanes (`wide::f32x8`: two SSE registers in the baseline build, one AVX register
-/// where the lane loop is built for x86-64-v3): the mask of the boxes entered before
+/// eight lanes (`wide::f32x8`, which this crate's builds compute as two SSE halves, the
+/// x86-64-v3 build of the lane loop included: `wide` picks its AVX form only when the whole
+/// crate is built for AVX): the mask of the boxes entered before
 /// `tmax` and the entry distances. A NaN from `0 * inf` keeps the previous bound (`maxps`
 /// and `minps` return their second operand then), and the exit distance is widened by
 /// 1 + 2 gamma(3) so round-off cannot cull a hit on a face (Ize 2013, "Robust BVH Ray

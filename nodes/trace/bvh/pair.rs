@@ -54,10 +54,8 @@ impl Bvh {
         }
         let r = RayPre::new(a.0, a.1);
         let p = Dyn(r.kx, r.ky, r.kz);
-        let mut w = Walk::new(&r, a.2);
         let (s, _) = st.split();
-        while !self.step8::<ANY, _>(&r, p, &mut w, s) {}
-        w.best()
+        self.walk_out::<ANY, _>(&r, p, &mut Walk::new(&r, a.2), s)
     }
 
     /// Whether anything blocks `a` and `b` (any-hit queries), traced interleaved: the same
@@ -105,14 +103,11 @@ impl Bvh {
         let mut wb = Walk::new(&rb, b.2);
         loop {
             if self.step8::<ANY_A, _>(&ra, pa, &mut wa, sa) {
-                while !self.step8::<ANY_B, _>(&rb, pb, &mut wb, sb) {}
-                break;
+                return (wa.best(), self.walk_out::<ANY_B, _>(&rb, pb, &mut wb, sb));
             }
             if self.step8::<ANY_B, _>(&rb, pb, &mut wb, sb) {
-                while !self.step8::<ANY_A, _>(&ra, pa, &mut wa, sa) {}
-                break;
+                return (self.walk_out::<ANY_A, _>(&ra, pa, &mut wa, sa), wb.best());
             }
         }
-        (wa.best(), wb.best())
     }
 }

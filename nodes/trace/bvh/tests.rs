@@ -265,6 +265,7 @@ fn interleaved_pairs_match_single_queries() {
     };
     let key = |h: Option<Hit>| h.map(|h| (h.t.to_bits(), h.prim, h.u.to_bits(), h.v.to_bits()));
     let (mut hits, mut blocked) = (0, 0);
+    let mut st = TraceStacks::new();
     for i in 0..3000 {
         let (a, b) = (ray(2 * i), ray(2 * i + 1));
         let single_a = bvh.intersect(a.0, a.1, a.2);
@@ -280,7 +281,6 @@ fn interleaved_pairs_match_single_queries() {
         );
         assert_eq!(occ, bvh.occluded(b.0, b.1, b.2), "pair {i}, shadow ray");
         // The inline forms on the caller's stacks give the same answers.
-        let mut st = TraceStacks::new();
         let single_in = bvh.single_in::<false>(&mut st, a);
         assert_eq!(
             key(single_in),

@@ -7,7 +7,8 @@
 //! collapsed by opening, while fewer than eight children remain, the interior child with
 //! the largest surface area (the one a random ray is most likely to enter). Eight children
 //! rather than four: a walk takes half as many node steps, each dearer, and the path
-//! tracer got 8-35 % faster (docs/path_tracing.md, fourteenth round).
+//! tracer got faster on both bench scenes (docs/path_tracing.md, fourteenth round, has the
+//! timings).
 //!
 //! The lane arithmetic is in `lanes.rs`; docs/path_tracing.md has the measurements.
 
@@ -192,10 +193,21 @@ impl Bvh {
         tmax: f32,
     ) -> Option<Hit> {
         with_stack(|stack| {
-            let mut w = Walk::new(r, tmax);
-            while !self.step8::<ANY, _>(r, Fixed::<KX, KY, KZ>, &mut w, stack) {}
-            w.best
+            self.walk_out::<ANY, _>(r, Fixed::<KX, KY, KZ>, &mut Walk::new(r, tmax), stack)
         })
+    }
+
+    /// Advances `w` until its query is finished; its answer.
+    #[inline(always)]
+    pub(super) fn walk_out<const ANY: bool, P: Axes>(
+        &self,
+        r: &RayPre,
+        axes: P,
+        w: &mut Walk,
+        stack: &mut [(u32, f32)],
+    ) -> Option<Hit> {
+        while !self.step8::<ANY, _>(r, axes, w, stack) {}
+        w.best
     }
 
     /// Advances `w` by one node (test its eight boxes, go to the nearest entered child,

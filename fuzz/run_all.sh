@@ -8,7 +8,7 @@ set -uo pipefail
 cd "$(dirname "$0")"
 secs=${1:-600}; jobs=${2:-1}; shift 2 2>/dev/null || shift $#
 targets=("$@")
-[ ${#targets[@]} -eq 0 ] && targets=(graph_json graph_f3d obj mtl off ply usda npy csv plugin_manifest plugin_reply)
+[ ${#targets[@]} -eq 0 ] && targets=(graph_json graph_f3d obj mtl off ply usda npy csv image plugin_manifest plugin_reply)
 mkdir -p logs
 run() {
   local t=$1

@@ -5,7 +5,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 C=fuzz/corpus
-mkdir -p $C/{graph_json,graph_f3d,obj,mtl,off,ply,usda,npy,csv,plugin_manifest,plugin_reply}
+mkdir -p $C/{graph_json,graph_f3d,obj,mtl,off,ply,usda,npy,csv,image,plugin_manifest,plugin_reply}
 seed() { # target, files...
   local t=$1; shift
   for f in "$@"; do
@@ -22,6 +22,7 @@ seed off assets/**/*.off tests/data/**/*.off
 seed ply assets/**/*.ply tests/data/**/*.ply
 seed usda assets/**/*.usda tests/data/**/*.usda
 seed csv assets/**/*.csv tests/data/**/*.csv
+seed image assets/**/*.{png,jpg,jpeg,bmp,gif,hdr,exr} tests/data/**/*.{png,jpg,jpeg,bmp,gif,hdr,exr}
 seed plugin_manifest examples/**/cgnodes-plugin.json tests/data/**/cgnodes-plugin.json
 # generated seeds: binary PLY, OFF variants, npy arrays, plugin replies
 printf 'OFF\n4 2 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 2 3\n' > $C/off/quad.off
@@ -54,4 +55,21 @@ for k, (j, n) in replies.items():
     open(f"{c}/plugin_reply/{k}", "wb").write(json.dumps(j).encode() + b"\0" + n)
 PY
 printf 'x,y\n0,1\n1,2\n# comment\n 2 , 3 \n' > $C/csv/xy.csv
+# Truncated and corrupted variants of every seed (issue 56): the first half, and one byte
+# flipped in the middle; readers must refuse both with an error, never a partial result.
+python3 - "$C" <<'PY'
+import os, sys
+c = sys.argv[1]
+for t in os.listdir(c):
+    for name in os.listdir(f"{c}/{t}"):
+        if name.startswith(("cut_", "flip_")):
+            continue
+        b = open(f"{c}/{t}/{name}", "rb").read()
+        if len(b) < 4:
+            continue
+        open(f"{c}/{t}/cut_{name}", "wb").write(b[: len(b) // 2])
+        f = bytearray(b)
+        f[len(f) // 2] ^= 0x10
+        open(f"{c}/{t}/flip_{name}", "wb").write(bytes(f))
+PY
 for t in $C/*; do echo "$(ls "$t" | wc -l) $t"; done

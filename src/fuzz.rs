@@ -71,6 +71,14 @@ pub fn mtl(data: &[u8], scratch: &Path) {
     let _ = crate::nodes::mesh::obj::load_obj_objects(&p);
 }
 
+/// Image file bytes (PNG, JPEG, EXR, HDR, BMP, GIF): the structural check and the decoder,
+/// in both colour spaces.
+pub fn image(data: &[u8]) {
+    use crate::nodes::image::image_load::{decode_image, ColorSpace};
+    let _ = decode_image(data, ColorSpace::Srgb);
+    let _ = decode_image(data, ColorSpace::Raw);
+}
+
 /// OFF text.
 pub fn off(data: &[u8]) {
     if let Ok(text) = std::str::from_utf8(data) {
@@ -176,6 +184,7 @@ pub fn run(target: &str, data: &[u8], scratch: &Path) -> bool {
         "obj" => obj(data, scratch),
         "mtl" => mtl(data, scratch),
         "off" => off(data),
+        "image" => image(data),
         "ply" => ply(data),
         "usda" => usda(data),
         "npy" => npy(data),

@@ -107,6 +107,7 @@ pub fn read_rgba8(path: &Path) -> Result<RgbaImage, String> {
             .map_err(|e| format!("{}: {e}", path.display()))?;
         return Ok(tone_map(&img));
     }
+    super::file_check::check_complete(&bytes).map_err(|e| format!("{}: {e}", path.display()))?;
     image::load_from_memory(&bytes)
         .map(|d| d.to_rgba8())
         .map_err(|e| format!("{}: {e}", path.display()))

@@ -32,7 +32,9 @@ pub fn image_dimensions(bytes: &[u8]) -> Result<(u32, u32), String> {
 }
 
 /// Decodes image file bytes to a linear RGBA image (see the module doc for the rules).
+/// A truncated or damaged file is an error (`file_check`), never a partial image.
 pub fn decode_image(bytes: &[u8], space: ColorSpace) -> Result<Image, String> {
+    super::file_check::check_complete(bytes)?;
     let dynimg = image::ImageReader::new(Cursor::new(bytes))
         .with_guessed_format()
         .map_err(|e| e.to_string())?

@@ -6,5 +6,5 @@
 crate::node_domain! {
     category: "image",
     nodes: [frames_to_video, image_compare, image_load, image_save, image_svd, image_warp, poisson_blend, rpca, seam_carve],
-    modules: [animation, srgb, warp],
+    modules: [animation, file_check, srgb, warp],
 }

@@ -11,7 +11,7 @@ use std::path::Path;
 pub(super) fn cmd(registry: &Registry, input: &Path, output: &Path, aliases: Option<&Path>) -> i32 {
     let read_json = |p: &Path| -> Result<serde_json::Value, String> {
         let t = std::fs::read_to_string(p).map_err(|e| format!("{}: {e}", p.display()))?;
-        serde_json::from_str(&t).map_err(|e| format!("{}: {e}", p.display()))
+        crate::io::json::parse_strict(&t).map_err(|e| format!("{}: {e}", p.display()))
     };
     let result = (|| -> Result<(), String> {
         let raw = read_json(input)?;

@@ -72,9 +72,9 @@ enum Cmd {
         after_help = "Example: cgnodes run graphs/arap_camelhead.json --out out --set arap.iterations=20 --profile"
     )]
     Run(RunArgs),
-    /// Check a graph without running it.
+    /// Check every node of a graph without running it (exit 3 on any error).
     #[command(after_help = "Example: cgnodes validate graphs/cloth_sphere.json")]
-    Validate(GraphArgs),
+    Validate(ValidateArgs),
     /// List every node type with its sockets.
     #[command(after_help = "Example: cgnodes nodes --json > nodes.json")]
     Nodes {
@@ -334,6 +334,16 @@ struct GraphArgs {
 }
 
 #[derive(clap::Args)]
+struct ValidateArgs {
+    #[command(flatten)]
+    load: GraphArgs,
+    /// Only these nodes and what they read from must validate; problems elsewhere are
+    /// warnings, as in `run --target` (repeatable).
+    #[arg(long = "target", value_name = "NODE")]
+    target: Vec<String>,
+}
+
+#[derive(clap::Args)]
 struct RunArgs {
     #[command(flatten)]
     load: GraphArgs,
@@ -403,7 +413,7 @@ pub fn main_with(registry: Registry) -> i32 {
     };
     match cli.cmd {
         Cmd::Run(args) => run::cmd(&registry, args),
-        Cmd::Validate(args) => validate::cmd(&registry, &args),
+        Cmd::Validate(args) => validate::cmd(&registry, &args.load, &args.target),
         Cmd::Nodes { json } => nodes::cmd(&registry, json),
         Cmd::Describe { node_type } => describe::cmd(&registry, &node_type),
         Cmd::Schema { untyped } => schema::cmd(&registry, untyped),

@@ -3,7 +3,7 @@
 
 use super::progress::{Monitor, Verbosity};
 use super::validate::load_args;
-use super::{RunArgs, EXIT_NODE_FAILED, EXIT_USAGE};
+use super::{RunArgs, EXIT_INVALID, EXIT_NODE_FAILED, EXIT_USAGE};
 use crate::exec::{Executor, NodeStatus, RunOptions, RunReport};
 use crate::graph::parse_frames;
 use crate::node::FileEnv;
@@ -24,6 +24,13 @@ pub(super) fn cmd(registry: &Registry, args: RunArgs) -> i32 {
             );
             return EXIT_USAGE;
         }
+    }
+    if targets.is_none() && graph.targets.is_empty() {
+        eprintln!(
+            "error: {}: nothing to run: no node writes a file; name a --target",
+            args.load.graph.display()
+        );
+        return EXIT_INVALID;
     }
     let (f0, f1) = match args.frames.as_deref().map(parse_frames).transpose() {
         Ok(r) => r.or(hint).unwrap_or((0, 0)),

@@ -10,8 +10,16 @@ use crate::validate::{validate_needed, validate_with, GraphError, ValidGraph};
 use std::path::{Path, PathBuf};
 
 /// `cgnodes validate GRAPH [--set ...] [--assets DIR] [--f3d-aliases FILE]`.
-pub(super) fn cmd(registry: &Registry, args: &GraphArgs) -> i32 {
-    match load_args(registry, args, None) {
+/// Every node is checked, needed by an output or not: a user validates to find every
+/// mistake before a long run. With `--target`, problems in nodes the targets do not need are
+/// warnings, as in `run`.
+pub(super) fn cmd(registry: &Registry, args: &GraphArgs, targets: &[String]) -> i32 {
+    let loaded = if targets.is_empty() {
+        load_whole(registry, args)
+    } else {
+        load_args(registry, args, Some(targets))
+    };
+    match loaded {
         Ok((g, _)) => {
             println!("{}: ok ({} nodes)", args.graph.display(), g.nodes.len());
             0
@@ -50,6 +58,22 @@ pub(super) fn load_args(
         }
         Ok(valid)
     })
+}
+
+/// Loads and validates every node of the graph from `validate`'s options; `Err` is the exit
+/// code, the errors are printed.
+fn load_whole(
+    registry: &Registry,
+    args: &GraphArgs,
+) -> Result<(ValidGraph, Option<(i64, i64)>), i32> {
+    let aliases = match args.f3d_aliases.as_deref().map(read_aliases).transpose() {
+        Ok(a) => a.unwrap_or_default(),
+        Err(e) => {
+            eprintln!("error: {e}");
+            return Err(EXIT_USAGE);
+        }
+    };
+    load_valid_with(registry, &args.graph, &args.set, &aliases, &args.assets)
 }
 
 /// Loads, applies overrides and validates, printing errors; `Err` is the exit code.

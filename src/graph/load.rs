@@ -93,7 +93,8 @@ fn parse_any(
             .unwrap_or_default()
             .to_string(),
     };
-    let raw: serde_json::Value = serde_json::from_str(text).map_err(perr)?;
+    // Strict: the same node id, param or input twice is an error naming the key and line.
+    let raw: serde_json::Value = crate::io::json::parse_strict(text).map_err(perr)?;
     let ferr = |m: String| LoadError::Format {
         file: file.to_path_buf(),
         message: m,

@@ -65,6 +65,7 @@ pub fn read(text: &str, comments: bool, trim: bool) -> Result<Option<Rows>, Stri
         }
         all.push(rec.iter().map(String::from).collect::<Vec<_>>());
     }
+    check_complete(text, &all)?;
     let mut it = all.into_iter();
     Ok(it.next().map(|header| Rows {
         header,
@@ -72,9 +73,50 @@ pub fn read(text: &str, comments: bool, trim: bool) -> Result<Option<Rows>, Stri
     }))
 }
 
+/// A file cut short is an error, not a shorter table: an unterminated quoted field (an odd
+/// number of quote characters, since RFC 4180 escapes a quote by doubling it), or a last row
+/// with fewer fields than the header and no line end after it.
+fn check_complete(text: &str, rows: &[Vec<String>]) -> Result<(), String> {
+    if text.bytes().filter(|&b| b == b'"').count() % 2 == 1 {
+        return Err(
+            "truncated CSV: a quoted field is not closed before the end of the file".into(),
+        );
+    }
+    let ended = text.ends_with('\n') || text.ends_with('\r');
+    if let (false, [header, .., last]) = (ended, rows) {
+        if last.len() < header.len() {
+            return Err(format!(
+                "truncated CSV: the last row has {} of the header's {} fields and no line end",
+                last.len(),
+                header.len()
+            ));
+        }
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_cut_file_is_an_error() {
+        assert!(read("a,b\n1,2\n3", false, false)
+            .unwrap_err()
+            .contains("truncated"));
+        assert!(read("a,b\n1,\"x", false, false)
+            .unwrap_err()
+            .contains("quoted"));
+        // A last row without a line end but with every field is whole.
+        assert_eq!(
+            read("a,b\n1,2", false, false).unwrap().unwrap().rows.len(),
+            1
+        );
+        assert_eq!(
+            read("a,b\n1\n", false, false).unwrap().unwrap().rows[0].len(),
+            1
+        );
+    }
 
     #[test]
     fn quoting_is_rfc4180_and_round_trips() {

@@ -4,6 +4,7 @@
 
 pub mod csv;
 pub mod interrupt;
+pub mod json;
 pub mod provenance;
 
 use std::io::{BufWriter, Write};

@@ -127,6 +127,35 @@ fn png_header(w: u32, h: u32) -> Vec<u8> {
     b
 }
 
+/// A 64 x 64 test image encoded in the format of extension `ext` by the image crate.
+fn encoded(ext: &str) -> Vec<u8> {
+    let img = image::Rgb32FImage::from_fn(64, 64, |x, y| {
+        image::Rgb([x as f32 / 64.0, y as f32 / 64.0, ((x ^ y) & 7) as f32 / 8.0])
+    });
+    let img = image::DynamicImage::ImageRgb32F(img);
+    let img = match ext {
+        "exr" | "hdr" => img,
+        _ => image::DynamicImage::ImageRgb8(img.to_rgb8()),
+    };
+    let mut out = std::io::Cursor::new(Vec::new());
+    img.write_to(&mut out, image::ImageFormat::from_extension(ext).unwrap())
+        .unwrap();
+    out.into_inner()
+}
+
+/// The first half of `b`.
+fn half(mut b: Vec<u8>) -> Vec<u8> {
+    b.truncate(b.len() / 2);
+    b
+}
+
+/// `b` with one bit flipped in its middle.
+fn flipped(mut b: Vec<u8>) -> Vec<u8> {
+    let i = b.len() / 2;
+    b[i] ^= 0x10;
+    b
+}
+
 /// CRC-32 of PNG chunks (ISO 3309, as the PNG specification's annex D gives it).
 fn crc32(data: &[u8]) -> u32 {
     let mut c = 0xffff_ffffu32;
@@ -308,6 +337,37 @@ fn graph_cases() -> Vec<Case> {
             vec!["'x'", "exec"],
         ),
         graph_case("not UTF-8", "\u{0}", vec!["graph.json"]),
+        graph_case(
+            "the same node id twice",
+            "{\"format\": \"cgnodes-graph\", \"version\": 1, \"nodes\": {\n\"a\": {\"type\": \"value_float\"},\n\"a\": {\"type\": \"value_int\"}\n}}",
+            vec!["graph.json:3:", "duplicate key 'a'"],
+        ),
+        graph_case(
+            "the same param twice",
+            &g(r#""a": {"type": "value_float", "params": {"value": 1, "value": 2}},
+                  "p": {"type": "print", "inputs": {"value": "a.value"}}"#),
+            vec!["graph.json", "duplicate key 'value'"],
+        ),
+        graph_case(
+            "two nodes in a cycle and nothing that writes",
+            &g(r#""a": {"type": "math", "inputs": {"a": "b.value"}},
+                  "b": {"type": "math", "inputs": {"a": "a.value"}}"#),
+            vec!["nothing to run"],
+        ),
+        Case {
+            args: args(&["validate", "graph.json"]),
+            ..graph_case(
+                "validate: a cycle no output needs",
+                &g(r#""a": {"type": "math", "inputs": {"a": "b.value"}},
+                      "b": {"type": "math", "inputs": {"a": "a.value"}}"#),
+                vec!["graph.json", "cycle"],
+            )
+        },
+        graph_case(
+            "nothing writes, prints or is a target",
+            &g(r#""a": {"type": "value_float"}"#),
+            vec!["nothing to run: no node writes a file; name a --target"],
+        ),
     ]
 }
 
@@ -388,6 +448,8 @@ fn mesh_cases() -> Vec<Case> {
         mesh_case("OBJ empty file", "obj", "in.obj", Vec::new(), "no faces"),
         mesh_case("OBJ binary garbage", "obj", "in.obj", (0..=255u8).cycle().take(4096).collect(), "in.obj"),
         mesh_case("OBJ two-corner face", "obj", "in.obj", t("v 0 0 0\nv 1 0 0\nf 1 2\n"), "line 3"),
+        mesh_case("OBJ cut inside its last vertex", "obj", "in.obj", t("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nv 1 1"), "line 5"),
+        mesh_case("USDA cut in half", "usda", "in.usda", t("#usda 1.0\ndef Mesh \"m\" {\n    point3f[] points = [(0, 0, 0), (1, 0, 0), (0, 1"), "in.usda"),
         Case {
             files: vec![
                 ("in.obj", t("v 0 0 0\nv 1 0 0\nv 0 1 0\ng a\nf 1 2 3\n")),
@@ -629,12 +691,65 @@ fn file_cases() -> Vec<Case> {
         ),
         image("text named .png", "in.png", b"hello".to_vec(), "in.png"),
         image(
+            "PNG cut after 120 bytes",
+            "in.png",
+            encoded("png")[..120].to_vec(),
+            "truncated PNG",
+        ),
+        image(
+            "PNG with a flipped byte in its pixel data",
+            "in.png",
+            flipped(encoded("png")),
+            "CRC",
+        ),
+        image(
+            "JPEG cut inside its scan",
+            "in.jpg",
+            half(encoded("jpg")),
+            "truncated JPEG",
+        ),
+        image(
+            "GIF without its trailer",
+            "in.gif",
+            {
+                let mut b = encoded("gif");
+                b.pop();
+                b
+            },
+            "truncated GIF",
+        ),
+        image(
+            "BMP cut inside its pixels",
+            "in.bmp",
+            half(encoded("bmp")),
+            "truncated BMP",
+        ),
+        image("EXR cut in half", "in.exr", half(encoded("exr")), "in.exr"),
+        image("HDR cut in half", "in.hdr", half(encoded("hdr")), "in.hdr"),
+        image(
             "unknown image extension",
             "in.tga2",
             b"hello".to_vec(),
             "in.tga2",
         ),
     ];
+    v.push(Case {
+        name: "CSV cut inside its last row",
+        reader: "csv",
+        files: vec![
+            ("in.csv", b"x,y\n0,1\n1,2\n2".to_vec()),
+            (
+                "graph.json",
+                graph(
+                    r#""t": {"type": "table_load", "params": {"path": "in.csv"}},
+                       "p": {"type": "print", "inputs": {"value": "t.table"}}"#,
+                ),
+            ),
+        ],
+        args: run_args(),
+        exit: 1,
+        expect: vec!["'t' (table_load)", "in.csv", "truncated CSV"],
+    });
     // compare_series takes a table; a float link is refused by type before any file is read.
     v.push(series(
         "compare_series fed a float",

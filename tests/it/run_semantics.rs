@@ -200,15 +200,65 @@ fn a_missing_file_in_an_unused_branch_is_a_warning() {
         "{err}"
     );
     assert!(!err.contains("error"), "{err}");
-    // The graph's own outputs choose the branch the same way, for run and validate.
+    // The graph's own outputs choose the branch the same way for run. `validate` checks
+    // every node (issue 56): the unused branch's missing file is an error there, and a
+    // warning only when `--target` names the branch that is used.
     std::fs::write(
         d.path().join("o.json"),
         BRANCHES.replace("OUTPUTS", r#", "outputs": ["w"]"#),
     )
     .unwrap();
-    let o = cgnodes(d.path(), &["validate", "o.json"]);
+    let o = cgnodes(d.path(), &["run", "o.json", "--out", "out2"]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     assert!(stderr(&o).contains("warning: "), "{}", stderr(&o));
+    let o = cgnodes(d.path(), &["validate", "o.json"]);
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("node 'm' (mesh_load): input 'path': file"),
+        "{}",
+        stderr(&o)
+    );
+    let o = cgnodes(d.path(), &["validate", "o.json", "--target", "w"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(stderr(&o).contains("warning: "), "{}", stderr(&o));
+}
+
+/// Two nodes that read each other and nothing that writes (issue 56).
+const CYCLE: &str = r#"{"format": "cgnodes-graph", "version": 1, "nodes": {
+    "a": {"type": "math", "inputs": {"a": "b.value"}},
+    "b": {"type": "math", "inputs": {"a": "a.value"}}
+}}"#;
+
+#[test]
+fn validate_reports_a_cycle_that_no_output_needs() {
+    let d = tempfile::tempdir().unwrap();
+    std::fs::write(d.path().join("g.json"), CYCLE).unwrap();
+    let o = cgnodes(d.path(), &["validate", "g.json"]);
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    assert!(stderr(&o).contains("cycle"), "{}", stderr(&o));
+    let o = cgnodes(d.path(), &["run", "g.json", "--out", "out"]);
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+}
+
+#[test]
+fn run_with_nothing_that_writes_says_so() {
+    let d = tempfile::tempdir().unwrap();
+    let g = r#"{"format": "cgnodes-graph", "version": 1, "nodes": {
+        "x": {"type": "value_float", "params": {"value": 2.5}}
+    }}"#;
+    std::fs::write(d.path().join("g.json"), g).unwrap();
+    let o = cgnodes(d.path(), &["run", "g.json", "--out", "out"]);
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("nothing to run: no node writes a file; name a --target"),
+        "{}",
+        stderr(&o)
+    );
+    let o = cgnodes(
+        d.path(),
+        &["run", "g.json", "--out", "out", "--target", "x"],
+    );
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
 }
 
 #[test]

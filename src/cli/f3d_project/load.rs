@@ -37,8 +37,8 @@ pub(super) fn load_project_graph(
     if text.trim().is_empty() {
         return Ok(ProjectGraph::Empty);
     }
-    let raw: serde_json::Value =
-        serde_json::from_str(&text).map_err(|e| format!("{}: not JSON: {e}", file.display()))?;
+    let raw: serde_json::Value = crate::io::json::parse_strict(&text)
+        .map_err(|e| format!("{}: not JSON: {e}", file.display()))?;
     if raw.is_null() {
         return Ok(ProjectGraph::Empty);
     }

@@ -1,43 +1,22 @@
 //! cgnodes: a node-graph batch executor for computer graphics.
 //!
-//! A graph is a JSON file of typed nodes and links (`graph`); it is checked against the
-//! node registry (`validate`), planned over the nodes the requested outputs need, and run
-//! in parallel with caching (`exec`). Built-in nodes live in `nodes`, one file per node or
-//! small family; each node's algorithm is a plain function callable without the runtime.
-//!
-//! Modules depend only on earlier ones, in this order: `io`, `types`, `node`, `registry`,
-//! `plugin` (adds external nodes to a registry), `graph::format`, `f3d` (imports Framework3D
-//! trees against a registry), `graph::load` and `graph::overrides`, `validate`, `cache`,
-//! `exec`, `chart`, `shard`, `sweep`, `sweep_merge`, `report`, `cli`. The built-in nodes (`nodes`) use only `io`, `types`,
-//! `node` and `registry`; `nodes::builtin_registry()` assembles them.
+//! This crate is the facade users build and run (as Bevy's `bevy` is over its crates): the
+//! command line (`cli`), and a registry of the built-in node families that its cargo features
+//! turn on (`nodes::builtin_registry`). The layers live in their own crates and are
+//! re-exported here under their usual paths:
+//! - `cgnodes_api` (`types`, `node`, `registry`, `io`, `rng`, `prelude`): what a node needs;
+//!   plugin crates depend on it alone.
+//! - `cgnodes_runtime` (`graph`, `validate`, `cache`, `exec`, `plugin`, `f3d`, `report`,
+//!   `chart`, `shard`, `sweep`, `sweep_merge`): the runtime, which knows no node.
+//! - one crate per node family (`nodes::mesh`, `nodes::param`, ...), each on the API alone
+//!   plus the shared crates `cgnodes_formats`, `cgnodes_geometry`, `cgnodes_linalg`,
+//!   `cgnodes_nn`.
 
-pub mod cache;
-pub mod chart;
 pub mod cli;
-pub mod exec;
-pub mod f3d;
 pub mod fuzz;
-pub mod graph;
-pub mod io;
-pub mod node;
-pub mod plugin;
-pub mod registry;
-pub mod report;
-pub mod shard;
-pub mod sweep;
-pub mod sweep_merge;
-pub mod types;
-pub mod validate;
-
-#[path = "../nodes/mod.rs"]
 pub mod nodes;
 
-/// Everything a node file needs.
-pub mod prelude {
-    pub use crate::node::{
-        Choice, ErrorKind, ExecContext, FileEnv, NodeBuilder, NodeDecl, NodeError,
-    };
-    pub use crate::registry::Registry;
-    pub use crate::types::*;
-    pub use std::sync::Arc;
-}
+pub use cgnodes_api::{io, node, prelude, registry, rng, types};
+pub use cgnodes_runtime::{
+    cache, chart, exec, f3d, graph, plugin, report, shard, sweep, sweep_merge, validate,
+};

@@ -5,7 +5,7 @@
 //! vertices; here the time is an input (link the frame's time to it) and the work is `skin`'s.
 
 use super::skin::{skin_mesh, SkinMethod};
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
 
 fn declare(b: &mut NodeBuilder) {
     b.doc("Framework3D's Animate Mesh: a UsdSkel-bound mesh skinned (LBS) at a USD time code.");

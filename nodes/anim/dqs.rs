@@ -8,7 +8,7 @@
 //! skeleton placement after, as in `lbs`.
 
 use super::lbs::Influences;
-use crate::nodes::mesh::usda::transform::Mat4;
+use cgnodes_formats::usda::transform::Mat4;
 use nalgebra::{
     DualQuaternion, Matrix3, Point3, Quaternion, Rotation3, RowVector3, Translation3,
     UnitDualQuaternion, UnitQuaternion, Vector3,
@@ -46,7 +46,11 @@ fn blend(v: usize, inf: &Influences, dq: &[DualQuaternion<f64>]) -> UnitDualQuat
         }
         let q = &dq[inf.indices[e] as usize];
         let p = *pivot.get_or_insert(q.real);
-        let s = if p.coords.dot(&q.real.coords) < 0.0 { -w } else { w };
+        let s = if p.coords.dot(&q.real.coords) < 0.0 {
+            -w
+        } else {
+            w
+        };
         b.real += q.real * s;
         b.dual += q.dual * s;
     }
@@ -105,7 +109,11 @@ pub fn dqs(
         .with_min_len(2048)
         .enumerate()
         .for_each(|(v, o)| {
-            let p = if g_id { points[v] } else { row_apply(geom_bind, points[v]) };
+            let p = if g_id {
+                points[v]
+            } else {
+                row_apply(geom_bind, points[v])
+            };
             let q = blend(v, inf, &dq);
             let r = q.transform_point(&Point3::new(p[0], p[1], p[2]));
             let r = [r.x, r.y, r.z];
@@ -123,10 +131,16 @@ pub fn dqs(
                 let v = vertex_of.map_or(i, |m| m[i] as usize);
                 let n = RowVector3::from(ns[i]) * g;
                 let q = blend(v, inf, &dq);
-                let r = q.rotation().transform_vector(&Vector3::new(n[0], n[1], n[2]));
+                let r = q
+                    .rotation()
+                    .transform_vector(&Vector3::new(n[0], n[1], n[2]));
                 let r = RowVector3::new(r.x, r.y, r.z) * w;
                 let len = r.norm();
-                *o = if len > 0.0 { [r[0] / len, r[1] / len, r[2] / len] } else { ns[i] };
+                *o = if len > 0.0 {
+                    [r[0] / len, r[1] / len, r[2] / len]
+                } else {
+                    ns[i]
+                };
             });
         out
     });
@@ -136,14 +150,18 @@ pub fn dqs(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::nodes::anim::lbs::{joint_matrices, lbs_points};
-    use crate::nodes::anim::pose::make_transform;
+    use crate::lbs::{joint_matrices, lbs_points};
+    use crate::pose::make_transform;
 
     #[test]
     fn one_rigid_joint_equals_lbs() {
         let (s, c) = (0.3f64.sin(), 0.3f64.cos());
         let m = make_transform([1.0, -2.0, 0.5], [c, 0.0, s, 0.0], [1.0; 3]);
-        let inf = Influences { count: 1, indices: &[0, 0], weights: &[1.0, 1.0] };
+        let inf = Influences {
+            count: 1,
+            indices: &[0, 0],
+            weights: &[1.0, 1.0],
+        };
         let pts = [[0.3, 0.4, 0.5], [-1.0, 2.0, 3.0]];
         let id = Mat4::identity();
         let (d, _, off) = dqs(&pts, None, &inf, &id, &[m], &id);
@@ -162,7 +180,11 @@ mod tests {
         // the axis, DQS turns it by 90 degrees and keeps radius 1 (Kavan et al., Fig. 2).
         let id = Mat4::identity();
         let half = make_transform([0.0; 3], [0.0, 0.0, 0.0, 1.0], [1.0; 3]);
-        let inf = Influences { count: 2, indices: &[0, 1], weights: &[0.5, 0.5] };
+        let inf = Influences {
+            count: 2,
+            indices: &[0, 1],
+            weights: &[0.5, 0.5],
+        };
         let (d, _, _) = dqs(&[[1.0, 0.0, 0.0]], None, &inf, &id, &[id, half], &id);
         let l = lbs_points(&[[1.0, 0.0, 0.0]], &inf, &[id, half]);
         let r = |p: [f64; 3]| (p[0] * p[0] + p[1] * p[1]).sqrt();

@@ -6,7 +6,7 @@
 //! of the linear parts (`UsdSkelSkinNormalsLBS`) and renormalized. Also the shared input
 //! checks of both skinning methods (`check_influences`, `normalize_weights`).
 
-use crate::nodes::mesh::usda::transform::Mat4;
+use cgnodes_formats::usda::transform::Mat4;
 use nalgebra::Matrix3;
 use rayon::prelude::*;
 
@@ -15,7 +15,11 @@ use rayon::prelude::*;
 pub enum SkinError {
     /// A joint index beyond the skeleton.
     #[error("vertex {vertex} refers to joint {index}, but the skeleton has {count} joints")]
-    JointOutOfRange { vertex: usize, index: u32, count: usize },
+    JointOutOfRange {
+        vertex: usize,
+        index: u32,
+        count: usize,
+    },
     /// Indices and weights of different lengths, or not `influences` per vertex.
     #[error("{indices} joint indices and {weights} weights for {vertices} vertices with {influences} influences each")]
     Lengths {
@@ -50,10 +54,7 @@ pub fn check_influences(
     num_joints: usize,
 ) -> Result<(), SkinError> {
     let want = num_vertices.checked_mul(inf.count);
-    if inf.count == 0
-        || want != Some(inf.indices.len())
-        || inf.indices.len() != inf.weights.len()
-    {
+    if inf.count == 0 || want != Some(inf.indices.len()) || inf.indices.len() != inf.weights.len() {
         return Err(SkinError::Lengths {
             indices: inf.indices.len(),
             weights: inf.weights.len(),
@@ -186,27 +187,49 @@ mod tests {
         a[(3, 0)] = 2.0;
         let mut b = Mat4::identity();
         b[(3, 1)] = 4.0;
-        let inf = Influences { count: 2, indices: &[0, 1], weights: &[0.5, 0.5] };
+        let inf = Influences {
+            count: 2,
+            indices: &[0, 1],
+            weights: &[0.5, 0.5],
+        };
         let p = lbs_points(&[[1.0, 1.0, 1.0]], &inf, &[a, b]);
         assert_eq!(p[0], [2.0, 3.0, 1.0]);
     }
 
     #[test]
     fn bad_indices_and_lengths_are_errors() {
-        let inf = Influences { count: 2, indices: &[0, 3], weights: &[0.5, 0.5] };
+        let inf = Influences {
+            count: 2,
+            indices: &[0, 3],
+            weights: &[0.5, 0.5],
+        };
         assert!(matches!(
             check_influences(&inf, 1, 2),
-            Err(SkinError::JointOutOfRange { vertex: 0, index: 3, count: 2 })
+            Err(SkinError::JointOutOfRange {
+                vertex: 0,
+                index: 3,
+                count: 2
+            })
         ));
-        let inf = Influences { count: 2, indices: &[0, 1], weights: &[1.0] };
-        assert!(matches!(check_influences(&inf, 1, 2), Err(SkinError::Lengths { .. })));
+        let inf = Influences {
+            count: 2,
+            indices: &[0, 1],
+            weights: &[1.0],
+        };
+        assert!(matches!(
+            check_influences(&inf, 1, 2),
+            Err(SkinError::Lengths { .. })
+        ));
     }
 
     #[test]
     fn weights_are_normalized_and_counted() {
         let (w, n) = normalize_weights(2, &[1.0, 1.0, 0.25, 0.75]).unwrap();
         assert_eq!((w, n), (vec![0.5, 0.5, 0.25, 0.75], 1));
-        assert!(matches!(normalize_weights(2, &[0.0, 0.0]), Err(SkinError::ZeroWeights(0, _))));
+        assert!(matches!(
+            normalize_weights(2, &[0.0, 0.0]),
+            Err(SkinError::ZeroWeights(0, _))
+        ));
     }
 
     #[test]
@@ -218,7 +241,11 @@ mod tests {
         r[(1, 0)] = -1.0;
         r[(1, 1)] = 0.0;
         r[(3, 2)] = 5.0;
-        let inf = Influences { count: 1, indices: &[0], weights: &[1.0] };
+        let inf = Influences {
+            count: 1,
+            indices: &[0],
+            weights: &[1.0],
+        };
         let n = lbs_normals(&[[1.0, 0.0, 0.0]], None, &inf, &[r]).unwrap();
         assert!((n[0][1] - 1.0).abs() < 1e-15 && n[0][0].abs() < 1e-15);
     }

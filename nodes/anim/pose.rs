@@ -5,9 +5,9 @@
 //! (`skel_j = local_j * skel_parent`), and skinning transforms `inverse(bind_j) * skel_j`.
 //! Matrices are USD's row-vector convention (`p' = p * M`), as `nodes::mesh::usda::transform`.
 
-use crate::nodes::mesh::usda::skel::from_rows;
-use crate::nodes::mesh::usda::transform::Mat4;
-use crate::types::{Skeleton, Track};
+use cgnodes_api::types::{Skeleton, Track};
+use cgnodes_formats::usda::skel::from_rows;
+use cgnodes_formats::usda::transform::Mat4;
 
 /// Why a pose cannot be computed.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -71,7 +71,10 @@ pub fn gf_slerp(alpha: f64, q0: [f64; 4], q1: [f64; 4]) -> [f64; 4] {
     let (s0, mut s1) = if 1.0 - cos > 1e-5 {
         let theta = cos.acos();
         let sin = theta.sin();
-        (((1.0 - alpha) * theta).sin() / sin, (alpha * theta).sin() / sin)
+        (
+            ((1.0 - alpha) * theta).sin() / sin,
+            (alpha * theta).sin() / sin,
+        )
     } else {
         (1.0 - alpha, alpha)
     };
@@ -100,9 +103,21 @@ pub fn sample_rotations(t: &Track<[f64; 4]>, time: f64) -> Vec<[f64; 4]> {
 pub fn make_transform(t: [f64; 3], q: [f64; 4], s: [f64; 3]) -> Mat4 {
     let (r, i, j, k) = (q[0], q[1], q[2], q[3]);
     let rot = [
-        [1.0 - 2.0 * (j * j + k * k), 2.0 * (i * j + k * r), 2.0 * (k * i - j * r)],
-        [2.0 * (i * j - k * r), 1.0 - 2.0 * (k * k + i * i), 2.0 * (j * k + i * r)],
-        [2.0 * (k * i + j * r), 2.0 * (j * k - i * r), 1.0 - 2.0 * (j * j + i * i)],
+        [
+            1.0 - 2.0 * (j * j + k * k),
+            2.0 * (i * j + k * r),
+            2.0 * (k * i - j * r),
+        ],
+        [
+            2.0 * (i * j - k * r),
+            1.0 - 2.0 * (k * k + i * i),
+            2.0 * (j * k + i * r),
+        ],
+        [
+            2.0 * (k * i + j * r),
+            2.0 * (j * k - i * r),
+            1.0 - 2.0 * (j * j + i * i),
+        ],
     ];
     let mut m = Mat4::identity();
     for a in 0..3 {
@@ -190,7 +205,7 @@ pub fn skinning_transforms(skel: &Skeleton, time: f64) -> Result<Vec<Mat4>, Pose
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::types::{Joint, SkelAnimation, IDENTITY_MATRIX};
+    use cgnodes_api::types::{Joint, SkelAnimation, IDENTITY_MATRIX};
 
     fn two_joints() -> Skeleton {
         let mut up = IDENTITY_MATRIX;
@@ -198,8 +213,18 @@ mod tests {
         Skeleton {
             prim: "/S".into(),
             joints: vec![
-                Joint { path: "A".into(), parent: None, bind: IDENTITY_MATRIX, rest: IDENTITY_MATRIX },
-                Joint { path: "A/B".into(), parent: Some(0), bind: up, rest: up },
+                Joint {
+                    path: "A".into(),
+                    parent: None,
+                    bind: IDENTITY_MATRIX,
+                    rest: IDENTITY_MATRIX,
+                },
+                Joint {
+                    path: "A/B".into(),
+                    parent: Some(0),
+                    bind: up,
+                    rest: up,
+                },
             ],
             animation: None,
         }
@@ -248,8 +273,14 @@ mod tests {
         s.animation = Some(SkelAnimation {
             prim: "/S/Anim".into(),
             joints: vec![0],
-            translations: Track { times: vec![], values: vec![vec![[0.0; 3]]] },
-            rotations: Track { times: vec![], values: vec![vec![[h, h, 0.0, 0.0]]] },
+            translations: Track {
+                times: vec![],
+                values: vec![vec![[0.0; 3]]],
+            },
+            rotations: Track {
+                times: vec![],
+                values: vec![vec![[h, h, 0.0, 0.0]]],
+            },
             scales: None,
         });
         let x = skel_transforms(&s, 0.0).unwrap();

@@ -1,8 +1,8 @@
 //! `skeleton_load`: reads a UsdSkel `Skeleton` prim (joints, bind and rest transforms) and
 //! its bound `SkelAnimation` from a `.usda` file.
 
-use crate::nodes::mesh::usda::{parse_usda, read_skeleton};
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
+use cgnodes_formats::usda::{parse_usda, read_skeleton};
 use std::path::Path;
 
 /// Reads the Skeleton at `prim` (the first one when empty) from the `.usda` file at `path`.
@@ -29,7 +29,9 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let prim: String = ctx.input("prim")?;
     let path = ctx.input_path(&p);
     if !path.exists() {
-        return Err(NodeError::new(ErrorKind::Io, format!("{}: file not found", path.display())).at("path"));
+        return Err(
+            NodeError::new(ErrorKind::Io, format!("{}: file not found", path.display())).at("path"),
+        );
     }
     let socket = if prim.is_empty() { "path" } else { "prim" };
     let skel = load_skeleton(&path, &prim).map_err(|e| NodeError::invalid(socket, e))?;

@@ -2,13 +2,13 @@
 //! of its bones (one thin box from each joint's parent to the joint) for looking at.
 
 use super::pose::skel_transforms;
-use crate::nodes::mesh::usda::transform::Mat4;
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
+use cgnodes_formats::usda::transform::Mat4;
 
 /// Thin boxes from each joint's parent origin to its origin (skeleton space), `width` times
 /// the bone's length across; zero-length bones are skipped.
 pub fn bones_mesh(skel: &Skeleton, xf: &[Mat4], width: f64) -> Mesh {
-    use crate::types::vec3::*;
+    use cgnodes_api::types::vec3::*;
     let origin = |m: &Mat4| [m[(3, 0)], m[(3, 1)], m[(3, 2)]];
     let mut pos = Vec::new();
     let mut counts = Vec::new();
@@ -22,7 +22,11 @@ pub fn bones_mesh(skel: &Skeleton, xf: &[Mat4], width: f64) -> Mesh {
             continue;
         }
         let t = scale(d, 1.0 / len);
-        let helper = if t[0].abs() < 0.9 { [1.0, 0.0, 0.0] } else { [0.0, 1.0, 0.0] };
+        let helper = if t[0].abs() < 0.9 {
+            [1.0, 0.0, 0.0]
+        } else {
+            [0.0, 1.0, 0.0]
+        };
         let u = unit(cross(t, helper));
         let v = cross(t, u);
         let h = 0.5 * width * len;
@@ -33,7 +37,14 @@ pub fn bones_mesh(skel: &Skeleton, xf: &[Mat4], width: f64) -> Mesh {
             }
         }
         // Outward-facing quads: the two caps, then the four sides.
-        let quads = [[0, 3, 2, 1], [4, 5, 6, 7], [0, 1, 5, 4], [1, 2, 6, 5], [2, 3, 7, 6], [3, 0, 4, 7]];
+        let quads = [
+            [0, 3, 2, 1],
+            [4, 5, 6, 7],
+            [0, 1, 5, 4],
+            [1, 2, 6, 5],
+            [2, 3, 7, 6],
+            [3, 0, 4, 7],
+        ];
         for q in quads {
             counts.push(4);
             idx.extend(q.iter().map(|&k| base + k));
@@ -45,7 +56,13 @@ pub fn bones_mesh(skel: &Skeleton, xf: &[Mat4], width: f64) -> Mesh {
 /// The joint transforms as a table: `joint`, `parent` (-1 for a root), the origin `x y z`,
 /// and the 16 entries `m00 .. m33` of each skeleton-space matrix (USD rows).
 pub fn pose_table(skel: &Skeleton, xf: &[Mat4]) -> Table {
-    let mut names: Vec<String> = vec!["joint".into(), "parent".into(), "x".into(), "y".into(), "z".into()];
+    let mut names: Vec<String> = vec![
+        "joint".into(),
+        "parent".into(),
+        "x".into(),
+        "y".into(),
+        "z".into(),
+    ];
     for r in 0..4 {
         for c in 0..4 {
             names.push(format!("m{r}{c}"));
@@ -54,7 +71,13 @@ pub fn pose_table(skel: &Skeleton, xf: &[Mat4]) -> Table {
     let refs: Vec<&str> = names.iter().map(|s| s.as_str()).collect();
     let mut t = Table::with_columns(&refs);
     for (j, (joint, m)) in skel.joints.iter().zip(xf).enumerate() {
-        let mut row = vec![j as f64, joint.parent.map_or(-1.0, |p| p as f64), m[(3, 0)], m[(3, 1)], m[(3, 2)]];
+        let mut row = vec![
+            j as f64,
+            joint.parent.map_or(-1.0, |p| p as f64),
+            m[(3, 0)],
+            m[(3, 1)],
+            m[(3, 2)],
+        ];
         for r in 0..4 {
             for c in 0..4 {
                 row.push(m[(r, c)]);
@@ -62,7 +85,14 @@ pub fn pose_table(skel: &Skeleton, xf: &[Mat4]) -> Table {
         }
         t.push_row(&row);
     }
-    t.meta.insert("joints".into(), skel.joints.iter().map(|j| j.path.as_str()).collect::<Vec<_>>().join(" "));
+    t.meta.insert(
+        "joints".into(),
+        skel.joints
+            .iter()
+            .map(|j| j.path.as_str())
+            .collect::<Vec<_>>()
+            .join(" "),
+    );
     t
 }
 
@@ -85,9 +115,13 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let time: f64 = ctx.input("time")?;
     let width: f64 = ctx.input("width")?;
     if !time.is_finite() {
-        return Err(NodeError::invalid("time", format!("time {time} is not finite")));
+        return Err(NodeError::invalid(
+            "time",
+            format!("time {time} is not finite"),
+        ));
     }
-    let xf = skel_transforms(&skel, time).map_err(|e| NodeError::invalid("skeleton", e.to_string()))?;
+    let xf =
+        skel_transforms(&skel, time).map_err(|e| NodeError::invalid("skeleton", e.to_string()))?;
     ctx.set_output("transforms", pose_table(&skel, &xf));
     ctx.set_output("bones", bones_mesh(&skel, &xf, width));
     Ok(())
@@ -101,7 +135,7 @@ pub fn register(r: &mut Registry) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::types::{Joint, IDENTITY_MATRIX};
+    use cgnodes_api::types::{Joint, IDENTITY_MATRIX};
 
     #[test]
     fn one_box_per_bone_spanning_the_bone() {
@@ -110,8 +144,18 @@ mod tests {
         let s = Skeleton {
             prim: "/S".into(),
             joints: vec![
-                Joint { path: "A".into(), parent: None, bind: IDENTITY_MATRIX, rest: IDENTITY_MATRIX },
-                Joint { path: "A/B".into(), parent: Some(0), bind: up, rest: up },
+                Joint {
+                    path: "A".into(),
+                    parent: None,
+                    bind: IDENTITY_MATRIX,
+                    rest: IDENTITY_MATRIX,
+                },
+                Joint {
+                    path: "A/B".into(),
+                    parent: Some(0),
+                    bind: up,
+                    rest: up,
+                },
             ],
             animation: None,
         };
@@ -121,7 +165,10 @@ mod tests {
         let zs: Vec<f64> = m.positions.iter().map(|p| p[2]).collect();
         assert_eq!(zs.iter().cloned().fold(f64::MAX, f64::min), 0.0);
         assert_eq!(zs.iter().cloned().fold(f64::MIN, f64::max), 2.0);
-        assert!(m.positions.iter().all(|p| p[0].abs() <= 0.1 + 1e-12 && p[1].abs() <= 0.1 + 1e-12));
+        assert!(m
+            .positions
+            .iter()
+            .all(|p| p[0].abs() <= 0.1 + 1e-12 && p[1].abs() <= 0.1 + 1e-12));
         let t = pose_table(&s, &xf);
         assert_eq!(t.column("z").unwrap(), &[0.0, 2.0]);
         assert_eq!(t.column("parent").unwrap(), &[-1.0, 0.0]);

@@ -3,10 +3,12 @@
 //! posed by another skeleton with the same joints.
 
 use super::dqs::dqs;
-use super::lbs::{check_influences, joint_matrices, lbs_normals, lbs_points, normalize_weights, Influences};
+use super::lbs::{
+    check_influences, joint_matrices, lbs_normals, lbs_points, normalize_weights, Influences,
+};
 use super::pose::skinning_transforms;
-use crate::nodes::mesh::usda::skel::from_rows;
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
+use cgnodes_formats::usda::skel::from_rows;
 
 /// The skinning method.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -18,7 +20,8 @@ pub enum SkinMethod {
 }
 
 impl Choice for SkinMethod {
-    const CHOICES: &'static [(&'static str, Self)] = &[("lbs", SkinMethod::Lbs), ("dqs", SkinMethod::Dqs)];
+    const CHOICES: &'static [(&'static str, Self)] =
+        &[("lbs", SkinMethod::Lbs), ("dqs", SkinMethod::Dqs)];
 }
 
 /// A skinned mesh and what the caller should be warned about.
@@ -47,7 +50,10 @@ pub fn skin_mesh(
     })?;
     let mesh_err = |e: String| NodeError::invalid("mesh", format!("Mesh '{}': {e}", bind.prim));
     if !time.is_finite() {
-        return Err(NodeError::invalid("time", format!("time {time} is not finite")));
+        return Err(NodeError::invalid(
+            "time",
+            format!("time {time} is not finite"),
+        ));
     }
     let (skel, socket) = match skeleton {
         Some(s) => (s, "skeleton"),
@@ -86,7 +92,8 @@ pub fn skin_mesh(
         weights: &weights,
         ..inf
     };
-    let xf = skinning_transforms(skel, time).map_err(|e| NodeError::invalid(socket, e.to_string()))?;
+    let xf =
+        skinning_transforms(skel, time).map_err(|e| NodeError::invalid(socket, e.to_string()))?;
     let g = from_rows(&bind.geom_bind);
     let w = from_rows(&bind.skel_to_world);
     let mut out = mesh.clone();
@@ -110,7 +117,8 @@ pub fn skin_mesh(
             let m = joint_matrices(&g, &xf, &w);
             out.positions = lbs_points(&mesh.positions, &inf, &m);
             if let (Some((ns, map)), Some(a)) = (normals, out.normals.as_mut()) {
-                a.values = lbs_normals(ns, map, &inf, &m).map_err(|e| NodeError::invalid(socket, e.to_string()))?;
+                a.values = lbs_normals(ns, map, &inf, &m)
+                    .map_err(|e| NodeError::invalid(socket, e.to_string()))?;
             }
         }
         SkinMethod::Dqs => {
@@ -127,24 +135,35 @@ pub fn skin_mesh(
             }
         }
     }
-    if let Some(i) = out.positions.iter().position(|p| p.iter().any(|x| !x.is_finite())) {
-        return Err(NodeError::invalid(socket, format!("the skinned vertex {i} is not finite")));
+    if let Some(i) = out
+        .positions
+        .iter()
+        .position(|p| p.iter().any(|x| !x.is_finite()))
+    {
+        return Err(NodeError::invalid(
+            socket,
+            format!("the skinned vertex {i} is not finite"),
+        ));
     }
-    Ok(Skinned { mesh: out, warnings })
+    Ok(Skinned {
+        mesh: out,
+        warnings,
+    })
 }
 
 fn declare(b: &mut NodeBuilder) {
     b.doc("Skins a UsdSkel-bound mesh at a time code by linear blend or dual-quaternion skinning.");
     b.add_input::<Mesh>("mesh")
         .doc("A mesh with a skeleton binding (mesh_load of a UsdSkel .usda).");
-    b.add_input::<Skeleton>("skeleton")
-        .optional()
-        .doc("Poses the mesh instead of its bound skeleton (same joints); unlinked: the bound one.");
+    b.add_input::<Skeleton>("skeleton").optional().doc(
+        "Poses the mesh instead of its bound skeleton (same joints); unlinked: the bound one.",
+    );
     b.add_input::<f64>("time")
         .default(0.0)
         .doc("USD time code; outside the animation's samples the ends are held.");
-    b.add_choice::<SkinMethod>("method")
-        .doc("lbs: linear blend skinning; dqs: dual-quaternion skinning (keeps volume under twist).");
+    b.add_choice::<SkinMethod>("method").doc(
+        "lbs: linear blend skinning; dqs: dual-quaternion skinning (keeps volume under twist).",
+    );
     b.add_output::<Mesh>("mesh");
 }
 

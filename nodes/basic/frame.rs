@@ -1,6 +1,6 @@
 //! `frame`: the current frame number, for animating parameters over `--frames`.
 
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
 
 fn declare(b: &mut NodeBuilder) {
     b.doc("The current frame number (0 unless the graph is run with --frames).");

@@ -1,6 +1,6 @@
 //! `math`: a binary operation on two numbers.
 
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
 
 /// The operations `math` offers.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -2,7 +2,7 @@
 //! file or a table: the course's `x y` curve files and `x y label` insect files.
 
 use super::table_load::{load_table_file, Header};
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
 
 /// Finds a column by header name, else by 0-based index (`"2"`).
 pub fn find_column<'t>(t: &'t Table, key: &str) -> Result<&'t [f64], String> {
@@ -44,17 +44,17 @@ pub fn integer_labels(col: &[f64]) -> Result<Vec<i64>, String> {
 }
 
 /// Points from columns `x` and `y` of `t`, with labels from column `label` when given.
-pub fn table_points(
-    t: &Table,
-    x: &str,
-    y: &str,
-) -> Result<Vec<[f64; 2]>, (&'static str, String)> {
+pub fn table_points(t: &Table, x: &str, y: &str) -> Result<Vec<[f64; 2]>, (&'static str, String)> {
     let xs = find_column(t, x).map_err(|e| ("x_column", e))?;
     let ys = find_column(t, y).map_err(|e| ("y_column", e))?;
     if xs.len() != ys.len() {
         return Err(("y_column", "the x and y columns differ in length".into()));
     }
-    if let Some(i) = xs.iter().zip(ys).position(|(a, b)| !(a.is_finite() && b.is_finite())) {
+    if let Some(i) = xs
+        .iter()
+        .zip(ys)
+        .position(|(a, b)| !(a.is_finite() && b.is_finite()))
+    {
         return Err(("x_column", format!("row {i} is not finite")));
     }
     Ok(xs.iter().zip(ys).map(|(&a, &b)| [a, b]).collect())
@@ -111,7 +111,8 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
         "auto" if table.columns.len() < 3 => Vec::new(),
         key => {
             let key = if key == "auto" { "2" } else { key };
-            let col = find_column(&table, key).map_err(|e| NodeError::invalid("label_column", e))?;
+            let col =
+                find_column(&table, key).map_err(|e| NodeError::invalid("label_column", e))?;
             integer_labels(col).map_err(|e| NodeError::invalid("label_column", e))?
         }
     };
@@ -133,8 +134,14 @@ mod tests {
     #[test]
     fn columns_by_name_or_index_and_labels() {
         let t = parse_table("a b lab\n1 2 0\n3 4 1\n", Header::Auto).unwrap();
-        assert_eq!(table_points(&t, "a", "1").unwrap(), vec![[1.0, 2.0], [3.0, 4.0]]);
-        assert_eq!(integer_labels(find_column(&t, "lab").unwrap()).unwrap(), vec![0, 1]);
+        assert_eq!(
+            table_points(&t, "a", "1").unwrap(),
+            vec![[1.0, 2.0], [3.0, 4.0]]
+        );
+        assert_eq!(
+            integer_labels(find_column(&t, "lab").unwrap()).unwrap(),
+            vec![0, 1]
+        );
         let e = table_points(&t, "0", "7").unwrap_err();
         assert_eq!(e.0, "y_column");
         assert!(e.1.contains("no column 7"), "{}", e.1);

@@ -1,11 +1,11 @@
 //! `print`: prints a value to standard output (and the run log).
 
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
 
 fn declare(b: &mut NodeBuilder) {
     b.doc("Prints a value: a number, a string, or a summary of a mesh, image or table.");
     b.sink();
-    b.add_input::<crate::types::value_any::Any>("value");
+    b.add_input::<cgnodes_api::types::value_any::Any>("value");
     b.add_input::<String>("label")
         .default("")
         .doc("Printed before the value.");

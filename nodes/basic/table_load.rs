@@ -1,7 +1,7 @@
 //! `table_load`: reads a table of numbers from a CSV or whitespace-separated text file, with
 //! or without a header row (the course's data files are `x y` or `x y label` per line).
 
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
 use std::path::Path;
 
 /// Whether the first row names the columns.
@@ -28,7 +28,7 @@ pub fn default_column_name(i: usize) -> String {
     format!("c{i}")
 }
 
-/// Splits `text` into rows of fields: CSV (through `crate::io::csv`) when the first data line
+/// Splits `text` into rows of fields: CSV (through `cgnodes_api::io::csv`) when the first data line
 /// has a comma, else fields separated by spaces or tabs. Blank lines and `#` comments are
 /// skipped, fields trimmed.
 fn split_rows(text: &str) -> Result<Vec<Vec<String>>, String> {
@@ -40,7 +40,7 @@ fn split_rows(text: &str) -> Result<Vec<Vec<String>>, String> {
         return Ok(Vec::new());
     };
     if first.contains(',') {
-        let rows = crate::io::csv::read(text, true, true)?;
+        let rows = cgnodes_api::io::csv::read(text, true, true)?;
         Ok(rows
             .map(|r| std::iter::once(r.header).chain(r.rows).collect())
             .unwrap_or_default())
@@ -93,9 +93,7 @@ pub fn parse_table(text: &str, header: Header) -> Result<Table, String> {
                 .parse()
                 .ok()
                 .filter(|v: &f64| v.is_finite())
-                .ok_or_else(|| {
-                    format!("row {line}, column {c}: '{s}' is not a finite number")
-                })?;
+                .ok_or_else(|| format!("row {line}, column {c}: '{s}' is not a finite number"))?;
             col.push(v);
         }
     }
@@ -114,8 +112,7 @@ pub fn load_table_file(
     header: Header,
 ) -> Result<Table, NodeError> {
     let path = ctx.input_path(p);
-    let text =
-        std::fs::read_to_string(&path).map_err(|e| NodeError::io(&path, e).at(socket))?;
+    let text = std::fs::read_to_string(&path).map_err(|e| NodeError::io(&path, e).at(socket))?;
     parse_table(&text, header).map_err(|e| {
         let e = if ctx.files().is_within_run_folders(&path) {
             e

@@ -1,11 +1,11 @@
 //! `table_write`: writes a number, a list or a Table as CSV or JSON (by the path's extension).
 
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
 
 fn declare(b: &mut NodeBuilder) {
     b.doc("Writes a scalar or a Table to CSV or JSON (chosen by the extension).");
     b.sink();
-    b.add_input::<crate::types::value_any::Any>("value")
+    b.add_input::<cgnodes_api::types::value_any::Any>("value")
         .doc("A number, a Table, or a list (numbers: column value; vec2: x, y; vec3: x, y, z; colours: r, g, b).");
     b.add_input::<String>("path")
         .file_out()

@@ -1,7 +1,7 @@
 //! `value_float`, `value_int`, `value_string`, `value_vec3`: constants, so one literal can
 //! feed several nodes and be varied from the command line (`--set v.value=2`).
 
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
 
 fn constant<T: Typed + Into<Value> + 'static>(r: &mut Registry, name: &str, default: T, doc: &str) {
     let doc = doc.to_string();

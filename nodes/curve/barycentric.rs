@@ -22,7 +22,9 @@ pub struct Barycentric<const D: usize> {
 pub fn weights(t: &[f64]) -> Vec<f64> {
     let (lo, hi) = t
         .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| (a.min(x), b.max(x)));
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+            (a.min(x), b.max(x))
+        });
     let c = if hi > lo { 4.0 / (hi - lo) } else { 1.0 };
     let mut w: Vec<f64> = (0..t.len())
         .map(|j| {

@@ -96,8 +96,7 @@ mod tests {
         let u: f64 = 0.3;
         let v = 1.0 - u;
         let b = [v * v * v, 3.0 * u * v * v, 3.0 * u * u * v, u * u * u];
-        let want: [f64; 2] =
-            std::array::from_fn(|k| (0..4).map(|i| b[i] * c[i][k]).sum::<f64>());
+        let want: [f64; 2] = std::array::from_fn(|k| (0..4).map(|i| b[i] * c[i][k]).sum::<f64>());
         let got = de_casteljau(&c, u);
         assert!((got[0] - want[0]).abs() < 1e-15 && (got[1] - want[1]).abs() < 1e-15);
         assert_eq!(de_casteljau(&c, 0.0), c[0]);

@@ -54,11 +54,9 @@ impl std::fmt::Display for SplineError {
             SplineError::TooFew { got, need } => {
                 write!(f, "needs at least {need} points, got {got}")
             }
-            SplineError::NotIncreasing(i) => write!(
-                f,
-                "parameter values must increase: t[{}] <= t[{i}]",
-                i + 1
-            ),
+            SplineError::NotIncreasing(i) => {
+                write!(f, "parameter values must increase: t[{}] <= t[{i}]", i + 1)
+            }
             SplineError::NotClosed => write!(
                 f,
                 "a periodic spline needs the last point equal to the first (a closed polygon)"
@@ -85,7 +83,10 @@ pub fn check_knots(t: &[f64], n: usize, need: usize) -> Result<(), SplineError> 
     if n < need {
         return Err(SplineError::TooFew { got: n, need });
     }
-    match t.windows(2).position(|w| w[1].partial_cmp(&w[0]) != Some(std::cmp::Ordering::Greater)) {
+    match t
+        .windows(2)
+        .position(|w| w[1].partial_cmp(&w[0]) != Some(std::cmp::Ordering::Greater))
+    {
         Some(i) => Err(SplineError::NotIncreasing(i)),
         None => Ok(()),
     }
@@ -253,9 +254,7 @@ fn solve_slopes<const D: usize>(
         .sp_lu()
         .map_err(|e| SplineError::Solve(format!("{e:?}")))?;
     let x = lu.solve(&rhs);
-    let mut s: Vec<[f64; D]> = (0..m)
-        .map(|i| std::array::from_fn(|k| x[(i, k)]))
-        .collect();
+    let mut s: Vec<[f64; D]> = (0..m).map(|i| std::array::from_fn(|k| x[(i, k)])).collect();
     if matches!(end, EndCondition::Periodic) {
         s.push(s[0]);
     }
@@ -331,7 +330,8 @@ mod tests {
     fn bad_knots_are_refused() {
         let f = values(|x| x);
         assert_eq!(
-            CubicSpline::new(&[0.0, 0.2, 0.2, 0.5, 0.8, 1.0], &f, EndCondition::Natural).unwrap_err(),
+            CubicSpline::new(&[0.0, 0.2, 0.2, 0.5, 0.8, 1.0], &f, EndCondition::Natural)
+                .unwrap_err(),
             SplineError::NotIncreasing(1)
         );
         assert_eq!(

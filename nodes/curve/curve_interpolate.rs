@@ -9,7 +9,7 @@ use super::cubic_spline::{CubicSpline, EndCondition};
 use super::curve_mlp::CurveMlp;
 use super::curve_parameterize::{parameterize, Parameterization};
 use super::rbf::{RbfCurve, RbfKernel};
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
 
 /// The interpolation method (the `method` socket).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -116,7 +116,11 @@ pub type InterpError = (&'static str, String);
 
 /// Fits `how` to points `p` at parameters `t` (strictly increasing, one per point). The
 /// points must be finite; the caller checks that.
-pub fn interpolate(p: &[[f64; 2]], t: &[f64], how: Interpolation) -> Result<Interpolant, InterpError> {
+pub fn interpolate(
+    p: &[[f64; 2]],
+    t: &[f64],
+    how: Interpolation,
+) -> Result<Interpolant, InterpError> {
     let n = p.len();
     if t.len() != n {
         return Err(("t", format!("{} parameter values for {n} points", t.len())));
@@ -127,7 +131,10 @@ pub fn interpolate(p: &[[f64; 2]], t: &[f64], how: Interpolation) -> Result<Inte
     if let Some(i) = t.iter().position(|x| !x.is_finite()) {
         return Err(("t", format!("t[{i}] is not finite")));
     }
-    if let Some(i) = t.windows(2).position(|w| w[1].partial_cmp(&w[0]) != Some(std::cmp::Ordering::Greater)) {
+    if let Some(i) = t
+        .windows(2)
+        .position(|w| w[1].partial_cmp(&w[0]) != Some(std::cmp::Ordering::Greater))
+    {
         return Err((
             "t",
             format!("parameter values must increase: t[{}] <= t[{i}]", i + 1),
@@ -181,10 +188,11 @@ pub fn interpolate(p: &[[f64; 2]], t: &[f64], how: Interpolation) -> Result<Inte
 
 fn declare(b: &mut NodeBuilder) {
     b.doc("A curve through points: polynomial, cubic spline, RBF, Bézier or C1 Bézier spline.");
-    b.add_input::<Vec<[f64; 2]>>("points").doc("The points in order.");
-    b.add_input::<Vec<f64>>("t")
-        .optional()
-        .doc("Parameter values, one per point, increasing (default: chordal, from curve_parameterize).");
+    b.add_input::<Vec<[f64; 2]>>("points")
+        .doc("The points in order.");
+    b.add_input::<Vec<f64>>("t").optional().doc(
+        "Parameter values, one per point, increasing (default: chordal, from curve_parameterize).",
+    );
     b.add_choice::<Method>("method")
         .doc("cubic_spline, polynomial (barycentric Lagrange), rbf, bezier (control polygon), bezier_spline (C1), mlp (a network t -> (x, y), approximates).");
     b.add_choice::<SplineEnd>("end")
@@ -195,7 +203,8 @@ fn declare(b: &mut NodeBuilder) {
     b.add_input::<[f64; 2]>("end_tangent")
         .default(Value::Vec2([0.0, 0.0]))
         .doc("clamped: dP/dt at the last point.");
-    b.add_choice::<RbfKernel>("kernel").doc("rbf: gaussian, multiquadric, thin_plate.");
+    b.add_choice::<RbfKernel>("kernel")
+        .doc("rbf: gaussian, multiquadric, thin_plate.");
     b.add_input::<f64>("scale")
         .default(0.2)
         .range(1e-9, 1e9)
@@ -207,7 +216,10 @@ fn declare(b: &mut NodeBuilder) {
         .default(3000)
         .range(1.0, 1e7)
         .doc("mlp: training steps (Adam, learning rate 0.01, all points per step).");
-    b.add_input::<i64>("seed").default(0).min(0.0).doc("mlp: the initialization's seed.");
+    b.add_input::<i64>("seed")
+        .default(0)
+        .min(0.0)
+        .doc("mlp: the initialization's seed.");
     b.add_input::<i64>("samples")
         .default(200)
         .range(2.0, 1e7)
@@ -227,8 +239,14 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
         .ok()
         .filter(|s| *s >= 2)
         .ok_or_else(|| NodeError::invalid("samples", "must be at least 2"))?;
-    if let Some(i) = p.iter().position(|q| !(q[0].is_finite() && q[1].is_finite())) {
-        return Err(NodeError::invalid("points", format!("point {i} is not finite")));
+    if let Some(i) = p
+        .iter()
+        .position(|q| !(q[0].is_finite() && q[1].is_finite()))
+    {
+        return Err(NodeError::invalid(
+            "points",
+            format!("point {i} is not finite"),
+        ));
     }
     let periodic = method == Method::CubicSpline && end == SplineEnd::Periodic;
     let t = match t {
@@ -268,7 +286,9 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
                 .map(|&h| usize::try_from(h).ok().filter(|h| (1..=1024).contains(h)))
                 .collect::<Option<Vec<usize>>>()
                 .filter(|h| !h.is_empty())
-                .ok_or_else(|| NodeError::invalid("hidden", "one to many sizes between 1 and 1024"))?;
+                .ok_or_else(|| {
+                    NodeError::invalid("hidden", "one to many sizes between 1 and 1024")
+                })?;
             let epochs = usize::try_from(ctx.input::<i64>("epochs")?)
                 .ok()
                 .filter(|e| *e >= 1)
@@ -296,10 +316,16 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     for (x, v) in &s {
         table.push_row(&[*x, v[0], v[1]]);
     }
-    table.meta.insert("residual".into(), format!("{residual:e}"));
+    table
+        .meta
+        .insert("residual".into(), format!("{residual:e}"));
     if let (Some(a), Some(b)) = (f.losses.first(), f.losses.last()) {
-        table.meta.insert("loss_first_epoch".into(), format!("{a:e}"));
-        table.meta.insert("loss_last_epoch".into(), format!("{b:e}"));
+        table
+            .meta
+            .insert("loss_first_epoch".into(), format!("{a:e}"));
+        table
+            .meta
+            .insert("loss_last_epoch".into(), format!("{b:e}"));
     }
     ctx.set_output("curve", s.into_iter().map(|(_, v)| v).collect::<Vec<_>>());
     ctx.set_output("table", table);
@@ -341,7 +367,11 @@ mod tests {
                 &t,
             ),
             (Interpolation::CubicSpline(EndCondition::NotAKnot), &p, &t),
-            (Interpolation::CubicSpline(EndCondition::Periodic), &closed, &tc),
+            (
+                Interpolation::CubicSpline(EndCondition::Periodic),
+                &closed,
+                &tc,
+            ),
             (Interpolation::Rbf(RbfKernel::Gaussian, 0.1), &p, &t),
             (Interpolation::Rbf(RbfKernel::Multiquadric, 0.1), &p, &t),
             (Interpolation::Rbf(RbfKernel::ThinPlate, 1.0), &p, &t),
@@ -367,17 +397,27 @@ mod tests {
     fn bad_input_names_the_socket() {
         let p = points();
         let t = parameterize(&p, Parameterization::Chordal).unwrap();
-        let e = interpolate(&p, &t[..5], Interpolation::Polynomial).err().unwrap();
+        let e = interpolate(&p, &t[..5], Interpolation::Polynomial)
+            .err()
+            .unwrap();
         assert_eq!(e.0, "t");
         let mut t2 = t.clone();
         t2[3] = t2[2];
-        let e = interpolate(&p, &t2, Interpolation::BezierSpline).err().unwrap();
+        let e = interpolate(&p, &t2, Interpolation::BezierSpline)
+            .err()
+            .unwrap();
         assert!(e.0 == "t" && e.1.contains("t[3] <= t[2]"), "{e:?}");
-        let e = interpolate(&p[..1], &t[..1], Interpolation::Polynomial).err().unwrap();
+        let e = interpolate(&p[..1], &t[..1], Interpolation::Polynomial)
+            .err()
+            .unwrap();
         assert_eq!(e.0, "points");
-        let e = interpolate(&p, &t, Interpolation::Rbf(RbfKernel::Gaussian, -1.0)).err().unwrap();
+        let e = interpolate(&p, &t, Interpolation::Rbf(RbfKernel::Gaussian, -1.0))
+            .err()
+            .unwrap();
         assert_eq!(e.0, "scale");
-        let e = interpolate(&p, &t, Interpolation::CubicSpline(EndCondition::Periodic)).err().unwrap();
+        let e = interpolate(&p, &t, Interpolation::CubicSpline(EndCondition::Periodic))
+            .err()
+            .unwrap();
         assert!(e.1.contains("closed"), "{e:?}");
     }
 }

@@ -5,7 +5,7 @@
 //! rate suits any drawing's size. An approximation, not an interpolation: how close it comes
 //! to the points depends on the width and the epochs (`nodes/learn/mlp.rs`).
 
-use crate::nodes::learn::mlp::{fit_regression, Activation, Mlp, Optimizer, TrainParams};
+use cgnodes_nn::mlp::{fit_regression, Activation, Mlp, Optimizer, TrainParams};
 
 /// A trained curve network with its input and output scaling.
 #[derive(Clone, Debug)]

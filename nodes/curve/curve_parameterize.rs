@@ -13,7 +13,7 @@
 //!
 //! then divided by their sum.
 
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
 
 /// The rule that spaces the parameter values.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -67,7 +67,10 @@ pub fn check_points(p: &[[f64; 2]]) -> Result<(), ParamError> {
     if p.len() < 2 {
         return Err(ParamError::TooFew(p.len()));
     }
-    if let Some(i) = p.iter().position(|q| !(q[0].is_finite() && q[1].is_finite())) {
+    if let Some(i) = p
+        .iter()
+        .position(|q| !(q[0].is_finite() && q[1].is_finite()))
+    {
         return Err(ParamError::NotFinite(i));
     }
     if let Some(i) = p.windows(2).position(|w| w[0] == w[1]) {
@@ -177,7 +180,10 @@ mod tests {
     #[test]
     fn four_points_by_hand() {
         let t = |m| parameterize(&P, m).unwrap();
-        close(&t(Parameterization::Uniform), &[0.0, 1.0 / 3.0, 2.0 / 3.0, 1.0]);
+        close(
+            &t(Parameterization::Uniform),
+            &[0.0, 1.0 / 3.0, 2.0 / 3.0, 1.0],
+        );
         close(&t(Parameterization::Chordal), &[0.0, 0.3, 0.7, 1.0]);
         let s3 = 3f64.sqrt();
         let sum = 2.0 * s3 + 2.0;

@@ -13,7 +13,7 @@
 
 use super::barycentric::Barycentric;
 use super::lstsq::lstsq;
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
 use faer::Mat;
 
 /// The model (the `model` socket).
@@ -74,7 +74,11 @@ impl Fit {
             return b.eval(x)[0];
         }
         if self.centres.is_empty() {
-            return self.coefficients.iter().rev().fold(0.0, |acc, c| acc * x + c);
+            return self
+                .coefficients
+                .iter()
+                .rev()
+                .fold(0.0, |acc, c| acc * x + c);
         }
         let s2 = 2.0 * self.sigma * self.sigma;
         self.coefficients[0]
@@ -102,7 +106,10 @@ pub fn fit(points: &[[f64; 2]], model: Model) -> Result<Fit, FitError> {
     if n == 0 {
         return Err(("points", "no points".into()));
     }
-    if let Some(i) = points.iter().position(|p| !(p[0].is_finite() && p[1].is_finite())) {
+    if let Some(i) = points
+        .iter()
+        .position(|p| !(p[0].is_finite() && p[1].is_finite()))
+    {
         return Err(("points", format!("point {i} is not finite")));
     }
     let x: Vec<f64> = points.iter().map(|p| p[0]).collect();
@@ -121,7 +128,10 @@ pub fn fit(points: &[[f64; 2]], model: Model) -> Result<Fit, FitError> {
             if lambda == 0.0 && distinct <= d {
                 return Err((
                     "degree",
-                    format!("degree {d} needs at least {} distinct x values, got {distinct}", d + 1),
+                    format!(
+                        "degree {d} needs at least {} distinct x values, got {distinct}",
+                        d + 1
+                    ),
                 ));
             }
             (monomials(d), Vec::new(), 0.0, lambda)
@@ -144,7 +154,9 @@ pub fn fit(points: &[[f64; 2]], model: Model) -> Result<Fit, FitError> {
             }
             let (lo, hi) = x
                 .iter()
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+                    (a.min(v), b.max(v))
+                });
             let centres: Vec<f64> = (0..count)
                 .map(|k| {
                     if count == 1 {
@@ -205,7 +217,8 @@ pub fn fit(points: &[[f64; 2]], model: Model) -> Result<Fit, FitError> {
 
 fn declare(b: &mut NodeBuilder) {
     b.doc("Fits y = f(x) to points: least-squares polynomial, ridge, Gaussian basis, or interpolating polynomial.");
-    b.add_input::<Vec<[f64; 2]>>("points").doc("The data (x, y).");
+    b.add_input::<Vec<[f64; 2]>>("points")
+        .doc("The data (x, y).");
     b.add_choice::<ModelKind>("model")
         .doc("polynomial, ridge, gaussian_basis or interpolate (degree n - 1).");
     b.add_input::<i64>("degree")
@@ -262,7 +275,9 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     }
     let (lo, hi) = p
         .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), q| (a.min(q[0]), b.max(q[0])));
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), q| {
+            (a.min(q[0]), b.max(q[0]))
+        });
     let curve: Vec<[f64; 2]> = (0..samples)
         .map(|k| {
             let x = if k + 1 == samples {
@@ -324,7 +339,14 @@ mod tests {
     #[test]
     fn gaussian_basis_and_ridge_behave() {
         let pts = sample(|x| (3.0 * x).sin(), 40);
-        let f = fit(&pts, Model::GaussianBasis { count: 10, sigma: 0.0 }).unwrap();
+        let f = fit(
+            &pts,
+            Model::GaussianBasis {
+                count: 10,
+                sigma: 0.0,
+            },
+        )
+        .unwrap();
         // numpy's lstsq on the same basis gives rms 0.0071003016153070.
         assert!((f.rms - 0.0071003016153070).abs() < 1e-12, "{}", f.rms);
         assert_eq!(f.coefficients.len(), 11);
@@ -358,12 +380,22 @@ mod tests {
         assert_eq!(fit(&pts, Model::Polynomial(2)).unwrap_err().0, "degree");
         assert_eq!(fit(&pts, Model::Interpolate).unwrap_err().0, "points");
         assert_eq!(
-            fit(&[[0.0, 1.0], [f64::NAN, 2.0]], Model::Polynomial(1)).unwrap_err().0,
+            fit(&[[0.0, 1.0], [f64::NAN, 2.0]], Model::Polynomial(1))
+                .unwrap_err()
+                .0,
             "points"
         );
         assert_eq!(fit(&pts, Model::Ridge(1, -1.0)).unwrap_err().0, "lambda");
         assert_eq!(
-            fit(&pts, Model::GaussianBasis { count: 3, sigma: 0.0 }).unwrap_err().0,
+            fit(
+                &pts,
+                Model::GaussianBasis {
+                    count: 3,
+                    sigma: 0.0
+                }
+            )
+            .unwrap_err()
+            .0,
             "basis_count"
         );
     }

@@ -26,7 +26,9 @@ pub fn lstsq(a: &Mat<f64>, y: &[f64], lambda: f64) -> Result<LstsqSolution, Stri
         .map(|j| (0..m).map(|i| a[(i, j)] * a[(i, j)]).sum::<f64>().sqrt())
         .collect();
     if let Some(j) = scale.iter().position(|s| !(*s > 0.0 && s.is_finite())) {
-        return Err(format!("basis function {j} is zero (or not finite) at every x"));
+        return Err(format!(
+            "basis function {j} is zero (or not finite) at every x"
+        ));
     }
     let rows = if lambda > 0.0 { m + n } else { m };
     if rows < n {

@@ -2,7 +2,7 @@
 //! curves, markers for data points, a legend, and free or equal axes (equal: one unit is as
 //! many pixels along x as along y, so circles look round).
 
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::Color as _;
@@ -40,7 +40,8 @@ pub enum Axes {
 }
 
 impl Choice for Axes {
-    const CHOICES: &'static [(&'static str, Self)] = &[("free", Axes::Free), ("equal", Axes::Equal)];
+    const CHOICES: &'static [(&'static str, Self)] =
+        &[("free", Axes::Free), ("equal", Axes::Equal)];
 }
 
 /// One series.
@@ -109,10 +110,20 @@ const COLORS: [(u8, u8, u8); 8] = [
 
 /// The data's bounding box, padded by 5 % (a unit box around a single point).
 fn bounds(plot: &Plot) -> ((f64, f64), (f64, f64)) {
-    let mut b = [f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY];
+    let mut b = [
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+    ];
     for p in plot.series.iter().flat_map(|s| &s.points) {
         if p[0].is_finite() && p[1].is_finite() {
-            b = [b[0].min(p[0]), b[1].max(p[0]), b[2].min(p[1]), b[3].max(p[1])];
+            b = [
+                b[0].min(p[0]),
+                b[1].max(p[0]),
+                b[2].min(p[1]),
+                b[3].max(p[1]),
+            ];
         }
     }
     let pad = |lo: f64, hi: f64| {
@@ -166,7 +177,9 @@ where
     let builder = |root| chart_builder(root, &plot.title);
     if plot.axes == Axes::Equal {
         // The plotting area's size does not depend on the ranges: measure it first.
-        let probe = builder(root).build_cartesian_2d(0.0..1.0, 0.0..1.0).map_err(e)?;
+        let probe = builder(root)
+            .build_cartesian_2d(0.0..1.0, 0.0..1.0)
+            .map_err(e)?;
         let px = probe.plotting_area().dim_in_pixel();
         (x, y) = equalize(x, y, px);
         root.fill(&WHITE).map_err(e)?;
@@ -292,7 +305,7 @@ fn region_runs(
             (0..nx).map(move |i| vec![x.0 + (i as f64 + 0.5) * dx, y.0 + (j as f64 + 0.5) * dy])
         })
         .collect();
-    let pred = crate::nodes::learn::dataset::predict(m, &cells)?;
+    let pred = cgnodes_nn::dataset::predict(m, &cells)?;
     let index = |v: i64| m.classes.iter().position(|c| *c == v).unwrap_or(0);
     let mut runs = Vec::new();
     for j in 0..ny {
@@ -315,7 +328,7 @@ fn region_runs(
 
 /// Draws `plot` as file bytes in `format`.
 pub fn render_plot(plot: &Plot, format: PlotFormat) -> Result<Vec<u8>, String> {
-    crate::io::register_plot_font();
+    cgnodes_formats::font::register_plot_font();
     let (w, h) = plot.size;
     match format {
         PlotFormat::Svg => {
@@ -334,13 +347,15 @@ pub fn render_plot(plot: &Plot, format: PlotFormat) -> Result<Vec<u8>, String> {
                 draw_on(plot, &root)?;
                 root.present().map_err(|e| e.to_string())?;
             }
-            crate::io::encode_png(w, h, 3, buf)
+            cgnodes_formats::png::encode_png(w, h, 3, buf)
         }
     }
 }
 
 fn declare(b: &mut NodeBuilder) {
-    b.doc("Draws up to 8 series of points (lines or markers, with legend labels) into a PNG or SVG.");
+    b.doc(
+        "Draws up to 8 series of points (lines or markers, with legend labels) into a PNG or SVG.",
+    );
     b.sink();
     for k in 1..=MAX_SERIES {
         b.add_input::<Vec<[f64; 2]>>(&format!("series_{k}"))
@@ -363,8 +378,12 @@ fn declare(b: &mut NodeBuilder) {
     b.add_input::<String>("y_label").default("y");
     b.add_choice::<Axes>("axes")
         .doc("free: each axis fits its data; equal: the same units on both.");
-    b.add_input::<i64>("width").default(900).range(100.0, 8000.0);
-    b.add_input::<i64>("height").default(600).range(100.0, 8000.0);
+    b.add_input::<i64>("width")
+        .default(900)
+        .range(100.0, 8000.0);
+    b.add_input::<i64>("height")
+        .default(600)
+        .range(100.0, 8000.0);
     b.add_input::<String>("path")
         .file_out()
         .doc("Output file (.png or .svg), under the output directory.");
@@ -394,7 +413,10 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
         }
     }
     if series.is_empty() {
-        return Err(NodeError::invalid("series_1", "nothing to plot: connect a series"));
+        return Err(NodeError::invalid(
+            "series_1",
+            "nothing to plot: connect a series",
+        ));
     }
     let dim = |name: &str, v: i64| {
         u32::try_from(v)
@@ -408,7 +430,10 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
         y_label: ctx.input("y_label")?,
         series,
         axes: ctx.choice("axes")?,
-        size: (dim("width", ctx.input("width")?)?, dim("height", ctx.input("height")?)?),
+        size: (
+            dim("width", ctx.input("width")?)?,
+            dim("height", ctx.input("height")?)?,
+        ),
         regions: ctx.input_opt("model")?,
     };
     let p: String = ctx.input("path")?;
@@ -416,7 +441,11 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let format = PlotFormat::from_path(&path)
         .ok_or_else(|| NodeError::invalid("path", format!("'{p}' should end in .png or .svg")))?;
     let bytes = render_plot(&plot, format).map_err(|e| {
-        let socket = if e.contains("decision regions") { "model" } else { "path" };
+        let socket = if e.contains("decision regions") {
+            "model"
+        } else {
+            "path"
+        };
         NodeError::invalid(socket, e)
     })?;
     ctx.write_file(&path, &bytes)
@@ -505,7 +534,8 @@ mod tests {
 
     #[test]
     fn draws_svg_with_labels_and_png_of_the_size() {
-        let svg = String::from_utf8(render_plot(&plot(Axes::Equal), PlotFormat::Svg).unwrap()).unwrap();
+        let svg =
+            String::from_utf8(render_plot(&plot(Axes::Equal), PlotFormat::Svg).unwrap()).unwrap();
         assert!(svg.contains("<svg") && svg.contains("a circle") && svg.contains("points"));
         let png = render_plot(&plot(Axes::Free), PlotFormat::Png).unwrap();
         let img = image::load_from_memory(&png).unwrap();

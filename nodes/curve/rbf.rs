@@ -12,7 +12,7 @@
 //! `epsilon = 1 / scale` (its multiquadric is -sqrt(1 + r^2), which only flips the sign of
 //! the a_j). The system is solved by faer's dense LU with partial pivoting.
 
-use crate::node::Choice;
+use cgnodes_api::node::Choice;
 use faer::linalg::solvers::Solve;
 use faer::Mat;
 
@@ -67,7 +67,9 @@ impl<const D: usize> RbfCurve<D> {
     pub fn new(t: &[f64], f: &[[f64; D]], kernel: RbfKernel, scale: f64) -> Result<Self, String> {
         let n = t.len();
         if n < 2 || f.len() != n {
-            return Err(format!("needs at least 2 nodes and one value each, got {n}"));
+            return Err(format!(
+                "needs at least 2 nodes and one value each, got {n}"
+            ));
         }
         if !(scale.is_finite() && scale > 0.0) {
             return Err(format!("scale must be a positive number, got {scale}"));
@@ -124,7 +126,11 @@ mod tests {
     fn interpolates_and_reproduces_lines() {
         let t: [f64; 5] = [0.0, 0.2, 0.35, 0.6, 1.0];
         let f: Vec<[f64; 2]> = t.iter().map(|&x| [x.sin(), 2.0 * x - 1.0]).collect();
-        for kernel in [RbfKernel::Gaussian, RbfKernel::Multiquadric, RbfKernel::ThinPlate] {
+        for kernel in [
+            RbfKernel::Gaussian,
+            RbfKernel::Multiquadric,
+            RbfKernel::ThinPlate,
+        ] {
             let r = RbfCurve::new(&t, &f, kernel, 0.3).unwrap();
             for (x, y) in t.iter().zip(&f) {
                 let v = r.eval(*x);

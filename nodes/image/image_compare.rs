@@ -1,6 +1,6 @@
 //! `image_compare`: RMSE and PSNR of an image against a reference, optionally inside a mask.
 
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
 
 /// Root-mean-square error over the RGB channels of the pixels where `mask` (if any) has
 /// luminance above one half, and the PSNR for a signal peak of `peak`. Returns

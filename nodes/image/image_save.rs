@@ -3,98 +3,8 @@
 //! `.png` is written 8-bit with the sRGB curve (or a power `gamma`), `.exr` and `.hdr` as
 //! linear floats; `exposure` (in stops) scales all of them.
 
-use super::srgb::linear_to_srgb;
-use crate::prelude::*;
-use std::io::Cursor;
-use std::path::Path;
-
-/// The file formats `image_save` writes.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ImageFileFormat {
-    /// 8-bit RGBA PNG, tone-encoded (sRGB curve or a power).
-    Png,
-    /// 32-bit float RGBA OpenEXR, linear.
-    Exr,
-    /// Radiance RGBE, linear RGB.
-    Hdr,
-}
-
-impl ImageFileFormat {
-    /// The format named by a path's extension.
-    pub fn from_path(p: &Path) -> Option<ImageFileFormat> {
-        let ext = p.extension()?.to_str()?.to_ascii_lowercase();
-        match ext.as_str() {
-            "png" => Some(ImageFileFormat::Png),
-            "exr" => Some(ImageFileFormat::Exr),
-            "hdr" => Some(ImageFileFormat::Hdr),
-            _ => None,
-        }
-    }
-}
-
-/// Encodes an image to file bytes. `exposure` scales colour by 2^exposure; for PNG,
-/// `gamma` = 0 applies the sRGB curve and `gamma` > 0 the power 1/gamma. Alpha is stored
-/// linearly. Non-finite values are written as 0.
-pub fn encode_image(
-    img: &Image,
-    format: ImageFileFormat,
-    exposure: f64,
-    gamma: f64,
-) -> Result<Vec<u8>, String> {
-    if img.pixels.len() != img.width as usize * img.height as usize || img.width == 0 {
-        return Err(format!(
-            "image {}x{} has {} pixels",
-            img.width,
-            img.height,
-            img.pixels.len()
-        ));
-    }
-    let k = 2f32.powf(exposure as f32);
-    let lin = |v: f32| if v.is_finite() { v * k } else { 0.0 };
-    let mut out = Vec::new();
-    let mut cur = Cursor::new(&mut out);
-    let (w, h) = (img.width, img.height);
-    let res = match format {
-        ImageFileFormat::Png => {
-            let enc = |v: f32| -> u8 {
-                let e = if gamma > 0.0 {
-                    let v = lin(v).clamp(0.0, 1.0);
-                    v.powf(1.0 / gamma as f32)
-                } else {
-                    linear_to_srgb(lin(v))
-                };
-                (e * 255.0 + 0.5).clamp(0.0, 255.0) as u8
-            };
-            let a8 = |v: f32| (v.clamp(0.0, 1.0) * 255.0 + 0.5) as u8;
-            let data: Vec<u8> = img
-                .pixels
-                .iter()
-                .flat_map(|p| [enc(p[0]), enc(p[1]), enc(p[2]), a8(p[3])])
-                .collect();
-            return crate::io::encode_png(w, h, 4, data);
-        }
-        ImageFileFormat::Exr => {
-            let data: Vec<f32> = img
-                .pixels
-                .iter()
-                .flat_map(|p| [lin(p[0]), lin(p[1]), lin(p[2]), p[3]])
-                .collect();
-            let buf = image::Rgba32FImage::from_raw(w, h, data).ok_or("bad buffer")?;
-            buf.write_to(&mut cur, image::ImageFormat::OpenExr)
-        }
-        ImageFileFormat::Hdr => {
-            let data: Vec<f32> = img
-                .pixels
-                .iter()
-                .flat_map(|p| [lin(p[0]).max(0.0), lin(p[1]).max(0.0), lin(p[2]).max(0.0)])
-                .collect();
-            let buf = image::Rgb32FImage::from_raw(w, h, data).ok_or("bad buffer")?;
-            buf.write_to(&mut cur, image::ImageFormat::Hdr)
-        }
-    };
-    res.map_err(|e| e.to_string())?;
-    Ok(out)
-}
+use cgnodes_api::prelude::*;
+pub use cgnodes_formats::image_file::{encode_image, ImageFileFormat};
 
 fn declare(b: &mut NodeBuilder) {
     b.doc("Writes an image: .png 8-bit sRGB, .exr and .hdr linear float (by extension).");
@@ -144,7 +54,7 @@ pub fn register(r: &mut Registry) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::nodes::image::image_load::{decode_image, ColorSpace};
+    use cgnodes_formats::image_file::{decode_image, ColorSpace};
     use std::collections::BTreeMap;
 
     fn test_image() -> Image {
@@ -203,7 +113,7 @@ mod tests {
     fn nodes_write_and_read_files() {
         let dir = tempfile::tempdir().unwrap();
         let mut r = Registry::new();
-        crate::nodes::image::register(&mut r);
+        crate::register(&mut r);
         let files = FileEnv {
             graph_dir: dir.path().join("out"),
             out_dir: dir.path().join("out"),

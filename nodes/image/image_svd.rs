@@ -5,7 +5,7 @@
 #[path = "svd/mod.rs"]
 pub mod svd;
 
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
 use faer::Mat;
 use svd::{Method, RandomizedParams, Truncation};
 
@@ -66,7 +66,11 @@ pub fn image_svd(
     if img.width == 0 || img.height == 0 {
         return Err(NodeError::invalid("image", "the image is empty"));
     }
-    if let Some(i) = img.pixels.iter().position(|p| p.iter().any(|v| !v.is_finite())) {
+    if let Some(i) = img
+        .pixels
+        .iter()
+        .position(|p| p.iter().any(|v| !v.is_finite()))
+    {
         let w = img.width as usize;
         return Err(NodeError::invalid(
             "image",
@@ -84,7 +88,11 @@ pub fn image_svd(
         let mse = diff * diff / (m * n) as f64;
         channels.push(ChannelResult {
             rank: approx.rank,
-            psnr: if mse > 0.0 { -10.0 * mse.log10() } else { f64::INFINITY },
+            psnr: if mse > 0.0 {
+                -10.0 * mse.log10()
+            } else {
+                f64::INFINITY
+            },
             rel_error: if norm > 0.0 { diff / norm } else { diff },
             storage_ratio: ((m + n + 1) * approx.rank) as f64 / (m * n) as f64,
             singular_values: approx.singular_values,
@@ -117,10 +125,13 @@ fn declare(b: &mut NodeBuilder) {
         .default(20)
         .min(0.0)
         .doc("k per channel; above min(width, height) it is clamped with a warning.");
-    b.add_input::<f64>("energy").default(0.0).range(0.0, 1.0).doc(
-        "If > 0, instead of rank: the smallest k whose squared singular values reach this \
+    b.add_input::<f64>("energy")
+        .default(0.0)
+        .range(0.0, 1.0)
+        .doc(
+            "If > 0, instead of rank: the smallest k whose squared singular values reach this \
          fraction of the channel's squared Frobenius norm.",
-    );
+        );
     b.add_choice::<Method>("method").doc(
         "full: faer's thin SVD; randomized: Halko, Martinsson & Tropp 2011 (Alg. 4.4 \
          subspace iteration, Alg. 5.1).",
@@ -190,7 +201,11 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
         "time_ms",
     ]);
     let mut sv = Table::default();
-    let names = if grayscale { &["gray"][..] } else { &["r", "g", "b"][..] };
+    let names = if grayscale {
+        &["gray"][..]
+    } else {
+        &["r", "g", "b"][..]
+    };
     for (c, (ch, name)) in r.channels.iter().zip(names).enumerate() {
         table.push_row(&[
             c as f64,
@@ -281,7 +296,11 @@ mod tests {
         let a = noise(60, 50, 5);
         let f = truncated::thin_svd(a.as_ref()).unwrap();
         let want = energy_rank(&f.s, frobenius_sq(a.as_ref()), 0.8).unwrap();
-        let k = |m| low_rank(a.as_ref(), Truncation::Energy(0.8), m, P).unwrap().rank;
+        let k = |m| {
+            low_rank(a.as_ref(), Truncation::Energy(0.8), m, P)
+                .unwrap()
+                .rank
+        };
         assert_eq!(k(Method::Full), want);
         let mut acc = 0.0;
         for v in &f.s[..want - 1] {

@@ -2,7 +2,7 @@
 //! RBF or MLS (the algorithms are in `warp/`; this file reads the sockets).
 
 use super::warp::{self, Fill, Kernel, Mapping, Method, Side, WarpError, WarpParams};
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
 use std::path::Path;
 
 /// Source and target control points.
@@ -11,7 +11,7 @@ pub type PointPairs = (Vec<[f64; 2]>, Vec<[f64; 2]>);
 /// Control points from CSV text with a header naming columns `sx,sy,tx,ty` (any order,
 /// other columns ignored, `#` comments allowed): (source points, target points).
 pub fn read_points_csv(text: &str) -> Result<PointPairs, String> {
-    let rows = crate::io::csv::read(text, true, true)?.ok_or("the file is empty")?;
+    let rows = cgnodes_api::io::csv::read(text, true, true)?.ok_or("the file is empty")?;
     let mut cols = [0usize; 4];
     for (c, name) in cols.iter_mut().zip(["sx", "sy", "tx", "ty"]) {
         *c = rows
@@ -69,9 +69,9 @@ fn declare(b: &mut NodeBuilder) {
         .default(0)
         .range(0.0, 4096.0)
         .doc("0 = evaluate the map at every pixel; N = on an N-pixel grid, bilinear between.");
-    b.add_input::<bool>("measure_grid")
-        .default(false)
-        .doc("Also report map_error: the largest distance (px) of the grid map from the exact one.");
+    b.add_input::<bool>("measure_grid").default(false).doc(
+        "Also report map_error: the largest distance (px) of the grid map from the exact one.",
+    );
     b.add_output::<Image>("image");
     b.add_output::<Image>("holes")
         .doc("White where forward mapping left a hole (before filling).");
@@ -90,41 +90,40 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     );
     let file: Option<String> = ctx.input_opt("points_file")?;
     let from_file = file.is_some();
-    let (p, q) = match (file, lists) {
-        (Some(_), (Some(_), _) | (_, Some(_))) => {
-            return Err(NodeError::invalid(
-                "points_file",
-                "give either points_file or source_points and target_points, not both",
-            ))
-        }
-        (Some(f), _) => {
-            let path = ctx.input_path(&f);
-            let text = std::fs::read_to_string(&path)
-                .map_err(|e| NodeError::io(&path, e).at("points_file"))?;
-            read_points_csv(&text).map_err(|e| {
-                // Only files of the run's own folders are quoted (issue 23).
-                let e = if ctx.files().is_within_run_folders(&path) {
-                    e
-                } else {
-                    "not a CSV with numeric columns sx,sy,tx,ty".into()
-                };
-                NodeError::invalid("points_file", format!("{}: {e}", Path::new(&f).display()))
-            })?
-        }
-        (None, (Some(p), Some(q))) => (p, q),
-        (None, (None, _)) => {
-            return Err(NodeError::invalid(
+    let (p, q) =
+        match (file, lists) {
+            (Some(_), (Some(_), _) | (_, Some(_))) => {
+                return Err(NodeError::invalid(
+                    "points_file",
+                    "give either points_file or source_points and target_points, not both",
+                ))
+            }
+            (Some(f), _) => {
+                let path = ctx.input_path(&f);
+                let text = std::fs::read_to_string(&path)
+                    .map_err(|e| NodeError::io(&path, e).at("points_file"))?;
+                read_points_csv(&text).map_err(|e| {
+                    // Only files of the run's own folders are quoted (issue 23).
+                    let e = if ctx.files().is_within_run_folders(&path) {
+                        e
+                    } else {
+                        "not a CSV with numeric columns sx,sy,tx,ty".into()
+                    };
+                    NodeError::invalid("points_file", format!("{}: {e}", Path::new(&f).display()))
+                })?
+            }
+            (None, (Some(p), Some(q))) => (p, q),
+            (None, (None, _)) => return Err(NodeError::invalid(
                 "source_points",
                 "no control points: connect source_points and target_points or give points_file",
-            ))
-        }
-        (None, (Some(_), None)) => {
-            return Err(NodeError::invalid(
-                "target_points",
-                "source_points are given but target_points are not",
-            ))
-        }
-    };
+            )),
+            (None, (Some(_), None)) => {
+                return Err(NodeError::invalid(
+                    "target_points",
+                    "source_points are given but target_points are not",
+                ))
+            }
+        };
     let params = WarpParams {
         method: ctx.choice("method")?,
         mu: ctx.input("mu")?,
@@ -210,8 +209,12 @@ mod tests {
         assert_eq!(q, vec![[3.0, 4.0], [7.0, 8.0]]);
         let (p, _) = read_points_csv("ty,tx,sy,sx\n1,2,3,4\n").unwrap();
         assert_eq!(p, vec![[4.0, 3.0]]);
-        assert!(read_points_csv("sx,sy,tx\n1,2,3\n").unwrap_err().contains("'ty'"));
-        assert!(read_points_csv("sx,sy,tx,ty\n1,2,x,4\n").unwrap_err().contains("row 2"));
+        assert!(read_points_csv("sx,sy,tx\n1,2,3\n")
+            .unwrap_err()
+            .contains("'ty'"));
+        assert!(read_points_csv("sx,sy,tx,ty\n1,2,x,4\n")
+            .unwrap_err()
+            .contains("row 2"));
         assert!(read_points_csv("").is_err());
     }
 

@@ -6,7 +6,7 @@
 #[path = "poisson/mod.rs"]
 pub mod poisson;
 
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
 use poisson::{MaskShape, Mode, ShapeKey, Solver};
 use rayon::prelude::*;
 use std::sync::{Mutex, Weak};
@@ -50,7 +50,10 @@ fn check_finite_in(img: &Image, [x0, y0, x1, y1]: [i64; 4]) -> Result<(), String
 
 /// The first non-finite pixel of `img`, as an error message.
 fn check_finite(img: &Image) -> Result<(), String> {
-    check_finite_in(img, [0, 0, i64::from(img.width) - 1, i64::from(img.height) - 1])
+    check_finite_in(
+        img,
+        [0, 0, i64::from(img.width) - 1, i64::from(img.height) - 1],
+    )
 }
 
 /// The result of `poisson_blend`: the image, and the table's facts.
@@ -99,8 +102,7 @@ impl Region {
             None => {
                 // the source's alpha; an opaque source is inside everywhere
                 let opaque = source.pixels.iter().all(|p| p[3] >= 1.0);
-                let flags: Vec<bool> =
-                    source.pixels.iter().map(|p| opaque || p[3] > 0.5).collect();
+                let flags: Vec<bool> = source.pixels.iter().map(|p| opaque || p[3] > 0.5).collect();
                 MaskShape::from_flags(source.width, source.height, &flags)
             }
         };
@@ -173,7 +175,12 @@ pub fn blend_region(
     let [x0, y0, x1, y1] = shape.bbox().map_or([0; 4], |b| b.map(i64::from));
     let around = [x0 - 1, y0 - 1, x1 + 1, y1 + 1];
     check_finite_in(source, around).map_err(|e| NodeError::invalid("source", e))?;
-    let moved = [around[0] + off[0], around[1] + off[1], around[2] + off[0], around[3] + off[1]];
+    let moved = [
+        around[0] + off[0],
+        around[1] + off[1],
+        around[2] + off[0],
+        around[3] + off[1],
+    ];
     check_finite_in(target, moved).map_err(|e| NodeError::invalid("target", e))?;
     if solver == Solver::SineTransform && shape.rectangle().is_none() {
         return Err(NodeError::invalid("solver", poisson::not_a_rectangle()));
@@ -205,7 +212,8 @@ fn region_of(source: &Arc<Image>, mask: Option<&Arc<Image>>) -> Result<Arc<Regio
     {
         let last = LAST_REGION.lock().unwrap_or_else(|e| e.into_inner());
         if let Some((w, r)) = last.as_ref() {
-            if std::ptr::eq(w.as_ptr(), Arc::as_ptr(image)) && (r.socket == "mask") == mask.is_some()
+            if std::ptr::eq(w.as_ptr(), Arc::as_ptr(image))
+                && (r.socket == "mask") == mask.is_some()
             {
                 return Ok(r.clone());
             }
@@ -227,11 +235,10 @@ fn declare(b: &mut NodeBuilder) {
     );
     b.add_input::<Image>("target")
         .doc("The image pasted into; its pixels around the mask are the boundary values.");
-    b.add_input::<Image>("source")
-        .doc(
-            "The image whose gradients are pasted (same size as the mask); its pixels under \
+    b.add_input::<Image>("source").doc(
+        "The image whose gradients are pasted (same size as the mask); its pixels under \
              the mask and their neighbours must be finite.",
-        );
+    );
     b.add_input::<Image>("mask").optional().doc(
         "Inside where alpha > 0.5, or, for an opaque mask, where luminance > 0.5. \
          Default: the source's alpha (the whole source when it is opaque).",
@@ -254,13 +261,12 @@ fn declare(b: &mut NodeBuilder) {
          large mask); sine_transform: rectangular masks only (an error otherwise).",
     );
     b.add_output::<Image>("image");
-    b.add_output::<Table>("table")
-        .doc(
-            "pixels solved, relative residual of the Poisson system, reused (0/1: the \
+    b.add_output::<Table>("table").doc(
+        "pixels solved, relative residual of the Poisson system, reused (0/1: the \
              factorization or multigrid hierarchy came from the cache), sine_transform (1: \
              the rectangle's fast solver), multigrid (1: multigrid, 0 with sine_transform 0: \
              sparse Cholesky), iterations (multigrid CG iterations), time_ms.",
-        );
+    );
 }
 
 fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
@@ -319,15 +325,20 @@ mod tests {
 
     /// A deterministic image with smooth structure and noise.
     fn image(w: u32, h: u32, seed: u64) -> Image {
-        let mut s = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        let mut s = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         let mut img = Image::new(w, h, [0.0, 0.0, 0.0, 1.0]);
         for y in 0..h {
             for x in 0..w {
                 let mut p = [0.0f32, 0.0, 0.0, 1.0];
                 for (c, v) in p.iter_mut().take(3).enumerate() {
-                    s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                    s = s
+                        .wrapping_mul(6364136223846793005)
+                        .wrapping_add(1442695040888963407);
                     let noise = (s >> 40) as f32 / (1u64 << 24) as f32;
-                    *v = 0.5 + 0.3 * ((x as f32 * 0.3 + c as f32) + y as f32 * 0.2).sin()
+                    *v = 0.5
+                        + 0.3 * ((x as f32 * 0.3 + c as f32) + y as f32 * 0.2).sin()
                         + 0.1 * noise;
                 }
                 img.set(x, y, p);
@@ -341,7 +352,10 @@ mod tests {
         let mut m = Image::new(w, h, [0.0, 0.0, 0.0, 1.0]);
         for y in 0..h {
             for x in 0..w {
-                let (dx, dy) = (x as f32 + 0.5 - w as f32 / 2.0, y as f32 + 0.5 - h as f32 / 2.0);
+                let (dx, dy) = (
+                    x as f32 + 0.5 - w as f32 / 2.0,
+                    y as f32 + 0.5 - h as f32 / 2.0,
+                );
                 if dx * dx + dy * dy < r * r {
                     m.set(x, y, [1.0; 4]);
                 }
@@ -402,8 +416,7 @@ mod tests {
             assert!(s.residual < 1e-10, "{mode:?}: {}", s.residual);
             // and independently: A x = b recomputed here
             let shape = MaskShape::from_image(&mask);
-            let rhs =
-                poisson::guidance::right_hand_side(&shape, &target, &source, [20, 10], mode);
+            let rhs = poisson::guidance::right_hand_side(&shape, &target, &source, [20, 10], mode);
             let r = system::apply(&shape, s.values.as_ref()) - &rhs;
             assert!(r.norm_l2() < 1e-10 * rhs.norm_l2());
             // the pixels outside Ω are the target's
@@ -471,7 +484,13 @@ mod tests {
         assert_eq!(solved(&b).solver, "sine_transform");
         assert!(max_diff_from_target(&b, &target, &rect, [9, 5]) < 1e-12);
         // an irregular mask stays on Cholesky
-        let b = poisson_blend(&target, &source, Some(&disc(22, 20, 7.0)), [9.0, 5.0], Mode::Seamless);
+        let b = poisson_blend(
+            &target,
+            &source,
+            Some(&disc(22, 20, 7.0)),
+            [9.0, 5.0],
+            Mode::Seamless,
+        );
         assert_eq!(solved(b.as_ref().unwrap()).solver, "cholesky");
     }
 
@@ -503,16 +522,32 @@ mod tests {
         assert!(run(&target, &source, Some(&mask), [0.0, 0.0]).is_ok());
         let e = run(&target, &source, Some(&mask), [-1.0, 0.0]).unwrap_err();
         assert_eq!(e.socket.as_deref(), Some("offset"));
-        assert!(e.message.contains("x in [0, 12], y in [0, 12]"), "{}", e.message);
-        assert_eq!(sock(run(&target, &source, Some(&mask), [13.0, 3.0])), "offset");
-        assert_eq!(sock(run(&target, &source, Some(&mask), [3.0, 40.0])), "offset");
-        assert_eq!(sock(run(&target, &source, Some(&mask), [f64::NAN, 3.0])), "offset");
+        assert!(
+            e.message.contains("x in [0, 12], y in [0, 12]"),
+            "{}",
+            e.message
+        );
+        assert_eq!(
+            sock(run(&target, &source, Some(&mask), [13.0, 3.0])),
+            "offset"
+        );
+        assert_eq!(
+            sock(run(&target, &source, Some(&mask), [3.0, 40.0])),
+            "offset"
+        );
+        assert_eq!(
+            sock(run(&target, &source, Some(&mask), [f64::NAN, 3.0])),
+            "offset"
+        );
         // a region larger than the target's interior
         let small = image(7, 7, 12);
         assert_eq!(sock(run(&small, &source, Some(&mask), [0.0, 0.0])), "mask");
         assert_eq!(sock(run(&small, &source, None, [0.0, 0.0])), "source");
         // sizes
-        assert_eq!(sock(run(&target, &source, Some(&disc(9, 8, 3.0)), [4.0, 4.0])), "mask");
+        assert_eq!(
+            sock(run(&target, &source, Some(&disc(9, 8, 3.0)), [4.0, 4.0])),
+            "mask"
+        );
         // NaN
         let mut bad = source.clone();
         bad.set(3, 3, [f32::NAN, 0.0, 0.0, 1.0]);

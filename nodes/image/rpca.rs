@@ -7,14 +7,14 @@ pub mod admm;
 #[path = "rpca/svt.rs"]
 pub mod svt;
 
-use crate::prelude::*;
 use admm::{Decomposition, Params};
+use cgnodes_api::prelude::*;
 use faer::Mat;
 
 /// A matrix from CSV text: every row a list of numbers (no header; blank lines and `#`
 /// comments skipped). Errors say which row and column.
 pub fn parse_matrix_csv(text: &str) -> Result<Mat<f64>, String> {
-    let rows = crate::io::csv::read(text, true, true)?.ok_or("the file has no rows")?;
+    let rows = cgnodes_api::io::csv::read(text, true, true)?.ok_or("the file has no rows")?;
     let all: Vec<&Vec<String>> = std::iter::once(&rows.header).chain(&rows.rows).collect();
     let n = all[0].len();
     let mut values = Vec::with_capacity(all.len() * n);
@@ -31,7 +31,11 @@ pub fn parse_matrix_csv(text: &str) -> Result<Mat<f64>, String> {
                 .parse()
                 .map_err(|_| format!("row {}, column {}: '{s}' is not a number", r + 1, c + 1))?;
             if !v.is_finite() {
-                return Err(format!("row {}, column {}: '{s}' is not finite", r + 1, c + 1));
+                return Err(format!(
+                    "row {}, column {}: '{s}' is not finite",
+                    r + 1,
+                    c + 1
+                ));
             }
             values.push(v);
         }
@@ -48,7 +52,11 @@ pub fn image_channels(img: &Image) -> Result<Vec<Mat<f64>>, NodeError> {
     if w == 0 || h == 0 {
         return Err(NodeError::invalid("image", "the image is empty"));
     }
-    if let Some(i) = img.pixels.iter().position(|p| p.iter().any(|v| !v.is_finite())) {
+    if let Some(i) = img
+        .pixels
+        .iter()
+        .position(|p| p.iter().any(|v| !v.is_finite()))
+    {
         return Err(NodeError::invalid(
             "image",
             format!("pixel ({}, {}) is not finite", i % w, i / w),
@@ -83,7 +91,10 @@ pub fn matrix_image(m: &Mat<f64>) -> Image {
 pub fn to_table(m: &Mat<f64>) -> Table {
     let mut t = Table::default();
     for j in 0..m.ncols() {
-        t.set_column(&format!("c{}", j + 1), (0..m.nrows()).map(|i| m[(i, j)]).collect());
+        t.set_column(
+            &format!("c{}", j + 1),
+            (0..m.nrows()).map(|i| m[(i, j)]).collect(),
+        );
     }
     t
 }
@@ -147,16 +158,22 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     };
     let (mats, from_matrix) = match (img, file) {
         (Some(_), Some(_)) => {
-            return Err(NodeError::invalid("matrix", "give either image or matrix, not both"))
+            return Err(NodeError::invalid(
+                "matrix",
+                "give either image or matrix, not both",
+            ))
         }
         (None, None) => {
-            return Err(NodeError::invalid("image", "connect an image or give a matrix file"))
+            return Err(NodeError::invalid(
+                "image",
+                "connect an image or give a matrix file",
+            ))
         }
         (Some(img), None) => (image_channels(&img)?, false),
         (None, Some(f)) => {
             let path = ctx.input_path(&f);
-            let text = std::fs::read_to_string(&path)
-                .map_err(|e| NodeError::io(&path, e).at("matrix"))?;
+            let text =
+                std::fs::read_to_string(&path).map_err(|e| NodeError::io(&path, e).at("matrix"))?;
             let m = parse_matrix_csv(&text).map_err(|e| NodeError::invalid("matrix", e))?;
             (vec![m], true)
         }
@@ -228,7 +245,7 @@ pub fn register(r: &mut Registry) {
 mod tests {
     use super::admm::*;
     use super::*;
-    use crate::nodes::image::image_svd::svd::randomized::gaussian_matrix;
+    use crate::image_svd::svd::randomized::gaussian_matrix;
 
     /// Candès et al. §4.1's synthetic case: L = X Y^T / sqrt(n) with Gaussian X (n x r) and
     /// Y, and a fraction `frac` of entries corrupted by values uniform in [-50, 50].
@@ -242,8 +259,10 @@ mod tests {
             let x = g.abs();
             // Abramowitz & Stegun 7.1.26: erf to 1.5e-7, enough to pick positions and values
             let t = 1.0 / (1.0 + 0.3275911 * x / 2f64.sqrt());
-            let poly = t * (0.254829592
-                + t * (-0.284496736 + t * (1.421413741 + t * (-1.453152027 + t * 1.061405429))));
+            let poly = t
+                * (0.254829592
+                    + t * (-0.284496736
+                        + t * (1.421413741 + t * (-1.453152027 + t * 1.061405429))));
             1.0 - poly * (-x * x / 2.0).exp()
         };
         let s = Mat::from_fn(n, n, |i, j| {
@@ -269,7 +288,11 @@ mod tests {
         assert!(d.converged, "{:?}", d.log.last());
         let el = (&d.low_rank - &l0).norm_l2() / l0.norm_l2();
         let es = (&d.sparse - &s0).norm_l2() / s0.norm_l2();
-        assert!(el < 1e-6 && es < 1e-6, "L {el:e}, S {es:e}, {} iterations", d.log.len());
+        assert!(
+            el < 1e-6 && es < 1e-6,
+            "L {el:e}, S {es:e}, {} iterations",
+            d.log.len()
+        );
         assert_eq!(d.log.last().unwrap().rank, r);
         // the low-rank phase runs on the warm-started thresholding, so the recovery covers it
         assert!(d.log.last().unwrap().warm, "last step not warm-started");
@@ -326,7 +349,10 @@ mod tests {
         let e = parse_matrix_csv("1,2,3\n4,5\n").unwrap_err();
         assert!(e.contains("row 2 has 2 numbers but row 1 has 3"), "{e}");
         let e = parse_matrix_csv("1,2\nNaN,5\n").unwrap_err();
-        assert!(e.contains("row 2, column 1") && e.contains("not finite"), "{e}");
+        assert!(
+            e.contains("row 2, column 1") && e.contains("not finite"),
+            "{e}"
+        );
         let e = parse_matrix_csv("1,x\n").unwrap_err();
         assert!(e.contains("'x' is not a number"), "{e}");
         assert!(parse_matrix_csv("\n").is_err());

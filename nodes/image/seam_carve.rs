@@ -6,7 +6,7 @@
 #[path = "seam/mod.rs"]
 pub mod seam;
 
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
 use seam::{dp::find_seam, insert::insert_seams, order, Energy, Grid, Order, MASK_ENERGY};
 
 /// What to produce.
@@ -118,7 +118,10 @@ fn mask_energy(img: &Image, protect: Option<&Image>, remove: Option<&Image>) -> 
         if m.pixels.iter().any(|q| q[3] < 1.0) {
             m.pixels.iter().map(|p| p[3] > 0.5).collect()
         } else {
-            m.pixels.iter().map(|p| seam::energy::luminance(*p) > 0.5).collect()
+            m.pixels
+                .iter()
+                .map(|p| seam::energy::luminance(*p) > 0.5)
+                .collect()
         }
     };
     let (prot, rem) = (flags(protect), flags(remove));
@@ -144,11 +147,18 @@ fn check(img: &Image, socket: &str, size: Option<(u32, u32)>) -> Result<(), Node
         if (img.width, img.height) != (w, h) {
             return Err(NodeError::invalid(
                 socket,
-                format!("the mask is {}x{} but the image is {w}x{h}", img.width, img.height),
+                format!(
+                    "the mask is {}x{} but the image is {w}x{h}",
+                    img.width, img.height
+                ),
             ));
         }
     }
-    if let Some(i) = img.pixels.iter().position(|p| p.iter().any(|v| !v.is_finite())) {
+    if let Some(i) = img
+        .pixels
+        .iter()
+        .position(|p| p.iter().any(|v| !v.is_finite()))
+    {
         let w = img.width as usize;
         return Err(NodeError::invalid(
             socket,
@@ -237,8 +247,7 @@ pub fn seam_carve(
         other => {
             if other == Order::Optimal && (tw, th) != (w, h) {
                 c.out.notes.push(
-                    "order optimal applies when both dimensions shrink; resized width first"
-                        .into(),
+                    "order optimal applies when both dimensions shrink; resized width first".into(),
                 );
             }
             c.resize(false, tw);
@@ -330,15 +339,25 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let dims = [ctx.input::<i64>("width")?, ctx.input::<i64>("height")?];
     for (d, name) in dims.iter().zip(["width", "height"]) {
         if *d < 0 {
-            return Err(NodeError::invalid(name, format!("{name} must not be negative")));
+            return Err(NodeError::invalid(
+                name,
+                format!("{name} must not be negative"),
+            ));
         }
     }
     // the grid (44 bytes per pixel) and its copy while inserting, at the larger of the input
     // and the target size in each dimension
-    let (w, h) = (dims[0].max(img.width as i64) as u64, dims[1].max(img.height as i64) as u64);
+    let (w, h) = (
+        dims[0].max(img.width as i64) as u64,
+        dims[1].max(img.height as i64) as u64,
+    );
     let what = format!("seam carving at {w}x{h} pixels");
-    let socket = if dims[0] > img.width as i64 { "width" } else { "height" };
-    ctx.reserve_bytes(socket, &what, crate::node::bytes_of(&[w, h, 2 * 44]))?;
+    let socket = if dims[0] > img.width as i64 {
+        "width"
+    } else {
+        "height"
+    };
+    ctx.reserve_bytes(socket, &what, cgnodes_api::node::bytes_of(&[w, h, 2 * 44]))?;
     let req = Request {
         width: dims[0] as usize,
         height: dims[1] as usize,

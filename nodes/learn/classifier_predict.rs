@@ -2,14 +2,15 @@
 //! accuracy and the confusion matrix when the table has the model's label column.
 
 use super::dataset::{features, int_labels, predict};
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
 
 fn declare(b: &mut NodeBuilder) {
     b.doc("Classifies the rows of a table with a trained model; accuracy and confusion matrix when labels are present.");
     b.add_input::<Model>("model");
     b.add_input::<Table>("data")
         .doc("Rows with the model's feature columns (and optionally its label column).");
-    b.add_output::<Vec<i64>>("labels").doc("The predicted label of every row.");
+    b.add_output::<Vec<i64>>("labels")
+        .doc("The predicted label of every row.");
     b.add_output::<Table>("table")
         .doc("One row: rows, correct, accuracy (NaN without a label column).");
     b.add_output::<Table>("confusion")
@@ -54,7 +55,10 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
                 r.extend(row.iter().map(|&v| v as f64));
                 conf.push_row(&r);
             }
-            (acc, tr.iter().zip(&pred).filter(|(a, b)| a == b).count() as f64)
+            (
+                acc,
+                tr.iter().zip(&pred).filter(|(a, b)| a == b).count() as f64,
+            )
         }
         None => (f64::NAN, f64::NAN),
     };

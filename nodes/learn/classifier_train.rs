@@ -4,7 +4,7 @@
 
 use super::dataset::{self, features, int_labels, label_index, standardization};
 use super::mlp::{train, Activation, Optimizer, TrainParams};
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
 
 /// The network (the `model` input).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -22,7 +22,8 @@ impl Choice for Architecture {
 
 fn declare(b: &mut NodeBuilder) {
     b.doc("Trains an MLP classifier (softmax cross-entropy, SGD or Adam) on a table with an integer label column.");
-    b.add_input::<Table>("train").doc("Training rows: feature columns and a label column.");
+    b.add_input::<Table>("train")
+        .doc("Training rows: feature columns and a label column.");
     b.add_input::<Table>("test")
         .optional()
         .doc("Rows evaluated after every epoch (same columns).");
@@ -34,9 +35,12 @@ fn declare(b: &mut NodeBuilder) {
     b.add_input::<Vec<i64>>("hidden")
         .default(Value::from(vec![16i64, 16]))
         .doc("Hidden layer sizes, e.g. [16, 16]; rnn: one size, its state.");
-    b.add_choice::<Activation>("activation").doc("relu, sigmoid or tanh.");
+    b.add_choice::<Activation>("activation")
+        .doc("relu, sigmoid or tanh.");
     b.add_choice::<Optimizer>("optimizer").doc("adam or sgd.");
-    b.add_input::<f64>("learning_rate").default(1e-3).range(1e-9, 10.0);
+    b.add_input::<f64>("learning_rate")
+        .default(1e-3)
+        .range(1e-9, 10.0);
     b.add_input::<i64>("epochs").default(200).range(1.0, 1e6);
     b.add_input::<i64>("batch_size").default(32).range(1.0, 1e7);
     b.add_input::<i64>("seed").default(0).min(0.0);
@@ -79,7 +83,11 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let c = label_index(&tr, &key).map_err(|e| NodeError::invalid("label_column", e))?;
     let label = tr.columns[c].0.clone();
     let (names, mut x, y) = labelled(&tr, c).map_err(|e| {
-        let socket = if e.contains("integer") { "label_column" } else { "train" };
+        let socket = if e.contains("integer") {
+            "label_column"
+        } else {
+            "train"
+        };
         NodeError::invalid(socket, e)
     })?;
     let mut classes = y.clone();

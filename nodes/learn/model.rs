@@ -2,7 +2,7 @@
 //! kind, activation, layers with row-major weights, features, label, classes, mean, scale).
 
 use super::dataset::network;
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
 use std::path::Path;
 
 fn declare_save(b: &mut NodeBuilder) {
@@ -19,7 +19,10 @@ fn execute_save(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let p: String = ctx.input("path")?;
     let path = ctx.output_path("path", &p)?;
     if path.extension().and_then(|e| e.to_str()) != Some("json") {
-        return Err(NodeError::invalid("path", format!("'{p}' should end in .json")));
+        return Err(NodeError::invalid(
+            "path",
+            format!("'{p}' should end in .json"),
+        ));
     }
     let text = serde_json::to_string_pretty(&*m)
         .map_err(|e| NodeError::invalid("model", e.to_string()))?;
@@ -28,7 +31,9 @@ fn execute_save(ctx: &mut ExecContext) -> Result<(), NodeError> {
 
 fn declare_load(b: &mut NodeBuilder) {
     b.doc("Reads a model written by model_save.");
-    b.add_input::<String>("path").file_in().doc("A .json model file.");
+    b.add_input::<String>("path")
+        .file_in()
+        .doc("A .json model file.");
     b.add_output::<Model>("model");
 }
 

@@ -8,7 +8,7 @@
 
 use super::nested_dissection::Dissection;
 use super::{SpdFactor, TwoDomainFactor};
-use crate::node::NodeError;
+use cgnodes_api::node::NodeError;
 use faer::sparse::SparseColMat;
 use faer::Mat;
 

@@ -7,7 +7,7 @@
 
 use super::laplace::not_positive_definite;
 use super::SpdFactor;
-use crate::node::NodeError;
+use cgnodes_api::node::NodeError;
 use faer::linalg::solvers::Solve;
 use faer::sparse::SparseColMat;
 use faer::Mat;

@@ -4,7 +4,7 @@
 //! `buffer_repeat2`, `buffer_repeat3` and `buffer_repeat_int` fill a list with `size` copies
 //! of one value (Framework3D's Create Buffer nodes).
 
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
 
 /// Zips coordinate lists into vectors; all lists must have the same length.
 pub fn zip<const N: usize>(cols: [&[f64]; N]) -> Result<Vec<[f64; N]>, String> {
@@ -107,7 +107,9 @@ where
         |b| {
             b.doc("A list of `size` copies of one vector (Framework3D's Create Buffer).");
             for a in &AXES[..N] {
-                b.add_input::<f64>(a).default(0.0).doc("Coordinate of every entry.");
+                b.add_input::<f64>(a)
+                    .default(0.0)
+                    .doc("Coordinate of every entry.");
             }
             declare_size(b);
             b.add_output::<Vec<[f64; N]>>("buffer");
@@ -136,7 +138,9 @@ pub fn register(r: &mut Registry) {
         "buffer_repeat",
         |b| {
             b.doc("A list of `size` copies of one number (Framework3D's Create Buffer1f).");
-            b.add_input::<f64>("x").default(0.0).doc("Value of every entry.");
+            b.add_input::<f64>("x")
+                .default(0.0)
+                .doc("Value of every entry.");
             declare_size(b);
             b.add_output::<Vec<f64>>("buffer");
         },
@@ -151,7 +155,9 @@ pub fn register(r: &mut Registry) {
         "buffer_repeat_int",
         |b| {
             b.doc("A list of `size` copies of one integer (Framework3D's Create Buffer1i).");
-            b.add_input::<i64>("x").default(0i64).doc("Value of every entry.");
+            b.add_input::<i64>("x")
+                .default(0i64)
+                .doc("Value of every entry.");
             declare_size(b);
             b.add_output::<Vec<i64>>("buffer");
         },

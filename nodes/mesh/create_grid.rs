@@ -3,7 +3,7 @@
 //! with texture coordinates (i / resolution, j / resolution). (`mesh_grid` is the centred,
 //! general grid; this one keeps the framework's layout so imported graphs place it alike.)
 
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
 
 /// The course's grid: vertex `(i, j)` (i along y, j along z) has index `i (r + 1) + j`,
 /// position `(0, size i / r, size j / r)` and UV `(i / r, j / r)`; quad `(i, j)` is
@@ -54,7 +54,10 @@ fn declare(b: &mut NodeBuilder) {
 fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let r: i64 = ctx.input("resolution")?;
     if !(1..=4096).contains(&r) {
-        return Err(NodeError::invalid("resolution", "must be between 1 and 4096"));
+        return Err(NodeError::invalid(
+            "resolution",
+            "must be between 1 and 4096",
+        ));
     }
     let size: f64 = ctx.input("size")?;
     if !(size.is_finite() && size > 0.0) {

@@ -4,7 +4,7 @@
 //! it: `K_v = (2 pi - sum of the corner angles at v) / (A_v / 3)`, `A_v` the area of the
 //! triangles around v.
 
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
 
 /// Per-vertex angle defect `2 pi - sum theta` (interior) or `pi - sum theta` (boundary, the
 /// turning of the boundary curve) and barycentric area `A_v / 3` of a triangle mesh.
@@ -135,8 +135,7 @@ mod tests {
 
     #[test]
     fn flat_grid_interior_is_zero() {
-        let g = crate::nodes::mesh::mesh_grid::grid_mesh(4, 4, [1.0, 1.0], "xy", [0.0; 3], true)
-            .unwrap();
+        let g = cgnodes_geometry::grid::grid_mesh(4, 4, [1.0, 1.0], "xy", [0.0; 3], true).unwrap();
         let k = gaussian_curvature(&Arc::new(g)).unwrap();
         // Interior vertex (2, 2): index 2 * 5 + 2; corner angles sum to 2 pi.
         assert!(k[12].abs() < 1e-9);

@@ -2,7 +2,7 @@
 //! (vertices, face sizes, face indices, normals, texcoords) and put back together, so that
 //! imported Framework3D graphs that edit buffers run unchanged.
 
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
 
 /// The buffers of a mesh, as Framework3D's `geom_mesh_decompose` gives them.
 #[derive(Clone, Debug, Default, PartialEq)]

@@ -2,7 +2,7 @@
 //! edges, bounding box, boundary loops and their lengths, components, Euler characteristic,
 //! genus, manifoldness, degenerate faces).
 
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
 
 /// Area of a polygon by Newell's method (half the length of the summed cross products),
 /// valid for non-planar polygons too.
@@ -25,7 +25,7 @@ fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
 /// The signed volume enclosed by a closed, outward-oriented mesh (divergence theorem over a
 /// fan triangulation of each face: `V = Σ p0 · (p1 × p2) / 6`); meaningless for an open mesh.
 pub fn signed_volume(mesh: &Mesh) -> f64 {
-    use crate::types::vec3::{cross, dot};
+    use cgnodes_api::types::vec3::{cross, dot};
     mesh.faces()
         .map(|f| {
             let p0 = mesh.positions[f[0] as usize];

@@ -1,69 +1,7 @@
 //! `mesh_plane`: a flat, subdivided ground plane with planar UVs and normals, for scenes.
 
-use crate::prelude::*;
-
-/// A square plane of side `size` centred at `center`, in the XZ plane facing +Y, split into
-/// `n` x `n` quads (two triangles each, counter-clockwise seen from +Y). UVs run over
-/// 0..`uv_scale` along +X and -Z (so a texture reads upright from above), normals are +Y.
-pub fn plane_mesh(size: f64, center: [f64; 3], n: usize, uv_scale: f64) -> Mesh {
-    let n = n.max(1);
-    let mut pos = Vec::with_capacity((n + 1) * (n + 1));
-    let mut uvs = Vec::with_capacity((n + 1) * (n + 1));
-    for j in 0..=n {
-        for i in 0..=n {
-            let s = i as f64 / n as f64;
-            let t = j as f64 / n as f64;
-            pos.push([
-                center[0] + (s - 0.5) * size,
-                center[1],
-                center[2] + (0.5 - t) * size,
-            ]);
-            uvs.push([s * uv_scale, t * uv_scale]);
-        }
-    }
-    // Rows go towards -Z as j grows, so the grid's (i,j),(i+1,j),(i+1,j+1) is CCW from +Y.
-    let tris = grid_triangles(n, n);
-    let nv = pos.len();
-    let mut m = Mesh::from_triangles(pos, &tris).expect("valid indices by construction");
-    m.normals = Some(Attribute {
-        domain: Domain::Vertex,
-        values: vec![[0.0, 1.0, 0.0]; nv],
-    });
-    m.uvs = Some(Attribute {
-        domain: Domain::Vertex,
-        values: uvs,
-    });
-    m
-}
-
-/// Turns a Y-up mesh made by `plane_mesh` Z-up: rotates it by +90 degrees about the X
-/// axis through `center`, so the normal +Y becomes +Z (for Z-up scenes such as USD's).
-pub fn y_up_to_z_up(m: &mut Mesh, center: [f64; 3]) {
-    let rot = |p: [f64; 3]| [p[0], -p[2], p[1]];
-    for p in &mut m.positions {
-        let d = [p[0] - center[0], p[1] - center[1], p[2] - center[2]];
-        let r = rot(d);
-        *p = [center[0] + r[0], center[1] + r[1], center[2] + r[2]];
-    }
-    if let Some(n) = &mut m.normals {
-        for v in &mut n.values {
-            *v = rot(*v);
-        }
-    }
-}
-
-/// The axis a plane faces (the `up` socket).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Up {
-    /// Y up: the plane is the XZ plane.
-    Y,
-    /// Z up: the plane is the XY plane.
-    Z,
-}
-
-impl Choice for Up {
-    const CHOICES: &'static [(&'static str, Self)] = &[("y", Up::Y), ("z", Up::Z)];
-}
+use cgnodes_api::prelude::*;
+pub use cgnodes_geometry::plane::*;
 
 fn declare(b: &mut NodeBuilder) {
     b.doc("A flat square plane facing +Y with planar UVs (a ground plane).");
@@ -103,8 +41,8 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let up = ctx.choice::<Up>("up")?;
     // The grid plus 40 bytes of UV and normal per vertex.
     let nv = (n as u64 + 1) * (n as u64 + 1);
-    let bytes = crate::nodes::mesh::mesh_grid::grid_mesh_bytes(n as u64, n as u64, true)
-        .saturating_add(crate::node::bytes_of(&[nv, 40]));
+    let bytes = cgnodes_geometry::grid::grid_mesh_bytes(n as u64, n as u64, true)
+        .saturating_add(cgnodes_api::node::bytes_of(&[nv, 40]));
     ctx.reserve_bytes("subdivisions", &format!("a {n}x{n} plane"), bytes)?;
     let mut m = plane_mesh(size, center, n as usize, uv_scale);
     if up == Up::Z {
@@ -130,9 +68,9 @@ mod tests {
         assert_eq!(m.bounds(), ([-1.0, 1.0, -1.0], [1.0, 1.0, 1.0]));
         for t in m.triangles().unwrap() {
             let p = |k: usize| m.positions[t[k] as usize];
-            let e1 = crate::types::vec3::sub(p(1), p(0));
-            let e2 = crate::types::vec3::sub(p(2), p(0));
-            let n = crate::types::vec3::cross(e1, e2);
+            let e1 = cgnodes_api::types::vec3::sub(p(1), p(0));
+            let e2 = cgnodes_api::types::vec3::sub(p(2), p(0));
+            let n = cgnodes_api::types::vec3::cross(e1, e2);
             assert!(n[1] > 0.0 && n[0].abs() < 1e-12 && n[2].abs() < 1e-12);
         }
         let mut z = m.clone();

@@ -1,14 +1,14 @@
 //! `mesh_save`: writes a mesh under the output directory as OBJ (plus MTL and texture PNG
 //! when the mesh carries a material), PLY, USDA or OFF, chosen by the extension.
 
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
 use std::path::Path;
 
 /// Encodes a linear RGBA image as an 8-bit sRGB PNG (IEC 61966-2-1 transfer function) with
 /// `image_save`'s encoder; a `+inf` colour channel stays white here (the encoder writes it
 /// as 0), as texture files written by `mesh_save` always had.
 pub fn png_bytes(img: &Image) -> Result<Vec<u8>, String> {
-    use crate::nodes::image::image_save::{encode_image, ImageFileFormat};
+    use cgnodes_formats::image_file::{encode_image, ImageFileFormat};
     let mut img = img.clone();
     for p in &mut img.pixels {
         for c in &mut p[..3] {
@@ -114,7 +114,7 @@ fn save_obj(ctx: &mut ExecContext, mesh: &Mesh, path: &Path) -> Result<(), NodeE
     if let Some(img) = &mat.base_color_texture {
         let t = format!(
             "{stem}_{}.png",
-            crate::nodes::mesh::usda::usd_identifier(&name)
+            cgnodes_formats::usda::usd_identifier(&name)
         );
         let bytes = png_bytes(img).map_err(|e| NodeError::io(&path.with_file_name(&t), e))?;
         ctx.write_file(&path.with_file_name(&t), &bytes)?;

@@ -15,8 +15,8 @@
 //! `MAX_EAR_TESTS` point-in-triangle tests is refused with an error naming the face and its
 //! corner count, rather than running for minutes.
 
-use crate::prelude::*;
-use crate::types::vec3;
+use cgnodes_api::prelude::*;
+use cgnodes_api::types::vec3;
 
 /// The most point-in-triangle tests spent on one face (about a second of work) before
 /// `triangulate_polygon` gives up on it.
@@ -147,7 +147,9 @@ impl Clipper<'_> {
                         continue;
                     }
                     let p = self.q[o];
-                    if cross2(qa, qb, p) >= 0.0 && cross2(qb, qc, p) >= 0.0 && cross2(qc, qa, p) >= 0.0
+                    if cross2(qa, qb, p) >= 0.0
+                        && cross2(qb, qc, p) >= 0.0
+                        && cross2(qc, qa, p) >= 0.0
                     {
                         inside = true;
                         break 'cells;
@@ -421,11 +423,19 @@ mod tests {
     /// triangle distinct, none clockwise, and their areas add up to the shoelace area.
     fn assert_valid(p: &[[f64; 3]], t: &[[usize; 3]]) {
         assert_eq!(t.len(), p.len() - 2);
-        assert!(t.iter().all(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2]));
-        assert!(t.iter().all(|&t| area2(p, t) > 0.0), "a triangle folds over");
+        assert!(t
+            .iter()
+            .all(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2]));
+        assert!(
+            t.iter().all(|&t| area2(p, t) > 0.0),
+            "a triangle folds over"
+        );
         let total: f64 = t.iter().map(|&t| area2(p, t)).sum();
         let want = shoelace2(p);
-        assert!((total - want).abs() <= 1e-9 * want.abs(), "{total} vs {want}");
+        assert!(
+            (total - want).abs() <= 1e-9 * want.abs(),
+            "{total} vs {want}"
+        );
     }
 
     /// A star around the origin: `n` corners alternating between radius 1 and `inner`, so
@@ -467,7 +477,13 @@ mod tests {
         let n = 100_000;
         let p: Vec<[f64; 3]> = star(n, 1.0)
             .iter()
-            .map(|x| [(100.0 * x[0]) as f32 as f64, (100.0 * x[1]) as f32 as f64, 0.0])
+            .map(|x| {
+                [
+                    (100.0 * x[0]) as f32 as f64,
+                    (100.0 * x[1]) as f32 as f64,
+                    0.0,
+                ]
+            })
             .collect();
         let reflex = (0..n)
             .filter(|&k| cross2_3(p[(k + n - 1) % n], p[k], p[(k + 1) % n]) <= 0.0)
@@ -489,7 +505,9 @@ mod tests {
         // Random star-shaped (hence simple) polygons, from a fixed linear congruential stream.
         let mut seed = 12345u64;
         let mut rnd = || {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             (seed >> 11) as f64 / (1u64 << 53) as f64
         };
         for _ in 0..300 {
@@ -519,7 +537,12 @@ mod tests {
         let mut comb = vec![[0.0, 0.0, 0.0], [2.0 * k as f64, 0.0, 0.0]];
         for i in (0..k).rev() {
             let x = 2.0 * i as f64;
-            comb.extend([[x + 2.0, 10.0, 0.0], [x + 1.0, 10.0, 0.0], [x + 1.0, 1.0, 0.0], [x, 1.0, 0.0]]);
+            comb.extend([
+                [x + 2.0, 10.0, 0.0],
+                [x + 1.0, 10.0, 0.0],
+                [x + 1.0, 1.0, 0.0],
+                [x, 1.0, 0.0],
+            ]);
         }
         assert_valid(&comb, &triangulate_polygon(&comb).unwrap());
     }
@@ -533,13 +556,20 @@ mod tests {
             (0..n)
                 .map(|k| {
                     let t = std::f64::consts::TAU * k as f64 / n as f64;
-                    [t.sin(), (2.0 * t).sin() * if k < n / 2 { 0.5 } else { 0.3 }, 0.0]
+                    [
+                        t.sin(),
+                        (2.0 * t).sin() * if k < n / 2 { 0.5 } else { 0.3 },
+                        0.0,
+                    ]
                 })
                 .collect()
         };
         assert_eq!(triangulate_polygon(&eight(200)).unwrap().len(), 198);
         let e = clip_polygon(&eight(20_000), 1_000_000).unwrap_err();
-        assert!(e.contains("more than 1000000 point-in-triangle tests"), "{e}");
+        assert!(
+            e.contains("more than 1000000 point-in-triangle tests"),
+            "{e}"
+        );
     }
 
     /// Past its budget of point-in-triangle tests a face is refused, and the error names the

@@ -4,7 +4,7 @@
 //! attribute the mesh's display colours. An optional `radius` adds a per-vertex `radius`
 //! attribute (USD's point widths are diameters, twice it).
 
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
 
 /// A points-only mesh of `points`: positions, attributes as vertex attributes, `color` as the
 /// display colour, and a constant `radius` attribute when `radius` is given. `Err` when a
@@ -97,7 +97,10 @@ fn declare(b: &mut NodeBuilder) {
 fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let r: f64 = ctx.input("radius")?;
     if !(r.is_finite() && r >= 0.0) {
-        return Err(NodeError::invalid("radius", "must be finite and not negative"));
+        return Err(NodeError::invalid(
+            "radius",
+            "must be finite and not negative",
+        ));
     }
     let radius = (r > 0.0).then_some(r);
     let points = ctx.input_opt::<Arc<Points>>("points")?;
@@ -114,7 +117,8 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
         (None, None) => return Err(NodeError::invalid("points", "link points or a mesh")),
     }
     .map_err(|e| NodeError::invalid("points", e.to_string()))?;
-    out.check().map_err(|e| NodeError::invalid("points", e.to_string()))?;
+    out.check()
+        .map_err(|e| NodeError::invalid("points", e.to_string()))?;
     ctx.set_output("mesh", out);
     Ok(())
 }
@@ -136,8 +140,10 @@ mod tests {
             ..Default::default()
         };
         p.scalars.insert("speed".into(), vec![0.5, 2.0]);
-        p.vectors.insert("color".into(), vec![[1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]);
-        p.vectors.insert("velocity".into(), vec![[0.0; 3], [1.0, 2.0, 3.0]]);
+        p.vectors
+            .insert("color".into(), vec![[1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]);
+        p.vectors
+            .insert("velocity".into(), vec![[0.0; 3], [1.0, 2.0, 3.0]]);
         let m = points_to_mesh(&p, Some(0.25)).unwrap();
         m.check().unwrap();
         assert_eq!(m.positions, p.positions);
@@ -159,8 +165,11 @@ mod tests {
 
     #[test]
     fn mesh_vertices_drop_faces_and_corner_data() {
-        let mut m = Mesh::from_triangles(vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], &[[0, 1, 2]])
-            .unwrap();
+        let mut m = Mesh::from_triangles(
+            vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+            &[[0, 1, 2]],
+        )
+        .unwrap();
         m.uvs = Some(Attribute {
             domain: Domain::Corner,
             values: vec![[0.0; 2]; 3],

@@ -4,8 +4,8 @@
 //! counter-based generator (SplitMix64), so the points differ from the framework's but follow
 //! the same distribution.
 
-use crate::nodes::trace::sampling::splitmix64;
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
+use cgnodes_api::rng::splitmix64;
 
 /// `count` points uniform in `[0, 1)^2 x {0}`, reproducible from `seed`.
 pub fn random_uv_points(count: usize, seed: i64) -> Vec<[f64; 3]> {
@@ -38,12 +38,15 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     }
     let width: f64 = ctx.input("width")?;
     if !(width.is_finite() && width >= 0.0) {
-        return Err(NodeError::invalid("width", "must be finite and not negative"));
+        return Err(NodeError::invalid(
+            "width",
+            "must be finite and not negative",
+        ));
     }
     let p = random_uv_points(count as usize, ctx.input("seed")?);
     let n = p.len();
-    let mut m =
-        Mesh::new(p, Vec::new(), Vec::new()).map_err(|e| NodeError::invalid("count", e.to_string()))?;
+    let mut m = Mesh::new(p, Vec::new(), Vec::new())
+        .map_err(|e| NodeError::invalid("count", e.to_string()))?;
     m.attributes.insert(
         "width".into(),
         AttributeData::Float(Attribute {

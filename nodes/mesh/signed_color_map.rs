@@ -2,7 +2,7 @@
 //! signed scalar per vertex (e.g. Gaussian curvature) red to green: values in [min, 0] and
 //! in (0, max] are each normalised to half of [0, 1] and coloured by the node's two ramps.
 
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
 
 /// The course node's colours for `values`: `t = (v - min) / (0 - min) / 2` for `v <= 0`,
 /// `t = 1/2 + v / max / 2` above; colour `(2 (1/2 - t), 1 - 2 (1/2 - t), 0)` for

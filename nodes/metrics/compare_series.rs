@@ -3,13 +3,13 @@
 //! relative error, with an optional anchor that shifts the simulated x (time) so both pass
 //! through one chosen point.
 
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
 use std::path::Path;
 
 /// Reads two named numeric columns from CSV text with a header row (blank lines and lines
 /// starting with `#` are skipped, fields trimmed).
 pub fn read_csv_columns(text: &str, x: &str, y: &str) -> Result<Vec<(f64, f64)>, String> {
-    let csv = crate::io::csv::read(text, true, true)?.ok_or("empty CSV")?;
+    let csv = cgnodes_api::io::csv::read(text, true, true)?.ok_or("empty CSV")?;
     let col = |name: &str| {
         csv.column(name)
             .ok_or_else(|| format!("no column '{name}' (columns: {})", csv.header.join(", ")))

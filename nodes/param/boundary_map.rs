@@ -9,7 +9,7 @@
 //! spaced along the sides between them; without the snapping a corner would be cut off and
 //! boundary triangles with three vertices on one side would collapse.
 
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
 
 /// The convex shape the boundary is mapped to.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

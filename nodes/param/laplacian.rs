@@ -10,7 +10,7 @@
 use faer::sparse::{SparseColMat, Triplet};
 use rayon::prelude::*;
 
-pub use crate::nodes::linalg::laplace_weights::EdgeWeight;
+pub use cgnodes_linalg::laplace_weights::EdgeWeight;
 
 /// The cotangent of each corner's angle, per triangle: `cot[t][k]` is the cotangent of the
 /// angle at corner `k` of triangle `t`, opposite the edge from corner `k+1` to corner `k+2`.
@@ -146,7 +146,7 @@ pub fn count_negative_edges(weights: &[EdgeWeight]) -> usize {
     count
 }
 
-use crate::types::vec3::{cross, dot, norm, sub};
+use cgnodes_api::types::vec3::{cross, dot, norm, sub};
 
 #[cfg(test)]
 mod tests {

@@ -10,8 +10,8 @@
 
 use super::laplacian::corner_cotangents;
 use super::triangles::corner_row_starts;
-use crate::nodes::linalg::laplace::LaplaceRows;
-use crate::nodes::linalg::nested_dissection::{nested_dissection, Dissection, ND_MIN_ROWS};
+use cgnodes_linalg::laplace::LaplaceRows;
+use cgnodes_linalg::nested_dissection::{nested_dissection, Dissection, ND_MIN_ROWS};
 
 /// Summed symmetric edge weights in compressed rows (see the module documentation).
 #[derive(Clone, Debug)]
@@ -168,8 +168,8 @@ mod tests {
     use super::super::laplacian::cotangent_weights;
     use super::super::triangles::grid_triangles;
     use super::*;
-    use crate::nodes::linalg::laplace::solve_dirichlet;
-    use crate::nodes::linalg::laplace_weights::solve_dirichlet_weights;
+    use cgnodes_linalg::laplace::solve_dirichlet;
+    use cgnodes_linalg::laplace_weights::solve_dirichlet_weights;
 
     /// A 6 x 6 grid of squares split into triangles (vertex `(i, j)` is `7 j + i`), jittered
     /// and bent so the weights differ.

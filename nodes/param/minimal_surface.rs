@@ -7,12 +7,12 @@
 //! sparse Cholesky factorization.
 
 use super::laplacian::mean_value_weights;
-use super::triangles::fan_triangles;
 use super::laplacian_rows::LaplacianRows;
+use super::triangles::fan_triangles;
 use super::tutte::TutteWeights;
-use crate::nodes::linalg::laplace::solve_dirichlet;
-use crate::nodes::linalg::laplace_weights::solve_dirichlet_weights;
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
+use cgnodes_linalg::laplace::solve_dirichlet;
+use cgnodes_linalg::laplace_weights::solve_dirichlet_weights;
 
 /// The minimal surface's vertex positions: interior vertices solved, boundary vertices (and
 /// vertices used by no face) kept. `weights` is `Uniform` or `Cotangent` (mean-value weights

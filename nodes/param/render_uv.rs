@@ -3,7 +3,7 @@
 
 use super::triangles::fan_triangles;
 use super::uv_metrics::uv_metrics;
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
 
 /// Draws the UV layout of `triangles` (UVs `uvs`) into a `size` x `size` image. When every UV
 /// lies in [0,1]^2 the image shows that square, otherwise the bounding square of the UVs,
@@ -151,7 +151,7 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
         .and_then(|m| m.base_color_texture.clone());
     let size = size.clamp(16, 8192) as u32;
     let what = format!("a {size}x{size} image");
-    let bytes = crate::node::bytes_of(&[size as u64, size as u64, 16]);
+    let bytes = cgnodes_api::node::bytes_of(&[size as u64, size as u64, 16]);
     ctx.reserve_bytes("size", &what, bytes)?;
     let img = render_uv_layout(&tris, &uvs, tex.as_deref(), &m.face_flipped, size);
     ctx.set_output("image", img);

@@ -2,24 +2,8 @@
 //! the usual way to see a parameterization's distortion on the surface. `mesh_save` writes
 //! the material as MTL + image next to the OBJ.
 
-use crate::prelude::*;
-
-/// A `size` x `size` checkerboard with `squares` squares per side, light and dark grey
-/// (linear RGB), with the square at UV (0, 0) dark.
-pub fn checkerboard(size: u32, squares: u32) -> Image {
-    let squares = squares.max(1);
-    let mut img = Image::new(size, size, [1.0; 4]);
-    for y in 0..size {
-        for x in 0..size {
-            // row 0 is the top of the image, v = 1
-            let i = (x as u64 * squares as u64) / size as u64;
-            let j = ((size - 1 - y) as u64 * squares as u64) / size as u64;
-            let c = if (i + j).is_multiple_of(2) { 0.05 } else { 0.8 };
-            img.set(x, y, [c, c, c, 1.0]);
-        }
-    }
-    img
-}
+use cgnodes_api::prelude::*;
+pub use cgnodes_geometry::checkerboard::*;
 
 fn declare(b: &mut NodeBuilder) {
     b.doc("Attaches a texture (default: a generated checkerboard) to a mesh with UVs as its material.");
@@ -54,7 +38,7 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
         None => {
             let s = size.clamp(8, 8192) as u32;
             let what = format!("a {s}x{s} checkerboard");
-            let bytes = crate::node::bytes_of(&[s as u64, s as u64, 16]);
+            let bytes = cgnodes_api::node::bytes_of(&[s as u64, s as u64, 16]);
             ctx.reserve_bytes("checker_size", &what, bytes)?;
             let squares = squares.clamp(1, 1024) as u32;
             (Arc::new(checkerboard(s, squares)), "checker")

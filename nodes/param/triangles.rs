@@ -2,7 +2,7 @@
 //! work on, the triangulated regular grid of tests and examples, and per-vertex lists of
 //! triangle corners in compressed rows.
 
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
 
 /// Splits every polygon into a fan of triangles from its first corner (`Mesh::fan_triangles`,
 /// named here for the parameterization code that calls it on every mesh).
@@ -11,7 +11,7 @@ pub fn fan_triangles(mesh: &Mesh) -> Vec<[u32; 3]> {
 }
 
 /// The triangulated regular grid (`Topology`'s neighbour in `src/types`), named here too.
-pub use crate::types::{grid_triangles, grid_triangles_with};
+pub use cgnodes_api::types::{grid_triangles, grid_triangles_with};
 
 /// Row starts of compressed rows with `per_corner` entries for every triangle corner at a
 /// vertex: row `v` is `start[v]..start[v + 1]`, `start[n]` the total. The counting pass of a
@@ -48,7 +48,7 @@ mod tests {
         .unwrap();
         assert_eq!(fan_triangles(&m), t);
         assert_eq!(m.topology().boundary_loops.len(), 1);
-        let (start, list) = crate::types::Topology::vertex_triangles(6, &t);
+        let (start, list) = cgnodes_api::types::Topology::vertex_triangles(6, &t);
         assert_eq!(start, [0, 2, 5, 6, 7, 10, 12]);
         assert_eq!(&list[start[4]..start[5]], [0, 1, 3]);
     }

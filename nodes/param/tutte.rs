@@ -14,13 +14,13 @@
 
 use super::boundary_map::{map_boundary, parse_start, rotate_loop, Spacing};
 use super::laplacian::mean_value_weights;
-use super::triangles::fan_triangles;
 use super::laplacian_rows::LaplacianRows;
+use super::triangles::fan_triangles;
 use super::uv_metrics::uv_metrics;
-use crate::nodes::linalg::laplace::DirichletFactor;
-use crate::nodes::linalg::laplace_weights::solve_dirichlet_weights;
-use crate::nodes::linalg::nested_dissection::Dissection;
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
+use cgnodes_linalg::laplace::DirichletFactor;
+use cgnodes_linalg::laplace_weights::solve_dirichlet_weights;
+use cgnodes_linalg::nested_dissection::Dissection;
 
 pub use super::boundary_map::BoundaryShape;
 

@@ -11,9 +11,9 @@
 //! area-weighted over the 3D triangles. A triangle is flipped when its UV orientation disagrees
 //! with the majority's.
 
-use crate::types::vec3::{cross, norm, sub};
 use super::triangles::fan_triangles;
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
+use cgnodes_api::types::vec3::{cross, norm, sub};
 
 /// Distortion measures of a triangle mesh's UVs.
 #[derive(Clone, Debug, Default)]

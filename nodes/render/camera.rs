@@ -3,14 +3,7 @@
 //! The camera geometry shared by the rasterizer and the tracers (look-at frame, field of
 //! view, focal length, validation) is in methods of `Camera` (`src/types/scene.rs`).
 
-use crate::prelude::*;
-
-impl Choice for FovAxis {
-    const CHOICES: &'static [(&'static str, Self)] = &[
-        ("vertical", FovAxis::Vertical),
-        ("smaller", FovAxis::Smaller),
-    ];
-}
+use cgnodes_api::prelude::*;
 
 fn declare(b: &mut NodeBuilder) {
     b.doc("A look-at pinhole camera.");

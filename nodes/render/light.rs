@@ -6,7 +6,7 @@
 //! environment light (tracers only) is radiance arriving from infinitely far in every
 //! direction, from an equirectangular image or a constant colour.
 
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
 
 /// A point light; fails on non-finite or negative values.
 pub fn point_light(position: [f64; 3], color: [f64; 3], intensity: f64) -> Result<Light, String> {
@@ -26,12 +26,12 @@ pub fn directional_light(
     intensity: f64,
 ) -> Result<Light, String> {
     check(&direction, &color, intensity)?;
-    let n = crate::types::vec3::norm(direction);
+    let n = cgnodes_api::types::vec3::norm(direction);
     if n.is_nan() || n <= 1e-12 {
         return Err("direction must not be zero".into());
     }
     Ok(Light::Directional {
-        direction: crate::types::vec3::scale(direction, 1.0 / n),
+        direction: cgnodes_api::types::vec3::scale(direction, 1.0 / n),
         color,
         intensity,
     })
@@ -123,7 +123,10 @@ pub fn environment_light(
         return Err(NodeError::invalid("rotation", "rotation must be finite"));
     }
     if let Some(img) = &image {
-        if img.width == 0 || img.height == 0 || img.pixels.len() != (img.width * img.height) as usize {
+        if img.width == 0
+            || img.height == 0
+            || img.pixels.len() != (img.width * img.height) as usize
+        {
             return Err(NodeError::invalid("image", "the image is empty"));
         }
         if let Some(i) = img
@@ -181,7 +184,11 @@ fn execute_environment(ctx: &mut ExecContext) -> Result<(), NodeError> {
 
 /// Registers `light_point`, `light_directional` and `light_environment`.
 pub fn register(r: &mut Registry) {
-    r.add("light_environment", declare_environment, execute_environment);
+    r.add(
+        "light_environment",
+        declare_environment,
+        execute_environment,
+    );
     r.add("light_point", declare_point, execute_point);
     r.add(
         "light_directional",

@@ -1,7 +1,7 @@
 //! `material`: a surface's appearance, shared by the rasterizer (Blinn-Phong from base
 //! colour, metallic and roughness) and the tracers (the scattering `kind`).
 
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
 
 /// The scattering model named by the `kind` socket (`MaterialKind` without its parameters,
 /// which come from the `ior` and `roughness` sockets).

@@ -3,7 +3,7 @@
 //! first frame so an animation does not jump) and by the run report's mesh thumbnails.
 
 use super::raster::{self, Passes, RasterOptions};
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
 use serde::{Deserialize, Serialize};
 
 /// What the preview camera frames: a bounding sphere.
@@ -62,6 +62,20 @@ pub fn preview_camera(f: &Framing, width: u32, height: u32) -> Camera {
     }
 }
 
+/// Previews of `meshes` (frames of one sequence) at `width` x `height`, all framed like the
+/// first, so a moving mesh moves in the frame; the run report's mesh thumbnails
+/// (`MeshHooks::preview`).
+pub fn preview_frames(meshes: &[Arc<Mesh>], width: u32, height: u32) -> Result<Vec<Image>, String> {
+    let Some(first) = meshes.first() else {
+        return Ok(Vec::new());
+    };
+    let framing = Framing::of(first).ok_or("no finite vertices")?;
+    meshes
+        .iter()
+        .map(|m| render_preview(m, Some(framing), width, height))
+        .collect()
+}
+
 /// Renders `mesh` as a preview with `framing` (the mesh's own when `None`): light grey
 /// background, a head light plus ambient, a checkerboard of 8 x 8 squares through the UVs
 /// when the mesh has them, else a light blue-grey surface. Fails on a mesh with no
@@ -81,7 +95,7 @@ pub fn render_preview(
         Material {
             name: "preview_checker".into(),
             base_color: [1.0; 3],
-            base_color_texture: Some(Arc::new(crate::nodes::param::texture_map::checkerboard(
+            base_color_texture: Some(Arc::new(cgnodes_geometry::checkerboard::checkerboard(
                 256, 8,
             ))),
             ..Default::default()
@@ -95,7 +109,11 @@ pub fn render_preview(
     };
     let n = VIEW_DIR.iter().map(|v| v * v).sum::<f64>().sqrt();
     // Light travels from above the camera's left towards the mesh.
-    let dir = [-VIEW_DIR[0] / n + 0.3, -VIEW_DIR[1] / n - 0.4, -VIEW_DIR[2] / n];
+    let dir = [
+        -VIEW_DIR[0] / n + 0.3,
+        -VIEW_DIR[1] / n - 0.4,
+        -VIEW_DIR[2] / n,
+    ];
     let scene = Scene {
         objects: vec![SceneObject {
             mesh: mesh.clone(),
@@ -172,7 +190,10 @@ mod tests {
             radius: 2.0,
         };
         let cam = preview_camera(&f, 100, 50);
-        let d: f64 = (0..3).map(|k| (cam.eye[k] - f.center[k]).powi(2)).sum::<f64>().sqrt();
+        let d: f64 = (0..3)
+            .map(|k| (cam.eye[k] - f.center[k]).powi(2))
+            .sum::<f64>()
+            .sqrt();
         // The sphere's angular radius is within the narrower half field of view.
         let half_v = 15f64.to_radians();
         assert!((f.radius / d).asin() <= half_v + 1e-12);

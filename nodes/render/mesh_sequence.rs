@@ -7,9 +7,9 @@
 //! not follow the mesh and the animation does not jump.
 
 use super::mesh_preview::{render_preview, Framing};
-use crate::nodes::image::animation::{to_rgba8, FramePattern};
-use crate::nodes::image::frames_to_video::{assemble, declare_options, read_options};
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
+use cgnodes_formats::animation::{assemble, declare_options, read_options};
+use cgnodes_formats::animation::{to_rgba8, FramePattern};
 
 fn declare(b: &mut NodeBuilder) {
     b.doc("Renders this frame's mesh from a fixed three-quarter view and assembles the previews so far into a GIF or APNG.");
@@ -84,9 +84,10 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
             f
         }
     };
-    let img = render_preview(&mesh, Some(framing), w, h).map_err(|e| NodeError::invalid("mesh", e))?;
+    let img =
+        render_preview(&mesh, Some(framing), w, h).map_err(|e| NodeError::invalid("mesh", e))?;
     let rgba = to_rgba8(&img);
-    let png = crate::io::encode_png(w, h, 4, rgba.as_raw().clone())
+    let png = cgnodes_formats::png::encode_png(w, h, 4, rgba.as_raw().clone())
         .map_err(|e| NodeError::new(ErrorKind::Internal, e))?;
     let frame_path = folder.join(pat.file_name(ctx.frame()));
     ctx.write_file(&frame_path, &png)?;

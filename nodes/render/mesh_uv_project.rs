@@ -1,7 +1,7 @@
 //! `mesh_uv_project`: planar UVs by projecting positions along an axis, so meshes without
 //! a parameterization can carry a texture in a scene.
 
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
 
 /// Per-vertex UVs from the orthographic projection along `axis` (0 = x, 1 = y, 2 = z):
 /// the two other coordinates are mapped so that the

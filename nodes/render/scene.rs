@@ -1,7 +1,7 @@
 //! `scene`: gathers meshes with materials, lights and a camera into one `Scene` for the
 //! rasterizer and the tracers.
 
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
 
 /// Builds a scene: `base` (if any) first, then `meshes`, each with `materials[i]` when
 /// given (else `None`: the renderer uses the mesh's own material or the default), the

@@ -321,7 +321,7 @@ fn sample_dielectric(wo: V3, n: V3, eta_rel: f32, u: f32) -> BsdfSample {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::nodes::trace::sampling::{length, Pcg32};
+    use crate::sampling::{length, Pcg32};
 
     #[test]
     fn fresnel_matches_known_values() {

@@ -111,10 +111,16 @@ struct Poly {
 
 impl Poly {
     fn lo(&self, k: usize) -> f64 {
-        self.p[..self.n].iter().map(|q| q[k]).fold(f64::INFINITY, f64::min)
+        self.p[..self.n]
+            .iter()
+            .map(|q| q[k])
+            .fold(f64::INFINITY, f64::min)
     }
     fn hi(&self, k: usize) -> f64 {
-        self.p[..self.n].iter().map(|q| q[k]).fold(f64::NEG_INFINITY, f64::max)
+        self.p[..self.n]
+            .iter()
+            .map(|q| q[k])
+            .fold(f64::NEG_INFINITY, f64::max)
     }
 }
 
@@ -138,7 +144,9 @@ fn cover(poly: &Poly, size: (u32, u32), mut f: impl FnMut(usize)) {
         let (a, b) = (p[k], p[(k + 1) % n]);
         area += a[0] * b[1] - b[0] * a[1];
     }
-    let scale = (poly.hi(0) - poly.lo(0)).max(poly.hi(1) - poly.lo(1)).max(1.0);
+    let scale = (poly.hi(0) - poly.lo(0))
+        .max(poly.hi(1) - poly.lo(1))
+        .max(1.0);
     let mut edges = [(0.0f64, 0.0f64, 0.0f64); 4];
     let mut ne = 0;
     if area.abs() > 1e-9 * scale * scale {
@@ -172,7 +180,10 @@ fn eye_distance(e: [f64; 3], t: &[V3; 3]) -> f32 {
     let mut d2 = 0.0;
     for k in 0..3 {
         let lo = t.iter().map(|p| p[k] as f64).fold(f64::INFINITY, f64::min);
-        let hi = t.iter().map(|p| p[k] as f64).fold(f64::NEG_INFINITY, f64::max);
+        let hi = t
+            .iter()
+            .map(|p| p[k] as f64)
+            .fold(f64::NEG_INFINITY, f64::max);
         let g = (lo - e[k]).max(e[k] - hi).max(0.0);
         d2 += g * g;
     }
@@ -240,7 +251,11 @@ impl CameraGrid {
             }
             // Film positions too far out to place the edges precisely (or not finite):
             // the triangle goes on the list every ray tests.
-            if poly.p[..n].iter().flatten().any(|x| x.is_nan() || x.abs() > FILM_LIMIT) {
+            if poly.p[..n]
+                .iter()
+                .flatten()
+                .any(|x| x.is_nan() || x.abs() > FILM_LIMIT)
+            {
                 return (true, None);
             }
             let on_film = poly.hi(0) >= -1.0
@@ -365,9 +380,9 @@ impl CameraGrid {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::nodes::trace::bvh::Bvh;
-    use crate::nodes::trace::sampling::Pcg32;
-    use crate::types::Camera;
+    use crate::bvh::Bvh;
+    use cgnodes_api::rng::Pcg32;
+    use cgnodes_api::types::Camera;
 
     fn camera(eye: [f64; 3], target: [f64; 3], w: u32, h: u32, fov: f64) -> PinholeCamera {
         PinholeCamera::new(&Camera {
@@ -463,7 +478,7 @@ mod tests {
                                 hits += 1;
                                 if p.prim != q.prim {
                                     let r = RayPre::new(cam.eye, dir);
-                                    let t = crate::nodes::trace::bvh::intersect_triangle(
+                                    let t = crate::bvh::intersect_triangle(
                                         &r,
                                         &tris[p.prim as usize],
                                         f32::INFINITY,

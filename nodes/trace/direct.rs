@@ -6,7 +6,7 @@
 use super::bsdf::Bsdf;
 use super::render_scene::{RenderScene, SurfacePoint, SHADOW_END};
 use super::sampling::{add, dot, length, max_comp, mul, power_heuristic, scale, sub, v3, V3};
-use crate::types::Light;
+use cgnodes_api::types::Light;
 
 /// The surface a direct-lighting estimate is made at.
 pub struct Vertex<'a> {

@@ -50,7 +50,11 @@ pub(super) fn max3(a: F3) -> F {
 /// `m ? a : b` per lane.
 #[inline(always)]
 pub(super) fn sel3(m: F, a: F3, b: F3) -> F3 {
-    [m.select(a[0], b[0]), m.select(a[1], b[1]), m.select(a[2], b[2])]
+    [
+        m.select(a[0], b[0]),
+        m.select(a[1], b[1]),
+        m.select(a[2], b[2]),
+    ]
 }
 /// `x` in every lane.
 #[inline(always)]

@@ -10,7 +10,7 @@ use super::path_lanes::{self, Job, Sample};
 use super::render_path::{radiance, Filter, PathSettings};
 use super::render_scene::{PinholeCamera, RenderScene};
 use super::sampling::{Pcg32, V3};
-use crate::types::Image;
+use cgnodes_api::types::Image;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
@@ -175,7 +175,9 @@ fn render_tile(
         1
     };
     let mut stacks = TraceStacks::new();
-    let pixels: Vec<(u32, u32)> = (y0..y1).flat_map(|y| (x0..x1).map(move |x| (x, y))).collect();
+    let pixels: Vec<(u32, u32)> = (y0..y1)
+        .flat_map(|y| (x0..x1).map(move |x| (x, y)))
+        .collect();
     let mut samples: Vec<Sample> = Vec::new();
     let spp = s.spp as usize;
     for chunk in pixels.chunks(ppc) {

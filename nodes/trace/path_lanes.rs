@@ -20,12 +20,12 @@ use super::bsdf::Bsdf;
 use super::bvh::{Hit, Segment, TraceStacks};
 use super::camera_grid::CameraGrid;
 use super::direct::{delta_lights, environment_nee, Vertex};
-use super::path_film::camera_sample;
-use super::render_path::{add_direct, found_weight, PathSettings, Strategy};
 use super::lane_math::{
     add3, bits, cosine_hemisphere4, dot3, f4, f43, get, max3, mul3, offset4, power4, put, scale3,
     sel3, splat, store3, sub3, F, L,
 };
+use super::path_film::camera_sample;
+use super::render_path::{add_direct, found_weight, PathSettings, Strategy};
 use super::render_scene::{PinholeCamera, RenderScene, SHADOW_END};
 use super::sampling::{add, dot, max_comp, mul, scale, Pcg32, V3};
 use std::f32::consts::FRAC_1_PI;
@@ -352,7 +352,8 @@ fn visit(
     let hit: Option<Hit> = if ln.pending[i] {
         let (hit, blocked) = if ln.nee[i] {
             let shadow = (get(&ln.seg_o, i), get(&ln.seg_d, i), SHADOW_END);
-            sc.bvh.intersect_occluded_in(stacks, (org, dir, tmax), shadow)
+            sc.bvh
+                .intersect_occluded_in(stacks, (org, dir, tmax), shadow)
         } else {
             (ln.lone(sc, (org, dir, tmax), stacks, out), false)
         };

@@ -14,13 +14,13 @@
 //! box or Gaussian reconstruction filter, variance) is `path_film.rs`, and the estimator
 //! run on four paths at a time for diffuse scenes is `path_lanes.rs`.
 
-use super::direct::{delta_lights, environment_nee, Vertex};
 use super::bvh::{Hit, Segment, TraceStacks};
+use super::direct::{delta_lights, environment_nee, Vertex};
 pub use super::path_film::{render, render_opts, Shortcuts};
 use super::render_scene::{prepare, RenderScene, SHADOW_END};
 use super::sampling::{add, dot, max_comp, mul, power_heuristic, scale, sub, Pcg32, V3};
 use super::tracer_node::{crease_input, declare_crease, reserve_image, trace_error};
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
 
 /// Which sampling strategies the estimator combines (MIS is the default; the others are
 /// for teaching and for checking that all three agree in expectation).
@@ -115,7 +115,9 @@ impl Deferred {
     /// Traces the shadow ray alone (the path ends here) and adds the estimates to `l`.
     #[inline]
     fn finish(&self, sc: &RenderScene, l: V3) -> V3 {
-        let blocked = self.nee.is_some_and(|((o, d, t), _)| sc.bvh.occluded(o, d, t));
+        let blocked = self
+            .nee
+            .is_some_and(|((o, d, t), _)| sc.bvh.occluded(o, d, t));
         self.add_to(l, blocked)
     }
 }

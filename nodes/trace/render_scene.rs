@@ -4,16 +4,16 @@
 //! camera that turns film positions into rays. Shared by `render_path` and `render_whitted`.
 
 use super::bsdf::Bsdf;
-use super::environment::Environment;
 use super::bvh::{triangle_normal, Bvh, Hit};
 use super::camera_grid::Frame;
+use super::environment::Environment;
 use super::sampling::{
-    add, dot, length, luminance, max_comp, normalize, scale, sub, uniform_triangle, v3,
-    AliasTable, V3,
+    add, dot, length, luminance, max_comp, normalize, scale, sub, uniform_triangle, v3, AliasTable,
+    V3,
 };
-use crate::nodes::render::raster::geometry::{normal_mapped, scene_geometry_creased};
-use crate::nodes::render::raster::texture::{MipTexture, Wrap};
-use crate::types::{Camera, Light, LookAt, Material, MaterialKind, Scene};
+use cgnodes_api::types::{Camera, Light, LookAt, Material, MaterialKind, Scene};
+use cgnodes_geometry::scene_geometry::{normal_mapped, scene_geometry_creased};
+use cgnodes_geometry::texture::{MipTexture, Wrap};
 
 /// A material reduced to what the tracers evaluate.
 #[derive(Clone, Debug)]
@@ -327,12 +327,17 @@ impl RenderScene {
                 }
             }
             let n = mesh.positions.len() as u32;
-            if mesh.faces().any(|f| f.len() < 3 || f.iter().any(|&i| i >= n)) {
+            if mesh
+                .faces()
+                .any(|f| f.len() < 3 || f.iter().any(|&i| i >= n))
+            {
                 return Err(format!("object {oi}: a face has a bad vertex index"));
             }
         }
         if !(0.0..=180.0).contains(&crease_deg) {
-            return Err(format!("crease angle {crease_deg} must be in 0..=180 degrees"));
+            return Err(format!(
+                "crease angle {crease_deg} must be in 0..=180 degrees"
+            ));
         }
         let g = scene_geometry_creased(scene, crease_deg)?;
         let tris: Vec<[V3; 3]> = g.pos.iter().map(|t| t.map(v3)).collect();
@@ -346,21 +351,29 @@ impl RenderScene {
             .materials
             .iter()
             .map(|m| Textures {
-                base: m.base_color_texture.as_deref().map(|i| MipTexture::new(i, false)),
+                base: m
+                    .base_color_texture
+                    .as_deref()
+                    .map(|i| MipTexture::new(i, false)),
                 normal: m.normal_map.as_deref().map(|i| MipTexture::new(i, false)),
             })
             .collect();
         let any_nmap = textures.iter().any(|t| t.normal.is_some());
         let corner_normals: Vec<[V3; 3]> = g.nrm.iter().map(|t| t.map(v3)).collect();
-        let corner_uvs: Vec<[[f32; 2]; 3]> = g
-            .uv
-            .iter()
-            .zip(&g.has_uv)
-            .map(|(t, &h)| {
-                // NaN marks a triangle without UVs.
-                t.map(|w| if h { [w[0] as f32, w[1] as f32] } else { [f32::NAN; 2] })
-            })
-            .collect();
+        let corner_uvs: Vec<[[f32; 2]; 3]> =
+            g.uv.iter()
+                .zip(&g.has_uv)
+                .map(|(t, &h)| {
+                    // NaN marks a triangle without UVs.
+                    t.map(|w| {
+                        if h {
+                            [w[0] as f32, w[1] as f32]
+                        } else {
+                            [f32::NAN; 2]
+                        }
+                    })
+                })
+                .collect();
         let corner_tangents = if any_nmap { g.tan } else { Vec::new() };
         let bvh = Bvh::build(&tris);
         let normals: Vec<V3> = tris.iter().map(|t| normalize(triangle_normal(t))).collect();

@@ -20,7 +20,7 @@ use super::bsdf::{fresnel_dielectric, reflect, Bsdf};
 use super::render_scene::{prepare, PinholeCamera, RenderScene, SHADOW_END};
 use super::sampling::{add, dot, max_comp, mul, normalize, scale, sub, uniform_triangle, v3, V3};
 use super::tracer_node::{crease_input, declare_crease, reserve_image, trace_error};
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
 use rayon::prelude::*;
 use std::f32::consts::FRAC_1_PI;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -118,7 +118,10 @@ pub fn trace(
                 let eta_rel = if dot(ng, wo) > 0.0 { eta } else { 1.0 / eta };
                 let ok = |m: V3| {
                     let (_, cos_t) = fresnel_dielectric(dot(m, wo), eta_rel);
-                    let wt = add(scale(wo, -1.0 / eta_rel), scale(m, dot(m, wo) / eta_rel - cos_t));
+                    let wt = add(
+                        scale(wo, -1.0 / eta_rel),
+                        scale(m, dot(m, wo) / eta_rel - cos_t),
+                    );
                     dot(reflect(wo, m), n) > 0.0 && (cos_t == 0.0 || dot(wt, n) < 0.0)
                 };
                 let m = if ok(ns) { ns } else { n };
@@ -377,7 +380,7 @@ pub fn register(r: &mut Registry) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::types::{FovAxis, MaterialKind, Mesh, SceneObject};
+    use cgnodes_api::types::{FovAxis, MaterialKind, Mesh, SceneObject};
 
     fn quad(z: f64, s: f64, up: bool) -> Mesh {
         let p = vec![[-s, -s, z], [s, -s, z], [s, s, z], [-s, s, z]];

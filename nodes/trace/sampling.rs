@@ -3,72 +3,9 @@
 //! uniform triangle sampling, an orthonormal frame and the power heuristic for multiple
 //! importance sampling. The f32 vector helpers (`V3`, in `v3.rs`) are re-exported here.
 
-pub use super::v3::*;
-
-/// PCG32 (O'Neill 2014, "PCG: A Family of Simple Fast Space-Efficient Statistically Good
-/// Algorithms for Random Number Generation"): 64-bit LCG state, XSH-RR output.
-#[derive(Clone, Debug)]
-pub struct Pcg32 {
-    state: u64,
-    inc: u64,
-}
-
-impl Pcg32 {
-    const MULT: u64 = 6364136223846793005;
-
-    /// The generator with initial state `seed` on stream `stream` (pcg32_srandom_r).
-    pub fn new(seed: u64, stream: u64) -> Pcg32 {
-        let mut r = Pcg32 {
-            state: 0,
-            inc: (stream << 1) | 1,
-        };
-        r.next_u32();
-        r.state = r.state.wrapping_add(seed);
-        r.next_u32();
-        r
-    }
-
-    /// The deterministic generator for one pixel sample: the pixel index and the user seed
-    /// are hashed into the initial state, the sample index selects the stream, so any
-    /// sample of any pixel can be reproduced on its own, whatever the tiling or thread count.
-    pub fn for_sample(pixel: u64, sample: u64, seed: u64) -> Pcg32 {
-        Pcg32::new(
-            splitmix64(pixel ^ splitmix64(seed)),
-            splitmix64(sample.wrapping_add(seed.rotate_left(32))),
-        )
-    }
-
-    /// The next 32 random bits.
-    #[inline(always)]
-    pub fn next_u32(&mut self) -> u32 {
-        let old = self.state;
-        self.state = old.wrapping_mul(Self::MULT).wrapping_add(self.inc);
-        let xorshifted = (((old >> 18) ^ old) >> 27) as u32;
-        let rot = (old >> 59) as u32;
-        xorshifted.rotate_right(rot)
-    }
-
-    /// A uniform float in [0, 1) (24 random mantissa bits).
-    #[inline(always)]
-    pub fn next_f32(&mut self) -> f32 {
-        (self.next_u32() >> 8) as f32 * (1.0 / 16_777_216.0)
-    }
-
-    /// Two uniform floats in [0, 1).
-    #[inline(always)]
-    pub fn next_2d(&mut self) -> [f32; 2] {
-        [self.next_f32(), self.next_f32()]
-    }
-}
-
-/// SplitMix64 finaliser (Steele et al. 2014), used as an integer hash for seeding.
-#[inline]
-pub fn splitmix64(x: u64) -> u64 {
-    let mut z = x.wrapping_add(0x9E3779B97F4A7C15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58476D1CE4E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D049BB133111EB);
-    z ^ (z >> 31)
-}
+pub use cgnodes_api::rng::{splitmix64, Pcg32};
+pub use cgnodes_geometry::distribution::Distribution1D;
+pub use cgnodes_geometry::v3::*;
 
 /// An orthonormal basis around unit normal `n` (Duff et al. 2017, "Building an Orthonormal
 /// Basis, Revisited", Listing 3). Returns (tangent, bitangent).
@@ -148,77 +85,6 @@ pub fn power_heuristic(pa: f32, pb: f32) -> f32 {
     }
 }
 
-/// A discrete distribution sampled by inverting its cumulative sum (one binary search).
-#[derive(Clone, Debug, Default)]
-pub struct Distribution1D {
-    cdf: Vec<f32>,
-    pmf: Vec<f32>,
-    total: f64,
-}
-
-impl Distribution1D {
-    /// The distribution proportional to the non-negative `weights`.
-    pub fn new(weights: &[f64]) -> Distribution1D {
-        let total: f64 = weights.iter().map(|w| w.max(0.0)).sum();
-        let mut acc = 0.0;
-        let mut cdf = Vec::with_capacity(weights.len());
-        let mut pmf = Vec::with_capacity(weights.len());
-        for w in weights {
-            let w = w.max(0.0);
-            acc += w;
-            cdf.push(if total > 0.0 {
-                (acc / total) as f32
-            } else {
-                0.0
-            });
-            pmf.push(if total > 0.0 { (w / total) as f32 } else { 0.0 });
-        }
-        if let Some(l) = cdf.last_mut() {
-            *l = 1.0;
-        }
-        Distribution1D { cdf, pmf, total }
-    }
-
-    /// Sum of the weights.
-    pub fn total(&self) -> f64 {
-        self.total
-    }
-
-    /// Whether nothing can be sampled.
-    pub fn is_empty(&self) -> bool {
-        self.total <= 0.0
-    }
-
-    /// Probability of index `i`.
-    #[inline(always)]
-    pub fn pmf(&self, i: usize) -> f32 {
-        self.pmf[i]
-    }
-
-    /// `sample(u)` and `u` remapped to a fresh uniform number within the chosen index's
-    /// cdf interval (PBRT 3, section 13.6.7), for sampling a position inside the cell.
-    #[inline]
-    pub fn sample_remapped(&self, u: f32) -> (usize, f32) {
-        let i = self.sample(u);
-        let lo = if i == 0 { 0.0 } else { self.cdf[i - 1] };
-        let p = self.pmf[i];
-        let r = if p > 0.0 { (u - lo) / p } else { 0.5 };
-        (i, r.clamp(0.0, 1.0 - f32::EPSILON))
-    }
-
-    /// An index drawn with probability `pmf(i)` from uniform `u`.
-    #[inline]
-    pub fn sample(&self, u: f32) -> usize {
-        let i = self.cdf.partition_point(|&c| c <= u);
-        let mut i = i.min(self.cdf.len() - 1);
-        // Skip zero-probability entries that share the cdf value.
-        while self.pmf[i] == 0.0 && i + 1 < self.cdf.len() {
-            i += 1;
-        }
-        i
-    }
-}
-
 /// One bin of an `AliasTable`: keep this index when the remapped number is below `q`,
 /// else take `alias`.
 #[derive(Clone, Copy, Debug)]
@@ -255,7 +121,12 @@ impl AliasTable {
         let n = w.len();
         // Scaled probabilities p_i n: a bin below 1 takes its remainder from one above.
         let mut p: Vec<f64> = w.iter().map(|x| x / total * n as f64).collect();
-        let mut bins: Vec<AliasBin> = (0..n).map(|i| AliasBin { q: 1.0, alias: i as u32 }).collect();
+        let mut bins: Vec<AliasBin> = (0..n)
+            .map(|i| AliasBin {
+                q: 1.0,
+                alias: i as u32,
+            })
+            .collect();
         let (mut under, mut over): (Vec<usize>, Vec<usize>) = (0..n).partition(|&i| p[i] < 1.0);
         while let (Some(&u), Some(&o)) = (under.last(), over.last()) {
             under.pop();
@@ -277,9 +148,15 @@ impl AliasTable {
         let big = (0..n).max_by(|&a, &b| w[a].total_cmp(&w[b])).unwrap_or(0);
         for i in under.into_iter().chain(over) {
             bins[i] = if w[i] > 0.0 {
-                AliasBin { q: 1.0, alias: i as u32 }
+                AliasBin {
+                    q: 1.0,
+                    alias: i as u32,
+                }
             } else {
-                AliasBin { q: 0.0, alias: big as u32 }
+                AliasBin {
+                    q: 0.0,
+                    alias: big as u32,
+                }
             };
         }
         AliasTable { bins }

@@ -8,8 +8,8 @@
 //! read (give a `material` with a `texture` instead). The OBJ itself is read by the mesh domain's loader
 //! (`load_obj_objects`), so its errors carry line numbers.
 
-use crate::nodes::mesh::obj::load_obj_objects;
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
+use cgnodes_formats::obj::load_obj_objects;
 use std::path::Path;
 
 /// Converts one MTL material.
@@ -83,7 +83,7 @@ pub fn load_obj_scene(path: &Path, two_sided_emission: bool) -> Result<Scene, St
 fn declare(b: &mut NodeBuilder) {
     b.doc("Reads an OBJ + MTL file (Kd, Ke emission, illum/Ni) into a scene for the tracers.");
     // The MTL libraries (and their textures) enter the cache key with the OBJ.
-    b.companions(crate::cache::obj_companions);
+    b.companions(cgnodes_formats::obj_companions::obj_companions);
     b.add_input::<String>("path")
         .file_in()
         .doc("OBJ file, relative to the graph's folder; its mtllib is read too.");
@@ -129,7 +129,7 @@ mod tests {
 
     #[test]
     fn cornell_obj_loads_with_emission_and_albedo() {
-        let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/cornell/cornell_box.obj");
+        let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/cornell/cornell_box.obj");
         let s = load_obj_scene(&p, false).unwrap();
         let light: Vec<_> = s
             .objects

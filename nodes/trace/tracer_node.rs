@@ -1,7 +1,7 @@
 //! What the tracer nodes (`render_path`, `render_whitted`) share around the renderers:
 //! the image-size check and the mapping of a renderer's error to the socket it concerns.
 
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
 
 /// Checks that a tracer's image buffers, `bytes_per_pixel` for every pixel of the camera's
 /// image (the linked `camera`, else the scene's), fit under the run's memory limit before
@@ -16,8 +16,12 @@ pub fn reserve_image(
     let Some(c) = camera.or(scene.camera.as_ref()) else {
         return Ok(());
     };
-    let bytes = crate::node::bytes_of(&[c.width as u64, c.height as u64, bytes_per_pixel]);
-    ctx.reserve_bytes("camera", &format!("a {}x{} image", c.width, c.height), bytes)
+    let bytes = cgnodes_api::node::bytes_of(&[c.width as u64, c.height as u64, bytes_per_pixel]);
+    ctx.reserve_bytes(
+        "camera",
+        &format!("a {}x{} image", c.width, c.height),
+        bytes,
+    )
 }
 
 /// A renderer's error as a node error on `camera` when it is about the camera, else on

@@ -101,7 +101,7 @@ pub(super) fn cmd(registry: &Registry, args: RunArgs) -> i32 {
     }
     // A shard's report would cover only its frames, and shards share one output folder.
     if !args.no_report && args.shard.shard.is_none() {
-        match crate::report::write_run_report(&graph, &collected, &args.out) {
+        match crate::report::write_run_report(&graph, &collected, &args.out, registry.mesh_hooks) {
             Ok(p) if !args.quiet => eprintln!("report: {}", p.display()),
             Ok(_) => {}
             Err(e) => eprintln!("warning: report not written: {e}"),

@@ -92,7 +92,7 @@ pub(super) fn cmd(registry: &Registry, a: SweepArgs) -> i32 {
                 print!("{}", to_csv(&spec, &rows));
             }
             if !sharded {
-                sweep_report(&spec, &base, &a.target);
+                sweep_report(&spec, &base, &a.target, registry);
             }
             0
         }
@@ -105,7 +105,7 @@ pub(super) fn cmd(registry: &Registry, a: SweepArgs) -> i32 {
 
 /// Writes `report.html` for a sweep beside its CSV (or in its `out` folder): the chart and
 /// the CSV. Nothing when the sweep writes neither.
-fn sweep_report(spec: &SweepSpec, base: &Path, target: &Path) {
+fn sweep_report(spec: &SweepSpec, base: &Path, target: &Path, registry: &Registry) {
     let files: Vec<PathBuf> = [&spec.plot, &spec.csv]
         .into_iter()
         .flatten()
@@ -121,7 +121,12 @@ fn sweep_report(spec: &SweepSpec, base: &Path, target: &Path) {
     } else {
         dir
     };
-    match crate::report::write_sweep_report(&target.display().to_string(), &files, &dir) {
+    match crate::report::write_sweep_report(
+        &target.display().to_string(),
+        &files,
+        &dir,
+        registry.mesh_hooks,
+    ) {
         Ok(p) => eprintln!("report: {}", p.display()),
         Err(e) => eprintln!("warning: report not written: {e}"),
     }

@@ -20,6 +20,7 @@ mod graphs;
 mod hostile;
 mod image_lowrank;
 mod image_warp;
+mod layout;
 mod learn;
 mod loader_bounds;
 mod mass_spring;

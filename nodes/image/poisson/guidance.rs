@@ -9,7 +9,7 @@
 //! source's edge); the source is then extended by its nearest pixel, so `g_p - g_q = 0` there.
 
 use super::mask::MaskShape;
-use crate::types::Image;
+use cgnodes_api::types::Image;
 use faer::Mat;
 use rayon::prelude::*;
 
@@ -22,7 +22,7 @@ pub enum Mode {
     Mixed,
 }
 
-impl crate::node::Choice for Mode {
+impl cgnodes_api::node::Choice for Mode {
     const CHOICES: &'static [(&'static str, Self)] =
         &[("seamless", Mode::Seamless), ("mixed", Mode::Mixed)];
 }
@@ -131,7 +131,13 @@ mod tests {
     fn one_pixel_region() {
         // Ω = {(1,1)} of a 3x3 source at offset (1,1) in a 5x5 target: 4 f_p = Σ f*_q + Σ v_pq
         let mut target = Image::new(5, 5, [0.0; 4]);
-        for (x, y, v) in [(3, 2, 1.0), (1, 2, 2.0), (2, 3, 3.0), (2, 1, 4.0), (2, 2, 9.0)] {
+        for (x, y, v) in [
+            (3, 2, 1.0),
+            (1, 2, 2.0),
+            (2, 3, 3.0),
+            (2, 1, 4.0),
+            (2, 2, 9.0),
+        ] {
             target.set(x, y, [v, 0.0, 0.0, 1.0]);
         }
         let mut source = Image::new(3, 3, [0.0; 4]);

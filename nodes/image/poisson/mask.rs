@@ -2,7 +2,7 @@
 //! how the unknowns are numbered, where the source may land, and the shape key under which
 //! the factorization is cached.
 
-use crate::types::Image;
+use cgnodes_api::types::Image;
 use rayon::prelude::*;
 
 /// The inside pixels of a mask (the unknowns of the Poisson system), numbered row-major.
@@ -160,7 +160,9 @@ fn hash_cells(cells: &[[u32; 2]]) -> u64 {
     const K: u64 = 0x9e37_79b9_7f4a_7c15;
     let mut h = cells.len() as u64 ^ 0xbf58_476d_1ce4_e5b9;
     for &[x, y] in cells {
-        h = (h ^ (u64::from(x) << 32 | u64::from(y))).wrapping_mul(K).rotate_left(29);
+        h = (h ^ (u64::from(x) << 32 | u64::from(y)))
+            .wrapping_mul(K)
+            .rotate_left(29);
     }
     h ^ (h >> 31)
 }

@@ -19,11 +19,11 @@ pub mod system;
 pub use guidance::Mode;
 pub use mask::{MaskShape, ShapeKey};
 
-use crate::types::Image;
+use cgnodes_api::types::Image;
 use faer::reborrow::ReborrowMut;
+use faer::Mat;
 use rayon::prelude::*;
 use rect::RectSolver;
-use faer::Mat;
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
@@ -43,7 +43,7 @@ pub enum Solver {
     SineTransform,
 }
 
-impl crate::node::Choice for Solver {
+impl cgnodes_api::node::Choice for Solver {
     const CHOICES: &'static [(&'static str, Self)] = &[
         ("auto", Solver::Auto),
         ("cholesky", Solver::Cholesky),
@@ -89,9 +89,9 @@ pub fn auto_solver(shape: &MaskShape) -> Solver {
     if shape.rectangle().is_some() {
         return Solver::SineTransform;
     }
-    let area = shape
-        .bbox()
-        .map_or(0, |[x0, y0, x1, y1]| (x1 - x0 + 1) as usize * (y1 - y0 + 1) as usize);
+    let area = shape.bbox().map_or(0, |[x0, y0, x1, y1]| {
+        (x1 - x0 + 1) as usize * (y1 - y0 + 1) as usize
+    });
     if shape.len() >= MULTIGRID_MIN_UNKNOWNS && 4 * shape.len() >= area {
         Solver::Multigrid
     } else {
@@ -142,15 +142,16 @@ impl Factor {
             Factor::Rect(f) => {
                 // the channels are independent: one per task
                 let mut cols: Vec<_> = x.as_mut().col_iter_mut().collect();
-                cols.par_iter_mut().for_each(|col| match col.rb_mut().try_as_col_major_mut() {
-                    Some(col) => f.solve_in_place(col.as_slice_mut()),
-                    None => {
-                        // a strided view: solve a contiguous copy
-                        let mut v: Vec<f64> = col.as_ref().iter().copied().collect();
-                        f.solve_in_place(&mut v);
-                        col.rb_mut().iter_mut().zip(v).for_each(|(d, s)| *d = s);
-                    }
-                });
+                cols.par_iter_mut()
+                    .for_each(|col| match col.rb_mut().try_as_col_major_mut() {
+                        Some(col) => f.solve_in_place(col.as_slice_mut()),
+                        None => {
+                            // a strided view: solve a contiguous copy
+                            let mut v: Vec<f64> = col.as_ref().iter().copied().collect();
+                            f.solve_in_place(&mut v);
+                            col.rb_mut().iter_mut().zip(v).for_each(|(d, s)| *d = s);
+                        }
+                    });
             }
         }
         Ok(0)
@@ -242,7 +243,11 @@ impl Spare {
 
     /// The kept matrix, or an empty one.
     fn take(&self) -> Mat<f64> {
-        self.0.try_lock().ok().and_then(|mut k| k.take()).unwrap_or_else(Mat::new)
+        self.0
+            .try_lock()
+            .ok()
+            .and_then(|mut k| k.take())
+            .unwrap_or_else(Mat::new)
     }
 
     /// Keeps `m` for the next `take`.
@@ -293,7 +298,15 @@ pub fn solve(
     offset: [i64; 2],
     mode: Mode,
 ) -> Result<Solution, String> {
-    solve_keyed(shape, &shape.key(), target, source, offset, mode, Solver::Auto)
+    solve_keyed(
+        shape,
+        &shape.key(),
+        target,
+        source,
+        offset,
+        mode,
+        Solver::Auto,
+    )
 }
 
 /// `solve` with the shape's key (`MaskShape::key`) found already, by `solver`.
@@ -381,20 +394,23 @@ const COPY_ROWS: usize = 8;
 /// alpha kept; not clamped (the image is linear; `image_save` clamps when it encodes).
 pub fn write_solution(out: &mut Image, shape: &MaskShape, offset: [i64; 2], values: &Mat<f64>) {
     let (tw, mw) = ((out.width as usize).max(1), shape.width as usize);
-    out.pixels.par_chunks_mut(tw).enumerate().for_each(|(ty, row)| {
-        let my = ty as i64 - offset[1];
-        if my < 0 || my >= i64::from(shape.height) {
-            return;
-        }
-        let index = &shape.index[my as usize * mw..(my as usize + 1) * mw];
-        for (mx, &k) in index.iter().enumerate() {
-            if k == u32::MAX {
-                continue;
+    out.pixels
+        .par_chunks_mut(tw)
+        .enumerate()
+        .for_each(|(ty, row)| {
+            let my = ty as i64 - offset[1];
+            if my < 0 || my >= i64::from(shape.height) {
+                return;
             }
-            let p = &mut row[(mx as i64 + offset[0]) as usize];
-            for (c, v) in p.iter_mut().take(3).enumerate() {
-                *v = values[(k as usize, c)] as f32;
+            let index = &shape.index[my as usize * mw..(my as usize + 1) * mw];
+            for (mx, &k) in index.iter().enumerate() {
+                if k == u32::MAX {
+                    continue;
+                }
+                let p = &mut row[(mx as i64 + offset[0]) as usize];
+                for (c, v) in p.iter_mut().take(3).enumerate() {
+                    *v = values[(k as usize, c)] as f32;
+                }
             }
-        }
-    });
+        });
 }

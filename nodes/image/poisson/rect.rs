@@ -13,9 +13,9 @@
 //!
 //! The DST-I of a real row comes from one real FFT of length `w + 1` (see `sine_rows`).
 
+use rayon::prelude::*;
 use rustfft::num_complex::Complex;
 use rustfft::{Fft, FftPlanner};
-use rayon::prelude::*;
 use std::sync::Arc;
 
 /// Rows transformed per FFT batch (pairs of rows): keeps the batch in cache.
@@ -90,15 +90,16 @@ impl RectSolver {
     fn sine_rows(&self, u: &mut [f64]) {
         let n = self.w + 1;
         // batches are independent: one per task, each with its own buffers
-        u.par_chunks_mut(2 * self.w * PAIRS_PER_BATCH).for_each_init(
-            || {
-                (
-                    vec![Complex::new(0.0, 0.0); n * PAIRS_PER_BATCH],
-                    vec![Complex::new(0.0, 0.0); self.fft.get_inplace_scratch_len()],
-                )
-            },
-            |(buf, scratch), rows| self.sine_batch(rows, buf, scratch),
-        );
+        u.par_chunks_mut(2 * self.w * PAIRS_PER_BATCH)
+            .for_each_init(
+                || {
+                    (
+                        vec![Complex::new(0.0, 0.0); n * PAIRS_PER_BATCH],
+                        vec![Complex::new(0.0, 0.0); self.fft.get_inplace_scratch_len()],
+                    )
+                },
+                |(buf, scratch), rows| self.sine_batch(rows, buf, scratch),
+            );
     }
 
     /// `sine_rows` for one batch of at most `2 PAIRS_PER_BATCH` rows.
@@ -212,12 +213,27 @@ mod tests {
     #[test]
     fn solves_the_five_point_system() {
         // odd and even row counts, a single row and a single column, prime widths
-        for (w, h) in [(7, 5), (8, 6), (1, 1), (1, 9), (13, 1), (2, 3), (31, 17), (64, 33), (257, 130)] {
+        for (w, h) in [
+            (7, 5),
+            (8, 6),
+            (1, 1),
+            (1, 9),
+            (13, 1),
+            (2, 3),
+            (31, 17),
+            (64, 33),
+            (257, 130),
+        ] {
             let b: Vec<f64> = (0..w * h).map(|i| ((i * 37 % 101) as f64) - 50.0).collect();
             let mut u = b.clone();
             RectSolver::new(w, h).solve_in_place(&mut u);
             let r = apply(w, h, &u);
-            let err: f64 = r.iter().zip(&b).map(|(a, b)| (a - b) * (a - b)).sum::<f64>().sqrt();
+            let err: f64 = r
+                .iter()
+                .zip(&b)
+                .map(|(a, b)| (a - b) * (a - b))
+                .sum::<f64>()
+                .sqrt();
             let bn: f64 = b.iter().map(|v| v * v).sum::<f64>().sqrt();
             assert!(err < 1e-12 * bn, "{w}x{h}: residual {err}");
         }

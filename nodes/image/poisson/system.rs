@@ -10,8 +10,8 @@
 //! and joined through the dense Schur complement of the top separator (`TwoDomainFactor`).
 
 use super::mask::MaskShape;
-use crate::nodes::linalg::nested_dissection::Dissection;
-use crate::nodes::linalg::{SpdFactor, TwoDomainFactor};
+use cgnodes_linalg::nested_dissection::Dissection;
+use cgnodes_linalg::{SpdFactor, TwoDomainFactor};
 use faer::sparse::{SparseColMat, SymbolicSparseColMat};
 use faer::{Mat, MatMut, MatRef, Par};
 use rayon::prelude::*;
@@ -152,7 +152,10 @@ impl PoissonFactor {
                 // the triangular solves are memory-bound: a column on one core, the rest on
                 // the other (both read the same factor)
                 let (a, b) = y.as_mut().split_at_col_mut(1);
-                rayon::join(|| f.solve_in_elimination_order(a), || f.solve_in_elimination_order(b));
+                rayon::join(
+                    || f.solve_in_elimination_order(a),
+                    || f.solve_in_elimination_order(b),
+                );
             }
             (Some(f), _) => f.solve_in_elimination_order(y.as_mut()),
             (None, Some(t)) => t.solve_in_place(y.as_mut()),
@@ -232,7 +235,14 @@ fn dissect(shape: &MaskShape, cells: &mut [u32], leaf: usize) -> Option<[usize; 
     let mut parts: [Vec<u32>; 3] = Default::default();
     for &v in cells.iter() {
         let c = at(v)[axis];
-        parts[if c < cut { 0 } else if c > cut { 1 } else { 2 }].push(v);
+        parts[if c < cut {
+            0
+        } else if c > cut {
+            1
+        } else {
+            2
+        }]
+        .push(v);
     }
     let [n0, n1] = [parts[0].len(), parts[1].len()];
     let mut k = 0;
@@ -244,7 +254,10 @@ fn dissect(shape: &MaskShape, cells: &mut [u32], leaf: usize) -> Option<[usize; 
     let (first, rest) = cells.split_at_mut(n0);
     let second = &mut rest[..n1];
     if n0 + n1 >= PARALLEL_DISSECT {
-        rayon::join(|| dissect(shape, first, leaf), || dissect(shape, second, leaf));
+        rayon::join(
+            || dissect(shape, first, leaf),
+            || dissect(shape, second, leaf),
+        );
     } else {
         dissect(shape, first, leaf);
         dissect(shape, second, leaf);
@@ -428,7 +441,13 @@ mod tests {
         // no 4-neighbour pair joins the two halves (the separator is a whole grid line)
         let mut part = vec![2u8; n];
         for (k, &v) in order.iter().enumerate() {
-            part[v] = if k < h0 { 0 } else if k < h0 + h1 { 1 } else { 2 };
+            part[v] = if k < h0 {
+                0
+            } else if k < h0 + h1 {
+                1
+            } else {
+                2
+            };
         }
         for (v, &[x, y]) in shape.inside.iter().enumerate() {
             for (dx, dy) in [(1, 0), (0, 1)] {
@@ -492,8 +511,8 @@ mod tests {
     #[test]
     #[ignore]
     fn course_solve_timing() {
-        use crate::nodes::image::image_load::{decode_image, ColorSpace};
-        let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/images/");
+        use cgnodes_formats::image_file::{decode_image, ColorSpace};
+        let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../../assets/images/");
         let load = |name: &str, space| {
             decode_image(&std::fs::read(format!("{dir}{name}")).unwrap(), space).unwrap()
         };
@@ -512,7 +531,9 @@ mod tests {
                 .fold(f64::MAX, f64::min)
         };
         let f = factor(&shape).unwrap();
-        let Kind::Amd(g) = &f.kind else { panic!("the course mask is factored by AMD") };
+        let Kind::Amd(g) = &f.kind else {
+            panic!("the course mask is factored by AMD")
+        };
         let mut b = Mat::new();
         use super::super::{guidance::right_hand_side_into, Mode};
         for mode in [Mode::Seamless, Mode::Mixed] {

@@ -111,7 +111,9 @@ pub fn rpca(m: MatRef<'_, f64>, p: Params) -> Result<Decomposition, String> {
     let t0 = std::time::Instant::now();
     // column-major copies: M, S, Y and the next SVT argument M - S + Y/ρ, updated in one
     // pass per iteration, columns in parallel
-    let mv: Vec<f64> = (0..cols).flat_map(|j| (0..rows).map(move |i| m[(i, j)])).collect();
+    let mv: Vec<f64> = (0..cols)
+        .flat_map(|j| (0..rows).map(move |i| m[(i, j)]))
+        .collect();
     let mut s = vec![0.0; rows * cols];
     let mut y = vec![0.0; rows * cols];
     let mut arg = mv.clone();

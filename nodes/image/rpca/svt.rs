@@ -20,7 +20,7 @@
 //! sin Θ theorem (1970) the Ritz vectors span the kept eigenspace to within an angle of
 //! ||R||_F / (θ_k - τ²), which must be below 1e-10; otherwise the full eigendecomposition runs.
 
-use crate::nodes::image::image_svd::svd::randomized::gaussian_matrix;
+use crate::image_svd::svd::randomized::gaussian_matrix;
 use faer::diag::Diag;
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::evd::{
@@ -149,7 +149,13 @@ impl Thresholder {
             // the warm start multiplies by G: the whole matrix (the eigensolver below still
             // reads only the lower triangle)
             mirror_lower(&mut self.gram);
-            warm_eigen(self.gram.as_ref(), tau * tau, v.as_ref(), &mut self.inertia, par)
+            warm_eigen(
+                self.gram.as_ref(),
+                tau * tau,
+                v.as_ref(),
+                &mut self.inertia,
+                par,
+            )
         });
         let k = match warm {
             Some((sigma2, mut v)) => {
@@ -175,7 +181,16 @@ impl Thresholder {
                 let v = self.vecs.subcols_mut(d - k, k);
                 // remembered only when the next step could start from it
                 self.prev = (WARM_FRACTION * (k + OVERSAMPLE) <= d).then(|| v.to_owned());
-                apply_filter(x, v, &sigma2, tau, tall, &mut self.filter, out.as_mut(), par);
+                apply_filter(
+                    x,
+                    v,
+                    &sigma2,
+                    tau,
+                    tall,
+                    &mut self.filter,
+                    out.as_mut(),
+                    par,
+                );
                 k
             }
         };
@@ -279,7 +294,12 @@ fn apply_filter(
 const ROW_BLOCK: usize = 320;
 
 /// `out = a b`, by blocks of at most `ROW_BLOCK` rows of `out` and `a`.
-fn matmul_by_row_blocks(mut out: MatMut<'_, f64>, a: MatRef<'_, f64>, b: MatRef<'_, f64>, par: Par) {
+fn matmul_by_row_blocks(
+    mut out: MatMut<'_, f64>,
+    a: MatRef<'_, f64>,
+    b: MatRef<'_, f64>,
+    par: Par,
+) {
     let m = a.nrows();
     let blocks = m.div_ceil(ROW_BLOCK).max(1);
     let mut r0 = 0;
@@ -456,9 +476,7 @@ impl Inertia {
     /// eigenvalues of g - threshold I, counted on the 1x1 and 2x2 blocks of its L B Lᵀ
     /// factorization (Sylvester's law of inertia). `None` if a pivot is not finite.
     fn eigenvalues_above(&mut self, g: MatRef<'_, f64>, threshold: f64, par: Par) -> Option<usize> {
-        use faer::linalg::cholesky::lblt::factor::{
-            cholesky_in_place, cholesky_in_place_scratch,
-        };
+        use faer::linalg::cholesky::lblt::factor::{cholesky_in_place, cholesky_in_place_scratch};
         let d = g.nrows();
         if self.a.shape() != (d, d) {
             self.a = Mat::zeros(d, d);
@@ -567,7 +585,11 @@ mod tests {
         let lambda = eig.S().column_vector();
         for t in [-1.0, 0.5, 10.0, 60.0, 150.0, 1e6] {
             let expected = (0..60).filter(|&i| lambda[i] > t).count();
-            assert_eq!(eigenvalues_above(g.as_ref(), t), Some(expected), "threshold {t}");
+            assert_eq!(
+                eigenvalues_above(g.as_ref(), t),
+                Some(expected),
+                "threshold {t}"
+            );
         }
     }
 
@@ -590,7 +612,10 @@ mod tests {
                 let (l, k) = svt.threshold(x.as_ref(), tau).unwrap();
                 let (l_ref, k_ref) = svt_by_svd(x.as_ref(), tau).unwrap();
                 assert_eq!(k, k_ref, "{m}x{n} step {t}");
-                assert!((&l - &l_ref).norm_max() < 1e-9 * x.norm_max(), "{m}x{n} step {t}");
+                assert!(
+                    (&l - &l_ref).norm_max() < 1e-9 * x.norm_max(),
+                    "{m}x{n} step {t}"
+                );
             }
             // steps 1-3 and 6 warm; 0, 4 (rank jump) and 5 (after it, 40 kept) full
             assert_eq!((svt.warm_calls, svt.full_calls), (4, 3), "{m}x{n}");

@@ -38,7 +38,11 @@ fn backward_row(prev: &[f64], cur: &mut [f64], par: &mut [u8], e: &[f64], mask: 
     let w = cur.len();
     for x in 0..w {
         let cl = if x > 0 { prev[x - 1] } else { f64::INFINITY };
-        let cr = if x + 1 < w { prev[x + 1] } else { f64::INFINITY };
+        let cr = if x + 1 < w {
+            prev[x + 1]
+        } else {
+            f64::INFINITY
+        };
         let (best, k) = pick(cl, prev[x], cr);
         cur[x] = best + e[x] + mask[x];
         par[x] = k;
@@ -46,7 +50,14 @@ fn backward_row(prev: &[f64], cur: &mut [f64], par: &mut [u8], e: &[f64], mask: 
 }
 
 /// One row of the forward DP, rows `up` (i - 1) and `row` (i) of the gray image.
-fn forward_row(prev: &[f64], cur: &mut [f64], par: &mut [u8], up: &[f64], row: &[f64], mask: &[f64]) {
+fn forward_row(
+    prev: &[f64],
+    cur: &mut [f64],
+    par: &mut [u8],
+    up: &[f64],
+    row: &[f64],
+    mask: &[f64],
+) {
     let w = cur.len();
     for x in 0..w {
         // replicated borders: I(i, -1) = I(i, 0), I(i, w) = I(i, w - 1)
@@ -54,8 +65,16 @@ fn forward_row(prev: &[f64], cur: &mut [f64], par: &mut [u8], up: &[f64], row: &
         let r = row[(x + 1).min(w - 1)];
         let u = up[x];
         let c_u = (r - l).abs();
-        let cl = if x > 0 { prev[x - 1] + c_u + (u - l).abs() } else { f64::INFINITY };
-        let cr = if x + 1 < w { prev[x + 1] + c_u + (u - r).abs() } else { f64::INFINITY };
+        let cl = if x > 0 {
+            prev[x - 1] + c_u + (u - l).abs()
+        } else {
+            f64::INFINITY
+        };
+        let cr = if x + 1 < w {
+            prev[x + 1] + c_u + (u - r).abs()
+        } else {
+            f64::INFINITY
+        };
         let (best, k) = pick(cl, prev[x] + c_u, cr);
         cur[x] = best + mask[x];
         par[x] = k;
@@ -72,9 +91,7 @@ pub fn find_seam(g: &Grid) -> Seam {
         *p = g.mask[x]
             + match g.mode {
                 Energy::Backward => g.energy[x],
-                Energy::Forward => {
-                    (gray[(x + 1).min(w - 1)] - gray[x.saturating_sub(1)]).abs()
-                }
+                Energy::Forward => (gray[(x + 1).min(w - 1)] - gray[x.saturating_sub(1)]).abs(),
             };
     }
     for y in 1..h {

@@ -12,8 +12,8 @@ pub mod energy;
 pub mod insert;
 pub mod order;
 
-use crate::node::Choice;
-use crate::types::Image;
+use cgnodes_api::node::Choice;
+use cgnodes_api::types::Image;
 
 /// The energy a seam minimizes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -5,15 +5,20 @@ use super::*;
 
 /// A deterministic textured image: smooth waves plus noise.
 fn image(w: u32, h: u32, seed: u64) -> Image {
-    let mut s = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+    let mut s = seed
+        .wrapping_mul(6364136223846793005)
+        .wrapping_add(1442695040888963407);
     let mut img = Image::new(w, h, [0.0, 0.0, 0.0, 1.0]);
     for y in 0..h {
         for x in 0..w {
             let mut p = [0.0f32, 0.0, 0.0, 1.0];
             for (c, v) in p.iter_mut().take(3).enumerate() {
-                s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                s = s
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
                 let noise = (s >> 40) as f32 / (1u64 << 24) as f32;
-                *v = 0.5 + 0.3 * ((x as f32 * 0.4 + c as f32) + y as f32 * 0.25).sin() + 0.2 * noise;
+                *v =
+                    0.5 + 0.3 * ((x as f32 * 0.4 + c as f32) + y as f32 * 0.25).sin() + 0.2 * noise;
             }
             img.set(x, y, p);
         }
@@ -89,7 +94,11 @@ fn dp_finds_the_minimal_seam() {
             .iter()
             .map(|t| seam_energy(&g, t))
             .fold(f64::INFINITY, f64::min);
-        assert!((s.energy - best).abs() < 1e-12, "{mode:?}: {} vs {best}", s.energy);
+        assert!(
+            (s.energy - best).abs() < 1e-12,
+            "{mode:?}: {} vs {best}",
+            s.energy
+        );
         assert!((seam_energy(&g, &s.columns) - best).abs() < 1e-12);
     }
 }
@@ -113,9 +122,13 @@ fn local_energy_update_matches_a_full_recompute() {
 /// The marked pixels form `k` seams: per row (vertical) exactly k of them.
 fn marked_per_line(marked: &[bool], w: usize, h: usize, vertical: bool) -> Vec<usize> {
     if vertical {
-        (0..h).map(|y| (0..w).filter(|&x| marked[y * w + x]).count()).collect()
+        (0..h)
+            .map(|y| (0..w).filter(|&x| marked[y * w + x]).count())
+            .collect()
     } else {
-        (0..w).map(|x| (0..h).filter(|&y| marked[y * w + x]).count()).collect()
+        (0..w)
+            .map(|x| (0..h).filter(|&y| marked[y * w + x]).count())
+            .collect()
     }
 }
 
@@ -126,20 +139,30 @@ fn removes_exactly_the_requested_seams_each_8_connected() {
         let r = seam_carve(&img, None, None, req(31, 30, mode)).unwrap();
         assert_eq!((r.image.width, r.image.height), (31, 30));
         assert_eq!((r.removed, r.inserted), (9, 0));
-        assert!(marked_per_line(&r.marked, 40, 30, true).iter().all(|&n| n == 9));
+        assert!(marked_per_line(&r.marked, 40, 30, true)
+            .iter()
+            .all(|&n| n == 9));
         // one seam: 8-connected and one pixel in every row, every column for horizontal
         let one = seam_carve(&img, None, None, req(39, 30, mode)).unwrap();
-        let cols: Vec<usize> = (0..30).map(|y| (0..40).find(|&x| one.marked[y * 40 + x]).unwrap()).collect();
+        let cols: Vec<usize> = (0..30)
+            .map(|y| (0..40).find(|&x| one.marked[y * 40 + x]).unwrap())
+            .collect();
         assert!(cols.windows(2).all(|p| p[0].abs_diff(p[1]) <= 1));
         let one = seam_carve(&img, None, None, req(40, 29, mode)).unwrap();
         assert_eq!((one.image.width, one.image.height), (40, 29));
-        assert!(marked_per_line(&one.marked, 40, 30, false).iter().all(|&n| n == 1));
-        let rows: Vec<usize> = (0..40).map(|x| (0..30).find(|&y| one.marked[y * 40 + x]).unwrap()).collect();
+        assert!(marked_per_line(&one.marked, 40, 30, false)
+            .iter()
+            .all(|&n| n == 1));
+        let rows: Vec<usize> = (0..40)
+            .map(|x| (0..30).find(|&y| one.marked[y * 40 + x]).unwrap())
+            .collect();
         assert!(rows.windows(2).all(|p| p[0].abs_diff(p[1]) <= 1));
         // the kept pixels are the input's, in order, in every row
         for y in 0..30u32 {
-            let kept: Vec<[f32; 4]> =
-                (0..40).filter(|&x| !r.marked[(y * 40 + x) as usize]).map(|x| img.get(x, y)).collect();
+            let kept: Vec<[f32; 4]> = (0..40)
+                .filter(|&x| !r.marked[(y * 40 + x) as usize])
+                .map(|x| img.get(x, y))
+                .collect();
             let out: Vec<[f32; 4]> = (0..31).map(|x| r.image.get(x, y)).collect();
             assert_eq!(kept, out);
         }
@@ -161,9 +184,16 @@ fn a_protected_region_survives() {
             mask.set(x, y, [1.0; 4]);
         }
     }
-    let inside = |r: &Carved| (0..24 * 40).filter(|&i| r.marked[i] && mask.pixels[i][0] > 0.5).count();
+    let inside = |r: &Carved| {
+        (0..24 * 40)
+            .filter(|&i| r.marked[i] && mask.pixels[i][0] > 0.5)
+            .count()
+    };
     let free = seam_carve(&img, None, None, req(28, 24, Energy::Backward)).unwrap();
-    assert!(inside(&free) > 0, "the test needs seams through the block without protection");
+    assert!(
+        inside(&free) > 0,
+        "the test needs seams through the block without protection"
+    );
     for mode in [Energy::Backward, Energy::Forward] {
         let r = seam_carve(&img, Some(&mask), None, req(28, 24, mode)).unwrap();
         assert_eq!(inside(&r), 0);
@@ -186,7 +216,12 @@ fn remove_then_insert_returns_the_original_size() {
     }
     let r = seam_carve(&img, None, Some(&mask), req(0, 0, Energy::Forward)).unwrap();
     assert_eq!((r.image.width, r.image.height), (36, 28));
-    assert!(r.removed >= 5 && r.inserted == r.removed, "{} {}", r.removed, r.inserted);
+    assert!(
+        r.removed >= 5 && r.inserted == r.removed,
+        "{} {}",
+        r.removed,
+        r.inserted
+    );
     assert_eq!(r.remove_left, 0);
     // every masked pixel was taken by a seam
     assert!((0..36 * 28).all(|i| mask.pixels[i][0] < 0.5 || r.marked[i]));
@@ -199,12 +234,18 @@ fn insertion_duplicates_distinct_seams() {
     assert_eq!((r.image.width, r.image.height), (27, 10));
     assert_eq!(r.inserted, 7);
     // 7 distinct pixels per row were duplicated, and every input pixel is in the output
-    assert!(marked_per_line(&r.marked, 20, 10, true).iter().all(|&n| n == 7));
+    assert!(marked_per_line(&r.marked, 20, 10, true)
+        .iter()
+        .all(|&n| n == 7));
     for y in 0..10u32 {
         let out: Vec<[f32; 4]> = (0..27).map(|x| r.image.get(x, y)).collect();
         let mut k = 0;
         for x in 0..20 {
-            k += out[k..].iter().position(|p| *p == img.get(x, y)).expect("input pixel kept") + 1;
+            k += out[k..]
+                .iter()
+                .position(|p| *p == img.get(x, y))
+                .expect("input pixel kept")
+                + 1;
         }
     }
     // more than doubling works in rounds
@@ -219,12 +260,29 @@ fn optimal_order_costs_no_more_than_either_fixed_order() {
     let (seq, total) = order::optimal_order(&g, 3, 4);
     assert_eq!(seq.iter().filter(|&&h| h).count(), 3);
     let fixed = |order| {
-        let r = seam_carve(&img, None, None, Request { order, ..req(12, 11, Energy::Backward) });
+        let r = seam_carve(
+            &img,
+            None,
+            None,
+            Request {
+                order,
+                ..req(12, 11, Energy::Backward)
+            },
+        );
         r.unwrap().energy_removed
     };
     assert!(total <= fixed(Order::WidthFirst) + 1e-9);
     assert!(total <= fixed(Order::HeightFirst) + 1e-9);
-    let r = seam_carve(&img, None, None, Request { order: Order::Optimal, ..req(12, 11, Energy::Backward) }).unwrap();
+    let r = seam_carve(
+        &img,
+        None,
+        None,
+        Request {
+            order: Order::Optimal,
+            ..req(12, 11, Energy::Backward)
+        },
+    )
+    .unwrap();
     assert_eq!((r.image.width, r.image.height), (12, 11));
     assert!((r.energy_removed - total).abs() < 1e-9);
 }
@@ -233,18 +291,46 @@ fn optimal_order_costs_no_more_than_either_fixed_order() {
 fn bad_inputs_name_their_socket() {
     let img = image(10, 8, 8);
     let sock = |r: Result<Carved, NodeError>| r.unwrap_err().socket.unwrap();
-    assert_eq!(sock(seam_carve(&img, None, None, req(0, 8, Energy::Backward))), "width");
-    assert_eq!(sock(seam_carve(&img, None, None, req(8, 0, Energy::Backward))), "height");
-    assert_eq!(sock(seam_carve(&img, None, None, req(161, 8, Energy::Backward))), "width");
+    assert_eq!(
+        sock(seam_carve(&img, None, None, req(0, 8, Energy::Backward))),
+        "width"
+    );
+    assert_eq!(
+        sock(seam_carve(&img, None, None, req(8, 0, Energy::Backward))),
+        "height"
+    );
+    assert_eq!(
+        sock(seam_carve(&img, None, None, req(161, 8, Energy::Backward))),
+        "width"
+    );
     let wrong = Image::new(9, 8, [1.0; 4]);
-    assert_eq!(sock(seam_carve(&img, Some(&wrong), None, req(8, 8, Energy::Backward))), "protect");
-    assert_eq!(sock(seam_carve(&img, None, Some(&wrong), req(8, 8, Energy::Backward))), "remove");
+    assert_eq!(
+        sock(seam_carve(
+            &img,
+            Some(&wrong),
+            None,
+            req(8, 8, Energy::Backward)
+        )),
+        "protect"
+    );
+    assert_eq!(
+        sock(seam_carve(
+            &img,
+            None,
+            Some(&wrong),
+            req(8, 8, Energy::Backward)
+        )),
+        "remove"
+    );
     let mut bad = img.clone();
     bad.set(3, 2, [f32::NAN, 0.0, 0.0, 1.0]);
     let e = seam_carve(&bad, None, None, req(8, 8, Energy::Backward)).unwrap_err();
     assert_eq!(e.socket.as_deref(), Some("image"));
     assert!(e.message.contains("(3, 2)"));
     let empty = Image::new(0, 0, [0.0; 4]);
-    assert_eq!(sock(seam_carve(&empty, None, None, req(1, 1, Energy::Backward))), "image");
+    assert_eq!(
+        sock(seam_carve(&empty, None, None, req(1, 1, Energy::Backward))),
+        "image"
+    );
     assert!(luminance([1.0, 1.0, 1.0, 1.0]) > 0.999);
 }

@@ -8,7 +8,7 @@
 pub mod randomized;
 pub mod truncated;
 
-use crate::node::Choice;
+use cgnodes_api::node::Choice;
 use faer::{Mat, MatRef};
 
 /// How the factors are computed.

@@ -66,7 +66,11 @@ pub fn range_finder(a: MatRef<'_, f64>, k: usize, p: RandomizedParams) -> Mat<f6
 /// The leading k singular triplets of `a`, estimated from a sketch of k + oversample
 /// columns (Alg. 4.4 then Alg. 5.1). All l computed triplets are returned; the caller keeps
 /// the first k.
-pub fn randomized_svd(a: MatRef<'_, f64>, k: usize, p: RandomizedParams) -> Result<Factors, String> {
+pub fn randomized_svd(
+    a: MatRef<'_, f64>,
+    k: usize,
+    p: RandomizedParams,
+) -> Result<Factors, String> {
     if a.nrows() == 0 || a.ncols() == 0 {
         return Err("the matrix is empty".into());
     }

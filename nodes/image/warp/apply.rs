@@ -3,8 +3,8 @@
 //! mapping (move each source pixel to f(x)). Rows run in parallel (rayon).
 
 use super::WarpMap;
-use crate::node::Choice;
-use crate::types::{Image, TRANSPARENT};
+use cgnodes_api::node::Choice;
+use cgnodes_api::types::{Image, TRANSPARENT};
 use rayon::prelude::*;
 
 /// How the map moves the image.

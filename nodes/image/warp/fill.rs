@@ -1,7 +1,7 @@
 //! Filling forward mapping's holes, and the holes mask image.
 
 use super::Fill;
-use crate::types::Image;
+use cgnodes_api::types::Image;
 use std::collections::VecDeque;
 
 /// The mask image of `holes` (row-major, `w` x `h`): opaque white at a hole, opaque black
@@ -88,7 +88,12 @@ fn push_pull(img: &mut Image, holes: &[bool]) {
         for y in 0..ch {
             for x in 0..cw {
                 let (mut s, mut sw) = ([0.0f32; 4], 0.0f32);
-                for (cx, cy) in [(2 * x, 2 * y), (2 * x + 1, 2 * y), (2 * x, 2 * y + 1), (2 * x + 1, 2 * y + 1)] {
+                for (cx, cy) in [
+                    (2 * x, 2 * y),
+                    (2 * x + 1, 2 * y),
+                    (2 * x, 2 * y + 1),
+                    (2 * x + 1, 2 * y + 1),
+                ] {
                     if cx < fw && cy < fh {
                         let k = (cy * fw + cx) as usize;
                         let wk = fine.w[k];
@@ -158,7 +163,10 @@ mod tests {
         assert_eq!(fill_holes(&mut im, &holes, Fill::PushPull), 12);
         for p in &im.pixels {
             // Every hole is an average of red and blue: opaque, red + blue = 1.
-            assert!((p[3] - 1.0).abs() < 1e-6 && (p[0] + p[2] - 1.0).abs() < 1e-6, "{p:?}");
+            assert!(
+                (p[3] - 1.0).abs() < 1e-6 && (p[0] + p[2] - 1.0).abs() < 1e-6,
+                "{p:?}"
+            );
         }
         // Mapped pixels kept; nearer red is redder.
         assert_eq!(im.get(0, 1), [1.0, 0.0, 0.0, 1.0]);

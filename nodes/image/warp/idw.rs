@@ -144,7 +144,13 @@ mod tests {
 
     #[test]
     fn interpolates_and_recovers_a_linear_map_locally() {
-        let p = [[10.0, 10.0], [50.0, 12.0], [30.0, 40.0], [70.0, 60.0], [5.0, 80.0]];
+        let p = [
+            [10.0, 10.0],
+            [50.0, 12.0],
+            [30.0, 40.0],
+            [70.0, 60.0],
+            [5.0, 80.0],
+        ];
         // q = A p + b: every D_i is A exactly (the least squares fit is exact) and f is A x + b.
         let a = [[1.1, 0.2], [-0.3, 0.9]];
         let q: Vec<[f64; 2]> = p

@@ -13,9 +13,9 @@ pub mod idw;
 pub mod mls;
 pub mod rbf;
 
-use crate::node::Choice;
-use crate::types::Image;
 pub use apply::{Fill, Mapping};
+use cgnodes_api::node::Choice;
+use cgnodes_api::types::Image;
 pub use rbf::Kernel;
 
 /// A fitted map of the plane: the warp evaluated at one point.
@@ -150,10 +150,9 @@ impl std::fmt::Display for WarpError {
                 f,
                 "{to} target points for {from} source points: the counts must be equal"
             ),
-            WarpError::TooFew { need, got } => write!(
-                f,
-                "{got} control points, the method needs at least {need}"
-            ),
+            WarpError::TooFew { need, got } => {
+                write!(f, "{got} control points, the method needs at least {need}")
+            }
             WarpError::NotFinite { index, .. } => {
                 write!(f, "point {index} has a NaN or infinite coordinate")
             }
@@ -172,11 +171,7 @@ impl std::fmt::Display for WarpError {
 }
 
 /// Checks the control points for `method` (counts, finiteness, coincidence, spread).
-pub fn check_points(
-    method: Method,
-    from: &[[f64; 2]],
-    to: &[[f64; 2]],
-) -> Result<(), WarpError> {
+pub fn check_points(method: Method, from: &[[f64; 2]], to: &[[f64; 2]]) -> Result<(), WarpError> {
     if from.len() != to.len() {
         return Err(WarpError::Mismatch {
             from: from.len(),
@@ -359,8 +354,14 @@ mod tests {
     #[test]
     fn grid_error_vanishes_for_affine_maps_only() {
         let p = [[10.0, 10.0], [90.0, 15.0], [50.0, 70.0], [20.0, 95.0]];
-        let aff: Vec<[f64; 2]> = p.iter().map(|x| [1.1 * x[0] + 2.0, 0.9 * x[1] - x[0] * 0.1]).collect();
-        let bent: Vec<[f64; 2]> = p.iter().map(|x| [x[0] + 0.02 * x[1] * x[1], x[1]]).collect();
+        let aff: Vec<[f64; 2]> = p
+            .iter()
+            .map(|x| [1.1 * x[0] + 2.0, 0.9 * x[1] - x[0] * 0.1])
+            .collect();
+        let bent: Vec<[f64; 2]> = p
+            .iter()
+            .map(|x| [x[0] + 0.02 * x[1] * x[1], x[1]])
+            .collect();
         let w = WarpParams {
             method: Method::MlsAffine,
             ..Default::default()
@@ -393,7 +394,10 @@ mod tests {
         let e = check_points(Method::Idw, &ok, &nan).unwrap_err();
         assert_eq!(e.side(), Side::To);
         let line = [[0.0, 0.0], [1.0, 1.0], [3.0, 3.0]];
-        assert_eq!(check_points(Method::Rbf, &line, &ok), Err(WarpError::Collinear));
+        assert_eq!(
+            check_points(Method::Rbf, &line, &ok),
+            Err(WarpError::Collinear)
+        );
         assert!(check_points(Method::MlsRigid, &line, &ok).is_ok());
     }
 }

@@ -13,7 +13,7 @@
 //! control points is reproduced exactly. Solved once per fit by dense LU (nalgebra).
 
 use super::{WarpError, WarpMap};
-use crate::node::Choice;
+use cgnodes_api::node::Choice;
 use nalgebra::DMatrix;
 
 /// The radial function phi(d) with radius r.
@@ -138,10 +138,7 @@ impl Rbf {
         };
         // An ill-conditioned system (nearly coincident centres, a gaussian of tiny radius)
         // solves to something that no longer interpolates: refuse it.
-        let scale = q
-            .iter()
-            .flatten()
-            .fold(1.0f64, |s, v| s.max(v.abs()));
+        let scale = q.iter().flatten().fold(1.0f64, |s, v| s.max(v.abs()));
         let res = super::residual(&f, p, q);
         if res.is_nan() || res > 1e-10 * scale.max(1000.0) {
             return Err(WarpError::Singular(format!(
@@ -177,11 +174,26 @@ mod tests {
 
     #[test]
     fn every_kernel_interpolates_and_reproduces_affine_sets() {
-        let p = [[10.0, 10.0], [90.0, 15.0], [50.0, 70.0], [20.0, 95.0], [80.0, 80.0], [45.0, 30.0]];
-        let bent: Vec<[f64; 2]> = p.iter().map(|x| [x[0] + 0.01 * x[1] * x[1], x[1] + 5.0]).collect();
+        let p = [
+            [10.0, 10.0],
+            [90.0, 15.0],
+            [50.0, 70.0],
+            [20.0, 95.0],
+            [80.0, 80.0],
+            [45.0, 30.0],
+        ];
+        let bent: Vec<[f64; 2]> = p
+            .iter()
+            .map(|x| [x[0] + 0.01 * x[1] * x[1], x[1] + 5.0])
+            .collect();
         let affine: Vec<[f64; 2]> = p
             .iter()
-            .map(|x| [0.9 * x[0] + 0.2 * x[1] + 3.0, -0.1 * x[0] + 1.2 * x[1] - 4.0])
+            .map(|x| {
+                [
+                    0.9 * x[0] + 0.2 * x[1] + 3.0,
+                    -0.1 * x[0] + 1.2 * x[1] - 4.0,
+                ]
+            })
             .collect();
         for (_, kernel) in Kernel::CHOICES {
             for radius in [0.0, 20.0] {
@@ -189,8 +201,14 @@ mod tests {
                 assert!(super::super::residual(&f, &p, &bent) < 1e-6, "{kernel:?}");
                 let g = Rbf::fit(&p, &affine, *kernel, radius).unwrap();
                 let y = g.eval([33.0, 61.0]);
-                assert!((y[0] - (0.9 * 33.0 + 0.2 * 61.0 + 3.0)).abs() < 1e-9, "{kernel:?}");
-                assert!((y[1] - (-0.1 * 33.0 + 1.2 * 61.0 - 4.0)).abs() < 1e-9, "{kernel:?}");
+                assert!(
+                    (y[0] - (0.9 * 33.0 + 0.2 * 61.0 + 3.0)).abs() < 1e-9,
+                    "{kernel:?}"
+                );
+                assert!(
+                    (y[1] - (-0.1 * 33.0 + 1.2 * 61.0 - 4.0)).abs() < 1e-9,
+                    "{kernel:?}"
+                );
             }
         }
     }

@@ -7,7 +7,7 @@ use super::error::ArapError;
 use super::local_global::arap_parameterize_progress;
 use super::options::ArapOptions;
 use super::{init_uv_list, init_uvs, uv_outputs};
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
 
 impl From<ArapError> for NodeError {
     fn from(e: ArapError) -> NodeError {

@@ -11,7 +11,7 @@ use super::options::{
     ArapOptions, RefactorSchedule, LOCAL_MAX_FRACTION, MAX_WEIGHT, MIN_STEP, REWEIGHT_FACTOR,
     STEP_SAFETY,
 };
-use crate::nodes::linalg::SpdFactor;
+use cgnodes_linalg::SpdFactor;
 use faer::sparse::{SparseColMat, SymbolicSparseColMat};
 use faer::{Mat, Par};
 
@@ -56,7 +56,7 @@ impl FoldFree {
             mark: vec![u32::MAX; if opts.injective { n } else { 0 }],
             seen: vec![false; if opts.injective { m } else { 0 }],
             adjacency: if opts.injective && opts.local_rings > 0 {
-                crate::types::Topology::vertex_triangles(n, &frames.triangles)
+                cgnodes_api::types::Topology::vertex_triangles(n, &frames.triangles)
             } else {
                 (Vec::new(), Vec::new())
             },
@@ -358,7 +358,7 @@ mod tests {
         for &b in &blocked {
             limits[b] = 0.1;
         }
-        let adjacency = crate::types::Topology::vertex_triangles(n, &frames.triangles);
+        let adjacency = cgnodes_api::types::Topology::vertex_triangles(n, &frames.triangles);
         let (mut mark, mut seen, mut touched) = (vec![u32::MAX; n], vec![false; m], Vec::new());
         let dmax = d
             .iter()

@@ -6,7 +6,7 @@
 //! edge 0→1 on the x axis, corner 2 above it), so the map from that frame to the UV plane is
 //! linear with Jacobian `J = [u1-u0, u2-u0] · [x1-x0, x2-x0]^-1`.
 
-use crate::types::vec3::{cross, cross2, dot, norm, sub, sub2};
+use cgnodes_api::types::vec3::{cross, cross2, dot, norm, sub, sub2};
 use rayon::prelude::*;
 
 /// Triangles per rayon task: large enough that small meshes run on one thread and the

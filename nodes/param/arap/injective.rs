@@ -3,7 +3,7 @@
 //! Boundaries", §4), and flip counting.
 
 use super::frames::{TriangleFrames, PAR_CHUNK};
-use crate::types::vec3::cross2;
+use cgnodes_api::types::vec3::cross2;
 use rayon::prelude::*;
 
 /// The smallest positive `t` at which triangle `t`'s signed area, moving as `uv + t·d`,

@@ -7,7 +7,7 @@
 use super::frames::{Similarity, TriangleFrames, PAR_CHUNK};
 use super::injective::{area_coefficients, smallest_positive_root};
 use super::options::{AREA_FLOOR, AREA_MARGIN};
-use crate::types::vec3::cross2;
+use cgnodes_api::types::vec3::cross2;
 use rayon::prelude::*;
 
 /// Per triangle, twice the UV area of its margin and of its hard floor (see `AREA_MARGIN`

@@ -137,7 +137,7 @@ pub(super) fn evaluate(
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
-    use crate::prelude::{ErrorKind, NodeError};
+    use cgnodes_api::prelude::{ErrorKind, NodeError};
 
     /// A wavy-free planar disk: a triangulated regular grid in the plane z = 0.
     pub(crate) fn planar_grid(k: usize) -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
@@ -154,7 +154,7 @@ pub(crate) mod tests {
                 p.push([x + s * ((i * 7 + j * 3) % 5) as f64 / 5.0, y, 0.0]);
             }
         }
-        (p, crate::nodes::param::triangles::grid_triangles(k, k))
+        (p, crate::triangles::grid_triangles(k, k))
     }
 
     #[test]

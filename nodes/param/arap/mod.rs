@@ -29,11 +29,12 @@ mod system;
 pub use asap::{asap_parameterize, AsapResult};
 pub use error::ArapError;
 pub use local_global::{
-    arap_parameterize, arap_parameterize_progress, ArapIteration, ArapResult, LOG_COLUMNS};
+    arap_parameterize, arap_parameterize_progress, ArapIteration, ArapResult, LOG_COLUMNS,
+};
 pub use options::{ArapOptions, RefactorSchedule, LOCAL_RINGS};
 
 use super::tutte::{tutte_parameterize, BoundaryShape, TutteWeights};
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
 
 /// Why an iterative parameterization stopped.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -136,10 +137,7 @@ pub fn init_uvs(mesh: &Mesh, init: Option<&Mesh>) -> Result<(Vec<[f64; 2]>, Stri
 
 /// Initial UVs given as a list (the `init_uv` socket): one finite UV per vertex of a mesh
 /// with `n` vertices.
-pub fn init_uv_list(
-    n: usize,
-    uv: Vec<[f64; 2]>,
-) -> Result<(Vec<[f64; 2]>, String), NodeError> {
+pub fn init_uv_list(n: usize, uv: Vec<[f64; 2]>) -> Result<(Vec<[f64; 2]>, String), NodeError> {
     if uv.len() != n {
         return Err(NodeError::invalid(
             "init_uv",

@@ -18,7 +18,7 @@ use super::system::{
     laplacian_triplets,
 };
 use super::StopReason;
-use crate::nodes::linalg::SpdFactor;
+use cgnodes_linalg::SpdFactor;
 use faer::sparse::Triplet;
 use faer::{Mat, Par};
 use rayon::prelude::*;

@@ -5,7 +5,7 @@
 
 use super::component_of;
 use super::frames::{Similarity, TriangleFrames, PAR_CHUNK};
-use crate::nodes::linalg::SpdFactor;
+use cgnodes_linalg::SpdFactor;
 use faer::sparse::Triplet;
 use faer::Mat;
 use rayon::prelude::*;

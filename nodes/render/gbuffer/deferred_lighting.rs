@@ -14,10 +14,10 @@
 
 use super::shadow_mapping::{map_from_image, scene_bounds};
 use super::{check_size, is_surface, light_at, pass_camera, rgb1};
-use crate::nodes::render::raster::shading::{blinn_phong, roughness_to_exponent, specular_weight};
-use crate::nodes::render::raster::shadow::{ShadowMap, ShadowParams};
-use crate::prelude::*;
-use crate::types::vec3::{normalize_recip as normalize, sub};
+use crate::raster::shading::{blinn_phong, roughness_to_exponent, specular_weight};
+use crate::raster::shadow::{ShadowMap, ShadowParams};
+use cgnodes_api::prelude::*;
+use cgnodes_api::types::vec3::{normalize_recip as normalize, sub};
 
 /// The G-buffer passes deferred lighting reads (all of one size).
 #[derive(Clone, Copy)]
@@ -124,8 +124,10 @@ fn declare(b: &mut NodeBuilder) {
     b.add_input::<Camera>("camera")
         .optional()
         .doc("The camera the G-buffer was rendered with (the eye of the specular term).");
-    b.add_input::<Image>("position").doc("World-space position pass.");
-    b.add_input::<Image>("normal").doc("World-space normal pass.");
+    b.add_input::<Image>("position")
+        .doc("World-space position pass.");
+    b.add_input::<Image>("normal")
+        .doc("World-space normal pass.");
     b.add_input::<Image>("base_color")
         .doc("Base (diffuse) colour pass.");
     b.add_input::<Image>("metallic_roughness")
@@ -146,7 +148,7 @@ fn declare(b: &mut NodeBuilder) {
         .default(0.2)
         .range(0.0, 10.0)
         .doc("Ambient term ka*Ia, times the base colour.");
-    crate::nodes::render::raster::render_raster::declare_shadow_params(b);
+    crate::raster::render_raster::declare_shadow_params(b);
     b.add_input::<Color>("background")
         .default(Color([0.05, 0.05, 0.05]))
         .doc("Colour where no surface is.");
@@ -174,7 +176,7 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
         background: ctx.input::<Color>("background")?.0,
         ..Default::default()
     };
-    set.shadow = crate::nodes::render::raster::render_raster::read_shadow_params(ctx)?;
+    set.shadow = crate::raster::render_raster::read_shadow_params(ctx)?;
     for (n, v) in [
         ("metallic", set.metallic),
         ("roughness", set.roughness),

@@ -9,7 +9,7 @@
 //! colour fills in, and the node logs a warning.
 
 use super::{camera_ray, check_size, depth_hit, pass_camera, rgb1, Sky};
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
 
 /// `color` where `depth` holds a surface, else the sky along the camera ray of `cam`
 /// (whose resolution is the images'). Output alpha is 1.
@@ -34,13 +34,15 @@ fn declare(b: &mut NodeBuilder) {
     b.add_input::<Camera>("camera")
         .optional()
         .doc("The camera the G-buffer was rendered with.");
-    b.add_input::<Image>("color").doc("Colour where a surface was hit.");
+    b.add_input::<Image>("color")
+        .doc("Colour where a surface was hit.");
     b.add_input::<Image>("depth")
         .doc("Depth pass: 0 or alpha 0 where nothing was hit.");
     b.add_input::<Color>("background")
         .default(Color([0.0, 0.0, 0.0]))
         .doc("Sky colour when the scene has no environment light (a warning is logged).");
-    b.add_output::<Image>("color").doc("Colour with the environment behind.");
+    b.add_output::<Image>("color")
+        .doc("Colour with the environment behind.");
 }
 
 fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {

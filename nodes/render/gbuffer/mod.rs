@@ -16,11 +16,11 @@ pub mod shadow_mapping;
 pub mod ssao;
 pub mod transparent_refraction;
 
-use crate::nodes::trace::environment::Environment;
-use crate::prelude::*;
-use crate::types::vec3::{dot, normalize_recip as normalize, sub};
-use crate::types::LookAt;
-pub use crate::nodes::render::raster::light_at;
+pub use crate::raster::light_at;
+use cgnodes_api::prelude::*;
+use cgnodes_api::types::vec3::{dot, normalize_recip as normalize, sub};
+use cgnodes_api::types::LookAt;
+use cgnodes_geometry::environment::Environment;
 
 /// Whether a position, normal or base-colour pixel holds a surface (alpha above 0).
 #[inline]
@@ -37,9 +37,7 @@ pub fn depth_hit(px: [f32; 4]) -> bool {
 
 /// Fails naming `socket` unless `img` is `w` x `h` (all passes of one G-buffer share a size).
 pub fn check_size(socket: &str, img: &Image, w: u32, h: u32) -> Result<(), NodeError> {
-    if (img.width, img.height) != (w, h)
-        || img.pixels.len() != w as usize * h as usize
-    {
+    if (img.width, img.height) != (w, h) || img.pixels.len() != w as usize * h as usize {
         return Err(NodeError::invalid(
             socket,
             format!(
@@ -128,7 +126,7 @@ pub fn camera_from_gbuffer(position: &Image, depth: &Image) -> Result<Camera, St
         b[k] = t[2];
     }
     let (fa, fb) = (dot(a, a).sqrt(), dot(b, b).sqrt());
-    let c = crate::types::vec3::cross(b, a);
+    let c = cgnodes_api::types::vec3::cross(b, a);
     let Some(c) = normalize(c).filter(|_| fa > 0.0 && fb > 0.0) else {
         return Err("the pixels do not span the image plane".into());
     };
@@ -166,7 +164,7 @@ pub fn camera_from_gbuffer(position: &Image, depth: &Image) -> Result<Camera, St
         target: std::array::from_fn(|k| e[k] + c[k]),
         up,
         fov_deg: 2.0 * (0.5 * h as f64 / f).atan().to_degrees(),
-        fov_axis: crate::types::FovAxis::Vertical,
+        fov_axis: cgnodes_api::types::FovAxis::Vertical,
         width: w,
         height: h,
         near: (0.5 * zmin).max(1e-9),
@@ -217,11 +215,7 @@ impl Sky {
 }
 
 /// An image of `w` x `h` whose rows are filled in parallel by `f(x, y)`.
-pub fn image_from_fn(
-    w: u32,
-    h: u32,
-    f: impl Fn(u32, u32) -> [f32; 4] + Sync,
-) -> Image {
+pub fn image_from_fn(w: u32, h: u32, f: impl Fn(u32, u32) -> [f32; 4] + Sync) -> Image {
     use rayon::prelude::*;
     let mut img = Image::new(w, h, [0.0; 4]);
     if w > 0 {

@@ -9,12 +9,12 @@
 //! the map from the image, the light and the scene's bounds (`map_from_image`).
 //! Environment lights have no map: their entry is a 0 x 0 image.
 
-use crate::nodes::render::raster::geometry::scene_geometry;
-use crate::nodes::render::raster::shadow::{
+use crate::raster::shadow::{
     cube_axes, directional_frame, directional_shadow_map, point_shadow_map, Face, ShadowMap,
 };
-use crate::prelude::*;
-use crate::types::vec3::{dot, sub};
+use cgnodes_api::prelude::*;
+use cgnodes_api::types::vec3::{dot, sub};
+use cgnodes_geometry::scene_geometry::scene_geometry;
 
 /// The cube faces' near distance for a scene of diagonal `diag` (as `render_raster`).
 fn near_of(diag: f64) -> f64 {
@@ -168,7 +168,8 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
         return Err(NodeError::invalid("resolution", "must lie in 256..=4096"));
     }
     let what = format!("{} shadow maps of {res}x{res}", scene.lights.len());
-    let bytes = crate::node::bytes_of(&[scene.lights.len() as u64, res as u64, res as u64, 24]);
+    let bytes =
+        cgnodes_api::node::bytes_of(&[scene.lights.len() as u64, res as u64, res as u64, 24]);
     ctx.reserve_bytes("resolution", &what, bytes)?;
     let maps = shadow_maps(&scene, res as u32).map_err(|e| NodeError::invalid("scene", e))?;
     let maps: Vec<Arc<Image>> = maps.into_iter().map(Arc::new).collect();
@@ -184,7 +185,7 @@ pub fn register(r: &mut Registry) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::nodes::render::raster::shadow::ShadowParams;
+    use crate::raster::shadow::ShadowParams;
 
     fn quad(y: f64, h: f64) -> Mesh {
         Mesh::from_triangles(
@@ -223,7 +224,12 @@ mod tests {
         let (tris, bounds) = tris_and_bounds(&scene).unwrap();
         let direct = [
             directional_shadow_map(&tris, [0.1, -1.0, 0.2], bounds, 256),
-            point_shadow_map(&tris, [0.2, 3.0, 0.1], 128, near_of(dot(sub(bounds.1, bounds.0), sub(bounds.1, bounds.0)).sqrt())),
+            point_shadow_map(
+                &tris,
+                [0.2, 3.0, 0.1],
+                128,
+                near_of(dot(sub(bounds.1, bounds.0), sub(bounds.1, bounds.0)).sqrt()),
+            ),
         ];
         let sp = ShadowParams {
             pcf_radius: 1,
@@ -236,7 +242,7 @@ mod tests {
             let m = map_from_image(&imgs[i], l, bounds).unwrap().unwrap();
             for k in 0..200 {
                 let p = [-1.9 + 0.019 * k as f64, 0.0, 1.3 - 0.013 * k as f64];
-                let (ld, _) = crate::nodes::render::gbuffer::light_at(l, p).unwrap();
+                let (ld, _) = crate::gbuffer::light_at(l, p).unwrap();
                 let a = m.visibility(p, up, ld, &sp);
                 assert_eq!(a, direct[i].visibility(p, up, ld, &sp));
                 shadowed += (a == 0.0) as usize;

@@ -21,9 +21,9 @@
 //! (`camera_from_gbuffer`).
 
 use super::{check_size, depth_hit, is_surface, pass_camera};
-use crate::nodes::trace::sampling::Pcg32;
-use crate::prelude::*;
-use crate::types::vec3::{axpy, cross, dot, normalize, sub};
+use cgnodes_api::prelude::*;
+use cgnodes_api::rng::Pcg32;
+use cgnodes_api::types::vec3::{axpy, cross, dot, normalize, sub};
 
 /// SSAO settings.
 #[derive(Clone, Debug)]
@@ -180,7 +180,11 @@ pub fn ssao(
         let rv = axpy(look.right.map(|c| c * tv[0]), tv[1], look.up);
         let t = normalize(axpy(rv, -dot(rv, n), n))
             .or_else(|| {
-                let a = if n[0].abs() < 0.9 { [1.0, 0.0, 0.0] } else { [0.0, 1.0, 0.0] };
+                let a = if n[0].abs() < 0.9 {
+                    [1.0, 0.0, 0.0]
+                } else {
+                    [0.0, 1.0, 0.0]
+                };
                 normalize(cross(a, n))
             })
             .unwrap_or([1.0, 0.0, 0.0]);
@@ -262,7 +266,8 @@ fn declare(b: &mut NodeBuilder) {
     b.add_input::<Image>("color")
         .optional()
         .doc("Colour to darken (output color = color x ao); without it, color is the ao.");
-    b.add_input::<Image>("position").doc("World-space position pass.");
+    b.add_input::<Image>("position")
+        .doc("World-space position pass.");
     b.add_input::<Image>("depth")
         .optional()
         .doc("Depth pass (else computed from the positions).");
@@ -287,7 +292,8 @@ fn declare(b: &mut NodeBuilder) {
     b.add_input::<bool>("blur")
         .default(true)
         .doc("Average the AO over 4x4 pixels (hides the kernel rotation pattern).");
-    b.add_output::<Image>("color").doc("The colour times the AO.");
+    b.add_output::<Image>("color")
+        .doc("The colour times the AO.");
     b.add_output::<Image>("ao")
         .doc("Ambient occlusion, 1 open to 0 closed (grey).");
 }
@@ -329,7 +335,10 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     }
     let bias: f64 = ctx.input("bias")?;
     if !(bias.is_finite() && bias >= 0.0) {
-        return Err(NodeError::invalid("bias", "must be finite and not negative"));
+        return Err(NodeError::invalid(
+            "bias",
+            "must be finite and not negative",
+        ));
     }
     let samples: i64 = ctx.input("samples")?;
     if !(1..=256).contains(&samples) {

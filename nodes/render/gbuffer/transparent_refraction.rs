@@ -24,8 +24,8 @@
 //! course's cleared target (an `environment_pass` after this fills them).
 
 use super::{check_size, depth_hit, is_surface, light_at, pass_camera, rgb1, Sky};
-use crate::prelude::*;
-use crate::types::vec3::{add, dot, normalize_recip as normalize, sub};
+use cgnodes_api::prelude::*;
+use cgnodes_api::types::vec3::{add, dot, normalize_recip as normalize, sub};
 
 /// Refraction settings.
 #[derive(Clone, Debug)]
@@ -127,7 +127,14 @@ fn curvature(position: &Image, normal: &Image, x: u32, y: u32, p: [f64; 3], n: [
 /// The direction in which a ray refracted into the surface at `p` (normal `n`, facing the
 /// eye) along `t` leaves the object's back (see the module doc); `None` on total internal
 /// reflection there.
-fn exit_direction(p: [f64; 3], n: [f64; 3], t: [f64; 3], view: [f64; 3], kappa: f64, ior: f64) -> Option<[f64; 3]> {
+fn exit_direction(
+    p: [f64; 3],
+    n: [f64; 3],
+    t: [f64; 3],
+    view: [f64; 3],
+    kappa: f64,
+    ior: f64,
+) -> Option<[f64; 3]> {
     if !(kappa > 1e-9 && kappa.is_finite()) {
         return Some(view);
     }
@@ -221,8 +228,10 @@ fn declare(b: &mut NodeBuilder) {
     b.add_input::<Camera>("camera")
         .optional()
         .doc("The camera the G-buffer was rendered with.");
-    b.add_input::<Image>("position").doc("World-space position pass.");
-    b.add_input::<Image>("normal").doc("World-space normal pass.");
+    b.add_input::<Image>("position")
+        .doc("World-space position pass.");
+    b.add_input::<Image>("normal")
+        .doc("World-space normal pass.");
     b.add_input::<Image>("depth")
         .doc("Depth pass: 0 or alpha 0 where nothing was hit.");
     b.add_input::<Image>("base_color")
@@ -278,15 +287,23 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
         return Err(NodeError::invalid("ior", "must be finite and at least 1"));
     }
     if !(set.highlight.is_finite() && set.highlight >= 0.0) {
-        return Err(NodeError::invalid("highlight", "must be finite and not negative"));
+        return Err(NodeError::invalid(
+            "highlight",
+            "must be finite and not negative",
+        ));
     }
     if !(set.shininess.is_finite() && set.shininess >= 1.0) {
-        return Err(NodeError::invalid("shininess", "must be finite and at least 1"));
+        return Err(NodeError::invalid(
+            "shininess",
+            "must be finite and at least 1",
+        ));
     }
     let bg: Color = ctx.input("background")?;
     let sky = Sky::new(&scene.lights, bg.0);
     if !sky.has_environment() {
-        ctx.log("warning: the scene has no environment light; refracted rays see the background colour");
+        ctx.log(
+            "warning: the scene has no environment light; refracted rays see the background colour",
+        );
     }
     let img = transparent_refraction(
         &position,
@@ -319,7 +336,10 @@ mod tests {
         assert!((t[0] - s / 1.5).abs() < 1e-12 && t[1] < 0.0);
         assert!((dot(t, t) - 1.0).abs() < 1e-12);
         // ior 1 goes straight on; glass to air past the critical angle reflects totally.
-        assert_eq!(refract([s, -s, 0.0], [0.0, 1.0, 0.0], 1.0).unwrap(), [s, -s, 0.0]);
+        assert_eq!(
+            refract([s, -s, 0.0], [0.0, 1.0, 0.0], 1.0).unwrap(),
+            [s, -s, 0.0]
+        );
         assert!(refract([s, -s, 0.0], [0.0, 1.0, 0.0], 1.5).is_none());
         assert_eq!(reflect([s, -s, 0.0], [0.0, 1.0, 0.0]), [s, s, 0.0]);
         assert!((schlick(1.0, 1.5) - 0.04).abs() < 1e-12);

@@ -5,8 +5,8 @@ use super::geometry::SceneGeometry;
 use super::options::RasterOptions;
 use super::shader::LightPrep;
 use super::shadow::{directional_shadow_map, point_shadow_map};
-use crate::prelude::*;
-use crate::types::vec3::{dot, normalize_recip as normalize, sub};
+use cgnodes_api::prelude::*;
+use cgnodes_api::types::vec3::{dot, normalize_recip as normalize, sub};
 use rayon::prelude::*;
 
 /// The lights of `scene` with their shadow maps (one light per task); shadow maps only when
@@ -30,9 +30,9 @@ pub(super) fn prepare_lights(
             },
             map: (lit && opts.shadows && !g.pos.is_empty())
                 .then(|| match l {
-                    Light::Directional { direction, .. } => Some(directional_shadow_map(
-                        &g.pos, *direction, g.bounds, res,
-                    )),
+                    Light::Directional { direction, .. } => {
+                        Some(directional_shadow_map(&g.pos, *direction, g.bounds, res))
+                    }
                     Light::Point { position, .. } => Some(point_shadow_map(
                         &g.pos,
                         *position,

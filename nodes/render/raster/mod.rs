@@ -21,7 +21,7 @@
 //! samples; their alpha is 1 where a surface was hit and 0 elsewhere. Colour is linear
 //! with alpha 1 (the background colour shows where nothing was hit).
 
-pub mod geometry;
+pub use cgnodes_geometry::scene_geometry as geometry;
 mod lights;
 pub mod options;
 pub mod rasterize;
@@ -32,12 +32,12 @@ mod setup;
 mod shader;
 pub mod shading;
 pub mod shadow;
-pub mod texture;
+pub use cgnodes_geometry::texture;
 
-use crate::prelude::*;
-use rayon::prelude::*;
-pub use options::{AntiAliasing, Passes, RasterOptions, RenderOutput};
+use cgnodes_api::prelude::*;
 pub use lights::light_at;
+pub use options::{AntiAliasing, Passes, RasterOptions, RenderOutput};
+use rayon::prelude::*;
 pub use scratch::release_scratch;
 
 /// Renders a scene through a camera (see the module doc). Fails on an unusable camera or
@@ -106,7 +106,7 @@ pub fn render_progress(
 /// shadow maps (4 bytes per texel, a point light's six half-size faces counted as 1.5 maps).
 /// Saturates instead of overflowing; checked with `ExecContext::reserve_bytes` before rendering.
 pub fn raster_bytes(cam: &Camera, opts: &RasterOptions, lights: usize) -> u64 {
-    use crate::node::bytes_of;
+    use cgnodes_api::node::bytes_of;
     let p = opts.passes;
     let passes = [p.color, p.depth, p.normal, p.position, p.uv, p.base_color]
         .iter()

@@ -3,7 +3,7 @@
 
 use super::shadow::ShadowParams;
 use super::texture::Wrap;
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
 
 /// Anti-aliasing mode.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -15,7 +15,7 @@
 //! the bands are filled in parallel (rayon), each in triangle order, so the result does
 //! not depend on the thread count.
 
-use crate::types::vec3::{cross, dot};
+use cgnodes_api::types::vec3::{cross, dot};
 use rayon::prelude::*;
 
 /// A triangle ready to rasterize: edge functions, depths and pixel bounds.
@@ -386,7 +386,14 @@ mod tests {
     }
 
     /// The old fill: every pixel of the bounding box tested (the reference for `row_span`).
-    fn fill_box(t: &TriSetup, width: u32, zmin: f64, zmax: f64, depth: &mut [f32], ids: &mut [u32]) {
+    fn fill_box(
+        t: &TriSetup,
+        width: u32,
+        zmin: f64,
+        zmax: f64,
+        depth: &mut [f32],
+        ids: &mut [u32],
+    ) {
         let [a, b, c] = t.inv;
         for y in t.bbox[1]..t.bbox[3] {
             for x in t.bbox[0]..t.bbox[2] {
@@ -413,7 +420,9 @@ mod tests {
         let (w, h) = (64u32, 48u32);
         let mut state = 12345u64;
         let mut rnd = || {
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             (state >> 11) as f64 / (1u64 << 53) as f64
         };
         let mut checked = 0;

@@ -2,23 +2,15 @@
 //! renders only the passes someone reads, and sets them as outputs.
 
 use super::options::{AntiAliasing, Passes, RasterOptions};
-use super::{raster_bytes, render_progress};
 use super::shadow::ShadowParams;
 use super::texture::Wrap;
-use crate::prelude::*;
+use super::{raster_bytes, render_progress};
+use cgnodes_api::prelude::*;
 
 impl Choice for AntiAliasing {
     const CHOICES: &'static [(&'static str, Self)] = &[
         ("msaa", AntiAliasing::Multisampling),
         ("ssaa", AntiAliasing::Supersampling),
-    ];
-}
-
-impl Choice for Wrap {
-    const CHOICES: &'static [(&'static str, Self)] = &[
-        ("repeat", Wrap::Repeat),
-        ("clamp", Wrap::Clamp),
-        ("mirror", Wrap::Mirror),
     ];
 }
 
@@ -139,7 +131,10 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let shadow = read_shadow_params(ctx)?;
     let ambient: f64 = ctx.input("ambient")?;
     if !(ambient.is_finite() && ambient >= 0.0) {
-        return Err(NodeError::invalid("ambient", "must be finite and not negative"));
+        return Err(NodeError::invalid(
+            "ambient",
+            "must be finite and not negative",
+        ));
     }
     let wrap = ctx.choice::<Wrap>("texture_wrap")?;
     let bgc: Color = ctx.input("background")?;
@@ -168,8 +163,13 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
         "a {}x{} image with {} samples per pixel",
         cam.width, cam.height, samples
     );
-    ctx.reserve_bytes("camera", &what, raster_bytes(&cam, &opts, scene.lights.len()))?;
-    let out = render_progress(&scene, &cam, &opts, &ctx.progress_fn()).map_err(|e| NodeError::invalid("scene", e))?;
+    ctx.reserve_bytes(
+        "camera",
+        &what,
+        raster_bytes(&cam, &opts, scene.lights.len()),
+    )?;
+    let out = render_progress(&scene, &cam, &opts, &ctx.progress_fn())
+        .map_err(|e| NodeError::invalid("scene", e))?;
     ctx.log(format!(
         "{}x{} with {} samples: {} triangles, {} shading evaluations",
         cam.width, cam.height, samples, out.triangles, out.shaded

@@ -8,7 +8,7 @@
 use super::options::{AntiAliasing, RasterOptions, RenderOutput};
 use super::rasterize::fill_rows;
 use super::shader::Shader;
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU64, Ordering};
 

@@ -9,8 +9,8 @@ use super::scratch::{NORMALS, SETUPS};
 use super::shader::MatPrep;
 use super::shading;
 use super::texture::MipTexture;
-use crate::prelude::*;
-use crate::types::vec3::{cross, normalize_recip as normalize, sub};
+use cgnodes_api::prelude::*;
+use cgnodes_api::types::vec3::{cross, normalize_recip as normalize, sub};
 use rayon::prelude::*;
 
 /// The camera's triangle setups (`None` for culled or clipped triangles), unit geometric

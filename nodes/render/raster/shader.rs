@@ -10,8 +10,8 @@ use super::rasterize::{barycentric, TriSetup};
 use super::shading;
 use super::shadow::{self, ShadowMap};
 use super::texture::MipTexture;
-use crate::prelude::*;
-use crate::types::vec3::{dot, normalize_recip as normalize, sub};
+use cgnodes_api::prelude::*;
+use cgnodes_api::types::vec3::{dot, normalize_recip as normalize, sub};
 
 /// A material ready for shading.
 pub(super) struct MatPrep {

@@ -14,7 +14,7 @@
 
 use super::rasterize::{rasterize_into, setup_triangle};
 use super::scratch::{DEPTHS, SETUPS};
-use crate::types::vec3::{cross, dot, sub, unit};
+use cgnodes_api::types::vec3::{cross, dot, sub, unit};
 use rayon::prelude::*;
 
 /// Bias and filtering settings of a shadow lookup.
@@ -187,7 +187,15 @@ pub fn point_shadow_map(tris: &[[[f64; 3]; 3]], pos: [f64; 3], res: u32, near: f
             })
             .collect_into_vec(&mut setups);
         let n = res as usize * res as usize;
-        let target = rasterize_into(&setups, res, res, near, f64::INFINITY, false, DEPTHS.take(n));
+        let target = rasterize_into(
+            &setups,
+            res,
+            res,
+            near,
+            f64::INFINITY,
+            false,
+            DEPTHS.take(n),
+        );
         SETUPS.give(setups);
         Face {
             axes: [r, u, f],

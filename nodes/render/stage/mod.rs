@@ -23,7 +23,7 @@ pub use scene::{default_camera, stage_to_scene};
 pub use write::write_stage;
 
 /// Registers `stage_load`, `stage_light`, `stage_read` and `stage_merge`.
-pub fn register(r: &mut crate::registry::Registry) {
+pub fn register(r: &mut cgnodes_api::registry::Registry) {
     stage_load::register(r);
     stage_nodes::register(r);
 }

@@ -1,8 +1,8 @@
 //! The stage as plain data: world-space meshes and point clouds, UsdLux lights with their
 //! world transforms, and an optional camera. Paths are absolute USD prim paths.
 
-use crate::nodes::mesh::usda::transform::Mat4;
-use crate::types::Mesh;
+use cgnodes_api::types::Mesh;
+use cgnodes_formats::usda::transform::Mat4;
 
 /// The stage's up axis (`upAxis` layer metadata): Framework3D's stages are Z up.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

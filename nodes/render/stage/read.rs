@@ -5,10 +5,10 @@
 //! `inputs:` prefix (USD before and after 21.02). Errors name the line.
 
 use super::model::{LightKind, Stage, StageCamera, StageLight, StagePoints, UpAxis};
-use crate::nodes::mesh::usda::access::{floats, num, tuples};
-use crate::nodes::mesh::usda::layer::{parse_usda, UsdPrim, UsdValue};
-use crate::nodes::mesh::usda::read::read_mesh_chain;
-use crate::nodes::mesh::usda::transform::{transform_points, world_transform};
+use cgnodes_formats::usda::access::{floats, num, tuples};
+use cgnodes_formats::usda::layer::{parse_usda, UsdPrim, UsdValue};
+use cgnodes_formats::usda::read::read_mesh_chain;
+use cgnodes_formats::usda::transform::{transform_points, world_transform};
 
 /// The diameter given to points without `widths`: the spacing they would have if spread
 /// evenly through their bounding box, `(volume / n)^(1/3)`, at most a tenth of the box's
@@ -48,7 +48,7 @@ fn attr_color(p: &UsdPrim, names: &[&str]) -> Result<[f64; 3], String> {
     for n in names {
         if let Some(a) = p.attr(n) {
             if let Some(v) = &a.value {
-                return crate::nodes::mesh::usda::access::tuple_n::<3>(v, a.line, n);
+                return cgnodes_formats::usda::access::tuple_n::<3>(v, a.line, n);
             }
         }
     }
@@ -57,7 +57,8 @@ fn attr_color(p: &UsdPrim, names: &[&str]) -> Result<[f64; 3], String> {
 
 fn attr_text(p: &UsdPrim, names: &[&str]) -> String {
     for n in names {
-        if let Some(UsdValue::Str(s) | UsdValue::Ident(s)) = p.attr(n).and_then(|a| a.value.as_ref())
+        if let Some(UsdValue::Str(s) | UsdValue::Ident(s)) =
+            p.attr(n).and_then(|a| a.value.as_ref())
         {
             return s.clone();
         }
@@ -66,7 +67,7 @@ fn attr_text(p: &UsdPrim, names: &[&str]) -> String {
 }
 
 fn visit<'a>(
-    layer: &'a crate::nodes::mesh::usda::UsdLayer,
+    layer: &'a cgnodes_formats::usda::UsdLayer,
     p: &'a UsdPrim,
     chain: &mut Vec<&'a UsdPrim>,
     stage: &mut Stage,
@@ -163,8 +164,14 @@ fn visit<'a>(
                 };
                 let color = attr_color(p, &["inputs:color", "color"]).map_err(at)?;
                 let intensity = n(&["inputs:intensity", "intensity"], 1.0)?;
-                if color.iter().chain([&intensity]).any(|x| !x.is_finite() || *x < 0.0) {
-                    return Err(at("light colour and intensity must be finite and >= 0".into()));
+                if color
+                    .iter()
+                    .chain([&intensity])
+                    .any(|x| !x.is_finite() || *x < 0.0)
+                {
+                    return Err(at(
+                        "light colour and intensity must be finite and >= 0".into()
+                    ));
                 }
                 stage.lights.push(StageLight {
                     path: p.path.clone(),
@@ -183,12 +190,9 @@ fn visit<'a>(
                 let clipping = match p.attr("clippingRange").and_then(|a| a.value.as_ref()) {
                     Some(v) => {
                         let line = p.attr("clippingRange").map_or(0, |a| a.line);
-                        let c = crate::nodes::mesh::usda::access::tuple_n::<2>(
-                            v,
-                            line,
-                            "clippingRange",
-                        )
-                        .map_err(at)?;
+                        let c =
+                            cgnodes_formats::usda::access::tuple_n::<2>(v, line, "clippingRange")
+                                .map_err(at)?;
                         (c[0], c[1])
                     }
                     None => (1.0, 1e6),

@@ -4,9 +4,11 @@
 //! `default_camera`'s framing of the geometry.
 
 use super::model::{axis, translation, LightKind, Stage, StageCamera, StagePoints, UpAxis};
-use crate::nodes::mesh::usda::transform::Mat4;
-use crate::types::{Attribute, Camera, Domain, Image, Light, Material, Mesh, Scene, SceneObject};
-use crate::types::vec3::{cross, sub, unit as norm};
+use cgnodes_api::types::vec3::{cross, sub, unit as norm};
+use cgnodes_api::types::{
+    Attribute, Camera, Domain, Image, Light, Material, Mesh, Scene, SceneObject,
+};
+use cgnodes_formats::usda::transform::Mat4;
 use std::sync::Arc;
 
 /// Vertical field of view of the default framing, degrees.
@@ -22,7 +24,11 @@ pub const DEFAULT_ELEVATION_DEG: f64 = 25.0;
 /// 40 degrees, from the distance at which the bounding sphere of the box (radius half the
 /// diagonal) fills the image height with 10 % to spare.
 pub fn default_camera(lo: [f64; 3], hi: [f64; 3], up: UpAxis, width: u32, height: u32) -> Camera {
-    let c = [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), 0.5 * (lo[2] + hi[2])];
+    let c = [
+        0.5 * (lo[0] + hi[0]),
+        0.5 * (lo[1] + hi[1]),
+        0.5 * (lo[2] + hi[2]),
+    ];
     let d2: f64 = (0..3).map(|k| (hi[k] - lo[k]).powi(2)).sum();
     let r = (0.5 * d2.sqrt()).max(1e-3);
     let (az, el) = (
@@ -35,7 +41,11 @@ pub fn default_camera(lo: [f64; 3], hi: [f64; 3], up: UpAxis, width: u32, height
     };
     let dist = 1.1 * r / (0.5 * DEFAULT_FOV_DEG.to_radians()).sin();
     Camera {
-        eye: [c[0] + dist * dir[0], c[1] + dist * dir[1], c[2] + dist * dir[2]],
+        eye: [
+            c[0] + dist * dir[0],
+            c[1] + dist * dir[1],
+            c[2] + dist * dir[2],
+        ],
         target: c,
         up: up.vector(),
         fov_deg: DEFAULT_FOV_DEG,
@@ -71,11 +81,12 @@ pub fn camera_prim(cam: &Camera, path: &str) -> StageCamera {
 pub fn camera_of(c: &StageCamera, width: u32, height: u32) -> Camera {
     let eye = translation(&c.transform);
     let back = axis(&c.transform, 2);
-    let (near, far) = if c.clipping.0 > 0.0 && c.clipping.1 > c.clipping.0 && c.clipping.1.is_finite() {
-        c.clipping
-    } else {
-        (0.01, 1000.0)
-    };
+    let (near, far) =
+        if c.clipping.0 > 0.0 && c.clipping.1 > c.clipping.0 && c.clipping.1.is_finite() {
+            c.clipping
+        } else {
+            (0.01, 1000.0)
+        };
     Camera {
         eye,
         target: [eye[0] - back[0], eye[1] - back[1], eye[2] - back[2]],
@@ -121,13 +132,21 @@ pub fn splat_points(p: &StagePoints) -> (Mesh, Material) {
         [0, 3, 5],
     ];
     for (i, q) in p.points.iter().enumerate() {
-        let r = 0.5 * p.widths.get(i).or(p.widths.first()).copied().unwrap_or(0.05);
+        let r = 0.5
+            * p.widths
+                .get(i)
+                .or(p.widths.first())
+                .copied()
+                .unwrap_or(0.05);
         let (tx, ty) = (i as u32 % w, i as u32 / w);
         if let Some(c) = &p.colors {
             let c = c.get(i).or(c.first()).copied().unwrap_or([0.8; 3]);
             pixels[(ty * w + tx) as usize] = [c[0] as f32, c[1] as f32, c[2] as f32, 1.0];
         }
-        let uv = [(tx as f64 + 0.5) / w as f64, 1.0 - (ty as f64 + 0.5) / h as f64];
+        let uv = [
+            (tx as f64 + 0.5) / w as f64,
+            1.0 - (ty as f64 + 0.5) / h as f64,
+        ];
         let base = positions.len() as u32;
         for d in DIRS {
             positions.push([q[0] + r * d[0], q[1] + r * d[1], q[2] + r * d[2]]);
@@ -172,20 +191,25 @@ pub fn stage_to_scene(
 ) -> Result<(Scene, Camera), String> {
     let mut scene = Scene::default();
     for m in &stage.meshes {
-        let material = m.mesh.colors.as_ref().filter(|c| !c.values.is_empty()).map(|c| {
-            let mut s = [0.0; 3];
-            for v in &c.values {
-                for k in 0..3 {
-                    s[k] += v[k];
+        let material = m
+            .mesh
+            .colors
+            .as_ref()
+            .filter(|c| !c.values.is_empty())
+            .map(|c| {
+                let mut s = [0.0; 3];
+                for v in &c.values {
+                    for k in 0..3 {
+                        s[k] += v[k];
+                    }
                 }
-            }
-            let n = c.values.len() as f64;
-            Arc::new(Material {
-                name: m.path.trim_start_matches('/').to_string(),
-                base_color: [s[0] / n, s[1] / n, s[2] / n],
-                ..Default::default()
-            })
-        });
+                let n = c.values.len() as f64;
+                Arc::new(Material {
+                    name: m.path.trim_start_matches('/').to_string(),
+                    base_color: [s[0] / n, s[1] / n, s[2] / n],
+                    ..Default::default()
+                })
+            });
         scene.objects.push(SceneObject {
             mesh: Arc::new(m.mesh.clone()),
             material,
@@ -285,7 +309,7 @@ fn y_up(scene: &mut Scene, camera: &mut Camera) -> Result<(), String> {
         0.0, 0.0, 0.0, 1.0,
     );
     for o in &mut scene.objects {
-        o.mesh = Arc::new(crate::nodes::mesh::mesh_transform::transform_mesh(&o.mesh, &m)?);
+        o.mesh = Arc::new(cgnodes_geometry::transform::transform_mesh(&o.mesh, &m)?);
     }
     for l in &mut scene.lights {
         match l {

@@ -6,8 +6,8 @@
 
 use super::read::read_stage;
 use super::scene::stage_to_scene;
-use crate::nodes::image::image_load::{decode_image, ColorSpace};
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
+use cgnodes_formats::image_file::{decode_image, ColorSpace};
 
 fn declare(b: &mut NodeBuilder) {
     b.doc("Reads a USDA stage (meshes, points, UsdLux lights, camera) into a scene and camera.");
@@ -43,7 +43,7 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     // Each point becomes an octahedron: 6 positions and UVs, 8 triangles (about 300 bytes).
     let points: u64 = stage.points.iter().map(|p| p.points.len() as u64).sum();
     let what = format!("{}: {points} points as octahedra", path.display());
-    ctx.reserve_bytes("path", &what, crate::node::bytes_of(&[points, 300]))?;
+    ctx.reserve_bytes("path", &what, cgnodes_api::node::bytes_of(&[points, 300]))?;
     let dir = path.parent().map(|d| d.to_path_buf()).unwrap_or_default();
     let files = ctx.files().clone();
     let mut load = |file: &str| -> Result<Option<Arc<Image>>, String> {
@@ -73,7 +73,11 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
         stage.points.len(),
         stage.points.iter().map(|p| p.points.len()).sum::<usize>(),
         stage.lights.len(),
-        if stage.camera.is_some() { "stage" } else { "default" }
+        if stage.camera.is_some() {
+            "stage"
+        } else {
+            "default"
+        }
     ));
     ctx.set_output("scene", scene);
     ctx.set_output("camera", camera);

@@ -10,9 +10,9 @@
 use super::model::{LightKind, Stage, StageLight};
 use super::read::read_stage;
 use super::write::write_stage;
-use crate::nodes::mesh::usda::transform::{rotation, Mat4};
-use crate::nodes::mesh::usda::usd_identifier;
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
+use cgnodes_formats::usda::transform::{rotation, Mat4};
+use cgnodes_formats::usda::usd_identifier;
 
 /// Which UsdLux light `stage_light` adds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -83,7 +83,9 @@ pub fn framework_light(
 }
 
 fn declare_light(b: &mut NodeBuilder) {
-    b.doc("Adds a UsdLux light to a project's stage (Framework3D's comp_add_*_light): a USDA layer.");
+    b.doc(
+        "Adds a UsdLux light to a project's stage (Framework3D's comp_add_*_light): a USDA layer.",
+    );
     b.add_choice::<StageLightType>("kind")
         .doc("point (a sphere light), distant, dome or rect.");
     b.add_input::<[f64; 3]>("position")
@@ -147,9 +149,17 @@ fn execute_light(ctx: &mut ExecContext) -> Result<(), NodeError> {
     if c.0.iter().any(|x| *x < 0.0) {
         return Err(NodeError::invalid("color", "colour must be >= 0"));
     }
-    for (s, v) in [("intensity", intensity), ("radius", size[0]), ("width", size[1]), ("height", size[2])] {
+    for (s, v) in [
+        ("intensity", intensity),
+        ("radius", size[0]),
+        ("width", size[1]),
+        ("height", size[2]),
+    ] {
         if !(v.is_finite() && v >= 0.0) {
-            return Err(NodeError::invalid(s, format!("{v} must be finite and >= 0")));
+            return Err(NodeError::invalid(
+                s,
+                format!("{v} must be finite and >= 0"),
+            ));
         }
     }
     let path: String = ctx.input("path")?;
@@ -192,8 +202,11 @@ fn execute_read(ctx: &mut ExecContext) -> Result<(), NodeError> {
 }
 
 fn declare_merge(b: &mut NodeBuilder) {
-    b.doc("Puts a layer on the stage under /Reference/<path> (Framework3D's comp_merge_to_global).");
-    b.add_input::<String>("layer").doc("A USDA layer (from stage_read).");
+    b.doc(
+        "Puts a layer on the stage under /Reference/<path> (Framework3D's comp_merge_to_global).",
+    );
+    b.add_input::<String>("layer")
+        .doc("A USDA layer (from stage_read).");
     b.add_input::<String>("path")
         .default("Scene")
         .doc("Where the layer goes: /Reference/<path>.");

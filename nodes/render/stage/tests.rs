@@ -5,18 +5,28 @@ use super::read::read_stage;
 use super::scene::{camera_prim, default_camera, stage_to_scene};
 use super::stage_nodes::{framework_light, StageLightType};
 use super::write::write_stage;
-use crate::types::{Attribute, Domain, Light, Mesh};
+use cgnodes_api::types::{Attribute, Domain, Light, Mesh};
 
 fn quad() -> Mesh {
     let mut m = Mesh::new(
-        vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.5], [0.0, 1.0, 0.25]],
+        vec![
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.0, 1.0, 0.5],
+            [0.0, 1.0, 0.25],
+        ],
         vec![4],
         vec![0, 1, 2, 3],
     )
     .unwrap();
     m.colors = Some(Attribute {
         domain: Domain::Vertex,
-        values: vec![[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [0.5, 0.5, 0.5]],
+        values: vec![
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+            [0.5, 0.5, 0.5],
+        ],
     });
     m.uvs = Some(Attribute {
         domain: Domain::Corner,
@@ -84,9 +94,18 @@ fn a_written_stage_reads_back_the_same() {
     assert_eq!(r.meshes.len(), 1);
     assert_eq!(r.meshes[0].path, "/geometry2");
     assert_eq!(r.meshes[0].mesh.positions, s.meshes[0].mesh.positions);
-    assert_eq!(r.meshes[0].mesh.face_indices(), s.meshes[0].mesh.face_indices());
-    assert_eq!(r.meshes[0].mesh.colors.as_ref().unwrap().values, s.meshes[0].mesh.colors.as_ref().unwrap().values);
-    assert_eq!(r.meshes[0].mesh.uvs.as_ref().unwrap().values, s.meshes[0].mesh.uvs.as_ref().unwrap().values);
+    assert_eq!(
+        r.meshes[0].mesh.face_indices(),
+        s.meshes[0].mesh.face_indices()
+    );
+    assert_eq!(
+        r.meshes[0].mesh.colors.as_ref().unwrap().values,
+        s.meshes[0].mesh.colors.as_ref().unwrap().values
+    );
+    assert_eq!(
+        r.meshes[0].mesh.uvs.as_ref().unwrap().values,
+        s.meshes[0].mesh.uvs.as_ref().unwrap().values
+    );
     assert_eq!(r.points, s.points);
     assert_eq!(r.lights.len(), 3);
     for (a, b) in r.lights.iter().zip(&s.lights) {
@@ -97,7 +116,12 @@ fn a_written_stage_reads_back_the_same() {
         assert!((a.transform - b.transform).abs().max() < 1e-12);
     }
     assert_eq!(r.lights[0].path, "/Reference/XFormDomeLight/DomeLight");
-    assert_eq!(r.lights[0].kind, LightKind::Dome { file: "garden.exr".into() });
+    assert_eq!(
+        r.lights[0].kind,
+        LightKind::Dome {
+            file: "garden.exr".into()
+        }
+    );
     let c = r.camera.unwrap();
     assert!((c.fov_deg - cam.fov_deg).abs() < 1e-9);
     assert_eq!(translation(&c.transform), cam.eye);
@@ -116,7 +140,12 @@ fn lights_become_cgnodes_lights_with_the_framework_transforms() {
     assert_eq!(asked, vec!["garden.exr".to_string()]);
     assert_eq!(warnings.len(), 1, "{warnings:?}"); // the missing texture
     match &scene.lights[0] {
-        Light::Environment { image, color, rotation_deg, .. } => {
+        Light::Environment {
+            image,
+            color,
+            rotation_deg,
+            ..
+        } => {
             assert!(image.is_none());
             assert_eq!(*color, [1.0, 1.0, 2.013]);
             // Rotate Z 30 degrees on a Z-up stage: a 30 degree turn about up.
@@ -128,14 +157,21 @@ fn lights_become_cgnodes_lights_with_the_framework_transforms() {
     // light at (1, -2, 3.5) on the stage is at (1, 3.5, 2).
     assert_eq!(
         scene.lights[1],
-        Light::Point { position: [1.0, 3.5, 2.0], color: [0.25, 0.5, 1.0], intensity: 2.0 }
+        Light::Point {
+            position: [1.0, 3.5, 2.0],
+            color: [0.25, 0.5, 1.0],
+            intensity: 2.0
+        }
     );
     // Rotate X 90: local -Z (the light's direction) turns to +Y on the stage (x-rotation,
     // right-handed), which is -Z in the Y-up scene.
     match &scene.lights[2] {
         Light::Directional { direction, .. } => {
             let want = [0.0, 0.0, -1.0];
-            assert!((0..3).all(|k| (direction[k] - want[k]).abs() < 1e-12), "{direction:?}");
+            assert!(
+                (0..3).all(|k| (direction[k] - want[k]).abs() < 1e-12),
+                "{direction:?}"
+            );
         }
         l => panic!("{l:?}"),
     }
@@ -147,12 +183,22 @@ fn lights_become_cgnodes_lights_with_the_framework_transforms() {
     assert_eq!((splats.positions.len(), splats.num_faces()), (18, 24));
     // The third particle's octahedron reaches width/2 = 0.025 along +x from its centre.
     assert!((splats.positions[12][0] - (-1.0 + 0.025)).abs() < 1e-12);
-    let tex = scene.objects[1].material.as_ref().unwrap().base_color_texture.clone().unwrap();
+    let tex = scene.objects[1]
+        .material
+        .as_ref()
+        .unwrap()
+        .base_color_texture
+        .clone()
+        .unwrap();
     assert_eq!((tex.width, tex.height), (2, 2));
     assert_eq!(tex.pixels[1], [0.9, 0.2, 0.1, 1.0]);
     assert_eq!(cam.width, 32);
     // the default camera's up (the stage's +Z) is the scene's +Y
-    assert!(cam.up[1] > 0.99 && scene.camera.as_ref() == Some(&cam), "{:?}", cam.up);
+    assert!(
+        cam.up[1] > 0.99 && scene.camera.as_ref() == Some(&cam),
+        "{:?}",
+        cam.up
+    );
 }
 
 #[test]
@@ -172,7 +218,10 @@ fn the_default_camera_sees_the_whole_box() {
             let v = b.to_view(p);
             assert!(v[2] > cam.near);
             let (x, y) = (320.0 + f * v[0] / v[2], 240.0 - f * v[1] / v[2]);
-            assert!((0.0..640.0).contains(&x) && (0.0..480.0).contains(&y), "{up:?} {p:?} -> {x} {y}");
+            assert!(
+                (0.0..640.0).contains(&x) && (0.0..480.0).contains(&y),
+                "{up:?} {p:?} -> {x} {y}"
+            );
         }
         // Up on the screen is up in the world.
         assert!(b.up[if up == UpAxis::Z { 2 } else { 1 }] > 0.5);

@@ -5,9 +5,9 @@
 //! Rust's shortest round-trip formatting, so reading the layer back gives the same values.
 
 use super::model::{LightKind, Stage};
-use crate::nodes::mesh::usda::transform::Mat4;
-use crate::nodes::mesh::usda::usd_identifier;
-use crate::types::{Attribute, Domain};
+use cgnodes_api::types::{Attribute, Domain};
+use cgnodes_formats::usda::transform::Mat4;
+use cgnodes_formats::usda::usd_identifier;
 use std::fmt::Write as _;
 
 /// USD's default vertical aperture of a camera (mm); the focal length is set from the
@@ -91,7 +91,15 @@ fn primvar<const N: usize>(decl: &str, a: &Attribute<[f64; N]>) -> String {
 
 fn matrix(m: &Mat4) -> Vec<String> {
     let rows: Vec<String> = (0..4)
-        .map(|r| format!("({}, {}, {}, {})", m[(r, 0)], m[(r, 1)], m[(r, 2)], m[(r, 3)]))
+        .map(|r| {
+            format!(
+                "({}, {}, {}, {})",
+                m[(r, 0)],
+                m[(r, 1)],
+                m[(r, 2)],
+                m[(r, 3)]
+            )
+        })
         .collect();
     vec![
         format!("matrix4d xformOp:transform = ({})", rows.join(", ")),
@@ -140,7 +148,11 @@ pub fn write_stage(stage: &Stage) -> String {
             format!(
                 "float[] widths = {} (interpolation = \"{}\")",
                 list(&p.widths),
-                if p.widths.len() == 1 { "constant" } else { "vertex" }
+                if p.widths.len() == 1 {
+                    "constant"
+                } else {
+                    "vertex"
+                }
             ),
         ];
         if let Some(c) = &p.colors {
@@ -172,7 +184,10 @@ pub fn write_stage(stage: &Stage) -> String {
             }
             LightKind::Dome { file } => {
                 if !file.is_empty() {
-                    body.push(format!("asset inputs:texture:file = @{}@", file.replace('@', "")));
+                    body.push(format!(
+                        "asset inputs:texture:file = @{}@",
+                        file.replace('@', "")
+                    ));
                 }
                 "DomeLight"
             }
@@ -190,7 +205,10 @@ pub fn write_stage(stage: &Stage) -> String {
         let mut body = vec![
             format!("float focalLength = {focal}"),
             format!("float verticalAperture = {VERTICAL_APERTURE}"),
-            format!("float2 clippingRange = ({}, {})", c.clipping.0, c.clipping.1),
+            format!(
+                "float2 clippingRange = ({}, {})",
+                c.clipping.0, c.clipping.1
+            ),
         ];
         body.extend(matrix(&c.transform));
         insert(&mut roots, &split(&c.path), "Camera", body);

@@ -106,10 +106,17 @@ mod tests {
 
     #[test]
     fn explicit_pairs_are_checked_and_targets_interpolate() {
-        assert_eq!(pairs_from_list(&[2, 0, 0, 1], 3, 2).unwrap(), vec![(2, 0), (0, 1)]);
+        assert_eq!(
+            pairs_from_list(&[2, 0, 0, 1], 3, 2).unwrap(),
+            vec![(2, 0), (0, 1)]
+        );
         assert!(pairs_from_list(&[2, 0, 0], 3, 2).is_err());
-        assert!(pairs_from_list(&[3, 0], 3, 2).unwrap_err().contains("cloth vertex 3"));
-        assert!(pairs_from_list(&[0, -1], 3, 2).unwrap_err().contains("body vertex -1"));
+        assert!(pairs_from_list(&[3, 0], 3, 2)
+            .unwrap_err()
+            .contains("cloth vertex 3"));
+        assert!(pairs_from_list(&[0, -1], 3, 2)
+            .unwrap_err()
+            .contains("body vertex -1"));
         let prev = [[0.0, 0.0, 0.0], [1.0, 1.0, 1.0]];
         let cur = [[2.0, 0.0, -4.0], [1.0, 1.0, 1.0]];
         let t = control_targets(&[(5, 0), (6, 1)], &prev, &cur, 0.25);

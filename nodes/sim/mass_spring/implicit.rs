@@ -21,8 +21,8 @@
 use super::newton_direct::HessianCholesky;
 use super::newton_pcg::HessianPcg;
 use super::springs::{
-    add_collider_forces, axpy, collider_energy, dot, spring_energy, spring_forces, sub,
-    Incidence, Model, Sphere, State,
+    add_collider_forces, axpy, collider_energy, dot, spring_energy, spring_forces, sub, Incidence,
+    Model, Sphere, State,
 };
 use faer::Mat;
 use std::time::Instant;
@@ -339,8 +339,8 @@ mod tests {
     use super::super::newton_direct::HessianCholesky;
     use super::super::newton_pcg::HessianPcg;
     use super::*;
-    use crate::nodes::mesh::mesh_grid::grid_mesh;
-    use crate::nodes::sim::mass_spring::{springs_from_mesh, SpringKinds};
+    use crate::mass_spring::{springs_from_mesh, SpringKinds};
+    use cgnodes_geometry::grid::grid_mesh;
 
     /// An `n x n` cloth (spacing 0.1, structural, shear and bending springs, k = 1000,
     /// 0.1 kg per vertex) in the xz plane, two corners of the first row fixed, gravity -y:
@@ -409,7 +409,11 @@ mod tests {
         let x: Vec<[f64; 3]> = (x0.iter().enumerate())
             .map(|(i, p)| {
                 let w = (i * 7919 % 17) as f64 / 17.0 - 0.5;
-                [p[0] * (1.0 + 0.2 * w), p[1] + 0.03 * w, p[2] * (1.0 - 0.15 * w)]
+                [
+                    p[0] * (1.0 + 0.2 * w),
+                    p[1] + 0.03 * w,
+                    p[2] * (1.0 - 0.15 * w),
+                ]
             })
             .collect();
         let sphere = Sphere {
@@ -438,7 +442,9 @@ mod tests {
             let b: Vec<f64> = (0..3 * n).map(|i| b[(i, 0)]).collect();
             let mut hb = vec![0.0; 3 * n];
             pcg.apply(&b, &mut hb);
-            let err = (hb.iter().zip(&r)).map(|(p, q)| (p - q).abs()).fold(0.0, f64::max);
+            let err = (hb.iter().zip(&r))
+                .map(|(p, q)| (p - q).abs())
+                .fold(0.0, f64::max);
             assert!(err < 1e-9, "seed {seed}: |H H^-1 r - r| = {err:e}");
         }
     }
@@ -458,7 +464,10 @@ mod tests {
         assert!(max_diff(&xs_c[39], &x0) > 0.1);
         let total_c: usize = it_c.iter().sum();
         let total_p: usize = it_p.iter().sum();
-        assert!(total_p <= total_c + 4, "Newton iterations {total_p} vs {total_c}");
+        assert!(
+            total_p <= total_c + 4,
+            "Newton iterations {total_p} vs {total_c}"
+        );
         assert_eq!(pcg.numeric_count, 0, "PCG factored");
         assert_eq!(pcg.profile.cg_fallbacks, 0);
         assert!(pcg.profile.cg_iterations > 0);

@@ -2,7 +2,7 @@
 //! `"frame:x,y,z; frame:x,y,z"` parameter parsed into sorted keys and interpolated linearly
 //! at fractional frames (sub-steps fall between frames).
 
-use crate::types::vec3::{axpy, sub};
+use cgnodes_api::types::vec3::{axpy, sub};
 
 /// Sphere centre at fractional frame `f` from keyframes `"frame:x,y,z; frame:x,y,z"`
 /// (linear between keys, held outside them); `None` when there are no keys.

@@ -8,8 +8,8 @@ use super::implicit::NewtonOptions;
 use super::keyframes::{keyframed_center, parse_keyframes};
 use super::simulator::{Method, SetupError, SimError, Simulator, SolverOptions};
 use super::springs::{springs_from_mesh, Model, Sphere, SpringKinds};
-use crate::nodes::mesh::vertex_select::select_vertices;
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
+use cgnodes_geometry::vertex_select::select_vertices;
 use std::hash::{Hash, Hasher};
 
 impl Choice for Method {
@@ -308,11 +308,9 @@ fn build(
     };
     let sim = if with_sim {
         Some(
-            Simulator::new(model, x0, None, method, h, opts).map_err(|e| {
-                match e {
-                    SetupError::NotPositiveDefinite(m) => NodeError::singular(m),
-                    SetupError::Invalid(m) => NodeError::invalid("mesh", m),
-                }
+            Simulator::new(model, x0, None, method, h, opts).map_err(|e| match e {
+                SetupError::NotPositiveDefinite(m) => NodeError::singular(m),
+                SetupError::Invalid(m) => NodeError::invalid("mesh", m),
             })?,
         )
     } else {
@@ -385,7 +383,10 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
         st.key = key;
         st.frame = frame;
         st.start_frame = frame;
-        st.control_prev = control.as_ref().map(|c| c.positions.clone()).unwrap_or_default();
+        st.control_prev = control
+            .as_ref()
+            .map(|c| c.positions.clone())
+            .unwrap_or_default();
     }
     let cur: Vec<[f64; 3]> = match &control {
         Some(c) => {
@@ -487,7 +488,11 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
         .insert("integrator".into(), format!("{:?}", params.method));
     if debug {
         let row = log.num_rows().saturating_sub(1);
-        let col = |c: &str| log.column(c).and_then(|v| v.get(row).copied()).unwrap_or(0.0);
+        let col = |c: &str| {
+            log.column(c)
+                .and_then(|v| v.get(row).copied())
+                .unwrap_or(0.0)
+        };
         let line = format!(
             "frame {frame}: kinetic {:.4e}, potential {:.4e}, max strain {:.3e}, iterations {}",
             col("kinetic"),

@@ -5,7 +5,7 @@
 //!
 //! The core is plain data (`Model`, `State`, in `springs`) and a `Simulator` (`simulator`)
 //! that advances it step by step and detects blow-ups; the node (`mass_spring`) wraps it with
-//! frame-to-frame state, fixed-vertex selections (`crate::nodes::mesh::vertex_select`) and a
+//! frame-to-frame state, fixed-vertex selections (`cgnodes_geometry::vertex_select`) and a
 //! sphere collider that may move along keyframes (`keyframes`).
 
 // Numerical kernels index several parallel arrays (positions, velocities, masses, flags) by
@@ -35,7 +35,7 @@ pub use simulator::{
 };
 pub use springs::{energy, springs_from_mesh, Energy, Model, Sphere, SpringKinds, Springs, State};
 
-use crate::registry::Registry;
+use cgnodes_api::registry::Registry;
 
 /// Registers `mass_spring`.
 pub fn register(r: &mut Registry) {

@@ -5,7 +5,7 @@
 //! Exact Newton steps; the reference for `newton_pcg.rs`, and its fallback.
 
 use super::springs::{norm, spring_hessian_psd, sub, Model, Sphere};
-use crate::nodes::linalg::SpdFactor;
+use cgnodes_linalg::SpdFactor;
 use faer::sparse::Triplet;
 use faer::{MatMut, Par};
 
@@ -153,7 +153,10 @@ impl HessianCholesky {
     /// Solves with the last factor: `rhs` has three entries per vertex (fixed vertices
     /// ignored), the solution is written over it (zero at fixed vertices).
     pub fn solve(&self, mut rhs: MatMut<'_, f64>) -> Result<(), String> {
-        let f = self.factor.as_ref().ok_or("solve before the first factorization")?;
+        let f = self
+            .factor
+            .as_ref()
+            .ok_or("solve before the first factorization")?;
         let mut reduced = faer::Mat::<f64>::zeros(3 * self.n_free, 1);
         for (v, p) in self.free.iter().enumerate() {
             if let Some(p) = p {

@@ -180,9 +180,9 @@ impl HessianPcg {
         };
         let pre = BlockJacobi { inv: &self.inv };
         let par = Par::Seq;
-        let mem = self.mem.get_or_insert_with(|| {
-            MemBuffer::new(conjugate_gradient_scratch(&pre, &op, 1, par))
-        });
+        let mem = self
+            .mem
+            .get_or_insert_with(|| MemBuffer::new(conjugate_gradient_scratch(&pre, &op, 1, par)));
         let params = CgParams {
             // faer 0.24 leaves the residual unset for `Zero`; the guess is filled above
             initial_guess: InitialGuessStatus::MaybeNonZero,
@@ -262,11 +262,7 @@ impl Operator<'_> {
 
 /// Applies `f(rhs column, out column)` to each column, through contiguous slices when the
 /// columns are contiguous (faer's CG passes such columns) and through copies otherwise.
-fn per_column(
-    mut out: MatMut<'_, f64>,
-    rhs: MatRef<'_, f64>,
-    f: impl Fn(&[f64], &mut [f64]),
-) {
+fn per_column(mut out: MatMut<'_, f64>, rhs: MatRef<'_, f64>, f: impl Fn(&[f64], &mut [f64])) {
     for j in 0..rhs.ncols() {
         let src = rhs.col(j);
         if let (Some(s), Some(d)) = (
@@ -333,7 +329,10 @@ impl LinOp<f64> for BlockJacobi<'_> {
     fn apply(&self, out: MatMut<'_, f64>, rhs: MatRef<'_, f64>, _par: Par, _: &mut MemStack) {
         per_column(out, rhs, |p, o| {
             for (v, ov) in o.chunks_mut(3).enumerate() {
-                ov.copy_from_slice(&sym3_mul(&self.inv[v], [p[3 * v], p[3 * v + 1], p[3 * v + 2]]));
+                ov.copy_from_slice(&sym3_mul(
+                    &self.inv[v],
+                    [p[3 * v], p[3 * v + 1], p[3 * v + 2]],
+                ));
             }
         });
     }

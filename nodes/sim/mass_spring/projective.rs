@@ -14,7 +14,7 @@
 //! velocity, so the prefactored matrix stays valid.
 
 use super::springs::{axpy, dot, norm, scale, sub, Model, Sphere, State};
-use crate::nodes::linalg::SpdFactor;
+use cgnodes_linalg::SpdFactor;
 use faer::sparse::Triplet;
 use faer::{Mat, Par};
 use rayon::prelude::*;

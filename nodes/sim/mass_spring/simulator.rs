@@ -161,9 +161,7 @@ impl Simulator {
         }
         let solver = match method {
             Method::SemiImplicit => Solver::Semi(SemiImplicit::new(&model)),
-            Method::Implicit => Solver::Implicit(Box::new(
-                Implicit::new(&model, opts.newton),
-            )),
+            Method::Implicit => Solver::Implicit(Box::new(Implicit::new(&model, opts.newton))),
             Method::Projective => Solver::Projective(Box::new(
                 Projective::new(&model, h, opts.pd_iterations)
                     .map_err(SetupError::NotPositiveDefinite)?,

@@ -5,7 +5,7 @@
 //! Spring energy (Hooke, as in the course's assignment 8): `E_s = 1/2 k (|x_j - x_i| - L)^2`.
 //! Sphere penalty (course): `E_c = 1/2 k_p (s r - |x - c|)^2` when `|x - c| < s r`, `s` = 1.1.
 
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
 use rayon::prelude::*;
 use std::collections::HashSet;
 
@@ -415,7 +415,7 @@ pub fn spring_hessian_psd(d: [f64; 3], rest: f64, k: f64) -> [[f64; 3]; 3] {
     h
 }
 
-pub use crate::types::vec3::{axpy, dot, norm, scale, sub};
+pub use cgnodes_api::types::vec3::{axpy, dot, norm, scale, sub};
 
 #[cfg(test)]
 mod tests {

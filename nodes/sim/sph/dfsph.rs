@@ -16,7 +16,7 @@
 
 use super::pressure_solver::PressureSolver;
 use super::state::{Fluid, StepStats};
-use crate::types::vec3::{axpy, dot, sub};
+use cgnodes_api::types::vec3::{axpy, dot, sub};
 use rayon::prelude::*;
 
 /// `alpha_i` (see the module doc); 0 for particles without neighbours.

@@ -2,7 +2,7 @@
 //! momentum, and the surge front and height of a dam break.
 
 use super::state::Fluid;
-use crate::types::vec3::{axpy, dot};
+use cgnodes_api::types::vec3::{axpy, dot};
 use rayon::prelude::*;
 
 impl Fluid {

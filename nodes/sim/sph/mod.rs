@@ -28,7 +28,7 @@ pub use pressure_solver::PressureSolver;
 pub use state::{Boundary, Fluid, Neighbour, Solver, SphParams, StepStats};
 pub use wcsph::Wcsph;
 
-use crate::registry::Registry;
+use cgnodes_api::registry::Registry;
 
 /// Registers `sph_fluid`, `points_save`, `particles_in_box` and `particles_around_box`.
 pub fn register(r: &mut Registry) {

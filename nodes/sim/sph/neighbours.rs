@@ -6,7 +6,7 @@
 use super::kernel::CubicSpline;
 use super::neighbour_grid::NeighbourGrid;
 use super::state::{Fluid, Neighbour};
-use crate::types::vec3::{dot, sub};
+use cgnodes_api::types::vec3::{dot, sub};
 use rayon::prelude::*;
 
 /// `j` as a neighbour of a particle at `xi` when `x_j` lies within the support radius.

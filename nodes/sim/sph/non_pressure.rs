@@ -2,7 +2,7 @@
 //! viscosity (an SPH Laplacian of the velocity).
 
 use super::state::Fluid;
-use crate::types::vec3::{axpy, dot, sub};
+use cgnodes_api::types::vec3::{axpy, dot, sub};
 use rayon::prelude::*;
 
 impl Fluid {

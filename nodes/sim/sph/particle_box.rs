@@ -10,7 +10,7 @@
 //! (the framework's `add_boundary_particles_around_box`, whose growth `s` the node's
 //! `scale factor` sets; the 2024 sampler's own source is not in the public history we read).
 
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
 
 /// The framework's point width (0.05): the `radius` attribute is half of it.
 pub const POINT_RADIUS: f64 = 0.025;
@@ -72,8 +72,7 @@ pub fn sample_around_box(min: [f64; 3], max: [f64; 3], n: [usize; 3], scale: f64
     for i in range(0) {
         for j in range(1) {
             for k in range(2) {
-                let p: [f64; 3] =
-                    std::array::from_fn(|a| min[a] + [i, j, k][a] as f64 * step[a]);
+                let p: [f64; 3] = std::array::from_fn(|a| min[a] + [i, j, k][a] as f64 * step[a]);
                 // zero-size axes: the box is a plane or a line there
                 let inside = (0..3).all(|a| p[a] >= min[a] - 1e-12 && p[a] <= max[a] + 1e-12);
                 if !inside {
@@ -127,7 +126,9 @@ fn execute_in(ctx: &mut ExecContext) -> Result<(), NodeError> {
 }
 
 fn declare_around(b: &mut NodeBuilder) {
-    b.doc("Boundary particles in a shell around a box (Framework3D's Sample Particles around a box).");
+    b.doc(
+        "Boundary particles in a shell around a box (Framework3D's Sample Particles around a box).",
+    );
     declare_box(b);
     b.add_input::<f64>("scale_factor")
         .default(0.2)
@@ -172,7 +173,10 @@ mod tests {
         // 9^3 lattice points in the grown box, minus the 5^3 inside the closed box
         assert_eq!(p.len(), 9 * 9 * 9 - 5 * 5 * 5);
         for q in &p {
-            assert!(q.iter().any(|&c| !(0.0..=1.0).contains(&c)), "{q:?} is inside");
+            assert!(
+                q.iter().any(|&c| !(0.0..=1.0).contains(&c)),
+                "{q:?} is inside"
+            );
             assert!(q.iter().all(|&c| (-0.5 - 1e-12..=1.5 + 1e-12).contains(&c)));
         }
         // scale 0: nothing outside the box

@@ -2,14 +2,14 @@
 //! with every scalar attribute as a `float` property and every vector attribute as three
 //! (`name_x`, `name_y`, `name_z`), so ParaView, Blender or Houdini can read the frames.
 
-use crate::prelude::*;
+use cgnodes_api::prelude::*;
 use std::io::Write;
 
 /// Writes `points` as PLY to `w`.
 pub fn write_ply(points: &Points, binary: bool, w: &mut dyn Write) -> std::io::Result<()> {
     let n = points.positions.len();
     let mut props: Vec<String> = vec!["x".into(), "y".into(), "z".into()];
-    let mut cols: Vec<crate::nodes::mesh::ply::PlyColumn<'_>> = vec![
+    let mut cols: Vec<cgnodes_formats::ply::PlyColumn<'_>> = vec![
         Box::new(|i| points.positions[i][0]),
         Box::new(|i| points.positions[i][1]),
         Box::new(|i| points.positions[i][2]),
@@ -28,7 +28,7 @@ pub fn write_ply(points: &Points, binary: bool, w: &mut dyn Write) -> std::io::R
             }
         }
     }
-    crate::nodes::mesh::ply::write_ply_points(w, "cgnodes points_save", n, &props, &cols, binary)
+    cgnodes_formats::ply::write_ply_points(w, "cgnodes points_save", n, &props, &cols, binary)
 }
 
 fn clean(name: &str) -> String {

@@ -5,8 +5,8 @@
 //! when the frame goes backwards, or when any parameter changes.
 
 use super::state::{Boundary, Fluid, Solver, SphParams};
-use crate::prelude::*;
-use crate::types::vec3::dot;
+use cgnodes_api::prelude::*;
+use cgnodes_api::types::vec3::dot;
 
 /// The particles as `Points` with `velocity`, `density`, `pressure`, `speed` and `color`.
 pub fn to_points(f: &Fluid, vref: f64) -> Points {
@@ -349,7 +349,7 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let height = (bup * width as f64 / bx).round().clamp(1.0, 8192.0);
     let height = if height.is_nan() { 1 } else { height as u64 };
     let what = format!("a {width}x{height} image");
-    let bytes = crate::node::bytes_of(&[width as u64, height, 16]);
+    let bytes = cgnodes_api::node::bytes_of(&[width as u64, height, 16]);
     ctx.reserve_bytes("image_width", &what, bytes)?;
     let started = std::time::Instant::now();
     let (profile, debug): (bool, bool) = (ctx.input("profile")?, ctx.input("debug")?);
@@ -434,7 +434,7 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let speeds = pts.scalars.get("speed").cloned().unwrap_or_default();
     ctx.set_output(
         "colors",
-        crate::nodes::mesh::set_vert_color::jet_colors(&speeds, None),
+        cgnodes_geometry::colormap::jet_colors(&speeds, None),
     );
     ctx.set_output("points", pts);
     ctx.set_output("image", img);

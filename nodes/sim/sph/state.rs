@@ -7,7 +7,7 @@
 use super::boundary;
 use super::kernel::CubicSpline;
 use super::neighbour_grid::NeighbourGrid;
-use crate::types::vec3::{axpy, dot};
+use cgnodes_api::types::vec3::{axpy, dot};
 use rayon::prelude::*;
 
 /// Which pressure solver advances the fluid.

@@ -5,7 +5,7 @@ use super::dfsph::Dfsph;
 use super::pressure_solver::PressureSolver;
 use super::state::{Fluid, Solver};
 use super::wcsph::Wcsph;
-use crate::types::vec3::dot;
+use cgnodes_api::types::vec3::dot;
 use rayon::prelude::*;
 
 /// The pressure solver named by `kind`.

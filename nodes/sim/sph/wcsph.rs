@@ -6,7 +6,7 @@
 
 use super::pressure_solver::PressureSolver;
 use super::state::{Fluid, StepStats};
-use crate::types::vec3::axpy;
+use cgnodes_api::types::vec3::axpy;
 use rayon::prelude::*;
 
 /// The course's equation of state (Becker & Teschner 2007 eq. 7), clamped at 0 so the

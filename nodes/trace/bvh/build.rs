@@ -14,7 +14,7 @@
 //! start on a surface and end on the next one, where PLOC's compact clusters pay.
 
 use super::{Aabb, Bvh, BvhNode};
-use crate::nodes::trace::sampling::V3;
+use crate::sampling::V3;
 use glam::Vec3A;
 use obvhs::bvh2::builder::build_bvh2;
 use obvhs::BvhBuildParams;

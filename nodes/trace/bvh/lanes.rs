@@ -10,7 +10,7 @@
 //! rare lanes that need the scalar test's double-precision fallback are handed to it.
 
 use super::traverse::{intersect_triangle, tri_test, RayPre};
-use crate::nodes::trace::sampling::V3;
+use crate::sampling::V3;
 use wide::{f32x4, f32x8};
 
 /// The axis permutation of the watertight test (`RayPre`'s kx, ky, kz): fixed at compile

@@ -13,7 +13,7 @@ use super::lanes::Dyn;
 use super::traverse::{with_stacks, RayPre, TraceStacks};
 use super::wide::Walk;
 use super::{Bvh, Hit};
-use crate::nodes::trace::sampling::V3;
+use crate::sampling::V3;
 
 /// A ray segment to trace: origin, direction, and the far end of the ray parameter
 /// (hits count for `0 < t < tmax`).

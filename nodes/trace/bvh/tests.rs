@@ -1,5 +1,5 @@
 use super::*;
-use crate::nodes::trace::sampling::{normalize, Pcg32};
+use crate::sampling::{normalize, Pcg32};
 
 fn random_tris(n: usize, seed: u64) -> Vec<[V3; 3]> {
     let mut r = Pcg32::new(seed, 1);

@@ -2,7 +2,7 @@
 //! ray-triangle test of Woop, Benthin and Wald 2013 and a conservative slab test.
 
 use super::{Aabb, Bvh, Hit};
-use crate::nodes::trace::sampling::{sub, V3};
+use crate::sampling::{sub, V3};
 use std::cell::RefCell;
 use wide::f32x4;
 

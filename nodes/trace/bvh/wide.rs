@@ -14,8 +14,8 @@
 
 use super::lanes::{slab8, tri4, Axes, Fixed, RayBox, Tri4, F8};
 use super::{Bvh, BvhNode};
-use crate::nodes::trace::bvh::traverse::{with_stack, RayPre};
-use crate::nodes::trace::bvh::Hit;
+use crate::bvh::traverse::{with_stack, RayPre};
+use crate::bvh::Hit;
 
 /// Children per node.
 pub const W: usize = 8;

@@ -56,10 +56,16 @@ pub(super) fn restrict_residual(
         };
         let init = || vec![[0.0f32; 3]; 3 * wf];
         if coarse.par() {
-            bc.rows[p].par_chunks_mut(wc).enumerate().for_each_init(init, f);
+            bc.rows[p]
+                .par_chunks_mut(wc)
+                .enumerate()
+                .for_each_init(init, f);
         } else {
             let mut rows = init();
-            bc.rows[p].chunks_mut(wc).enumerate().for_each(|a| f(&mut rows, a));
+            bc.rows[p]
+                .chunks_mut(wc)
+                .enumerate()
+                .for_each(|a| f(&mut rows, a));
         }
     }
 }
@@ -187,7 +193,8 @@ pub(super) fn galerkin(fine: &Level) -> Level {
             for xc in 1..mx {
                 let (y, x) = (2 * yc, 2 * xc);
                 let clear = yc >= 2 && yc + 2 <= my && xc >= 2 && xc + 2 <= mx;
-                if clear && (y - 2..=y + 2).all(|yy| (x - 2..=x + 2).all(|xx| is_interior(yy, xx))) {
+                if clear && (y - 2..=y + 2).all(|yy| (x - 2..=x + 2).all(|xx| is_interior(yy, xx)))
+                {
                     index[xc] = 1;
                     continue;
                 }

@@ -75,7 +75,10 @@ pub(super) enum Op {
     /// stencil that most points share, the others one per point near ∂Ω. A sweep then reads
     /// 4 bytes per point instead of 36. Stored in f32 (the hierarchy is only a
     /// preconditioner); the rounded stencils stay exactly symmetric (`galerkin`).
-    Stencil { index: Vec<u32>, table: Vec<[f32; 9]> },
+    Stencil {
+        index: Vec<u32>,
+        table: Vec<[f32; 9]>,
+    },
 }
 
 /// One level of the hierarchy on its padded `w x h` grid (both odd; rows and columns 0 and
@@ -133,7 +136,9 @@ pub(super) fn for_rows<T: Send, F: Fn(usize, &mut [T]) + Sync + Send>(
     f: F,
 ) {
     if par {
-        rows.par_chunks_mut(w).enumerate().for_each(|(i, r)| f(i, r));
+        rows.par_chunks_mut(w)
+            .enumerate()
+            .for_each(|(i, r)| f(i, r));
     } else {
         rows.chunks_mut(w).enumerate().for_each(|(i, r)| f(i, r));
     }
@@ -171,7 +176,10 @@ pub(super) fn smooth_rows(
             return;
         }
         let (up, dn): (&[Q3], &[Q3]) = if vertical {
-            (&other[((y - 1) >> 1) * w..][..w], &other[((y + 1) >> 1) * w..][..w])
+            (
+                &other[((y - 1) >> 1) * w..][..w],
+                &other[((y + 1) >> 1) * w..][..w],
+            )
         } else {
             (&zero, &zero)
         };
@@ -242,7 +250,13 @@ fn off_rows(s: &[f32; 9], up: &[Q3], dn: &[Q3], x: usize, c: usize) -> f32 {
 pub(super) const COLOURS: [(usize, [usize; 2]); 2] = [(0, [0, 1]), (1, [0, 1])];
 
 /// Row `y` of `b - A u` (`- A u` when `b` is `None`) into `out`, zero outside Ω.
-pub(super) fn residual_row(level: &Level, y: usize, u: &Field<f32>, b: Option<&Field<f32>>, out: &mut [Q3]) {
+pub(super) fn residual_row(
+    level: &Level,
+    y: usize,
+    u: &Field<f32>,
+    b: Option<&Field<f32>>,
+    out: &mut [Q3],
+) {
     let (w, h) = (level.w, level.h);
     out.iter_mut().for_each(|v| *v = [0.0; 3]);
     if y == 0 || y + 1 >= h {
@@ -258,7 +272,8 @@ pub(super) fn residual_row(level: &Level, y: usize, u: &Field<f32>, b: Option<&F
                 if m[x] {
                     let mut v = base(x);
                     for c in 0..3 {
-                        v[c] -= 4.0 * row[x][c] - row[x - 1][c] - row[x + 1][c] - up[x][c] - dn[x][c];
+                        v[c] -=
+                            4.0 * row[x][c] - row[x - 1][c] - row[x + 1][c] - up[x][c] - dn[x][c];
                     }
                     out[x] = v;
                 }
@@ -285,7 +300,12 @@ pub(super) fn residual_row(level: &Level, y: usize, u: &Field<f32>, b: Option<&F
 
 /// Conjugate gradients' `out = b - A u` (or `A u` when `b` is `None`) for the fine 5-point
 /// operator, zero outside Ω; returns the per-channel dot product of `u` and `out` (`pᵀ A p`).
-pub(super) fn fine_residual(level: &Level, u: &Field<f64>, b: Option<&Field<f64>>, out: &mut Field<f64>) -> P3 {
+pub(super) fn fine_residual(
+    level: &Level,
+    u: &Field<f64>,
+    b: Option<&Field<f64>>,
+    out: &mut Field<f64>,
+) -> P3 {
     let (w, h) = (level.w, level.h);
     let Op::Fine(m) = &level.op else {
         unreachable!("conjugate gradients runs on the fine level")
@@ -479,7 +499,10 @@ pub(super) fn to_f32(level: &Level, a: &Field<f64>, out: &mut Field<f32>) {
     for p in 0..2 {
         let f = |(o, v): (&mut Q3, &P3)| *o = [v[0] as f32, v[1] as f32, v[2] as f32];
         if level.par() {
-            out.rows[p].par_iter_mut().zip(a.rows[p].par_iter()).for_each(f);
+            out.rows[p]
+                .par_iter_mut()
+                .zip(a.rows[p].par_iter())
+                .for_each(f);
         } else {
             out.rows[p].iter_mut().zip(a.rows[p].iter()).for_each(f);
         }
@@ -489,7 +512,12 @@ pub(super) fn to_f32(level: &Level, a: &Field<f64>, out: &mut Field<f32>) {
 /// Per channel, `zᵀ r` and (with `p`) `zᵀ A p` in one pass: the preconditioned residual
 /// against the residual and against the last step's `A p`, recomputed from `p` (zero
 /// without `p`, the first step's).
-pub(super) fn z_dots(level: &Level, z: &Field<f32>, r: &Field<f64>, p: Option<&Field<f32>>) -> (P3, P3) {
+pub(super) fn z_dots(
+    level: &Level,
+    z: &Field<f32>,
+    r: &Field<f64>,
+    p: Option<&Field<f32>>,
+) -> (P3, P3) {
     let (w, m) = (level.w, fine_mask(level));
     sum_rows(level, |y| {
         let (zr, rr) = (z.row(y), r.row(y));
@@ -521,7 +549,10 @@ pub(super) fn next_direction(level: &Level, p: &mut Field<f32>, z: &Field<f32>, 
             }
         };
         if level.par() {
-            p.rows[r].par_iter_mut().zip(z.rows[r].par_iter()).for_each(f);
+            p.rows[r]
+                .par_iter_mut()
+                .zip(z.rows[r].par_iter())
+                .for_each(f);
         } else {
             p.rows[r].iter_mut().zip(z.rows[r].iter()).for_each(f);
         }

@@ -28,7 +28,7 @@
 //! parity's rows are read, without `unsafe`.
 
 use super::mask::MaskShape;
-use crate::nodes::linalg::SpdFactor;
+use cgnodes_linalg::SpdFactor;
 use faer::sparse::{SparseColMat, SymbolicSparseColMat};
 use faer::{Mat, MatMut, Par};
 use rayon::prelude::*;
@@ -39,7 +39,6 @@ mod grid;
 
 use coarsen::*;
 use grid::*;
-
 
 /// A level with at most this many unknowns is solved directly (sparse Cholesky). At 1024 the
 /// course mask's coarsest level had 999 unknowns, whose factorization took 0.9 of the
@@ -67,7 +66,6 @@ pub const TOLERANCE: f64 = 8e-11;
 
 /// Iterations after which conjugate gradients gives up (it needs about 10).
 const MAX_ITERATIONS: usize = 200;
-
 
 /// Per-level vectors of a V-cycle (f32) and the conjugate-gradient vectors (f64), kept
 /// between solves.
@@ -241,7 +239,13 @@ impl Multigrid {
         }
         {
             let (lo, hi) = wk.b.split_at_mut(l + 1);
-            restrict_residual(level, &self.levels[l + 1], &wk.u[l], Some(&lo[l]), &mut hi[0]);
+            restrict_residual(
+                level,
+                &self.levels[l + 1],
+                &wk.u[l],
+                Some(&lo[l]),
+                &mut hi[0],
+            );
         }
         self.vcycle(l + 1, wk);
         {
@@ -375,7 +379,15 @@ impl Multigrid {
                     0.0
                 }
             });
-            rn = flat(cg_update(fine, &mut wk.x, &mut wk.res, &wk.p, &mut wk.b[0], alpha)).sqrt();
+            rn = flat(cg_update(
+                fine,
+                &mut wk.x,
+                &mut wk.res,
+                &wk.p,
+                &mut wk.b[0],
+                alpha,
+            ))
+            .sqrt();
             if rn <= goal {
                 break;
             }
@@ -454,7 +466,9 @@ mod tests {
     fn rhs(n: usize) -> Mat<f64> {
         let mut s = 12345u64;
         Mat::from_fn(n, 3, |i, c| {
-            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             ((i as f64) * 0.01 + c as f64).sin() + ((s >> 40) as f64 / (1u64 << 24) as f64 - 0.5)
         })
     }
@@ -462,7 +476,10 @@ mod tests {
     fn shapes() -> Vec<(&'static str, MaskShape)> {
         vec![
             ("disc", disc(40.0)),
-            ("L-shape", mask(90, 80, |x, y| (x < 40 || y < 30) && x < 88 && y < 78)),
+            (
+                "L-shape",
+                mask(90, 80, |x, y| (x < 40 || y < 30) && x < 88 && y < 78),
+            ),
             (
                 "annulus (a hole)",
                 mask(101, 101, |x, y| {
@@ -488,7 +505,10 @@ mod tests {
                         || (x == y && x < 80)
                 }),
             ),
-            ("touching the box (full box less a notch)", mask(70, 50, |x, y| !(x > 30 && y > 20 && x < 40))),
+            (
+                "touching the box (full box less a notch)",
+                mask(70, 50, |x, y| !(x > 30 && y > 20 && x < 40)),
+            ),
             ("single pixel", mask(3, 3, |x, y| x == 1 && y == 1)),
         ]
     }
@@ -499,7 +519,9 @@ mod tests {
             let n = shape.len();
             let b = rhs(n);
             let mut reference = b.clone();
-            system::factor(&shape).unwrap().solve_in_place(reference.as_mut());
+            system::factor(&shape)
+                .unwrap()
+                .solve_in_place(reference.as_mut());
             let mg = Multigrid::new(&shape).unwrap();
             for warm in [false, true, true] {
                 let mut x = b.clone();
@@ -507,7 +529,10 @@ mod tests {
                 let r = system::residual_norm(&shape, x.as_ref(), b.as_ref()) / b.norm_l2();
                 assert!(r <= 1e-10, "{name}: residual {r:.2e} ({stats:?})");
                 let e = (&x - &reference).norm_l2() / reference.norm_l2();
-                assert!(e < 1e-9, "{name}: relative difference {e:.2e} from Cholesky");
+                assert!(
+                    e < 1e-9,
+                    "{name}: relative difference {e:.2e} from Cholesky"
+                );
             }
         }
     }
@@ -531,8 +556,12 @@ mod tests {
             mo.solve_with(&mut reused, y.as_mut(), false).unwrap();
             mg.shape_work(&mut reused);
             let mut x_reused = b.clone();
-            mg.solve_with(&mut reused, x_reused.as_mut(), false).unwrap();
-            assert!(x_fresh == x_reused, "{name}: reshaped buffers changed the solution");
+            mg.solve_with(&mut reused, x_reused.as_mut(), false)
+                .unwrap();
+            assert!(
+                x_fresh == x_reused,
+                "{name}: reshaped buffers changed the solution"
+            );
         }
     }
 
@@ -542,7 +571,10 @@ mod tests {
         let mg = Multigrid::new(&shape).unwrap();
         let u = mg.unknowns();
         assert!(mg.depth() >= 3, "{u:?}");
-        assert!(u.windows(2).all(|p| p[1] < p[0]) && *u.last().unwrap() <= COARSEST_MAX, "{u:?}");
+        assert!(
+            u.windows(2).all(|p| p[1] < p[0]) && *u.last().unwrap() <= COARSEST_MAX,
+            "{u:?}"
+        );
         // five columns: a group of three and a group of two
         let b = Mat::from_fn(shape.len(), 5, |i, c| ((i * (c + 3)) % 17) as f64 - 8.0);
         let mut x = b.clone();
@@ -559,7 +591,10 @@ mod tests {
         let shape = disc(80.0);
         let b = rhs(shape.len());
         let solve = |threads: usize| {
-            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
             pool.install(|| {
                 let mg = Multigrid::new(&shape).unwrap();
                 assert!(mg.levels[0].par() && mg.levels[1].par());
@@ -574,7 +609,10 @@ mod tests {
             assert_eq!(it1, it2);
             let same = (0..one.ncols())
                 .all(|c| (0..one.nrows()).all(|i| one[(i, c)].to_bits() == two[(i, c)].to_bits()));
-            assert!(same, "the two-thread solution differs from the one-thread one");
+            assert!(
+                same,
+                "the two-thread solution differs from the one-thread one"
+            );
         }
     }
 
@@ -582,10 +620,14 @@ mod tests {
     fn the_galerkin_operator_is_pt_a_p() {
         // A_c e_J = Pᵀ A P e_J checked by applying the fine operator to the prolongated unit
         // vector, on an irregular mask
-        let shape = mask(23, 19, |x, y| (x - 11) * (x - 11) + 2 * (y - 9) * (y - 9) < 90 || (x == 3 && y > 2));
+        let shape = mask(23, 19, |x, y| {
+            (x - 11) * (x - 11) + 2 * (y - 9) * (y - 9) < 90 || (x == 3 && y > 2)
+        });
         let mg = Multigrid::new(&shape).unwrap();
         let (fine, coarse) = (&mg.levels[0], &galerkin(&mg.levels[0]));
-        let Op::Stencil { index, table } = &coarse.op else { panic!("coarse levels are stencils") };
+        let Op::Stencil { index, table } = &coarse.op else {
+            panic!("coarse levels are stencils")
+        };
         let a: Vec<[f32; 9]> = index.iter().map(|&i| table[i as usize]).collect();
         let mut checked = 0;
         for yc in 1..coarse.h - 1 {
@@ -624,7 +666,10 @@ mod tests {
         for (sweeps, bound) in [(1, 0.3), (2, 0.2)] {
             let mg = Multigrid::new(&shape).unwrap().with_sweeps(sweeps);
             let rate = mg.vcycle_rate(b.as_ref(), 8);
-            assert!(rate < bound, "V({sweeps},{sweeps}) convergence factor {rate:.3}");
+            assert!(
+                rate < bound,
+                "V({sweeps},{sweeps}) convergence factor {rate:.3}"
+            );
         }
         // conjugate gradients with one V(1,1) per iteration: residual 1e-11 in at most 12
         // iterations, a mean reduction per iteration below 0.15
@@ -633,7 +678,10 @@ mod tests {
         let stats = mg.solve_in_place(x.as_mut(), false).unwrap();
         assert!(stats.iterations <= 12, "{stats:?}");
         let r = system::residual_norm(&shape, x.as_ref(), b.as_ref()) / b.norm_l2();
-        assert!(r.powf(1.0 / stats.iterations as f64) < 0.15, "{r:.2e} {stats:?}");
+        assert!(
+            r.powf(1.0 / stats.iterations as f64) < 0.15,
+            "{r:.2e} {stats:?}"
+        );
     }
 
     /// Convergence factors and timings of V(1,1) and V(2,2) on a 0.84-megapixel ellipse (not
@@ -643,12 +691,17 @@ mod tests {
     #[ignore]
     fn multigrid_timing() {
         let shape = mask(1200, 900, |x, y| {
-            let (dx, dy) = ((x as f64 + 0.5 - 600.0) / 597.0, (y as f64 + 0.5 - 450.0) / 447.0);
+            let (dx, dy) = (
+                (x as f64 + 0.5 - 600.0) / 597.0,
+                (y as f64 + 0.5 - 450.0) / 447.0,
+            );
             dx * dx + dy * dy < 1.0
         });
         let b = rhs(shape.len());
         // the plain cycle's convergence factor on the ellipse and on its bounding rectangle
-        let rect = mask(1200, 900, |x, y| (3..1197).contains(&x) && (3..897).contains(&y));
+        let rect = mask(1200, 900, |x, y| {
+            (3..1197).contains(&x) && (3..897).contains(&y)
+        });
         for (name, sh) in [("ellipse", &shape), ("rectangle", &rect)] {
             for sweeps in [1, 2] {
                 let mg = Multigrid::new(sh).unwrap().with_sweeps(sweeps);

@@ -1,0 +1,323 @@
+//! Running one node: blocks it when an upstream node failed, completes its key with the
+//! stamps of files named through links, serves it from the caches when its key is unchanged, else gathers its inputs, runs it (catching panics), checks its
+//! outputs against the declaration and stores the result.
+
+use super::{Executor, NodeReport, NodeStatus, Shared};
+use crate::cache::{stamp_input, Entry, Key};
+use crate::validate::InputSource;
+use cgnodes_api::node::{ErrorKind, ExecContext, FileRole, NodeError, RunSetup};
+use cgnodes_api::types::{SocketType, Value};
+use std::collections::BTreeMap;
+use std::sync::Arc;
+
+impl Executor {
+    /// Gathers inputs, consults the caches, runs the node and checks its outputs.
+    pub(super) fn evaluate(
+        &self,
+        sh: &Shared,
+        i: usize,
+        report: &mut NodeReport,
+    ) -> Result<Arc<BTreeMap<String, Value>>, String> {
+        let node = &sh.graph.nodes[i];
+        let decl = &node.decl;
+        // Upstream failures block this node.
+        for &d in &node.deps {
+            if let Some(Err(failed)) = sh.slots[d]
+                .lock()
+                .unwrap_or_else(|p| p.into_inner())
+                .as_ref()
+            {
+                report.status = NodeStatus::Blocked { by: failed.clone() };
+                return Err(failed.clone());
+            }
+        }
+        let key = complete_key(sh, i);
+        let _ = sh.final_keys[i].set(key);
+        let wanted = sh.wanted[i].as_ref();
+        // A cached entry that skipped an output wanted now is kept, to merge with the rerun.
+        let mut older = None;
+        if !decl.stateful && !sh.fresh[i] {
+            if let Some(e) = self.lookup(&key) {
+                if e.serves(wanted) {
+                    report.status = NodeStatus::Cached;
+                    report.written = e.written.clone();
+                    return Ok(e.outputs);
+                }
+                older = Some(e);
+            }
+        }
+        let fail = |report: &mut NodeReport, e: NodeError| {
+            report.status = NodeStatus::Failed(e);
+            Err(node.id.clone())
+        };
+        // Inputs.
+        let mut inputs = BTreeMap::new();
+        for (name, src) in &node.inputs {
+            let Some(sdecl) = decl.input(name) else {
+                continue;
+            };
+            let v = match src {
+                InputSource::Literal(v) | InputSource::Default(v) => v.clone(),
+                InputSource::Unset => continue,
+                InputSource::Links(links) => {
+                    let mut vals = Vec::new();
+                    for (j, out) in links {
+                        let slot = sh.slots[*j].lock().unwrap_or_else(|p| p.into_inner());
+                        let v = slot
+                            .as_ref()
+                            .and_then(|r| r.as_ref().ok())
+                            .and_then(|o| o.get(out))
+                            .cloned();
+                        match v {
+                            Some(v) => vals.push(v),
+                            None => {
+                                let e = NodeError::new(
+                                    ErrorKind::Internal,
+                                    format!(
+                                        "'{}' produced no output '{out}'",
+                                        sh.graph.nodes[*j].id
+                                    ),
+                                )
+                                .at(name);
+                                return fail(report, e);
+                            }
+                        }
+                    }
+                    if let SocketType::List(_) = sdecl.ty {
+                        let mut flat = Vec::new();
+                        for v in vals {
+                            match v {
+                                Value::List(items) => flat.extend(items.iter().cloned()),
+                                other => flat.push(other),
+                            }
+                        }
+                        Value::List(Arc::new(flat))
+                    } else {
+                        vals.pop().unwrap_or(Value::Bool(false))
+                    }
+                }
+            };
+            match v.convert_to(&sdecl.ty) {
+                Some(v) => {
+                    // Validation checked literals against the declared range and choices; a
+                    // linked value arrives only now and gets the same check (issue 23).
+                    if matches!(src, InputSource::Links(_)) {
+                        if let Err(msg) = sdecl.check_literal(&v) {
+                            return fail(report, NodeError::invalid(name, msg));
+                        }
+                    }
+                    inputs.insert(name.clone(), v);
+                }
+                None => {
+                    let e = NodeError::invalid(
+                        name,
+                        format!("cannot convert {} to {}", v.socket_type(), sdecl.ty),
+                    );
+                    return fail(report, e);
+                }
+            }
+        }
+        // State (taken out while the node runs, put back after).
+        let mut state = if decl.stateful {
+            self.states
+                .lock()
+                .unwrap_or_else(|p| p.into_inner())
+                .remove(&node.id)
+        } else {
+            None
+        };
+        let Some(exec) = decl.exec.clone() else {
+            return fail(
+                report,
+                NodeError::new(ErrorKind::Internal, "node has no implementation"),
+            );
+        };
+        let setup = RunSetup {
+            inputs,
+            frame: sh.frame,
+            state: &mut state,
+            files: &sh.opts.files,
+            progress: sh.opts.progress.clone(),
+            log_sink: sh.opts.log.clone(),
+            wanted: wanted.cloned(),
+            memory_limit: sh.opts.memory_limit(),
+            provenance: Some(Arc::new(provenance(sh, node))),
+        };
+        let mut ctx = ExecContext::for_run(&node.id, decl, setup);
+        let res = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| exec(&mut ctx)));
+        // Ends the node's progress bar, if it started one, whether it succeeded or not.
+        ctx.progress(1.0);
+        let (outputs, logs, written) = ctx.finish();
+        report.logs = logs;
+        report.written = written;
+        drop(ctx);
+        if decl.stateful {
+            // The history follows the state: the next frame's key chains onto this one while
+            // the node holds state, and starts anew when it dropped it.
+            // Locked in the order the planner locks them.
+            let mut states = self.states.lock().unwrap_or_else(|p| p.into_inner());
+            let mut hist = self.histories.lock().unwrap_or_else(|p| p.into_inner());
+            if let Some(s) = state {
+                states.insert(node.id.clone(), s);
+                hist.insert(node.id.clone(), key);
+            } else {
+                hist.remove(&node.id);
+            }
+        }
+        match res {
+            Ok(Ok(())) => {}
+            Ok(Err(e)) => return fail(report, e),
+            Err(panic) => {
+                let msg = panic
+                    .downcast_ref::<String>()
+                    .cloned()
+                    .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
+                    .unwrap_or_default();
+                return fail(
+                    report,
+                    NodeError::new(ErrorKind::Internal, format!("the node panicked: {msg}")),
+                );
+            }
+        }
+        let is_wanted = |name: &str| wanted.is_none_or(|w| w.contains(name));
+        let mut skipped = Vec::new();
+        for o in &decl.outputs {
+            match outputs.get(&o.name) {
+                None if !is_wanted(&o.name) => skipped.push(o.name.clone()),
+                None if o.optional => {}
+                None => {
+                    return fail(
+                        report,
+                        NodeError::new(
+                            ErrorKind::Internal,
+                            format!("produced no output '{}'", o.name),
+                        ),
+                    )
+                }
+                Some(v)
+                    if !o.ty.accepts(&v.socket_type())
+                        && !matches!(v, Value::List(l) if l.is_empty()) =>
+                {
+                    let e = NodeError::new(
+                        ErrorKind::Internal,
+                        format!(
+                            "output '{}' should be {} but is {}",
+                            o.name,
+                            o.ty,
+                            v.socket_type()
+                        ),
+                    );
+                    return fail(report, e);
+                }
+                _ => {}
+            }
+        }
+        let mut e = Entry {
+            outputs: Arc::new(outputs),
+            written: report.written.clone(),
+            skipped,
+        };
+        if let Some(older) = &older {
+            e = e.merged_with(older);
+        }
+        let outputs = e.outputs.clone();
+        if !decl.stateful {
+            if let Some(d) = &self.disk {
+                d.put(&key, &e);
+            }
+            self.memory
+                .lock()
+                .unwrap_or_else(|p| p.into_inner())
+                .put(key, e);
+        }
+        Ok(outputs)
+    }
+
+    fn lookup(&self, key: &Key) -> Option<Entry> {
+        let hit = self
+            .memory
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .get(key);
+        let hit = hit.or_else(|| {
+            let e = self.disk.as_ref()?.get(key)?;
+            self.memory
+                .lock()
+                .unwrap_or_else(|p| p.into_inner())
+                .put(*key, e.clone());
+            Some(e)
+        });
+        hit.filter(|e| e.files_present())
+    }
+}
+
+/// The node's key completed at evaluation time: the planned key, plus the completed keys of
+/// upstream nodes whose keys changed, plus the stamp (and companions) of every file named by
+/// a path that arrives through a link. Equal to the planned key when there is neither.
+fn complete_key(sh: &Shared, i: usize) -> Key {
+    let node = &sh.graph.nodes[i];
+    let decl = &node.decl;
+    let mut h: Option<blake3::Hasher> = None;
+    for &d in &node.deps {
+        let k = sh.final_keys[d].get().copied().unwrap_or(sh.keys[d]);
+        if k != sh.keys[d] {
+            let h = h.get_or_insert_with(blake3::Hasher::new);
+            h.update(&(d as u64).to_le_bytes());
+            h.update(&k);
+        }
+    }
+    for (name, src) in &node.inputs {
+        let InputSource::Links(links) = src else {
+            continue;
+        };
+        if decl.input(name).map(|s| s.file) != Some(FileRole::Input) {
+            continue;
+        }
+        for (j, out) in links {
+            let slot = sh.slots[*j].lock().unwrap_or_else(|p| p.into_inner());
+            let Some(v) = slot
+                .as_ref()
+                .and_then(|r| r.as_ref().ok())
+                .and_then(|o| o.get(out))
+            else {
+                continue;
+            };
+            let h = h.get_or_insert_with(blake3::Hasher::new);
+            h.update(name.as_bytes());
+            h.update(b"=");
+            for p in super::plan::path_strings(v) {
+                stamp_input(h, &sh.opts.files.input_path(p), decl.companions);
+            }
+        }
+    }
+    match h {
+        None => sh.keys[i],
+        Some(mut h) => {
+            h.update(b"planned");
+            h.update(&sh.keys[i]);
+            *h.finalize().as_bytes()
+        }
+    }
+}
+
+/// What the files `node` writes record: this build, the graph's hash, the node and its
+/// literal parameters, the frame.
+fn provenance(sh: &Shared, node: &crate::validate::ValidNode) -> cgnodes_api::node::Provenance {
+    let params = node
+        .inputs
+        .iter()
+        .filter_map(|(name, src)| match src {
+            InputSource::Literal(v) => Some((name.clone(), v.to_json()?)),
+            _ => None,
+        })
+        .collect();
+    cgnodes_api::node::Provenance {
+        cgnodes: env!("CARGO_PKG_VERSION").to_string(),
+        graph: sh.graph.file.display().to_string(),
+        graph_hash: sh.graph.hash.clone(),
+        node: node.id.clone(),
+        node_type: node.decl.type_name.clone(),
+        params,
+        frame: sh.frame,
+    }
+}

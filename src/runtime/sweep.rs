@@ -1,0 +1,613 @@
+//! `cgnodes sweep`: runs a graph for every combination of parameter values, records wall time
+//! per node and in total, the measured outputs, and the kind of failure of runs that fail,
+//! then writes a CSV and a chart of accuracy against time. Upstream results are reused from
+//! the cache between combinations. A sweep file (JSON) makes a sweep reproducible.
+
+use crate::chart::{Chart, Series};
+use crate::exec::{Executor, NodeStatus, RunOptions};
+use crate::f3d::Aliases;
+use crate::graph::{self, apply_sets, parse_frames, split_link};
+use cgnodes_api::node::FileEnv;
+use cgnodes_api::registry::Registry;
+use cgnodes_api::types::Value;
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// A sweep: which graph, which parameters to vary, what to measure, where to write.
+#[derive(Clone, Debug, Default, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct SweepSpec {
+    /// The graph file (relative to the sweep file).
+    pub graph: PathBuf,
+    /// Parameters to vary: `{"param": "node.socket", "values": [...]}` in order; every
+    /// combination runs.
+    #[serde(default)]
+    pub vary: Vec<Vary>,
+    /// Fixed overrides applied to every run (`node.socket=value`).
+    #[serde(default)]
+    pub set: Vec<String>,
+    /// Runs per combination (timings of repeats re-execute the varied nodes).
+    #[serde(default = "one")]
+    pub repeat: usize,
+    /// Outputs to record: `node.socket`, or for a Table `node.socket:column[:last|mean|max|min|sum]`.
+    #[serde(default)]
+    pub measure: Vec<String>,
+    /// CSV file to write (relative to the sweep file).
+    #[serde(default)]
+    pub csv: Option<PathBuf>,
+    /// Chart to write, `.svg` or `.png` (relative to the sweep file).
+    #[serde(default)]
+    pub plot: Option<PathBuf>,
+    /// X axis: `time` (total wall ms, the default), `time:NODE` (one node's ms), a measure, or
+    /// a varied parameter.
+    #[serde(default)]
+    pub x: Option<String>,
+    /// Y axis: a measure (default: the first).
+    #[serde(default)]
+    pub y: Option<String>,
+    /// The varied parameter whose values name the series (default: a varied parameter with
+    /// string values, if there is one).
+    #[serde(default)]
+    pub series: Option<String>,
+    /// Logarithmic x axis.
+    #[serde(default)]
+    pub log_x: bool,
+    /// Logarithmic y axis.
+    #[serde(default)]
+    pub log_y: bool,
+    /// Chart title.
+    #[serde(default)]
+    pub title: Option<String>,
+    /// Frame range `A..B` run per combination (simulations); measures are read at the last frame.
+    #[serde(default)]
+    pub frames: Option<String>,
+    /// Output directory for the graph's writers (default: a temporary folder).
+    #[serde(default)]
+    pub out: Option<PathBuf>,
+    /// Most bytes one node's buffers may take (`--max-memory`; default: CGNODES_MAX_MEMORY,
+    /// else half the physical memory).
+    #[serde(default)]
+    pub max_memory: Option<u64>,
+    /// Run only this shard's combinations (`--shard I/N`, round robin); the CSV then starts
+    /// with the columns `shard`, `combination`, `combinations` that `cgnodes sweep-merge` reads.
+    #[serde(skip)]
+    pub shard: Option<crate::shard::Shard>,
+    /// A result cache folder on disk (`--cache DIR`), which the shards of a sweep may share:
+    /// an upstream result one shard computed is read by the others. Without it, results are
+    /// reused only between the combinations of one process.
+    #[serde(skip)]
+    pub cache: Option<PathBuf>,
+    /// Told after each run (runs done, runs in total) for `cgnodes sweep`'s progress bar.
+    #[serde(skip)]
+    pub progress: Option<SweepProgress>,
+}
+
+/// A callback told after each run of a sweep: (runs done, runs in total).
+#[derive(Clone)]
+pub struct SweepProgress(pub std::sync::Arc<dyn Fn(usize, usize) + Send + Sync>);
+
+impl std::fmt::Debug for SweepProgress {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("SweepProgress")
+    }
+}
+
+fn one() -> usize {
+    1
+}
+
+/// One varied parameter.
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct Vary {
+    /// `node.socket`.
+    pub param: String,
+    /// Values to try.
+    pub values: Vec<serde_json::Value>,
+}
+
+/// One run of a sweep.
+#[derive(Clone, Debug)]
+pub struct SweepRow {
+    /// Index of the combination in the whole grid (first varied parameter slowest).
+    pub combination: usize,
+    /// The varied values, in `vary` order.
+    pub values: Vec<serde_json::Value>,
+    /// Repeat index.
+    pub repeat: usize,
+    /// `ok` or `failed`.
+    pub ok: bool,
+    /// Kind of the first failure (`unstable`, `singular`, `invalid`, ...), empty when ok.
+    pub error_kind: String,
+    /// Message of the first failure.
+    pub error: String,
+    /// Total wall time in ms (over all frames).
+    pub total_ms: f64,
+    /// Wall time per node (0 for cached nodes).
+    pub node_ms: BTreeMap<String, f64>,
+    /// Measured values (NaN when unavailable).
+    pub measures: Vec<f64>,
+}
+
+/// Parses `A=v1,v2,...` (`--vary`): values are JSON when they parse, else strings.
+pub fn parse_vary(s: &str) -> Result<Vary, String> {
+    let (param, vals) = s
+        .split_once('=')
+        .ok_or_else(|| format!("--vary '{s}': expected NODE.PARAM=v1,v2,..."))?;
+    split_link(param).ok_or_else(|| format!("--vary '{s}': expected NODE.PARAM=v1,v2,..."))?;
+    let values = split_values(vals)
+        .into_iter()
+        .map(|v| {
+            serde_json::from_str(v.trim())
+                .unwrap_or_else(|_| serde_json::Value::String(v.trim().to_string()))
+        })
+        .collect::<Vec<_>>();
+    if values.is_empty() {
+        return Err(format!("--vary '{s}': no values"));
+    }
+    Ok(Vary {
+        param: param.to_string(),
+        values,
+    })
+}
+
+/// Splits on commas outside brackets, so `[0,1,2],[1,1,1]` gives two vectors.
+fn split_values(s: &str) -> Vec<&str> {
+    let mut out = Vec::new();
+    let (mut depth, mut start) = (0i32, 0);
+    for (i, c) in s.char_indices() {
+        match c {
+            '[' | '{' => depth += 1,
+            ']' | '}' => depth -= 1,
+            ',' if depth == 0 => {
+                out.push(&s[start..i]);
+                start = i + 1;
+            }
+            _ => {}
+        }
+    }
+    if start < s.len() {
+        out.push(&s[start..]);
+    }
+    out
+}
+
+/// Reads one measure from a run's outputs.
+pub fn measure(outputs: &crate::exec::RunReport, spec: &str) -> Result<f64, String> {
+    let mut parts = spec.split(':');
+    let link = parts.next().unwrap_or_default();
+    let (node, socket) =
+        split_link(link).ok_or_else(|| format!("measure '{spec}': expected NODE.SOCKET"))?;
+    let v = outputs
+        .output(node, socket)
+        .ok_or_else(|| format!("measure '{spec}': no output {node}.{socket}"))?;
+    let column = parts.next();
+    let summary = parts.next().unwrap_or("last");
+    let summarize = |c: &[f64]| -> Result<f64, String> {
+        let finite = c.iter().copied();
+        Ok(match summary {
+            "last" => c.last().copied().unwrap_or(f64::NAN),
+            "first" => c.first().copied().unwrap_or(f64::NAN),
+            "mean" => finite.clone().sum::<f64>() / c.len().max(1) as f64,
+            "max" => finite.fold(f64::NEG_INFINITY, f64::max),
+            "min" => finite.fold(f64::INFINITY, f64::min),
+            "sum" => finite.sum(),
+            other => {
+                return Err(format!(
+                "measure '{spec}': unknown summary '{other}' (last, first, mean, max, min, sum)"
+            ))
+            }
+        })
+    };
+    match v {
+        Value::Float(x) => Ok(*x),
+        Value::Int(x) => Ok(*x as f64),
+        Value::Bool(b) => Ok(f64::from(u8::from(*b))),
+        Value::Table(t) => {
+            let col = match column {
+                Some(c) => t.column(c).ok_or_else(|| {
+                    let names: Vec<&str> = t.columns.iter().map(|(n, _)| n.as_str()).collect();
+                    format!(
+                        "measure '{spec}': the table has no column '{c}' (it has {})",
+                        names.join(", ")
+                    )
+                })?,
+                None if t.columns.len() == 1 => &t.columns[0].1,
+                None => {
+                    return Err(format!(
+                        "measure '{spec}': name a column, NODE.SOCKET:COLUMN"
+                    ))
+                }
+            };
+            summarize(col)
+        }
+        Value::List(items) => {
+            let nums: Vec<f64> = items
+                .iter()
+                .filter_map(|x| match x {
+                    Value::Float(f) => Some(*f),
+                    Value::Int(i) => Some(*i as f64),
+                    _ => None,
+                })
+                .collect();
+            summarize(&nums)
+        }
+        other => Err(format!(
+            "measure '{spec}': a {} is not a number or a table",
+            other.socket_type()
+        )),
+    }
+}
+
+/// Runs a sweep. `base` is the folder relative paths in the spec resolve against.
+pub fn run(
+    spec: &SweepSpec,
+    base: &Path,
+    registry: &Registry,
+    threads: Option<usize>,
+) -> Result<Vec<SweepRow>, String> {
+    let gpath = base.join(&spec.graph);
+    let graph0 =
+        graph::load_with(&gpath, &Aliases::default(), registry).map_err(|e| e.to_string())?;
+    let frames = match &spec.frames {
+        Some(f) => parse_frames(f)?,
+        None => graph0.spec.frames_hint().unwrap_or((0, 0)),
+    };
+    // Registered so that Ctrl-C removes it (`io::interrupt`).
+    let (_tracked, tmp) = cgnodes_api::io::interrupt::track(tempfile::tempdir, |t| {
+        cgnodes_api::io::interrupt::Resource::Path(t.path().to_path_buf())
+    })
+    .map_err(|e| e.to_string())?;
+    let out_dir = spec
+        .out
+        .as_ref()
+        .map(|o| base.join(o))
+        .unwrap_or_else(|| tmp.path().to_path_buf());
+    let exec = Executor::new(threads, spec.cache.as_deref())?;
+    let varied_nodes: Vec<String> = spec
+        .vary
+        .iter()
+        .filter_map(|v| split_link(&v.param).map(|(n, _)| n.to_string()))
+        .collect();
+    // Cartesian product of the varied values.
+    let mut combos: Vec<Vec<serde_json::Value>> = vec![Vec::new()];
+    for v in &spec.vary {
+        combos = combos
+            .into_iter()
+            .flat_map(|c| {
+                v.values.iter().map(move |x| {
+                    let mut c = c.clone();
+                    c.push(x.clone());
+                    c
+                })
+            })
+            .collect();
+    }
+    let mut rows = Vec::new();
+    let shard = spec.shard.unwrap_or_default();
+    let total_runs = (0..combos.len()).filter(|&ci| shard.takes(ci)).count() * spec.repeat.max(1);
+    let tell = |done: usize| {
+        if let Some(p) = &spec.progress {
+            (p.0)(done, total_runs);
+        }
+    };
+    tell(0);
+    for (ci, combo) in combos.iter().enumerate() {
+        if !shard.takes(ci) {
+            continue;
+        }
+        for rep in 0..spec.repeat.max(1) {
+            let mut g = graph0.clone();
+            let mut sets = spec.set.clone();
+            for (v, x) in spec.vary.iter().zip(combo) {
+                sets.push(format!("{}={}", v.param, value_text(x)));
+            }
+            let mut row = SweepRow {
+                combination: ci,
+                values: combo.clone(),
+                repeat: rep,
+                ok: true,
+                error_kind: String::new(),
+                error: String::new(),
+                total_ms: 0.0,
+                node_ms: BTreeMap::new(),
+                measures: vec![f64::NAN; spec.measure.len()],
+            };
+            let valid = apply_sets(&mut g, &sets).and_then(|_| {
+                crate::validate::validate(&g, registry).map_err(|e| e[0].to_string())
+            });
+            let valid = match valid {
+                Ok(v) => v,
+                Err(e) => {
+                    row.ok = false;
+                    row.error_kind = "invalid".into();
+                    row.error = e;
+                    rows.push(row);
+                    tell(rows.len());
+                    continue;
+                }
+            };
+            let opts = RunOptions {
+                files: FileEnv {
+                    graph_dir: valid.dir.clone(),
+                    out_dir: out_dir.clone(),
+                    ..Default::default()
+                },
+                // The measured outputs are read after the run: their nodes run even when the
+                // graph's outputs do not need them (a metric node is usually no writer), and
+                // they compute those outputs even when nothing links them.
+                read_outputs: spec
+                    .measure
+                    .iter()
+                    .filter_map(|m| m.split(':').next().map(str::to_string))
+                    .collect(),
+                max_memory: spec.max_memory,
+                recompute: if rep > 0 {
+                    varied_nodes.clone()
+                } else {
+                    Vec::new()
+                },
+                ..Default::default()
+            };
+            exec.reset_states();
+            // Before the last frame, only failures of the simulations and what they read end
+            // the run: a node that feeds no stateful node (a metric over a series that is
+            // still too short, say) runs again at the last frame, where it counts.
+            let stateful: Vec<usize> = (0..valid.nodes.len())
+                .filter(|&i| valid.nodes[i].decl.stateful)
+                .collect();
+            let feeds_state = valid.needed(&stateful);
+            let mut last = None;
+            for f in frames.0..=frames.1 {
+                let r = exec.run(&valid, &opts, f);
+                row.total_ms += r.total_ms;
+                for n in &r.nodes {
+                    *row.node_ms.entry(n.id.clone()).or_default() +=
+                        if matches!(n.status, NodeStatus::Ran) {
+                            n.ms
+                        } else {
+                            0.0
+                        };
+                }
+                let counts = |id: &str| {
+                    f == frames.1 || valid.index.get(id).is_some_and(|&i| feeds_state[i])
+                };
+                let failed = r.nodes.iter().find_map(|n| match &n.status {
+                    NodeStatus::Failed(e) if counts(&n.id) => Some((
+                        e.kind.to_string(),
+                        format!("{} ({}): {e}", n.id, n.node_type),
+                    )),
+                    _ => None,
+                });
+                if let Some((kind, msg)) = failed {
+                    row.ok = false;
+                    row.error_kind = kind;
+                    row.error = format!("frame {f}: {msg}");
+                    break;
+                }
+                last = Some(r);
+            }
+            if let (true, Some(r)) = (row.ok, &last) {
+                for (k, m) in spec.measure.iter().enumerate() {
+                    match measure(r, m) {
+                        Ok(x) => row.measures[k] = x,
+                        Err(e) => return Err(e),
+                    }
+                }
+            }
+            rows.push(row);
+            tell(rows.len());
+        }
+    }
+    Ok(rows)
+}
+
+/// CSV text of a sweep's rows: the varied values, repeat, status, error, total and per-node
+/// wall times, then the measures (empty when not finite).
+pub fn to_csv(spec: &SweepSpec, rows: &[SweepRow]) -> String {
+    let nodes: Vec<String> = rows
+        .first()
+        .map(|r| r.node_ms.keys().cloned().collect())
+        .unwrap_or_default();
+    let shard_head = spec
+        .shard
+        .map(|_| ["shard", "combination", "combinations"].map(String::from));
+    let total: usize = spec.vary.iter().map(|v| v.values.len()).product();
+    let mut head: Vec<String> = shard_head.into_iter().flatten().collect();
+    head.extend(spec.vary.iter().map(|v| v.param.clone()));
+    head.extend(["repeat", "status", "error_kind", "error", "total_ms"].map(String::from));
+    head.extend(nodes.iter().map(|n| format!("ms:{n}")));
+    head.extend(spec.measure.iter().cloned());
+    let records = rows.iter().map(|r| {
+        let mut f: Vec<String> = match spec.shard {
+            Some(s) => vec![s.to_string(), r.combination.to_string(), total.to_string()],
+            None => Vec::new(),
+        };
+        f.extend(r.values.iter().map(value_text));
+        f.push(r.repeat.to_string());
+        f.push(if r.ok { "ok".into() } else { "failed".into() });
+        f.push(r.error_kind.clone());
+        f.push(r.error.clone());
+        f.push(format!("{:.4}", r.total_ms));
+        for n in &nodes {
+            f.push(format!("{:.4}", r.node_ms.get(n).copied().unwrap_or(0.0)));
+        }
+        for m in &r.measures {
+            f.push(if m.is_finite() {
+                format!("{m}")
+            } else {
+                String::new()
+            });
+        }
+        f
+    });
+    cgnodes_api::io::csv::to_text(std::iter::once(head).chain(records))
+}
+
+/// A varied value as text: strings as they are, anything else as JSON.
+pub fn value_text(v: &serde_json::Value) -> String {
+    match v {
+        serde_json::Value::String(s) => s.clone(),
+        other => other.to_string(),
+    }
+}
+
+/// The chart of a sweep: y against x, one series per value of the series parameter.
+pub fn to_chart(spec: &SweepSpec, rows: &[SweepRow]) -> Result<Chart, String> {
+    let xs = spec.x.clone().unwrap_or_else(|| "time".into());
+    let ys = spec
+        .y
+        .clone()
+        .or_else(|| spec.measure.first().cloned())
+        .ok_or("nothing to plot: give --measure")?;
+    let axis = |name: &str, r: &SweepRow| -> Result<f64, String> {
+        if name == "time" {
+            return Ok(r.total_ms);
+        }
+        if let Some(node) = name.strip_prefix("time:") {
+            return r
+                .node_ms
+                .get(node)
+                .copied()
+                .ok_or_else(|| format!("no node '{node}' for the time axis"));
+        }
+        if let Some(k) = spec.measure.iter().position(|m| m == name) {
+            return Ok(r.measures[k]);
+        }
+        if let Some(k) = spec.vary.iter().position(|v| v.param == name) {
+            return r.values[k]
+                .as_f64()
+                .ok_or_else(|| format!("'{name}' has non-numeric values"));
+        }
+        Err(format!(
+            "'{name}' is neither time, time:NODE, a measure nor a varied parameter"
+        ))
+    };
+    let series_param = spec.series.clone().or_else(|| {
+        spec.vary
+            .iter()
+            .find(|v| v.values.iter().any(|x| x.is_string()) && v.param != xs)
+            .map(|v| v.param.clone())
+    });
+    let sidx = series_param
+        .as_ref()
+        .and_then(|p| spec.vary.iter().position(|v| &v.param == p));
+    let mut series: Vec<Series> = Vec::new();
+    let mut failures = Vec::new();
+    for r in rows {
+        let x = axis(&xs, r)?;
+        if !r.ok {
+            failures.push((x, r.error_kind.clone()));
+            continue;
+        }
+        let y = axis(&ys, r)?;
+        let label = match sidx {
+            Some(k) => value_text(&r.values[k]),
+            None => ys.clone(),
+        };
+        match series.iter_mut().find(|s| s.label == label) {
+            Some(s) => s.points.push((x, y)),
+            None => series.push(Series {
+                label,
+                points: vec![(x, y)],
+            }),
+        }
+    }
+    for s in &mut series {
+        s.points.sort_by(|a, b| a.0.total_cmp(&b.0));
+    }
+    let x_label = match xs.as_str() {
+        "time" => "wall time (ms)".to_string(),
+        t if t.starts_with("time:") => format!("{} wall time (ms)", &t[5..]),
+        other => other.to_string(),
+    };
+    Ok(Chart {
+        title: spec
+            .title
+            .clone()
+            .unwrap_or_else(|| format!("{ys} against {x_label}")),
+        x_label,
+        y_label: ys,
+        series,
+        failures,
+        log_x: spec.log_x,
+        log_y: spec.log_y,
+    })
+}
+
+/// Runs a sweep and writes its CSV and chart; returns the rows.
+pub fn run_and_write(
+    spec: &SweepSpec,
+    base: &Path,
+    registry: &Registry,
+    threads: Option<usize>,
+) -> Result<Vec<SweepRow>, String> {
+    let rows = run(spec, base, registry, threads)?;
+    let record = sweep_provenance(spec, base);
+    if let Some(csv) = &spec.csv {
+        let p = base.join(csv);
+        let text = to_csv(spec, &rows);
+        cgnodes_api::io::write_atomic(&p, |w| w.write_all(text.as_bytes()))
+            .map_err(|e| format!("{}: {e}", p.display()))?;
+        record.record_in(&p)?;
+    }
+    if let Some(plot) = &spec.plot {
+        let p = base.join(plot);
+        crate::chart::draw(&to_chart(spec, &rows)?, &p)?;
+        record.record_in(&p)?;
+    }
+    Ok(rows)
+}
+
+/// What made a sweep's CSV and chart: the graph (path and hash), node `sweep`, and as
+/// parameters the sweep's `vary`, `set`, `measure`, `frames`, `repeat` and shard.
+fn sweep_provenance(spec: &SweepSpec, base: &Path) -> cgnodes_api::node::Provenance {
+    let gpath = base.join(&spec.graph);
+    let mut params = std::collections::BTreeMap::new();
+    let json = |v: Result<serde_json::Value, serde_json::Error>| v.unwrap_or_default();
+    params.insert("vary".into(), json(serde_json::to_value(&spec.vary)));
+    params.insert("set".into(), json(serde_json::to_value(&spec.set)));
+    params.insert("measure".into(), json(serde_json::to_value(&spec.measure)));
+    params.insert("frames".into(), json(serde_json::to_value(&spec.frames)));
+    params.insert("repeat".into(), serde_json::Value::from(spec.repeat));
+    params.insert(
+        "shard".into(),
+        serde_json::Value::from(spec.shard.map(|s| s.to_string())),
+    );
+    cgnodes_api::node::Provenance {
+        cgnodes: env!("CARGO_PKG_VERSION").into(),
+        graph: gpath.display().to_string(),
+        graph_hash: std::fs::read(&gpath)
+            .map(|b| cgnodes_api::node::Provenance::hash_graph(&b))
+            .unwrap_or_default(),
+        node: "sweep".into(),
+        node_type: "cgnodes sweep".into(),
+        params,
+        frame: spec
+            .frames
+            .as_deref()
+            .and_then(|f| parse_frames(f).ok())
+            .map_or(0, |(_, b)| b),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn vary_values_parse_as_json_or_strings() {
+        let v = parse_vary("t.weights=uniform,cotangent").unwrap();
+        assert_eq!(
+            v.values,
+            vec![serde_json::json!("uniform"), serde_json::json!("cotangent")]
+        );
+        let v = parse_vary("c.eye=[0,1,2],[3,4,5]").unwrap();
+        assert_eq!(v.values.len(), 2);
+        let v = parse_vary("s.h=0.01,0.02").unwrap();
+        assert_eq!(v.values[1], serde_json::json!(0.02));
+        assert!(parse_vary("nodot=1").is_err());
+    }
+}

@@ -35,6 +35,8 @@ pub struct AnimOptions {
     pub looped: bool,
     /// Downscale frames wider than this (keeping the aspect ratio); 0 keeps the size.
     pub max_width: u32,
+    /// APNG: compress fast (fdeflate) rather than small; for previews made on every run.
+    pub fast: bool,
 }
 
 impl Default for AnimOptions {
@@ -44,6 +46,7 @@ impl Default for AnimOptions {
             fps: 12.0,
             looped: true,
             max_width: 0,
+            fast: false,
         }
     }
 }
@@ -258,6 +261,9 @@ pub fn encode_prepared(frames: &[Arc<Prepared>], opts: &AnimOptions) -> Result<V
             let mut enc = png::Encoder::new(&mut out, w, h);
             enc.set_color(png::ColorType::Rgba);
             enc.set_depth(png::BitDepth::Eight);
+            if opts.fast {
+                enc.set_compression(png::Compression::Fast);
+            }
             let e = |e: png::EncodingError| e.to_string();
             enc.set_animated(frames.len() as u32, if opts.looped { 0 } else { 1 })
                 .map_err(e)?;
@@ -408,6 +414,7 @@ pub fn read_options(ctx: &ExecContext, path: &str) -> Result<AnimOptions, NodeEr
         fps,
         looped: ctx.input("loop")?,
         max_width,
+        fast: false,
     })
 }
 

@@ -43,7 +43,13 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     })?;
     let bytes =
         encode_image(&img, fmt, exposure, gamma).map_err(|e| NodeError::invalid("image", e))?;
-    ctx.write_file(&path, &bytes)
+    ctx.write_file(&path, &bytes)?;
+    // With no exposure or gamma change the file shows the image as it is: the run report
+    // draws it from memory.
+    if exposure == 0.0 && gamma == 0.0 {
+        ctx.wrote_from(&path, Value::Image(img));
+    }
+    Ok(())
 }
 
 /// Registers `image_save`.

@@ -50,7 +50,7 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
         .and_then(|e| e.to_str())
         .unwrap_or("")
         .to_ascii_lowercase();
-    match ext.as_str() {
+    let written = match ext.as_str() {
         "obj" => save_obj(ctx, &mesh, &path),
         "ply" => ctx.write_with(&path, |w| super::ply::write_ply(&mesh, binary, w)),
         "usda" | "usd" if animated => save_animated(ctx, &mesh, &p, &path, &prim),
@@ -60,7 +60,11 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
             "path",
             format!("unknown mesh format '.{other}' (obj, ply, usda, off are written)"),
         )),
-    }
+    };
+    written?;
+    // The run report previews the mesh from memory instead of reading the file back.
+    ctx.wrote_from(&path, Value::Mesh(mesh));
+    Ok(())
 }
 
 /// Adds this frame's points (and normals) to the animated layer at `path` (see

@@ -4,6 +4,7 @@
 
 use super::raster::{self, Passes, RasterOptions};
 use cgnodes_api::prelude::*;
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 /// What the preview camera frames: a bounding sphere.
@@ -71,7 +72,7 @@ pub fn preview_frames(meshes: &[Arc<Mesh>], width: u32, height: u32) -> Result<V
     };
     let framing = Framing::of(first).ok_or("no finite vertices")?;
     meshes
-        .iter()
+        .par_iter()
         .map(|m| render_preview(m, Some(framing), width, height))
         .collect()
 }
@@ -91,13 +92,17 @@ pub fn render_preview(
         None => Framing::of(mesh).ok_or("the mesh has no (finite) vertices")?,
     };
     let cam = preview_camera(&f, width, height);
+    // The checkerboard is made once per process: previews run on every report.
+    static CHECKER: std::sync::OnceLock<Arc<Image>> = std::sync::OnceLock::new();
     let material = if mesh.uvs.is_some() {
         Material {
             name: "preview_checker".into(),
             base_color: [1.0; 3],
-            base_color_texture: Some(Arc::new(cgnodes_geometry::checkerboard::checkerboard(
-                256, 8,
-            ))),
+            base_color_texture: Some(
+                CHECKER
+                    .get_or_init(|| Arc::new(cgnodes_geometry::checkerboard::checkerboard(256, 8)))
+                    .clone(),
+            ),
             ..Default::default()
         }
     } else {

@@ -47,6 +47,18 @@ pub type LogFn = Arc<dyn Fn(&str, LogLevel, &str) + Send + Sync>;
 /// the elapsed time: plugins).
 pub const PROGRESS_UNKNOWN: f64 = -1.0;
 
+/// What a node's run left behind (`ExecContext::finish`).
+pub struct Finished {
+    /// Output values by socket.
+    pub outputs: BTreeMap<String, Value>,
+    /// Log lines.
+    pub logs: Vec<String>,
+    /// Files written, in order.
+    pub written: Vec<PathBuf>,
+    /// The values some of those files were written from (`ExecContext::wrote_from`).
+    pub written_values: Vec<(PathBuf, Value)>,
+}
+
 /// What a runtime hands a node for one run, beside its id and declaration
 /// (`ExecContext::for_run`).
 pub struct RunSetup<'a> {
@@ -84,6 +96,7 @@ pub struct ExecContext<'a> {
     pub(crate) files: &'a FileEnv,
     pub(crate) logs: Vec<String>,
     pub(crate) written: Vec<PathBuf>,
+    pub(crate) written_values: Vec<(PathBuf, Value)>,
     pub(crate) progress: Option<ProgressFn>,
     pub(crate) log_sink: Option<LogFn>,
     /// The outputs someone will read; `None` = all of them.
@@ -108,6 +121,7 @@ impl<'a> ExecContext<'a> {
             files: setup.files,
             logs: Vec::new(),
             written: Vec::new(),
+            written_values: Vec::new(),
             progress: setup.progress,
             log_sink: setup.log_sink,
             wanted: setup.wanted,
@@ -116,13 +130,21 @@ impl<'a> ExecContext<'a> {
         }
     }
 
-    /// Ends a run: the outputs set, the log lines written and the files written.
-    pub fn finish(&mut self) -> (BTreeMap<String, Value>, Vec<String>, Vec<PathBuf>) {
-        (
-            std::mem::take(&mut self.outputs),
-            std::mem::take(&mut self.logs),
-            std::mem::take(&mut self.written),
-        )
+    /// Ends a run: the outputs set, the log lines written, the files written and the values
+    /// they were written from.
+    pub fn finish(&mut self) -> Finished {
+        Finished {
+            outputs: std::mem::take(&mut self.outputs),
+            logs: std::mem::take(&mut self.logs),
+            written: std::mem::take(&mut self.written),
+            written_values: std::mem::take(&mut self.written_values),
+        }
+    }
+
+    /// Records the value `path` was written from (a mesh, an image), so that the run report
+    /// draws it without reading the file back (a writer node calls it after writing).
+    pub fn wrote_from(&mut self, path: &Path, value: Value) {
+        self.written_values.push((path.to_path_buf(), value));
     }
 
     /// A context for running a node directly, outside a graph (tests, Rust users).
@@ -149,6 +171,7 @@ impl<'a> ExecContext<'a> {
             files,
             logs: Vec::new(),
             written: Vec::new(),
+            written_values: Vec::new(),
             progress: None,
             log_sink: None,
             wanted: None,

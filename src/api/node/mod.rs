@@ -34,7 +34,7 @@ mod provenance;
 
 pub use builder::{NodeBuilder, SocketBuilder};
 pub use choice::{parse_choice, Choice};
-pub use context::{ExecContext, LogFn, LogLevel, ProgressFn, RunSetup, PROGRESS_UNKNOWN};
+pub use context::{ExecContext, Finished, LogFn, LogLevel, ProgressFn, RunSetup, PROGRESS_UNKNOWN};
 pub use decl::{CompanionFn, ExecFn, FileRole, NodeDecl, SocketDecl};
 pub use error::{ErrorKind, NodeError};
 pub use files::{substitute_frame, FileEnv};

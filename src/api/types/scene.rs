@@ -366,6 +366,13 @@ impl Scene {
     }
 }
 
+impl crate::node::Choice for FovAxis {
+    const CHOICES: &'static [(&'static str, Self)] = &[
+        ("vertical", FovAxis::Vertical),
+        ("smaller", FovAxis::Smaller),
+    ];
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -396,11 +403,4 @@ mod tests {
         };
         assert!(flat.frame().is_err());
     }
-}
-
-impl crate::node::Choice for FovAxis {
-    const CHOICES: &'static [(&'static str, Self)] = &[
-        ("vertical", FovAxis::Vertical),
-        ("smaller", FovAxis::Smaller),
-    ];
 }

@@ -147,9 +147,11 @@ impl Executor {
         let res = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| exec(&mut ctx)));
         // Ends the node's progress bar, if it started one, whether it succeeded or not.
         ctx.progress(1.0);
-        let (outputs, logs, written) = ctx.finish();
-        report.logs = logs;
-        report.written = written;
+        let done = ctx.finish();
+        let outputs = done.outputs;
+        report.logs = done.logs;
+        report.written = done.written;
+        report.written_values = done.written_values;
         drop(ctx);
         if decl.stateful {
             // The history follows the state: the next frame's key chains onto this one while

@@ -224,6 +224,7 @@ impl Executor {
                 rss_kib: 0,
                 logs: Vec::new(),
                 written: Vec::new(),
+                written_values: Vec::new(),
             }));
             if let Some(Ok(o)) = slots[i].lock().unwrap_or_else(|p| p.into_inner()).take() {
                 outputs.insert(node.id.clone(), o);
@@ -250,6 +251,7 @@ impl Executor {
             rss_kib: 0,
             logs: Vec::new(),
             written: Vec::new(),
+            written_values: Vec::new(),
         };
         let result = match self.stopped_since(&node.id) {
             Some(since) if node.decl.stateful => {

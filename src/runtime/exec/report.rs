@@ -49,6 +49,9 @@ pub struct NodeReport {
     pub logs: Vec<String>,
     /// Files written.
     pub written: Vec<PathBuf>,
+    /// The values some written files were written from, for the run report (empty when the
+    /// node was served from the cache).
+    pub written_values: Vec<(PathBuf, Value)>,
 }
 
 /// The result of running a graph once (one frame).

@@ -6,9 +6,13 @@
 
 use super::esc;
 use cgnodes_api::registry::MeshHooks;
+use cgnodes_api::types::Value;
 use cgnodes_formats::animation::{self, AnimFormat, AnimOptions};
 use image::RgbaImage;
+use rayon::prelude::*;
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Arc;
 
 /// The largest thumbnail side, in pixels.
@@ -22,7 +26,8 @@ pub const MAX_ANIM_FRAMES: usize = 120;
 pub struct FileRenderer {
     dir: PathBuf,
     files: PathBuf,
-    next: usize,
+    /// The number of the last file made under `report_files/` (files are made in parallel).
+    next: AtomicUsize,
     hooks: MeshHooks,
 }
 
@@ -35,7 +40,7 @@ impl FileRenderer {
         Ok(FileRenderer {
             dir: dir.to_path_buf(),
             files,
-            next: 0,
+            next: AtomicUsize::new(0),
             hooks,
         })
     }
@@ -57,14 +62,15 @@ impl FileRenderer {
     }
 
     /// A new file under `report_files/`: (path, href).
-    fn new_file(&mut self, ext: &str) -> (PathBuf, String) {
-        self.next += 1;
-        let name = format!("f{:04}.{ext}", self.next);
+    fn new_file(&self, ext: &str) -> (PathBuf, String) {
+        let n = self.next.fetch_add(1, Ordering::Relaxed) + 1;
+        let name = format!("f{n:04}.{ext}");
         (self.files.join(&name), format!("report_files/{name}"))
     }
 
-    /// HTML for the files one node wrote.
-    pub fn render(&mut self, written: &[PathBuf]) -> String {
+    /// HTML for the files one node wrote; `values` holds what some of them were written
+    /// from (drawn from memory instead of read back).
+    pub fn render(&self, written: &[PathBuf], values: &HashMap<PathBuf, Value>) -> String {
         let mut groups: Vec<(String, Vec<PathBuf>)> = Vec::new();
         for p in written {
             let ext = ext_of(p);
@@ -80,10 +86,10 @@ impl FileRenderer {
             let html = match ext.as_str() {
                 "gif" => Ok(self.anim_fig(&paths)),
                 "png" if paths.len() == 1 && is_apng(&paths[0]) => Ok(self.anim_fig(&paths)),
-                "png" | "jpg" | "jpeg" | "bmp" | "exr" | "hdr" => self.images(&paths),
+                "png" | "jpg" | "jpeg" | "bmp" | "exr" | "hdr" => self.images(&paths, values),
                 "svg" => Ok(self.svg(&paths)),
                 "csv" => Ok(self.csv(&paths)),
-                "obj" | "ply" | "usda" | "usd" | "off" => self.meshes(&paths),
+                "obj" | "ply" | "usda" | "usd" | "off" => self.meshes(&paths, values),
                 _ => {
                     links.extend(paths);
                     continue;
@@ -140,32 +146,47 @@ impl FileRenderer {
         s
     }
 
-    fn images(&mut self, paths: &[PathBuf]) -> Result<String, String> {
+    fn images(
+        &self,
+        paths: &[PathBuf],
+        values: &HashMap<PathBuf, Value>,
+    ) -> Result<String, String> {
+        // The image a file was written from, encoded as the file is (tone-mapped when the
+        // file is EXR or HDR); else the file read back.
+        let read = |p: &PathBuf| match values.get(p) {
+            Some(Value::Image(img)) if matches!(ext_of(p).as_str(), "exr" | "hdr") => {
+                Ok(animation::tone_map(img))
+            }
+            Some(Value::Image(img)) => Ok(animation::to_rgba8(img)),
+            _ => animation::read_rgba8(p),
+        };
         if let [one] = paths {
-            let img = animation::read_rgba8(one)?;
-            let t = thumbnail(&img);
+            let t = thumbnail(&read(one)?);
             let (file, href) = self.new_file("png");
             save_png(&t, &file)?;
             return Ok(self.figure(&href, t.dimensions(), paths));
         }
         let picked = sample(paths);
         let frames = picked
-            .iter()
-            .map(|p| animation::read_rgba8(p).map(|i| thumbnail(&i)))
+            .par_iter()
+            .map(|p| read(p).map(|i| thumbnail(&i)))
             .collect::<Result<Vec<_>, _>>()?;
         self.animation(&frames, paths)
     }
 
-    /// Writes `frames` as a GIF under report_files/ and returns its figure.
-    fn animation(&mut self, frames: &[RgbaImage], paths: &[PathBuf]) -> Result<String, String> {
+    /// Writes `frames` as an APNG under report_files/ and returns its figure. APNG, not GIF:
+    /// no palette to quantize per frame (NeuQuant made the report of an 8-frame cloth run
+    /// cost more than the run), lossless, and shown by every current browser.
+    fn animation(&self, frames: &[RgbaImage], paths: &[PathBuf]) -> Result<String, String> {
         let opts = AnimOptions {
-            format: AnimFormat::Gif,
+            format: AnimFormat::Apng,
             fps: 12.0,
             looped: true,
             max_width: 0,
+            fast: true,
         };
         let bytes = animation::encode_animation(frames, &opts)?;
-        let (file, href) = self.new_file("gif");
+        let (file, href) = self.new_file("png");
         cgnodes_api::io::write_atomic(&file, |w| w.write_all(&bytes))
             .map_err(|e| format!("{}: {e}", file.display()))?;
         Ok(self.figure(&href, frames[0].dimensions(), paths))
@@ -238,9 +259,16 @@ impl FileRenderer {
         s
     }
 
-    fn meshes(&mut self, paths: &[PathBuf]) -> Result<String, String> {
+    fn meshes(
+        &self,
+        paths: &[PathBuf],
+        values: &HashMap<PathBuf, Value>,
+    ) -> Result<String, String> {
         let picked = sample(paths);
         let load = |p: &PathBuf| {
+            if let Some(Value::Mesh(m)) = values.get(p) {
+                return Ok(m.clone());
+            }
             cgnodes_formats::mesh_file::load_mesh(p, &Default::default()).map(Arc::new)
         };
         let first = load(picked[0])?;
@@ -255,9 +283,12 @@ impl FileRenderer {
         }
         let preview = self.hooks.preview.ok_or("no mesh preview in this build")?;
         let mut meshes = vec![first];
-        for p in &picked[1..] {
-            meshes.push(load(p)?);
-        }
+        meshes.extend(
+            picked[1..]
+                .par_iter()
+                .map(|p| load(p))
+                .collect::<Result<Vec<_>, String>>()?,
+        );
         let frames: Vec<RgbaImage> = preview(&meshes, THUMB, THUMB * 3 / 4)?
             .iter()
             .map(animation::to_rgba8)
@@ -323,8 +354,7 @@ pub fn thumbnail(img: &RgbaImage) -> RgbaImage {
 }
 
 fn save_png(img: &RgbaImage, path: &Path) -> Result<(), String> {
-    let bytes =
-        cgnodes_formats::png::encode_png(img.width(), img.height(), 4, img.as_raw().clone())?;
+    let bytes = cgnodes_formats::png::encode_png_fast(img.width(), img.height(), img.as_raw())?;
     cgnodes_api::io::write_atomic(path, |w| w.write_all(&bytes))
         .map_err(|e| format!("{}: {e}", path.display()))
 }

@@ -12,9 +12,11 @@ pub use files::fit as fit_thumbnail;
 pub mod graph_svg;
 
 use crate::exec::{NodeStatus, RunReport};
-use crate::validate::ValidGraph;
+use crate::validate::{ValidGraph, ValidNode};
 use cgnodes_api::registry::MeshHooks;
-use std::collections::BTreeMap;
+use cgnodes_api::types::Value;
+use rayon::prelude::*;
+use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 
 /// A node's status over a run, the worst over its frames.
@@ -82,9 +84,16 @@ pub struct NodeSummary {
     pub rss_kib: u64,
     /// Files written, in order, without repeats.
     pub written: Vec<PathBuf>,
+    /// The values files were written from (the first `MAX_KEPT_VALUES`), so the report draws
+    /// them without reading the files back.
+    pub values: HashMap<PathBuf, Value>,
     /// The first error, with its frame.
     pub error: Option<String>,
 }
+
+/// At most this many written values are kept per node (twice the frames an animation shows);
+/// files past them are read back.
+pub const MAX_KEPT_VALUES: usize = 2 * files::MAX_ANIM_FRAMES;
 
 /// What the report needs from each frame's `RunReport`, gathered as the frames run (the
 /// reports themselves hold every output and are not kept).
@@ -122,8 +131,13 @@ impl Collector {
             s.ms += n.ms;
             s.rss_kib = s.rss_kib.max(n.rss_kib);
             for w in &n.written {
-                if !s.written.contains(w) {
+                if !s.values.contains_key(w) && !s.written.contains(w) {
                     s.written.push(w.clone());
+                }
+            }
+            for (p, v) in &n.written_values {
+                if s.values.len() < MAX_KEPT_VALUES {
+                    s.values.insert(p.clone(), v.clone());
                 }
             }
             if let (NodeStatus::Failed(e), None) = (&n.status, &s.error) {
@@ -232,22 +246,29 @@ pub fn write_run_report(
     };
     body.push_str(&graph_svg::graph_svg(graph, &status));
     body.push_str("</div>\n<h2>Outputs</h2>\n");
-    let mut fr = files::FileRenderer::new(dir, hooks)?;
-    let mut any = false;
-    for n in &graph.nodes {
-        let Some(s) = c.nodes.get(&n.id) else {
-            continue;
-        };
-        if s.written.is_empty() {
-            continue;
-        }
-        any = true;
-        body.push_str(&format!(
-            "<h3>{} <span class=\"muted\">({})</span></h3>\n",
-            esc(&n.id),
-            esc(&n.decl.type_name)
-        ));
-        body.push_str(&fr.render(&s.written));
+    let fr = files::FileRenderer::new(dir, hooks)?;
+    // Each node's files are drawn in parallel (thumbnails, previews, animations); the page
+    // keeps the graph's order.
+    let shown: Vec<(&ValidNode, &NodeSummary)> = graph
+        .nodes
+        .iter()
+        .filter_map(|n| Some((n, c.nodes.get(&n.id)?)))
+        .filter(|(_, s)| !s.written.is_empty())
+        .collect();
+    let any = !shown.is_empty();
+    let parts: Vec<String> = shown
+        .par_iter()
+        .map(|(n, s)| {
+            format!(
+                "<h3>{} <span class=\"muted\">({})</span></h3>\n{}",
+                esc(&n.id),
+                esc(&n.decl.type_name),
+                fr.render(&s.written, &s.values)
+            )
+        })
+        .collect();
+    for p in parts {
+        body.push_str(&p);
     }
     if !any {
         body.push_str("<p>No file was written.</p>\n");
@@ -290,9 +311,14 @@ pub fn write_sweep_report(
     hooks: MeshHooks,
 ) -> Result<PathBuf, String> {
     let mut body = format!("<h1>cgnodes sweep: {}</h1>\n", esc(title));
-    let mut fr = files::FileRenderer::new(dir, hooks)?;
-    for f in files.iter().filter(|f| f.is_file()) {
-        body.push_str(&fr.render(std::slice::from_ref(f)));
+    let fr = files::FileRenderer::new(dir, hooks)?;
+    let parts: Vec<String> = files
+        .par_iter()
+        .filter(|f| f.is_file())
+        .map(|f| fr.render(std::slice::from_ref(f), &HashMap::new()))
+        .collect();
+    for p in parts {
+        body.push_str(&p);
     }
     write_page(dir, "cgnodes sweep", &body)
 }

@@ -69,8 +69,7 @@ fn main() {
             root.join("assets/meshes/nefertiti_front.obj"),
             root.join("assets/meshes/bunny_base.obj"),
             root.join("assets/meshes/bunny_open.obj"),
-            root.join("../../shared/assets/meshes/igea_front.obj"),
-            PathBuf::from("/work/shared/assets/meshes/igea_front.obj"),
+            root.join("assets/meshes/igea_front.obj"),
         ];
     }
     let out_dir = root.join("target/bench/arap");

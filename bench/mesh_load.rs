@@ -1,6 +1,6 @@
 //! Loading `igea_front.obj` (154k faces): cgnodes' `mesh_load` path (tobj, vertex welding
 //! across groups, mesh checks) plus building the shared connectivity, beside tobj alone with
-//! the same options. Run: `cargo bench --bench mesh_load` (reads /work/shared, or the path
+//! the same options. Run: `cargo bench --bench mesh_load` (reads assets/meshes/igea_front.obj, or the path
 //! given as the first argument).
 
 use cgnodes::nodes::mesh::mesh_load::{load_mesh, LoadOptions};
@@ -17,7 +17,7 @@ fn main() {
         .skip(1)
         .find(|a| !a.starts_with('-'))
         .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from("/work/shared/assets/meshes/igea_front.obj"));
+        .unwrap_or_else(|| PathBuf::from("assets/meshes/igea_front.obj"));
     if !path.exists() {
         eprintln!("skipping: {} not found", path.display());
         return;

@@ -2,7 +2,7 @@
 //! on the same meshes in the same run, and agreement of the UVs after a similarity.
 //!
 //! Run: `cargo bench --bench param` (default meshes: nefertiti_front and igea_front from
-//! /work/shared/assets/meshes), or `cargo bench --bench param -- A.obj B.obj`. The libigl side
+//! assets/meshes), or `cargo bench --bench param -- A.obj B.obj`. The libigl side
 //! is `bench/peers/param_libigl.py` (`pip install libigl`); without it only our times print.
 //! Our time includes building the mesh connectivity (the mesh is rebuilt before every run).
 
@@ -28,7 +28,7 @@ fn main() {
     if meshes.is_empty() {
         meshes = ["nefertiti_front.obj", "igea_front.obj"]
             .iter()
-            .map(|m| format!("/work/shared/assets/meshes/{m}"))
+            .map(|m| format!("assets/meshes/{m}"))
             .collect();
     }
     let dir = tempfile::tempdir().unwrap();

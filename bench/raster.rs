@@ -1,7 +1,7 @@
 //! Rasterizer benchmark: `igea_front` (154k triangles) on a ground plane at 1920x1080
 //! with 4x anti-aliasing and two 2048^2 directional shadow maps.
 //!
-//! Run: `cargo bench --bench raster` (reads /work/shared/assets/meshes/igea_front.obj, or
+//! Run: `cargo bench --bench raster` (reads assets/meshes/igea_front.obj, or
 //! the path in CGNODES_IGEA). Prints the minimum and median milliseconds of five renders,
 //! triangles per second and shaded pixels per second, with the same scene under 1x
 //! sampling without shadows as the baseline measured in the same run, the target line
@@ -36,8 +36,8 @@ fn cpu_seconds() -> f64 {
 }
 
 fn main() {
-    let path = std::env::var("CGNODES_IGEA")
-        .unwrap_or_else(|_| "/work/shared/assets/meshes/igea_front.obj".into());
+    let path =
+        std::env::var("CGNODES_IGEA").unwrap_or_else(|_| "assets/meshes/igea_front.obj".into());
     let mesh = match load_mesh(std::path::Path::new(&path), &LoadOptions::default()) {
         Ok(m) => m,
         Err(e) => {

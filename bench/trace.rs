@@ -19,7 +19,7 @@
 //! `--bvh-camera-rays` (camera rays through the BVH instead of `CameraGrid`), `--scene igea`
 //! (the box with the 154k-triangle igea scan standing in it, white diffuse, as
 //! `trace_mitsuba.py --scene igea` builds it; `--igea PATH`, default
-//! `/work/shared/assets/meshes/igea_front.obj`), `--rays` (traversal alone, no shading:
+//! `assets/meshes/igea_front.obj`), `--rays` (traversal alone, no shading:
 //! path-like rays traced one at a time, in wavefront order and sorted by direction; see
 //! `traversal_only`). The SVG chart is written for the plain box
 //! only.
@@ -306,7 +306,7 @@ fn main() {
     let which = get("--scene").unwrap_or("box".into());
     let mut scene = load_obj_scene(&root.join("assets/cornell/cornell_box.obj"), false).unwrap();
     if which == "igea" {
-        let p = get("--igea").unwrap_or("/work/shared/assets/meshes/igea_front.obj".into());
+        let p = get("--igea").unwrap_or("assets/meshes/igea_front.obj".into());
         add_igea(&mut scene, Path::new(&p));
     }
     let ntris: usize = scene

@@ -53,7 +53,7 @@ def stretches(V, F, U, scaled=True):
 
 def arap_metric(V, F, U, scaled=True):
     """ARAP energy sum A((s1-1)^2+(s2-1)^2)/sum A after scaling UV area to 3D area, and flips
-    against the majority orientation (as shared/reference/PEERS.md)."""
+    against the majority orientation (as uv_metrics does)."""
     a3, s1, s2, pos, neg = stretches(V, F, U, scaled)
     energy = float((a3 * ((s1 - 1) ** 2 + (s2 - 1) ** 2)).sum() / a3.sum())
     flips = int(len(F) - max(pos, neg))

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """The hard inputs of the fold-free ARAP benchmark (issue 29), made from the meshes in
-../shared/assets/meshes/ (or assets/meshes/) with numpy alone.
+assets/meshes/ with numpy alone.
 
 Usage: arap_meshes.py OUT_DIR [SHARED_MESH_DIR]
 

@@ -22,7 +22,7 @@ import drjit as dr  # noqa: E402
 
 ap = argparse.ArgumentParser()
 ap.add_argument("--scene", default="box", choices=["box", "igea"])
-ap.add_argument("--igea", default="/work/shared/assets/meshes/igea_front.obj")
+ap.add_argument("--igea", default="assets/meshes/igea_front.obj")
 ap.add_argument("--variant", default="llvm_ad_rgb")
 ap.add_argument("--dir", default=os.path.join(os.path.dirname(__file__), "..", "..", "target", "trace_bench"))
 a = ap.parse_args()

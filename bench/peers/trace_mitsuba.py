@@ -8,7 +8,7 @@ against the same reference.
                                          [--scene box|igea] [--igea PATH]
 
 `--scene igea` adds the 154k-triangle igea scan (default
-/work/shared/assets/meshes/igea_front.obj) standing in the box, white diffuse, scaled so its
+assets/meshes/igea_front.obj) standing in the box, white diffuse, scaled so its
 largest extent is 0.8 with its box centre at (0, -0.2, 0.2), as `cargo bench --bench trace
 -- --scene igea` builds it (Mitsuba computes its smooth vertex normals, ours come from the
 60-degree crease rule, which on a scan is smooth everywhere but at sharp folds).
@@ -28,7 +28,7 @@ ap.add_argument("--spp", default="4,16,64")
 ap.add_argument("--variants", default="scalar_rgb,llvm_ad_rgb")
 ap.add_argument("--probe", default=None, help=argparse.SUPPRESS)
 ap.add_argument("--scene", default="box", choices=["box", "igea"])
-ap.add_argument("--igea", default="/work/shared/assets/meshes/igea_front.obj")
+ap.add_argument("--igea", default="assets/meshes/igea_front.obj")
 ap.add_argument("--out", default=os.path.join(os.path.dirname(__file__), "..", "..", "target", "trace_bench"))
 a = ap.parse_args()
 if a.probe:  # child process: does this variant render at all? (LLVM may abort the process)

@@ -37,13 +37,7 @@ pub(super) fn load_args(
     args: &GraphArgs,
     targets: Option<&[String]>,
 ) -> Result<(ValidGraph, Option<(i64, i64)>), i32> {
-    let aliases = match args.f3d_aliases.as_deref().map(read_aliases).transpose() {
-        Ok(a) => a.unwrap_or_default(),
-        Err(e) => {
-            eprintln!("error: {e}");
-            return Err(EXIT_USAGE);
-        }
-    };
+    let aliases = aliases_of(args)?;
     load_checked(registry, &args.graph, &args.set, &aliases, |g| {
         let (valid, warnings) = validate_needed(g, registry, &args.assets, targets)?;
         for w in &warnings {
@@ -60,19 +54,25 @@ pub(super) fn load_args(
     })
 }
 
+/// The `--f3d-aliases` file's aliases (none without the option); `Err` is the exit code, the
+/// error printed.
+fn aliases_of(args: &GraphArgs) -> Result<Aliases, i32> {
+    match args.f3d_aliases.as_deref().map(read_aliases).transpose() {
+        Ok(a) => Ok(a.unwrap_or_default()),
+        Err(e) => {
+            eprintln!("error: {e}");
+            Err(EXIT_USAGE)
+        }
+    }
+}
+
 /// Loads and validates every node of the graph from `validate`'s options; `Err` is the exit
 /// code, the errors are printed.
 fn load_whole(
     registry: &Registry,
     args: &GraphArgs,
 ) -> Result<(ValidGraph, Option<(i64, i64)>), i32> {
-    let aliases = match args.f3d_aliases.as_deref().map(read_aliases).transpose() {
-        Ok(a) => a.unwrap_or_default(),
-        Err(e) => {
-            eprintln!("error: {e}");
-            return Err(EXIT_USAGE);
-        }
-    };
+    let aliases = aliases_of(args)?;
     load_valid_with(registry, &args.graph, &args.set, &aliases, &args.assets)
 }
 

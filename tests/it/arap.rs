@@ -62,7 +62,7 @@ fn check_fold_free(name: &str, iterations: usize) -> (f64, f64) {
 
 #[test]
 fn fold_free_on_camelhead() {
-    // libigl folds 724 triangles here (shared/reference/PEERS.md); a fold-free line search
+    // libigl folds 724 triangles here (bench/peers/arap_libigl.py); a fold-free line search
     // without reweighting stalls at 0.65 of the start's energy
     let (e0, e1) = check_fold_free("assets/meshes/camelhead.obj", 20);
     assert!(e1 < 0.55 * e0, "{e0} -> {e1}");

@@ -19,7 +19,7 @@ fn load(p: &str) -> Mesh {
     load_mesh(&asset(p), &opts()).unwrap_or_else(|e| panic!("{e}"))
 }
 
-/// Vertex and face counts from `shared/reference/framework3d/FORMAT.md`; the hw8 grids are
+/// Vertex and face counts from the Framework3D format notes of the course; the hw8 grids are
 /// n x n squares split in two triangles ((n+1)^2 vertices, 2 n^2 faces); the sphere is a
 /// 3-times subdivided icosahedron (642 vertices, 1280 faces); `arm.usda` is hand-written
 /// with 12 points and 10 quads.

@@ -1,6 +1,6 @@
 #!/bin/bash
 # A real one-node Slurm cluster (docs/cluster.md; how it was first set up:
-# ../shared/reference/SLURM_LOCAL.md): installs slurmctld, slurmd, slurm-client and munge
+# the Slurm documentation for a one-node cluster): installs slurmctld, slurmd, slurm-client and munge
 # when missing (Debian, as root), starts munged (unless running) and the two Slurm daemons
 # with a configuration generated in a temporary folder, submits examples/slurm/sweep.sbatch
 # as a 4-task job array of a small sweep with `sbatch --wait`, then examples/slurm/merge.sbatch

@@ -136,6 +136,7 @@ pub fn render_preview(
         ambient: 0.35,
         background: [0.85, 0.86, 0.88],
         passes: Passes::COLOR,
+        mipmaps: false,
         ..Default::default()
     };
     Ok(raster::render(&scene, &cam, &opts)?.color)

@@ -63,14 +63,16 @@ pub fn preview_camera(f: &Framing, width: u32, height: u32) -> Camera {
     }
 }
 
-/// Previews of `meshes` (frames of one sequence) at `width` x `height`, all framed like the
-/// first, so a moving mesh moves in the frame; the run report's mesh thumbnails
-/// (`MeshHooks::preview`).
-pub fn preview_frames(meshes: &[Arc<Mesh>], width: u32, height: u32) -> Result<Vec<Image>, String> {
-    let Some(first) = meshes.first() else {
-        return Ok(Vec::new());
-    };
-    let framing = Framing::of(first).ok_or("no finite vertices")?;
+/// Previews of `meshes` (frames of one sequence) at `width` x `height`, all framed on the
+/// bounds of `framing_of` (the sequence's first frame), so a moving mesh moves in the frame;
+/// the run report's mesh thumbnails (`MeshHooks::preview`).
+pub fn preview_frames(
+    framing_of: &Mesh,
+    meshes: &[Arc<Mesh>],
+    width: u32,
+    height: u32,
+) -> Result<Vec<Image>, String> {
+    let framing = Framing::of(framing_of).ok_or("no finite vertices")?;
     meshes
         .par_iter()
         .map(|m| render_preview(m, Some(framing), width, height))

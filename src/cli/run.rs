@@ -73,6 +73,9 @@ pub(super) fn cmd(registry: &Registry, args: RunArgs) -> i32 {
     let mut profile = Vec::new();
     monitor.start_frames(f0, f1);
     let mut collected = crate::report::Collector::default();
+    if !args.no_report && args.shard.shard.is_none() {
+        collected.prefetch_previews(registry.mesh_hooks);
+    }
     for frame in f0..=f1 {
         if f1 > f0 {
             monitor.set_prefix(format!("[frame {frame}] "));

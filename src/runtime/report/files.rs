@@ -13,7 +13,7 @@ use rayon::prelude::*;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 
 /// The largest thumbnail side, in pixels.
 pub const THUMB: u32 = 256;
@@ -29,12 +29,22 @@ pub struct FileRenderer {
     /// The number of the last file made under `report_files/` (files are made in parallel).
     next: AtomicUsize,
     hooks: MeshHooks,
+    /// Thumbnails drawn during the run: file -> (the file it is framed on, thumbnail).
+    prefetched: Arc<Mutex<Prefetched>>,
 }
+
+/// Mesh thumbnails drawn while the frames ran, by file: the file whose bounds framed it, and
+/// the thumbnail.
+pub type Prefetched = HashMap<PathBuf, (PathBuf, RgbaImage)>;
 
 impl FileRenderer {
     /// A renderer for a report in `dir` (creates `dir/report_files/`).
     /// Meshes are drawn through `hooks` (linked only, when the hook is missing).
-    pub fn new(dir: &Path, hooks: MeshHooks) -> Result<FileRenderer, String> {
+    pub fn new(
+        dir: &Path,
+        hooks: MeshHooks,
+        prefetched: Arc<Mutex<Prefetched>>,
+    ) -> Result<FileRenderer, String> {
         let files = dir.join("report_files");
         std::fs::create_dir_all(&files).map_err(|e| format!("{}: {e}", files.display()))?;
         Ok(FileRenderer {
@@ -42,6 +52,7 @@ impl FileRenderer {
             files,
             next: AtomicUsize::new(0),
             hooks,
+            prefetched,
         })
     }
 
@@ -264,6 +275,11 @@ impl FileRenderer {
         paths: &[PathBuf],
         values: &HashMap<PathBuf, Value>,
     ) -> Result<String, String> {
+        let prefetched = self
+            .prefetched
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .clone();
         let picked = sample(paths);
         let load = |p: &PathBuf| {
             if let Some(Value::Mesh(m)) = values.get(p) {
@@ -282,17 +298,24 @@ impl FileRenderer {
             ));
         }
         let preview = self.hooks.preview.ok_or("no mesh preview in this build")?;
-        let mut meshes = vec![first];
-        meshes.extend(
-            picked[1..]
-                .par_iter()
-                .map(|p| load(p))
-                .collect::<Result<Vec<_>, String>>()?,
-        );
-        let frames: Vec<RgbaImage> = preview(&meshes, THUMB, THUMB * 3 / 4)?
-            .iter()
-            .map(animation::to_rgba8)
-            .collect();
+        // Thumbnails drawn while the frames ran (`Prefetch`) are used when framed on the
+        // same first file; the rest are drawn now, in parallel.
+        let framed_on = picked[0];
+        let frames = picked
+            .par_iter()
+            .map(|p| match prefetched.get(*p) {
+                Some((on, img)) if on == framed_on => Ok(img.clone()),
+                _ => {
+                    let m = if *p == framed_on {
+                        first.clone()
+                    } else {
+                        load(p)?
+                    };
+                    let img = preview(&first, &[m], THUMB, THUMB * 3 / 4)?;
+                    Ok(animation::to_rgba8_preview(&img[0]))
+                }
+            })
+            .collect::<Result<Vec<RgbaImage>, String>>()?;
         if paths.len() == 1 {
             let t = &frames[0];
             let (file, href) = self.new_file("png");

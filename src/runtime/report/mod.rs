@@ -14,10 +14,11 @@ pub mod graph_svg;
 use crate::exec::{NodeStatus, RunReport};
 use crate::validate::{ValidGraph, ValidNode};
 use cgnodes_api::registry::MeshHooks;
-use cgnodes_api::types::Value;
+use cgnodes_api::types::{Mesh, Value};
 use rayon::prelude::*;
 use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
+use std::sync::{Arc, Condvar, Mutex};
 
 /// A node's status over a run, the worst over its frames.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
@@ -107,9 +108,89 @@ pub struct Collector {
     pub total_ms: f64,
     /// Peak resident memory, KiB.
     pub peak_rss_kib: u64,
+    /// Mesh thumbnails drawn while later frames run (`prefetch_previews`).
+    pub prefetch: Option<Arc<Prefetch>>,
+}
+
+/// A node id and a file extension: the files of one sequence.
+type SequenceKey = (String, String);
+
+/// Mesh thumbnails drawn on the thread pool as soon as a frame has written its meshes, while
+/// the next frames run, so that a frame range's report has little left to draw after the
+/// last frame. A sequence is framed on the first file its node wrote with that extension.
+#[derive(Default)]
+pub struct Prefetch {
+    hooks: MeshHooks,
+    done: Arc<Mutex<files::Prefetched>>,
+    /// The first mesh file per node and extension, and its mesh: what a sequence is framed on.
+    firsts: Mutex<HashMap<SequenceKey, (PathBuf, Arc<Mesh>)>>,
+    /// Thumbnails being drawn, and a signal when one is done.
+    pending: (Mutex<usize>, Condvar),
+}
+
+impl std::fmt::Debug for Prefetch {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let n = self.done.lock().map_or(0, |d| d.len());
+        write!(f, "Prefetch {{ {n} thumbnails }}")
+    }
+}
+
+impl Prefetch {
+    /// Starts drawing the thumbnail of `mesh`, written to `path` by node `node`.
+    fn start(self: &Arc<Self>, node: &str, path: &Path, mesh: &Arc<Mesh>) {
+        let Some(preview) = self.hooks.preview else {
+            return;
+        };
+        let ext = path
+            .extension()
+            .map(|e| e.to_string_lossy().to_ascii_lowercase())
+            .unwrap_or_default();
+        let (on, first) = self
+            .firsts
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .entry((node.to_string(), ext))
+            .or_insert_with(|| (path.to_path_buf(), mesh.clone()))
+            .clone();
+        *self.pending.0.lock().unwrap_or_else(|e| e.into_inner()) += 1;
+        let (me, path, mesh) = (self.clone(), path.to_path_buf(), mesh.clone());
+        rayon::spawn(move || {
+            let drawn = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                preview(&first, &[mesh], files::THUMB, files::THUMB * 3 / 4)
+            }));
+            if let Ok(Ok(imgs)) = drawn {
+                if let Some(img) = imgs.first() {
+                    let t = cgnodes_formats::animation::to_rgba8_preview(img);
+                    me.done
+                        .lock()
+                        .unwrap_or_else(|e| e.into_inner())
+                        .insert(path, (on, t));
+                }
+            }
+            let mut n = me.pending.0.lock().unwrap_or_else(|e| e.into_inner());
+            *n -= 1;
+            me.pending.1.notify_all();
+        });
+    }
+
+    /// Waits for the thumbnails still being drawn.
+    fn wait(&self) {
+        let mut n = self.pending.0.lock().unwrap_or_else(|e| e.into_inner());
+        while *n > 0 {
+            n = self.pending.1.wait(n).unwrap_or_else(|e| e.into_inner());
+        }
+    }
 }
 
 impl Collector {
+    /// Draws mesh thumbnails through `hooks` as frames are added, while later frames run.
+    pub fn prefetch_previews(&mut self, hooks: MeshHooks) {
+        self.prefetch = Some(Arc::new(Prefetch {
+            hooks,
+            ..Default::default()
+        }));
+    }
+
     /// Adds one frame's report.
     pub fn add(&mut self, r: &RunReport) {
         self.frames = Some(match self.frames {
@@ -138,6 +219,9 @@ impl Collector {
             for (p, v) in &n.written_values {
                 if s.values.len() < MAX_KEPT_VALUES {
                     s.values.insert(p.clone(), v.clone());
+                    if let (Some(pf), Value::Mesh(m)) = (&self.prefetch, v) {
+                        pf.start(&n.id, p, m);
+                    }
                 }
             }
             if let (NodeStatus::Failed(e), None) = (&n.status, &s.error) {
@@ -246,7 +330,14 @@ pub fn write_run_report(
     };
     body.push_str(&graph_svg::graph_svg(graph, &status));
     body.push_str("</div>\n<h2>Outputs</h2>\n");
-    let fr = files::FileRenderer::new(dir, hooks)?;
+    let prefetched = match &c.prefetch {
+        Some(pf) => {
+            pf.wait();
+            pf.done.clone()
+        }
+        None => Default::default(),
+    };
+    let fr = files::FileRenderer::new(dir, hooks, prefetched)?;
     // Each node's files are drawn in parallel (thumbnails, previews, animations); the page
     // keeps the graph's order.
     let shown: Vec<(&ValidNode, &NodeSummary)> = graph
@@ -311,7 +402,7 @@ pub fn write_sweep_report(
     hooks: MeshHooks,
 ) -> Result<PathBuf, String> {
     let mut body = format!("<h1>cgnodes sweep: {}</h1>\n", esc(title));
-    let fr = files::FileRenderer::new(dir, hooks)?;
+    let fr = files::FileRenderer::new(dir, hooks, Default::default())?;
     let parts: Vec<String> = files
         .par_iter()
         .filter(|f| f.is_file())

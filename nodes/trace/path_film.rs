@@ -83,7 +83,7 @@ pub fn render_opts(
     let lanes = opts.lanes && path_lanes::handles(sc);
     let (w, h) = (cam.width, cam.height);
     // Building the grid costs about as much per triangle as it is estimated to save on
-    // 2.7 camera rays (igea, docs/path_tracing.md, eleventh round): build it only when
+    // 2.7 camera rays (igea, docs/path_tracing.md, "How it runs"): build it only when
     // there are enough rays.
     let rays = w as u64 * h as u64 * s.spp as u64;
     let grid = if opts.camera_grid && rays >= 4 * sc.tris.len() as u64 {

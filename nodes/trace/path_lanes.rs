@@ -277,7 +277,7 @@ pub fn trace(
 /// `trace` compiled for x86-64-v3 (AVX2 and its companions), chosen at run time so that
 /// the binary still starts on older CPUs. The same code as the baseline build: three-operand
 /// VEX forms of the same SSE instructions (Rust never contracts to FMA), so the same bits,
-/// in about 5 % fewer instructions (docs/path_tracing.md, twelfth round).
+/// in about 5 % fewer instructions (docs/path_tracing.md, "How it runs").
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
 fn trace_avx2(b: Batch, stacks: &mut TraceStacks) -> Vec<Sample> {

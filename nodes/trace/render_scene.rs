@@ -156,7 +156,7 @@ impl LightSample {
 /// An emissive triangle as light sampling reads it: corners, normal, density and
 /// emission in one record, so that a sample touches nothing else (the chain of look-ups
 /// through triangle, normal, density and material arrays was about a tenth of the box
-/// render's time: docs/path_tracing.md, twelfth round).
+/// render's time: docs/path_tracing.md, "How it runs").
 #[derive(Clone, Copy, Debug)]
 pub struct EmitterRecord {
     /// Corners.

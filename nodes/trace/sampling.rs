@@ -97,7 +97,7 @@ pub struct AliasBin {
 
 /// A discrete distribution sampled in constant time by the alias method (Walker 1977,
 /// built as in Vose 1991; pbrt-v4 section A.1): one bin per index, so a sample reads one
-/// bin instead of walking a binary search (docs/path_tracing.md, twelfth round).
+/// bin instead of walking a binary search (docs/path_tracing.md, "How it runs").
 #[derive(Clone, Debug, Default)]
 pub struct AliasTable {
     bins: Vec<AliasBin>,

@@ -1,7 +1,7 @@
 //! Lane building blocks of the 8-wide BVH: `[f32; 4]` helpers computed as packed SSE
 //! through the `wide` crate (safe code; `minps`, `maxps`, and comparisons straight to a bit
 //! mask with `cmpps` + `movmskps`, which LLVM had turned into four `ucomiss` and `set`s per
-//! mask when they were written as plain lane-wise Rust: docs/path_tracing.md, ninth round);
+//! mask when they were written as plain lane-wise Rust: docs/path_tracing.md, "How it runs");
 //! the eight-box slab test; and the watertight ray-triangle test of Woop, Benthin and Wald
 //! 2013 run on four triangles stored axis by axis (`Tri4`).
 //!

@@ -7,7 +7,7 @@
 //! collapsed by opening, while fewer than eight children remain, the interior child with
 //! the largest surface area (the one a random ray is most likely to enter). Eight children
 //! rather than four: a walk takes half as many node steps, each dearer, and the path
-//! tracer got faster on both bench scenes (docs/path_tracing.md, fourteenth round, has the
+//! tracer got faster on both bench scenes (docs/path_tracing.md, "How it runs", has the
 //! timings).
 //!
 //! The lane arithmetic is in `lanes.rs`; docs/path_tracing.md has the measurements.

@@ -17,6 +17,10 @@ use std::sync::{Arc, Mutex};
 
 /// The largest thumbnail side, in pixels.
 pub const THUMB: u32 = 256;
+/// The size a mesh sequence's frames are drawn at: half the thumbnail's, shown at the
+/// thumbnail's size. A sequence redraws every frame, so this quarters the report's cost on a
+/// frame range (the cloth of `bench/report_overhead.py`); a single mesh is drawn at full size.
+pub const SEQUENCE_FRAME: (u32, u32) = (THUMB / 2, THUMB * 3 / 8);
 /// Rows of a CSV file shown as a table.
 pub const TABLE_ROWS: usize = 50;
 /// At most this many frames of a sequence go into its animation (evenly spaced).
@@ -189,6 +193,16 @@ impl FileRenderer {
     /// no palette to quantize per frame (NeuQuant made the report of an 8-frame cloth run
     /// cost more than the run), lossless, and shown by every current browser.
     fn animation(&self, frames: &[RgbaImage], paths: &[PathBuf]) -> Result<String, String> {
+        self.animation_at(frames, paths, frames[0].dimensions())
+    }
+
+    /// `animation`, shown at `shown` pixels (frames drawn smaller are scaled by the browser).
+    fn animation_at(
+        &self,
+        frames: &[RgbaImage],
+        paths: &[PathBuf],
+        shown: (u32, u32),
+    ) -> Result<String, String> {
         let opts = AnimOptions {
             format: AnimFormat::Apng,
             fps: 12.0,
@@ -200,7 +214,7 @@ impl FileRenderer {
         let (file, href) = self.new_file("png");
         cgnodes_api::io::write_atomic(&file, |w| w.write_all(&bytes))
             .map_err(|e| format!("{}: {e}", file.display()))?;
-        Ok(self.figure(&href, frames[0].dimensions(), paths))
+        Ok(self.figure(&href, shown, paths))
     }
 
     fn svg(&self, paths: &[PathBuf]) -> String {
@@ -301,17 +315,22 @@ impl FileRenderer {
         // Thumbnails drawn while the frames ran (`Prefetch`) are used when framed on the
         // same first file; the rest are drawn now, in parallel.
         let framed_on = picked[0];
+        let (w, h) = if paths.len() > 1 {
+            SEQUENCE_FRAME
+        } else {
+            (THUMB, THUMB * 3 / 4)
+        };
         let frames = picked
             .par_iter()
             .map(|p| match prefetched.get(*p) {
-                Some((on, img)) if on == framed_on => Ok(img.clone()),
+                Some((on, img)) if on == framed_on && img.dimensions() == (w, h) => Ok(img.clone()),
                 _ => {
                     let m = if *p == framed_on {
                         first.clone()
                     } else {
                         load(p)?
                     };
-                    let img = preview(&first, &[m], THUMB, THUMB * 3 / 4)?;
+                    let img = preview(&first, &[m], w, h)?;
                     Ok(animation::to_rgba8_preview(&img[0]))
                 }
             })
@@ -322,7 +341,7 @@ impl FileRenderer {
             save_png(t, &file)?;
             return Ok(self.figure(&href, t.dimensions(), paths));
         }
-        self.animation(&frames, paths)
+        self.animation_at(&frames, paths, (THUMB, THUMB * 3 / 4))
     }
 }
 

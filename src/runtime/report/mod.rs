@@ -13,7 +13,7 @@ pub mod graph_svg;
 
 use crate::exec::{NodeStatus, RunReport};
 use crate::validate::{ValidGraph, ValidNode};
-use cgnodes_api::registry::MeshHooks;
+use cgnodes_api::registry::{MeshHooks, MeshPreviewFn};
 use cgnodes_api::types::{Mesh, Value};
 use rayon::prelude::*;
 use std::collections::{BTreeMap, HashMap};
@@ -112,8 +112,18 @@ pub struct Collector {
     pub prefetch: Option<Arc<Prefetch>>,
 }
 
+/// The lower-case extension of `p`.
+fn ext_of(p: &Path) -> String {
+    p.extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default()
+}
+
 /// A node id and a file extension: the files of one sequence.
 type SequenceKey = (String, String);
+
+/// A sequence's first file, its mesh, and whether its thumbnail was started.
+type SequenceStart = (PathBuf, Arc<Mesh>, bool);
 
 /// Mesh thumbnails drawn on the thread pool as soon as a frame has written its meshes, while
 /// the next frames run, so that a frame range's report has little left to draw after the
@@ -122,8 +132,9 @@ type SequenceKey = (String, String);
 pub struct Prefetch {
     hooks: MeshHooks,
     done: Arc<Mutex<files::Prefetched>>,
-    /// The first mesh file per node and extension, and its mesh: what a sequence is framed on.
-    firsts: Mutex<HashMap<SequenceKey, (PathBuf, Arc<Mesh>)>>,
+    /// The first mesh file per node and extension, its mesh (what a sequence is framed on),
+    /// and whether it was drawn.
+    firsts: Mutex<HashMap<SequenceKey, SequenceStart>>,
     /// Thumbnails being drawn, and a signal when one is done.
     pending: (Mutex<usize>, Condvar),
 }
@@ -141,22 +152,49 @@ impl Prefetch {
         let Some(preview) = self.hooks.preview else {
             return;
         };
-        let ext = path
-            .extension()
-            .map(|e| e.to_string_lossy().to_ascii_lowercase())
-            .unwrap_or_default();
-        let (on, first) = self
-            .firsts
-            .lock()
-            .unwrap_or_else(|e| e.into_inner())
-            .entry((node.to_string(), ext))
-            .or_insert_with(|| (path.to_path_buf(), mesh.clone()))
-            .clone();
+        let ext = ext_of(path);
+        // Only sequences are drawn ahead: the first file is kept, and drawn with the second.
+        let (on, first, todo) = {
+            let mut firsts = self.firsts.lock().unwrap_or_else(|e| e.into_inner());
+            let e = firsts.entry((node.to_string(), ext));
+            let is_new = matches!(e, std::collections::hash_map::Entry::Vacant(_));
+            let (on, first, drawn) = e
+                .or_insert_with(|| (path.to_path_buf(), mesh.clone(), false))
+                .clone();
+            let todo = match (is_new, drawn) {
+                (true, _) => Vec::new(),
+                (false, false) => vec![
+                    (on.clone(), first.clone()),
+                    (path.to_path_buf(), mesh.clone()),
+                ],
+                (false, true) => vec![(path.to_path_buf(), mesh.clone())],
+            };
+            if let Some(v) = firsts.get_mut(&(node.to_string(), ext_of(path))) {
+                v.2 = v.2 || !todo.is_empty();
+            }
+            (on, first, todo)
+        };
+        for (path, mesh) in todo {
+            self.spawn(preview, on.clone(), first.clone(), path, mesh);
+        }
+    }
+
+    /// Draws the sequence frame `mesh` (file `path`) framed on `first` (file `on`), at the
+    /// size of a sequence's frames.
+    fn spawn(
+        self: &Arc<Self>,
+        preview: MeshPreviewFn,
+        on: PathBuf,
+        first: Arc<Mesh>,
+        path: PathBuf,
+        mesh: Arc<Mesh>,
+    ) {
         *self.pending.0.lock().unwrap_or_else(|e| e.into_inner()) += 1;
-        let (me, path, mesh) = (self.clone(), path.to_path_buf(), mesh.clone());
+        let me = self.clone();
         rayon::spawn(move || {
+            let (w, h) = files::SEQUENCE_FRAME;
             let drawn = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                preview(&first, &[mesh], files::THUMB, files::THUMB * 3 / 4)
+                preview(&first, &[mesh], w, h)
             }));
             if let Ok(Ok(imgs)) = drawn {
                 if let Some(img) = imgs.first() {

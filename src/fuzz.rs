@@ -47,7 +47,7 @@ pub fn graph_f3d(data: &[u8]) {
 
 /// OBJ, written to `scratch`: merged, one group, and per object.
 pub fn obj(data: &[u8], scratch: &Path) {
-    use crate::nodes::mesh::obj;
+    use cgnodes_formats::obj;
     let p = scratch.join("in.obj");
     if std::fs::write(&p, data).is_err() {
         return;
@@ -68,13 +68,13 @@ pub fn mtl(data: &[u8], scratch: &Path) {
     if std::fs::write(scratch.join("in.mtl"), data).is_err() || std::fs::write(&p, OBJ).is_err() {
         return;
     }
-    let _ = crate::nodes::mesh::obj::load_obj_objects(&p);
+    let _ = cgnodes_formats::obj::load_obj_objects(&p);
 }
 
 /// Image file bytes (PNG, JPEG, EXR, HDR, BMP, GIF): the structural check and the decoder,
 /// in both colour spaces.
 pub fn image(data: &[u8]) {
-    use crate::nodes::image::image_load::{decode_image, ColorSpace};
+    use cgnodes_formats::image_file::{decode_image, ColorSpace};
     let _ = decode_image(data, ColorSpace::Srgb);
     let _ = decode_image(data, ColorSpace::Raw);
 }
@@ -82,18 +82,18 @@ pub fn image(data: &[u8]) {
 /// OFF text.
 pub fn off(data: &[u8]) {
     if let Ok(text) = std::str::from_utf8(data) {
-        let _ = crate::nodes::mesh::off::read_off(text);
+        let _ = cgnodes_formats::off::read_off(text);
     }
 }
 
 /// PLY, ASCII and binary.
 pub fn ply(data: &[u8]) {
-    let _ = crate::nodes::mesh::ply::read_ply(data);
+    let _ = cgnodes_formats::ply::read_ply(data);
 }
 
 /// USDA: the layer parser, then the first mesh prims, with and without transforms.
 pub fn usda(data: &[u8]) {
-    use crate::nodes::mesh::usda;
+    use cgnodes_formats::usda;
     let Ok(text) = std::str::from_utf8(data) else {
         return;
     };
@@ -127,9 +127,12 @@ pub fn csv(data: &[u8]) {
             let _ = crate::io::csv::read(text, comments, trim);
         }
     }
-    use crate::nodes::metrics::compare_series::read_csv_columns;
-    let _ = read_csv_columns(text, "x", "y");
-    let _ = read_csv_columns(text, "T", "Z");
+    #[cfg(feature = "metrics")]
+    {
+        use crate::nodes::metrics::compare_series::read_csv_columns;
+        let _ = read_csv_columns(text, "x", "y");
+        let _ = read_csv_columns(text, "T", "Z");
+    }
 }
 
 /// A plugin manifest (written to `scratch/plugin/`), loaded and registered.

@@ -8,6 +8,7 @@
 mod chart;
 mod describe;
 mod dot;
+#[cfg(feature = "render")]
 mod f3d_project;
 mod import_f3d;
 mod nodes;
@@ -143,6 +144,7 @@ enum Cmd {
     #[command(
         after_help = "Example: cgnodes f3d-project assets/course/hw9 --frames 0..20 --assets assets/course_hw9 --out out"
     )]
+    #[cfg(feature = "render")]
     F3dProject(f3d_project::ProjectArgs),
     /// Print what made a file cgnodes wrote: version, graph hash, node, parameters, frame.
     #[command(after_help = "Example: cgnodes provenance out/arap_cow/layout.png --json")]
@@ -433,6 +435,7 @@ pub fn main_with(registry: Registry) -> i32 {
             }
             _ => import_f3d::list_map(aliases.as_deref(), markdown),
         },
+        #[cfg(feature = "render")]
         Cmd::F3dProject(args) => f3d_project::cmd(&registry, args),
         Cmd::Provenance { file, json } => provenance::cmd(&file, json),
         Cmd::Completions { shell } => {

@@ -17,7 +17,7 @@
 //! grid, and their camera rays take the BVH.
 
 use super::bvh::{tri_test, Hit, RayPre};
-use super::render_scene::PinholeCamera;
+use super::camera::PinholeCamera;
 use super::sampling::V3;
 use rayon::prelude::*;
 
@@ -45,41 +45,6 @@ const FILM_LIMIT: f64 = 1e12;
 /// The most triangles the list that every camera ray tests may hold; a scene with more
 /// (triangles through the eye, or thrown far out) gets no grid.
 const MAX_NEAR: usize = 64;
-
-/// The camera frame in f64: the eye, right, up and forward axes, and the focal length in
-/// pixels (a camera-space point `(x, y, z)` lands at `(w/2 + f x/z, h/2 - f y/z)`).
-#[derive(Clone, Copy, Debug)]
-pub struct Frame {
-    /// Eye.
-    pub eye: [f64; 3],
-    /// Right, up, forward (unit, camera space x, y, z).
-    pub axes: [[f64; 3]; 3],
-    /// Focal length in pixels.
-    pub focal: f64,
-    /// Film width and height in pixels.
-    pub size: (u32, u32),
-}
-
-impl Frame {
-    /// `p` in camera space.
-    fn view(&self, p: V3) -> [f64; 3] {
-        let d = [
-            p[0] as f64 - self.eye[0],
-            p[1] as f64 - self.eye[1],
-            p[2] as f64 - self.eye[2],
-        ];
-        self.axes.map(|a| a[0] * d[0] + a[1] * d[1] + a[2] * d[2])
-    }
-
-    /// Film position of camera-space point `v` (`v[2] > 0`).
-    fn film(&self, v: [f64; 3]) -> [f64; 2] {
-        let (w, h) = (self.size.0 as f64, self.size.1 as f64);
-        [
-            0.5 * w + self.focal * v[0] / v[2],
-            0.5 * h - self.focal * v[1] / v[2],
-        ]
-    }
-}
 
 /// The part of the triangle `v` (camera space) with `z >= z0`: a convex polygon of 0, 3 or
 /// 4 corners (Sutherland and Hodgman 1974, one plane), and its corner count.

@@ -4,7 +4,9 @@
 
 pub mod bsdf;
 pub mod bvh;
+pub mod camera;
 pub mod camera_grid;
+pub mod camera_sample;
 pub mod direct;
 pub mod lane_math;
 pub mod path_film;

@@ -4,12 +4,12 @@
 //! the per-pixel variance of the estimate. Tiles are summed in a fixed order, so images do
 //! not depend on the thread count.
 
-use super::bvh::{Hit, TraceStacks};
+use super::bvh::TraceStacks;
 use super::camera_grid::CameraGrid;
-use super::path_lanes::{self, Job, Sample};
+use super::camera_sample::{camera_sample, Job};
+use super::path_lanes::{self, Sample};
 use super::render_path::{radiance, Filter, PathSettings};
 use super::render_scene::{PinholeCamera, RenderScene};
-use super::sampling::{Pcg32, V3};
 use cgnodes_api::types::Image;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -110,44 +110,6 @@ pub fn render_opts(
         })
         .collect();
     gather(&outs, w, h)
-}
-
-/// The start of one pixel sample's path: its random stream (after the film position's two
-/// numbers), film position, camera ray direction and that ray's first hit.
-pub(crate) struct CameraSample {
-    pub rng: Pcg32,
-    pub fx: f32,
-    pub fy: f32,
-    pub dir: V3,
-    pub hit: Option<Hit>,
-}
-
-/// Starts sample `k` of pixel `(x, y)`: both path loops begin here, so they draw the same
-/// numbers and trace the same camera ray (through `grid` when there is one).
-#[inline(always)]
-pub(crate) fn camera_sample(
-    sc: &RenderScene,
-    cam: &PinholeCamera,
-    grid: Option<&CameraGrid>,
-    seed: u64,
-    (x, y, k): Job,
-) -> CameraSample {
-    let pix = y as u64 * cam.width as u64 + x as u64;
-    let mut rng = Pcg32::for_sample(pix, k as u64, seed);
-    let [ux, uy] = rng.next_2d();
-    let (fx, fy) = (x as f32 + ux, y as f32 + uy);
-    let dir = cam.ray_dir(fx, fy);
-    let hit = match grid {
-        Some(g) => g.intersect(&sc.tris, (x, y), cam.eye, dir, cam.far),
-        None => sc.intersect(cam.eye, dir, cam.far),
-    };
-    CameraSample {
-        rng,
-        fx,
-        fy,
-        dir,
-        hit,
-    }
 }
 
 /// Traces and splats the samples of the tile whose top-left pixel is `(x0, y0)`.

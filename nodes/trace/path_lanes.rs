@@ -19,19 +19,16 @@
 use super::bsdf::Bsdf;
 use super::bvh::{Hit, Segment, TraceStacks};
 use super::camera_grid::CameraGrid;
+use super::camera_sample::{camera_sample, Job};
 use super::direct::{delta_lights, environment_nee, Vertex};
 use super::lane_math::{
     add3, bits, cosine_hemisphere4, dot3, f4, f43, get, max3, mul3, offset4, power4, put, scale3,
     sel3, splat, store3, sub3, F, L,
 };
-use super::path_film::camera_sample;
 use super::render_path::{add_direct, found_weight, PathSettings, Strategy};
 use super::render_scene::{PinholeCamera, RenderScene, SHADOW_END};
 use super::sampling::{add, dot, max_comp, mul, scale, Pcg32, V3};
 use std::f32::consts::FRAC_1_PI;
-
-/// One pixel sample to trace: pixel column, row and sample index.
-pub type Job = (u32, u32, u32);
 
 /// A traced sample: its radiance and film position.
 #[derive(Clone, Copy, Debug, Default)]

@@ -5,13 +5,13 @@
 
 use super::bsdf::Bsdf;
 use super::bvh::{triangle_normal, Bvh, Hit};
-use super::camera_grid::Frame;
+pub use super::camera::PinholeCamera;
 use super::environment::Environment;
 use super::sampling::{
     add, dot, length, luminance, max_comp, normalize, scale, sub, uniform_triangle, v3, AliasTable,
     V3,
 };
-use cgnodes_api::types::{Camera, Light, LookAt, Material, MaterialKind, Scene};
+use cgnodes_api::types::{Camera, Light, Material, MaterialKind, Scene};
 use cgnodes_geometry::scene_geometry::{normal_mapped, scene_geometry_creased};
 use cgnodes_geometry::texture::{MipTexture, Wrap};
 
@@ -171,90 +171,6 @@ pub struct EmitterRecord {
     pub le: V3,
     /// Whether it emits on both sides.
     pub two_sided: bool,
-}
-
-/// A pinhole camera (Mitsuba `perspective` without depth of field).
-#[derive(Clone, Debug)]
-pub struct PinholeCamera {
-    /// Eye position.
-    pub eye: V3,
-    /// The look-at basis (ray generation).
-    basis: LookAt<f32>,
-    tan_x: f32,
-    tan_y: f32,
-    /// Image width.
-    pub width: u32,
-    /// Image height.
-    pub height: u32,
-    /// Far clip.
-    pub far: f32,
-}
-
-impl PinholeCamera {
-    /// Builds the camera; +x of the image is `forward x up` (world +x on the right for a
-    /// camera looking down -z with +y up, as in Mitsuba's `look_at`).
-    pub fn new(c: &Camera) -> Result<PinholeCamera, String> {
-        let fin = |a: [f64; 3]| a.iter().all(|x| x.is_finite());
-        if !fin(c.eye) || !fin(c.target) || !fin(c.up) {
-            return Err("camera eye/target/up must be finite".into());
-        }
-        if c.width == 0 || c.height == 0 || c.width > 16384 || c.height > 16384 {
-            return Err(format!(
-                "camera resolution {}x{} must be between 1 and 16384",
-                c.width, c.height
-            ));
-        }
-        if !(c.fov_deg > 0.0 && c.fov_deg < 180.0) {
-            return Err(format!(
-                "camera fov {} must be in (0, 180) degrees",
-                c.fov_deg
-            ));
-        }
-        // The look-at basis in f32, with the tracers' own tolerances.
-        let b = c.look_at::<f32>();
-        if b.forward_len == 0.0 {
-            return Err("camera target equals eye".into());
-        }
-        if b.right_len < 1e-6 {
-            return Err("camera up is parallel to the viewing direction".into());
-        }
-        let tan_y = c.tan_half_fov() as f32;
-        let tan_x = tan_y * c.width as f32 / c.height as f32;
-        Ok(PinholeCamera {
-            eye: b.eye,
-            basis: b,
-            tan_x,
-            tan_y,
-            width: c.width,
-            height: c.height,
-            far: if c.far > 0.0 && c.far.is_finite() {
-                c.far as f32
-            } else {
-                f32::INFINITY
-            },
-        })
-    }
-
-    /// The unit direction through film position (`x`, `y`) in pixels, (0, 0) at the top-left
-    /// corner of the image.
-    #[inline]
-    pub fn ray_dir(&self, x: f32, y: f32) -> V3 {
-        let sx = (2.0 * x / self.width as f32 - 1.0) * self.tan_x;
-        let sy = (1.0 - 2.0 * y / self.height as f32) * self.tan_y;
-        self.basis.ray_dir(sx, sy)
-    }
-
-    /// The camera's frame in f64, for projecting the scene onto the film
-    /// (`CameraGrid::build`).
-    pub fn frame(&self) -> Frame {
-        let d = |a: V3| a.map(|x| x as f64);
-        Frame {
-            eye: d(self.basis.eye),
-            axes: [d(self.basis.right), d(self.basis.up), d(self.basis.forward)],
-            focal: 0.5 * self.height as f64 / self.tan_y as f64,
-            size: (self.width, self.height),
-        }
-    }
 }
 
 /// The part of a point's largest coordinate added to `RenderScene::eps` when a ray leaves

@@ -279,7 +279,7 @@ fn reweight(limits: &[f64], best_step: f64, weights: &mut [f64]) -> usize {
 
 #[cfg(test)]
 mod tests {
-    use super::super::local_global::evaluate;
+    use super::super::energy::evaluate;
     use super::super::local_global::tests::planar_grid;
     use super::super::system::{
         corner_weights, descent_direction, elimination_rows, fixed_vertices, free_rows,

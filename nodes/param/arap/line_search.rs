@@ -240,7 +240,7 @@ fn reduce_directional(
 
 #[cfg(test)]
 mod tests {
-    use super::super::local_global::evaluate;
+    use super::super::energy::evaluate;
     use super::super::local_global::tests::planar_grid;
     use super::*;
 

@@ -1,7 +1,8 @@
 //! ARAP, ASAP and hybrid parameterization (Liu et al. 2008), fast and fold-free.
 //!
 //! - `local_global`: `arap_parameterize`, the local/global iteration for ARAP and the hybrid
-//!   model, and its local step over all triangles; the loop is in `solver`, its global step
+//!   model; its local step over all triangles, log rows and result are in `energy`, the loop
+//!   in `solver`, its global step
 //!   in `system`, the fold-free line search in `line_search` and `fold_free`, its settings
 //!   and constants in `options`.
 //! - `arap`: nodes `arap` and `arap_hybrid`, and how `ArapError` becomes a `NodeError`.
@@ -16,6 +17,7 @@
 #[allow(clippy::module_inception)]
 pub mod arap;
 pub mod asap;
+pub mod energy;
 pub mod error;
 mod fold_free;
 pub mod frames;
@@ -27,10 +29,9 @@ mod solver;
 mod system;
 
 pub use asap::{asap_parameterize, AsapResult};
+pub use energy::{ArapIteration, ArapResult, LOG_COLUMNS};
 pub use error::ArapError;
-pub use local_global::{
-    arap_parameterize, arap_parameterize_progress, ArapIteration, ArapResult, LOG_COLUMNS,
-};
+pub use local_global::{arap_parameterize, arap_parameterize_progress};
 pub use options::{ArapOptions, RefactorSchedule, LOCAL_RINGS};
 
 use super::tutte::{tutte_parameterize, BoundaryShape, TutteWeights};

@@ -3,12 +3,12 @@
 //! step is no longer blocked), Armijo's backtracking, and the bookkeeping of an accepted
 //! step. `iterate` is the loop over them.
 
+use super::energy::{evaluate, ArapIteration, ArapResult};
 use super::error::ArapError;
 use super::fold_free::FoldFree;
 use super::frames::{Similarity, TriangleFrames, PAR_CHUNK};
 use super::injective::orientation_and_flips;
 use super::line_search::{area_floors, Directional, StepLimits};
-use super::local_global::{evaluate, ArapIteration, ArapResult};
 use super::options::{
     ArapOptions, ARMIJO_C, BLOCKED_STEP, LOCAL_GIVE_UP, LOCAL_ROUNDS, MAX_BACKTRACKS, MIN_STEP,
     STEP_SAFETY,

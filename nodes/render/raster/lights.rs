@@ -3,11 +3,22 @@
 
 use super::geometry::SceneGeometry;
 use super::options::RasterOptions;
-use super::shader::LightPrep;
-use super::shadow::{directional_shadow_map, point_shadow_map};
+use super::shadow::{directional_shadow_map, point_shadow_map, ShadowMap};
 use cgnodes_api::prelude::*;
 use cgnodes_api::types::vec3::{dot, normalize_recip as normalize, sub};
 use rayon::prelude::*;
+
+/// A light with its shadow map.
+pub(super) struct LightPrep {
+    pub(super) light: Light,
+    /// A directional light's unit direction towards it and irradiance, computed once.
+    pub(super) dir: Option<([f64; 3], [f64; 3])>,
+    pub(super) map: Option<ShadowMap>,
+    /// A directional light's shadow-bias factor per triangle (`shadow::bias_factor` of the
+    /// triangle's geometric normal, computed once per triangle instead of per lookup);
+    /// empty for other lights, which compute it per lookup.
+    pub(super) factors: Vec<f64>,
+}
 
 /// The lights of `scene` with their shadow maps (one light per task); shadow maps only when
 /// the colour pass is `lit` and `opts.shadows` is on.

@@ -4,11 +4,11 @@
 //! shadow-map visibility of each light.
 
 use super::geometry::{normal_mapped, SceneGeometry};
-use super::lights::light_at;
+use super::lights::{light_at, LightPrep};
 use super::options::RasterOptions;
 use super::rasterize::{barycentric, TriSetup};
 use super::shading;
-use super::shadow::{self, ShadowMap};
+use super::shadow;
 use super::texture::MipTexture;
 use cgnodes_api::prelude::*;
 use cgnodes_api::types::vec3::{dot, normalize_recip as normalize, sub};
@@ -21,18 +21,6 @@ pub(super) struct MatPrep {
     pub(super) ks: f64,
     pub(super) k: f64,
     pub(super) emission: [f64; 3],
-}
-
-/// A light with its shadow map.
-pub(super) struct LightPrep {
-    pub(super) light: Light,
-    /// A directional light's unit direction towards it and irradiance, computed once.
-    pub(super) dir: Option<([f64; 3], [f64; 3])>,
-    pub(super) map: Option<ShadowMap>,
-    /// A directional light's shadow-bias factor per triangle (`shadow::bias_factor` of the
-    /// triangle's geometric normal, computed once per triangle instead of per lookup);
-    /// empty for other lights, which compute it per lookup.
-    pub(super) factors: Vec<f64>,
 }
 
 /// A reconstructed surface point.

@@ -7,14 +7,15 @@ round's seconds, medians, ratio, extra milliseconds).
 Usage: cargo build --release && python3 bench/report_overhead.py [--rounds N] [--bin PATH]
 """
 import argparse
-import json
 import os
-import platform
 import statistics
 import subprocess
 import sys
 import tempfile
 import time
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import _record  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 # (name, graph, extra arguments): the README's graph, Tutte on a 44k-face mesh, a cloth
@@ -41,8 +42,6 @@ def main():
     ap.add_argument("--rounds", type=int, default=7)
     ap.add_argument("--bin", default=os.path.join(ROOT, "target/release/cgnodes"))
     a = ap.parse_args()
-    commit = subprocess.run(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"],
-                            capture_output=True, text=True).stdout.strip()
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         for name, graph, extra in CASES:
@@ -63,18 +62,7 @@ def main():
             rows.append(row)
             print(f"{name:18s} with {mr*1e3:8.1f} ms  without {mn*1e3:8.1f} ms  "
                   f"ratio {mr/mn:5.2f}  +{(mr-mn)*1e3:6.1f} ms  {'ok' if row['meets_bar'] else 'over'}")
-    rec = {
-        "benchmark": "report_overhead",
-        "command": "python3 bench/report_overhead.py --rounds %d" % a.rounds,
-        "commit": commit,
-        "date": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
-        "machine": {"cpu": platform.processor() or platform.machine(), "cores": os.cpu_count()},
-        "rounds": a.rounds,
-        "cases": rows,
-    }
-    os.makedirs(os.path.join(ROOT, "bench/results"), exist_ok=True)
-    with open(os.path.join(ROOT, "bench/results/report_overhead.json"), "w") as f:
-        json.dump(rec, f, indent=1)
+    _record.write("report_overhead", "python3 bench/report_overhead.py --rounds %d" % a.rounds, rounds=a.rounds, cases=rows)
     return 0
 
 

@@ -18,6 +18,9 @@ import sys
 import tempfile
 import time
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import _record  # noqa: E402
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 MESHES = ["camel_b", "camelhead", "nefertiti_front", "bunny_base", "igea_front"]
 
@@ -60,8 +63,6 @@ def main():
     except ImportError:
         print("libigl is not installed: pip install libigl", file=sys.stderr)
         return 2
-    commit = subprocess.run(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"],
-                            capture_output=True, text=True).stdout.strip()
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         script = os.path.join(tmp, "tutte_libigl.py")
@@ -83,19 +84,7 @@ def main():
             rows.append({"mesh": name, "cgnodes_s": ours, "libigl_s": peer,
                          "median_cgnodes_s": mo, "median_libigl_s": mp, "ratio": mo / mp})
             print(f"{name:16s} cgnodes {mo*1e3:8.1f} ms  libigl {mp*1e3:8.1f} ms  ratio {mo/mp:5.2f}")
-    rec = {
-        "benchmark": "tutte_whole_run",
-        "command": "python3 bench/tutte_whole_run.py --rounds %d" % a.rounds,
-        "commit": commit,
-        "date": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
-        "machine": {"cpu": platform.processor() or platform.machine(), "cores": os.cpu_count()},
-        "peer": "libigl (pip), Python " + platform.python_version(),
-        "rounds": a.rounds,
-        "meshes": rows,
-    }
-    os.makedirs(os.path.join(ROOT, "bench/results"), exist_ok=True)
-    with open(os.path.join(ROOT, "bench/results/tutte_whole_run.json"), "w") as f:
-        json.dump(rec, f, indent=1)
+    _record.write("tutte_whole_run", "python3 bench/tutte_whole_run.py --rounds %d" % a.rounds, peer="libigl (pip), Python " + platform.python_version(), rounds=a.rounds, meshes=rows)
     return 0
 
 

@@ -67,7 +67,7 @@ pub fn register_all(r: &mut Registry) {
 fn mesh_hooks() -> MeshHooks {
     MeshHooks {
         #[cfg(feature = "render")]
-        preview: Some(render::mesh_preview::preview_frames),
+        preview: Some(render::mesh_preview::preview_framed_on),
         #[cfg(not(feature = "render"))]
         preview: None,
     }

@@ -67,34 +67,6 @@ pub fn to_rgba8(img: &Image) -> RgbaImage {
     RgbaImage::from_raw(img.width, img.height, data).unwrap_or_default()
 }
 
-/// `to_rgba8` through a table of the sRGB curve at 2^14 points instead of a power per
-/// channel: within one code value of it (the curve's steepest slope, 12.92 near black, moves
-/// 2^-14 of linear by 0.2 of a code value), several times faster; for previews drawn on every
-/// run.
-pub fn to_rgba8_preview(img: &Image) -> RgbaImage {
-    const N: usize = 1 << 14;
-    static LUT: std::sync::OnceLock<Vec<u8>> = std::sync::OnceLock::new();
-    let lut = LUT.get_or_init(|| {
-        (0..N)
-            .map(|i| (linear_to_srgb(i as f32 / (N - 1) as f32) * 255.0 + 0.5) as u8)
-            .collect()
-    });
-    let enc = |v: f32| {
-        let v = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
-        lut[(v * (N - 1) as f32 + 0.5) as usize]
-    };
-    let a8 = |v: f32| {
-        let v = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
-        (v * 255.0 + 0.5) as u8
-    };
-    let data: Vec<u8> = img
-        .pixels
-        .iter()
-        .flat_map(|p| [enc(p[0]), enc(p[1]), enc(p[2]), a8(p[3])])
-        .collect();
-    RgbaImage::from_raw(img.width, img.height, data).unwrap_or_default()
-}
-
 /// A linear HDR image tone-mapped to 8-bit sRGB: with the largest finite channel value
 /// `w` above 1, each channel goes through extended Reinhard `c (1 + c / w^2) / (1 + c)`
 /// (Reinhard et al. 2002, eq. 4), which maps `w` to 1; images within 0..1 are only clamped.
@@ -518,26 +490,6 @@ mod tests {
             .into_iter()
             .map(|f| f.into_buffer())
             .collect()
-    }
-
-    #[test]
-    fn preview_encoding_is_within_one_code_value_of_the_exact_one() {
-        let px: Vec<[f32; 4]> = (0..4096)
-            .map(|i| {
-                let v = i as f32 / 4095.0;
-                [v, v * v, v.sqrt(), 1.0]
-            })
-            .chain([[f32::NAN, -1.0, 2.0, 0.5]])
-            .collect();
-        let img = Image {
-            width: px.len() as u32,
-            height: 1,
-            pixels: px,
-        };
-        let (a, b) = (to_rgba8(&img), to_rgba8_preview(&img));
-        for (x, y) in a.as_raw().iter().zip(b.as_raw()) {
-            assert!((*x as i32 - *y as i32).abs() <= 1, "{x} {y}");
-        }
     }
 
     #[test]

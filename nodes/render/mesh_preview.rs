@@ -4,7 +4,6 @@
 
 use super::raster::{self, Passes, RasterOptions};
 use cgnodes_api::prelude::*;
-use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 /// What the preview camera frames: a bounding sphere.
@@ -63,20 +62,17 @@ pub fn preview_camera(f: &Framing, width: u32, height: u32) -> Camera {
     }
 }
 
-/// Previews of `meshes` (frames of one sequence) at `width` x `height`, all framed on the
-/// bounds of `framing_of` (the sequence's first frame), so a moving mesh moves in the frame;
-/// the run report's mesh thumbnails (`MeshHooks::preview`).
-pub fn preview_frames(
+/// The preview of `mesh` at `width` x `height`, framed on the bounds of `framing_of` (a
+/// sequence's first frame, so a moving mesh moves in the frame): the run report's mesh
+/// thumbnails (`MeshHooks::preview`).
+pub fn preview_framed_on(
     framing_of: &Mesh,
-    meshes: &[Arc<Mesh>],
+    mesh: &Arc<Mesh>,
     width: u32,
     height: u32,
-) -> Result<Vec<Image>, String> {
+) -> Result<Image, String> {
     let framing = Framing::of(framing_of).ok_or("no finite vertices")?;
-    meshes
-        .par_iter()
-        .map(|m| render_preview(m, Some(framing), width, height))
-        .collect()
+    render_preview(mesh, Some(framing), width, height)
 }
 
 /// Renders `mesh` as a preview with `framing` (the mesh's own when `None`): light grey

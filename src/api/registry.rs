@@ -22,13 +22,13 @@ pub struct Registry {
 /// any family; left `None`, the report links the mesh file instead of drawing it.
 #[derive(Clone, Copy, Default)]
 pub struct MeshHooks {
-    /// Draws `meshes` (frames of one sequence) at `width` x `height`, all framed on the
-    /// bounds of `framing` (the sequence's first frame), as linear RGBA images.
+    /// Draws a mesh at `width` x `height`, framed on the bounds of another (a sequence's
+    /// first frame, so a moving mesh moves in the frame), as a linear RGBA image.
     pub preview: Option<MeshPreviewFn>,
 }
 
-/// Draws frames of meshes framed on one mesh's bounds (see `MeshHooks::preview`).
-pub type MeshPreviewFn = fn(&Mesh, &[Arc<Mesh>], u32, u32) -> Result<Vec<Image>, String>;
+/// Draws the second mesh framed on the first's bounds (see `MeshHooks::preview`).
+pub type MeshPreviewFn = fn(&Mesh, &Arc<Mesh>, u32, u32) -> Result<Image, String>;
 
 impl Registry {
     /// An empty registry.

@@ -14,14 +14,6 @@ pub fn parse_strict(text: &str) -> Result<Value, serde_json::Error> {
     Ok(v)
 }
 
-/// Parses `bytes` as JSON like `parse_strict`.
-pub fn parse_strict_slice(bytes: &[u8]) -> Result<Value, serde_json::Error> {
-    let mut de = serde_json::Deserializer::from_slice(bytes);
-    let v = StrictValue.deserialize(&mut de)?;
-    de.end()?;
-    Ok(v)
-}
-
 /// A seed that builds a `serde_json::Value`, checking every object for repeated keys.
 struct StrictValue;
 

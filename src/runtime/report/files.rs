@@ -13,7 +13,7 @@ use rayon::prelude::*;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 
 /// The largest thumbnail side, in pixels.
 pub const THUMB: u32 = 256;
@@ -34,7 +34,7 @@ pub struct FileRenderer {
     next: AtomicUsize,
     hooks: MeshHooks,
     /// Thumbnails drawn during the run: file -> (the file it is framed on, thumbnail).
-    prefetched: Arc<Mutex<Prefetched>>,
+    prefetched: Prefetched,
 }
 
 /// Mesh thumbnails drawn while the frames ran, by file: the file whose bounds framed it, and
@@ -47,7 +47,7 @@ impl FileRenderer {
     pub fn new(
         dir: &Path,
         hooks: MeshHooks,
-        prefetched: Arc<Mutex<Prefetched>>,
+        prefetched: Prefetched,
     ) -> Result<FileRenderer, String> {
         let files = dir.join("report_files");
         std::fs::create_dir_all(&files).map_err(|e| format!("{}: {e}", files.display()))?;
@@ -289,11 +289,6 @@ impl FileRenderer {
         paths: &[PathBuf],
         values: &HashMap<PathBuf, Value>,
     ) -> Result<String, String> {
-        let prefetched = self
-            .prefetched
-            .lock()
-            .unwrap_or_else(|e| e.into_inner())
-            .clone();
         let picked = sample(paths);
         let load = |p: &PathBuf| {
             if let Some(Value::Mesh(m)) = values.get(p) {
@@ -322,7 +317,7 @@ impl FileRenderer {
         };
         let frames = picked
             .par_iter()
-            .map(|p| match prefetched.get(*p) {
+            .map(|p| match self.prefetched.get(*p) {
                 Some((on, img)) if on == framed_on && img.dimensions() == (w, h) => Ok(img.clone()),
                 _ => {
                     let m = if *p == framed_on {
@@ -330,8 +325,7 @@ impl FileRenderer {
                     } else {
                         load(p)?
                     };
-                    let img = preview(&first, &[m], w, h)?;
-                    Ok(animation::to_rgba8_preview(&img[0]))
+                    Ok(animation::to_rgba8(&preview(&first, &m, w, h)?))
                 }
             })
             .collect::<Result<Vec<RgbaImage>, String>>()?;
@@ -346,7 +340,7 @@ impl FileRenderer {
 }
 
 /// Lower-case extension of a path.
-fn ext_of(p: &Path) -> String {
+pub(super) fn ext_of(p: &Path) -> String {
     p.extension()
         .and_then(|e| e.to_str())
         .unwrap_or("")

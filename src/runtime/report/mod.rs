@@ -16,6 +16,7 @@ use crate::validate::{ValidGraph, ValidNode};
 use cgnodes_api::registry::{MeshHooks, MeshPreviewFn};
 use cgnodes_api::types::{Mesh, Value};
 use rayon::prelude::*;
+use std::collections::hash_map::Entry;
 use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Condvar, Mutex};
@@ -112,13 +113,6 @@ pub struct Collector {
     pub prefetch: Option<Arc<Prefetch>>,
 }
 
-/// The lower-case extension of `p`.
-fn ext_of(p: &Path) -> String {
-    p.extension()
-        .map(|e| e.to_string_lossy().to_ascii_lowercase())
-        .unwrap_or_default()
-}
-
 /// A node id and a file extension: the files of one sequence.
 type SequenceKey = (String, String);
 
@@ -131,7 +125,7 @@ type SequenceStart = (PathBuf, Arc<Mesh>, bool);
 #[derive(Default)]
 pub struct Prefetch {
     hooks: MeshHooks,
-    done: Arc<Mutex<files::Prefetched>>,
+    done: Mutex<files::Prefetched>,
     /// The first mesh file per node and extension, its mesh (what a sequence is framed on),
     /// and whether it was drawn.
     firsts: Mutex<HashMap<SequenceKey, SequenceStart>>,
@@ -152,27 +146,27 @@ impl Prefetch {
         let Some(preview) = self.hooks.preview else {
             return;
         };
-        let ext = ext_of(path);
         // Only sequences are drawn ahead: the first file is kept, and drawn with the second.
-        let (on, first, todo) = {
-            let mut firsts = self.firsts.lock().unwrap_or_else(|e| e.into_inner());
-            let e = firsts.entry((node.to_string(), ext));
-            let is_new = matches!(e, std::collections::hash_map::Entry::Vacant(_));
-            let (on, first, drawn) = e
-                .or_insert_with(|| (path.to_path_buf(), mesh.clone(), false))
-                .clone();
-            let todo = match (is_new, drawn) {
-                (true, _) => Vec::new(),
-                (false, false) => vec![
-                    (on.clone(), first.clone()),
-                    (path.to_path_buf(), mesh.clone()),
-                ],
-                (false, true) => vec![(path.to_path_buf(), mesh.clone())],
-            };
-            if let Some(v) = firsts.get_mut(&(node.to_string(), ext_of(path))) {
-                v.2 = v.2 || !todo.is_empty();
+        let key = (node.to_string(), files::ext_of(path));
+        let (on, first, todo) = match self
+            .firsts
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .entry(key)
+        {
+            Entry::Vacant(v) => {
+                v.insert((path.to_path_buf(), mesh.clone(), false));
+                return;
             }
-            (on, first, todo)
+            Entry::Occupied(mut o) => {
+                let (on, first, drawn) = o.get_mut();
+                let mut todo = vec![(path.to_path_buf(), mesh.clone())];
+                if !*drawn {
+                    todo.push((on.clone(), first.clone()));
+                    *drawn = true;
+                }
+                (on.clone(), first.clone(), todo)
+            }
         };
         for (path, mesh) in todo {
             self.spawn(preview, on.clone(), first.clone(), path, mesh);
@@ -194,16 +188,14 @@ impl Prefetch {
         rayon::spawn(move || {
             let (w, h) = files::SEQUENCE_FRAME;
             let drawn = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                preview(&first, &[mesh], w, h)
+                preview(&first, &mesh, w, h)
             }));
-            if let Ok(Ok(imgs)) = drawn {
-                if let Some(img) = imgs.first() {
-                    let t = cgnodes_formats::animation::to_rgba8_preview(img);
-                    me.done
-                        .lock()
-                        .unwrap_or_else(|e| e.into_inner())
-                        .insert(path, (on, t));
-                }
+            if let Ok(Ok(img)) = drawn {
+                let t = cgnodes_formats::animation::to_rgba8(&img);
+                me.done
+                    .lock()
+                    .unwrap_or_else(|e| e.into_inner())
+                    .insert(path, (on, t));
             }
             let mut n = me.pending.0.lock().unwrap_or_else(|e| e.into_inner());
             *n -= 1;
@@ -371,7 +363,7 @@ pub fn write_run_report(
     let prefetched = match &c.prefetch {
         Some(pf) => {
             pf.wait();
-            pf.done.clone()
+            std::mem::take(&mut *pf.done.lock().unwrap_or_else(|e| e.into_inner()))
         }
         None => Default::default(),
     };

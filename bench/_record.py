@@ -1,0 +1,28 @@
+"""The record a benchmark script writes: bench/results/NAME.json with the command, commit,
+date and machine beside the script's own fields (shared by bench/*.py)."""
+import json
+import os
+import platform
+import subprocess
+import time
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+def write(name, command, **fields):
+    """Writes bench/results/NAME.json and returns its path."""
+    commit = subprocess.run(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"],
+                            capture_output=True, text=True).stdout.strip()
+    rec = {
+        "benchmark": name,
+        "command": command,
+        "commit": commit,
+        "date": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
+        "machine": {"cpu": platform.processor() or platform.machine(), "cores": os.cpu_count()},
+        **fields,
+    }
+    path = os.path.join(ROOT, "bench/results", name + ".json")
+    os.makedirs(os.path.dirname(path), exist_ok=True)
+    with open(path, "w") as f:
+        json.dump(rec, f, indent=1)
+    return path

@@ -13,11 +13,11 @@ pub mod graph_svg;
 
 use crate::exec::{NodeStatus, RunReport};
 use crate::validate::{ValidGraph, ValidNode};
-use cgnodes_api::registry::{MeshHooks, MeshPreviewFn};
+use cgnodes_api::registry::MeshHooks;
 use cgnodes_api::types::{Mesh, Value};
 use rayon::prelude::*;
 use std::collections::hash_map::Entry;
-use std::collections::{BTreeMap, HashMap};
+use std::collections::{BTreeMap, HashMap, VecDeque};
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Condvar, Mutex};
 
@@ -119,9 +119,22 @@ type SequenceKey = (String, String);
 /// A sequence's first file, its mesh, and whether its thumbnail was started.
 type SequenceStart = (PathBuf, Arc<Mesh>, bool);
 
-/// Mesh thumbnails drawn on the thread pool as soon as a frame has written its meshes, while
-/// the next frames run, so that a frame range's report has little left to draw after the
-/// last frame. A sequence is framed on the first file its node wrote with that extension.
+/// One thumbnail to draw: the sequence frame `mesh` (file `path`) framed on `first` (file
+/// `on`).
+struct Job {
+    on: PathBuf,
+    first: Arc<Mesh>,
+    path: PathBuf,
+    mesh: Arc<Mesh>,
+}
+
+/// Mesh thumbnails drawn while the next frames run, so that a frame range's report has
+/// little left to draw after the last frame. A sequence is framed on the first file its node
+/// wrote with that extension. They are drawn by one thread at idle priority (`SCHED_IDLE` on
+/// Linux): a run rarely keeps every core busy (the cloth of `bench/report_overhead.py` uses
+/// 1.2 of 2), and an idle-priority thread takes only the time the run leaves, where jobs on
+/// the run's own thread pool held up its parallel sections. What is left when the run ends
+/// is drawn on every core (`wait`).
 #[derive(Default)]
 pub struct Prefetch {
     hooks: MeshHooks,
@@ -129,8 +142,10 @@ pub struct Prefetch {
     /// The first mesh file per node and extension, its mesh (what a sequence is framed on),
     /// and whether it was drawn.
     firsts: Mutex<HashMap<SequenceKey, SequenceStart>>,
-    /// Thumbnails being drawn, and a signal when one is done.
-    pending: (Mutex<usize>, Condvar),
+    /// Thumbnails waiting, whether the run has ended, and a signal for both.
+    queue: (Mutex<(VecDeque<Job>, bool)>, Condvar),
+    /// The drawing thread, started with the first job.
+    worker: Mutex<Option<std::thread::JoinHandle<()>>>,
 }
 
 impl std::fmt::Debug for Prefetch {
@@ -141,11 +156,11 @@ impl std::fmt::Debug for Prefetch {
 }
 
 impl Prefetch {
-    /// Starts drawing the thumbnail of `mesh`, written to `path` by node `node`.
+    /// Queues the thumbnail of `mesh`, written to `path` by node `node`.
     fn start(self: &Arc<Self>, node: &str, path: &Path, mesh: &Arc<Mesh>) {
-        let Some(preview) = self.hooks.preview else {
+        if self.hooks.preview.is_none() {
             return;
-        };
+        }
         // Only sequences are drawn ahead: the first file is kept, and drawn with the second.
         let key = (node.to_string(), files::ext_of(path));
         let (on, first, todo) = match self
@@ -168,46 +183,91 @@ impl Prefetch {
                 (on.clone(), first.clone(), todo)
             }
         };
-        for (path, mesh) in todo {
-            self.spawn(preview, on.clone(), first.clone(), path, mesh);
+        {
+            let mut q = self.queue.0.lock().unwrap_or_else(|e| e.into_inner());
+            for (path, mesh) in todo {
+                q.0.push_back(Job {
+                    on: on.clone(),
+                    first: first.clone(),
+                    path,
+                    mesh,
+                });
+            }
+        }
+        self.queue.1.notify_one();
+        let mut w = self.worker.lock().unwrap_or_else(|e| e.into_inner());
+        if w.is_none() {
+            let me = self.clone();
+            *w = std::thread::Builder::new()
+                .name("report-thumbnails".into())
+                .spawn(move || me.work())
+                .ok();
         }
     }
 
-    /// Draws the sequence frame `mesh` (file `path`) framed on `first` (file `on`), at the
-    /// size of a sequence's frames.
-    fn spawn(
-        self: &Arc<Self>,
-        preview: MeshPreviewFn,
-        on: PathBuf,
-        first: Arc<Mesh>,
-        path: PathBuf,
-        mesh: Arc<Mesh>,
-    ) {
-        *self.pending.0.lock().unwrap_or_else(|e| e.into_inner()) += 1;
-        let me = self.clone();
-        rayon::spawn(move || {
-            let (w, h) = files::SEQUENCE_FRAME;
-            let drawn = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                preview(&first, &mesh, w, h)
-            }));
-            if let Ok(Ok(img)) = drawn {
-                let t = cgnodes_formats::animation::to_rgba8(&img);
-                me.done
-                    .lock()
-                    .unwrap_or_else(|e| e.into_inner())
-                    .insert(path, (on, t));
-            }
-            let mut n = me.pending.0.lock().unwrap_or_else(|e| e.into_inner());
-            *n -= 1;
-            me.pending.1.notify_all();
-        });
+    /// The drawing thread: takes jobs until the run ends.
+    fn work(&self) {
+        lower_priority();
+        loop {
+            let job = {
+                let mut q = self.queue.0.lock().unwrap_or_else(|e| e.into_inner());
+                loop {
+                    if q.1 {
+                        return;
+                    }
+                    if let Some(j) = q.0.pop_front() {
+                        break j;
+                    }
+                    q = self.queue.1.wait(q).unwrap_or_else(|e| e.into_inner());
+                }
+            };
+            self.draw(job);
+        }
     }
 
-    /// Waits for the thumbnails still being drawn.
+    /// Draws one job at the size of a sequence's frames and keeps it.
+    fn draw(&self, j: Job) {
+        let Some(preview) = self.hooks.preview else {
+            return;
+        };
+        let (w, h) = files::SEQUENCE_FRAME;
+        let drawn = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            preview(&j.first, &j.mesh, w, h)
+        }));
+        if let Ok(Ok(img)) = drawn {
+            let t = cgnodes_formats::animation::to_rgba8(&img);
+            self.done
+                .lock()
+                .unwrap_or_else(|e| e.into_inner())
+                .insert(j.path, (j.on, t));
+        }
+    }
+
+    /// Ends the drawing thread and draws what it had not reached on every core.
     fn wait(&self) {
-        let mut n = self.pending.0.lock().unwrap_or_else(|e| e.into_inner());
-        while *n > 0 {
-            n = self.pending.1.wait(n).unwrap_or_else(|e| e.into_inner());
+        let left: Vec<Job> = {
+            let mut q = self.queue.0.lock().unwrap_or_else(|e| e.into_inner());
+            q.1 = true;
+            q.0.drain(..).collect()
+        };
+        self.queue.1.notify_all();
+        left.into_par_iter().for_each(|j| self.draw(j));
+        if let Some(h) = self.worker.lock().unwrap_or_else(|e| e.into_inner()).take() {
+            let _ = h.join();
+        }
+    }
+}
+
+/// Puts the calling thread in Linux's idle scheduling class, so that it runs only on a core
+/// nothing else wants (sched(7), `SCHED_IDLE`); elsewhere it keeps its priority.
+fn lower_priority() {
+    #[cfg(target_os = "linux")]
+    {
+        let param = libc::sched_param { sched_priority: 0 };
+        // SAFETY: plain syscall on the calling thread (pid 0) with a valid parameter; a
+        // failure only leaves the priority as it was.
+        unsafe {
+            libc::sched_setscheduler(0, libc::SCHED_IDLE, &param);
         }
     }
 }

@@ -9,8 +9,8 @@ import time
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
-def write(name, command, **fields):
-    """Writes bench/results/NAME.json and returns its path."""
+def write(name, command, out_dir=None, **fields):
+    """Writes bench/results/NAME.json (or OUT_DIR/NAME.json) and returns its path."""
     commit = subprocess.run(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"],
                             capture_output=True, text=True).stdout.strip()
     rec = {
@@ -21,7 +21,7 @@ def write(name, command, **fields):
         "machine": {"cpu": platform.processor() or platform.machine(), "cores": os.cpu_count()},
         **fields,
     }
-    path = os.path.join(ROOT, "bench/results", name + ".json")
+    path = os.path.join(out_dir or os.path.join(ROOT, "bench/results"), name + ".json")
     os.makedirs(os.path.dirname(path), exist_ok=True)
     with open(path, "w") as f:
         json.dump(rec, f, indent=1)

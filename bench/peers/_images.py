@@ -125,3 +125,12 @@ def read_table(path):
 
     with open(path) as f:
         return [{k: float(v) for k, v in r.items() if v != ""} for r in csv.DictReader(f)]
+
+
+def result(cases, **extra):
+    """Prints the line `bench/peers/compare.py` reads from a script's round: `RESULT {json}`
+    with one entry per case (case, ours_ms, peer_ms, accuracy) and `extra` (e.g. the peer's
+    version). The script's own table stays above it for a person."""
+    import json
+
+    print("RESULT " + json.dumps({"cases": cases, **extra}), flush=True)

@@ -93,13 +93,15 @@ def ensure_llvm():
     raise Missing("libllvm19 (Debian) is not installed: apt-get install libllvm19")
 
 
-def need(*modules):
-    """Imports the peer's modules; raises Missing naming the one that fails."""
+def need(*modules, env=None):
+    """Checks that the peer's modules import, in a child process (a native library that
+    crashes on import must not take this process down); raises Missing naming the first
+    that fails."""
     for m in modules:
-        try:
-            __import__(m)
-        except Exception as e:  # noqa: BLE001 (an ImportError or a broken native library)
-            raise Missing(f"python module {m} cannot be imported ({type(e).__name__}: {e})")
+        r = subprocess.run([sys.executable, "-c", f"import {m}"], capture_output=True, text=True, env=env)
+        if r.returncode != 0:
+            err = (r.stderr.strip().splitlines() or [f"exit status {r.returncode}"])[-1]
+            raise Missing(f"python module {m} cannot be imported ({err})")
 
 
 def cgnodes_bin():
@@ -109,14 +111,15 @@ def cgnodes_bin():
     return path
 
 
-def run(cmd, env=None, cwd=None, what=None):
-    """Runs a command; raises Failed with the end of its stderr when it fails."""
+def run(cmd, env=None, cwd=None, what=None, both=False):
+    """Runs a command and returns its stdout (`both`: stdout and stderr); raises Failed with
+    the end of its stderr when it fails."""
     r = subprocess.run(cmd, capture_output=True, text=True, env=env, cwd=cwd)
     if r.returncode != 0:
         tail = "\n".join((r.stderr or r.stdout).strip().splitlines()[-12:])
         raise Failed(f"{what or os.path.basename(str(cmd[1] if len(cmd) > 1 else cmd[0]))} "
                      f"exited {r.returncode}:\n{tail}")
-    return r.stdout
+    return r.stdout + r.stderr if both else r.stdout
 
 
 def timed(cmd, env=None, cwd=None):
@@ -230,13 +233,18 @@ def c_tutte_libigl(ctx):
         timed(ours_cmd), timed(peer_cmd)  # page cache warm
         for _ in range(ctx.rounds):
             cases.add(name, timed(ours_cmd), timed(peer_cmd))
-        vt = np.array([[float(x) for x in ln.split()[1:3]] for ln in open(os.path.join(out, "flat.obj"))
-                       if ln.startswith("vt ")])
-        vp = np.array([[float(x) for x in ln.split()[1:3]] for ln in open(igl_obj) if ln.startswith("v ")])
+        from scipy.spatial import cKDTree
+        rows = lambda path, tag, k: np.array([[float(x) for x in ln.split()[1:1 + k]]  # noqa: E731
+                                              for ln in open(path) if ln.startswith(tag + " ")])
+        flat = os.path.join(out, "flat.obj")
+        vt, v_ours, v_in = rows(flat, "vt", 2), rows(flat, "v", 3), rows(mesh, "v", 3)
+        vp = rows(igl_obj, "v", 2)
         faces = sum(1 for ln in open(mesh) if ln.startswith("f "))
         acc = {"faces": faces}
-        if vt.shape == vp.shape:
-            acc["uv_max_diff_after_similarity_rel"] = uv_similarity_error(vt, vp)
+        if len(vt) == len(v_ours) == len(vp) == len(v_in):
+            # mesh_load may renumber the vertices: match ours to the input's by position
+            _, idx = cKDTree(v_ours).query(v_in)
+            acc["uv_max_diff_after_similarity_rel"] = uv_similarity_error(vt[idx], vp)
         cases.add(name, None, None, acc)
     return cases.done(), {"peer": pkg_version("libigl"), "threads": "cgnodes: all cores; libigl: its own",
                           "ours": "cgnodes run (whole process, report included)",
@@ -470,7 +478,7 @@ def c_warp_cloth(ctx):
             g = os.path.join(ctx.tmp, f"cloth{n}.json")
             json.dump(_cloth_graph(n), open(g, "w"))
             out = run([ctx.bin, "run", g, "--frames", "1..61", "--target", "cloth", "--no-report",
-                       "--out", os.path.join(ctx.tmp, "cloth_out")], env=script_env(ctx))
+                       "--out", os.path.join(ctx.tmp, "cloth_out")], env=script_env(ctx), both=True)
             frames = [float(m) for m in re.findall(r"frame took ([0-9.]+) ms", out)]
             if len(frames) < 30:
                 raise Failed(f"cloth graph logged {len(frames)} frame times")
@@ -488,13 +496,15 @@ def c_splishsplash(ctx):
     T = 3.5, same particle radius, CFL 0.4. Times: the simulation alone on both sides.
     Accuracy: the front's RMS relative error in T against Martin & Moyce's table
     (bench/peers/sph_front.py, as compare_series computes it)."""
-    need("pysplishsplash", "numpy")
     import csv
     import sph_front
     radii = [0.025] if ctx.smoke else [0.014, 0.01]
     env = script_env(ctx)
+    # as bench/sweeps/sph_dam_break.sh: the wheel needs libGLdispatch preloaded, and OpenMP
+    # threads that wait passively on a shared machine
     env["LD_PRELOAD"] = "/lib/x86_64-linux-gnu/libGLdispatch.so.0"
     env.setdefault("OMP_WAIT_POLICY", "PASSIVE")
+    need("pysplishsplash", "numpy", env=env)
     cases = Cases()
     for _ in range(ctx.rounds):
         for r in radii:

@@ -4,11 +4,14 @@
 # thin_plate, inverse) on a 1024x1024 image with 32 control points. The script installs
 # scikit-image into target/peers-venv when it is missing; its JSON goes to
 # docs/charts/image_warp_skimage.json (figures quoted in docs/image.md).
+# scikit-image is required (`--check`): without it the script fails.
 set -euo pipefail
-CGNODES=${CGNODES:-target/release/cgnodes}
-if ! command -v python3 >/dev/null; then
-  echo "image_warp_grid.sh: python3 not found; skipping the scikit-image comparison"
-  exit 0
+py=${PEERS_PYTHON:-python3}
+if ! "$py" -c 'import skimage' 2>/dev/null; then
+  echo "scikit-image not importable by $py (bench/run_all --peers installs it into target/peers-venv)" >&2
+  exit 1
 fi
-python3 bench/peers/warp_skimage.py "$CGNODES" 5 > docs/charts/image_warp_skimage.json
+[ "${1:-}" = --check ] && exit 0
+CGNODES=${CGNODES:-target/release/cgnodes}
+"$py" bench/peers/warp_skimage.py "$CGNODES" 5 > docs/charts/image_warp_skimage.json
 cat docs/charts/image_warp_skimage.json

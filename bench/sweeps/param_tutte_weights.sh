@@ -4,12 +4,13 @@
 # the repeats of each (weights, mesh) pair, add the mesh's name, and redraw
 # docs/charts/param_tutte_weights.svg from the fastest runs (one point per mesh and weighting).
 set -euo pipefail
+[ "${1:-}" = --check ] && exit 0  # no peer
 CGNODES=${CGNODES:-target/release/cgnodes}
 csv=docs/charts/param_tutte_weights.csv
 best=docs/charts/param_tutte_weights_best.csv
 if ! command -v python3 >/dev/null; then
-  echo "param_tutte_weights.sh: python3 not found; keeping the sweep's own chart (every repeat)"
-  exit 0
+  echo "param_tutte_weights.sh: python3 not found" >&2
+  exit 1
 fi
 python3 - "$csv" "$best" <<'PY'
 import csv, os, statistics, sys

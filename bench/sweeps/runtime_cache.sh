@@ -5,11 +5,12 @@
 # redraws docs/charts/runtime_cache.svg as wall time against vertex count, with a third series
 # "executor only": the rerun's total minus the writer's own time (cache lookups, scheduling).
 set -euo pipefail
+[ "${1:-}" = --check ] && exit 0  # no peer
 csv=docs/charts/runtime_cache.csv
 out=docs/charts/runtime_cache_runs.csv
 if ! command -v python3 >/dev/null; then
-  echo "runtime_cache.sh: python3 not found; keeping the sweep's own chart"
-  exit 0
+  echo "runtime_cache.sh: python3 not found" >&2
+  exit 1
 fi
 python3 - "$csv" "$out" <<'PY'
 import csv, sys

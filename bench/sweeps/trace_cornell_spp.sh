@@ -1,11 +1,19 @@
 #!/usr/bin/env bash
 # trace_cornell_spp: after the sweep (cgnodes' bsdf / nee / mis at several spp, two runs
 # each), keep the faster of the two runs of each configuration (the first run of the
-# sweep shares the cores with the 1024-spp reference render), then, when Mitsuba 3 is
-# installed, render mi.cornell_box() with bench/peers/trace_mitsuba.py at the same spp
+# sweep shares the cores with the 1024-spp reference render), then render mi.cornell_box() with bench/peers/trace_mitsuba.py at the same spp
 # (box filter, max_depth 8), score its images against the same reference with the same
-# mask, and overlay it: docs/charts/trace_cornell_spp.svg.
+# mask, and overlay it: docs/charts/trace_cornell_spp.svg. Mitsuba 3 is required: without it
+# (`--check` says so) the script fails and draws nothing, so the published chart never loses
+# Mitsuba's series. The peer's Python is $PEERS_PYTHON (bench/run_all sets
+# target/peers-venv's), default python3.
 set -euo pipefail
+py=${PEERS_PYTHON:-python3}
+if ! "$py" -c 'import mitsuba' 2>/dev/null; then
+  echo "mitsuba not importable by $py (bench/run_all --peers installs it into target/peers-venv)" >&2
+  exit 1
+fi
+[ "${1:-}" = --check ] && exit 0
 CGNODES=${CGNODES:-target/release/cgnodes}
 csv=docs/charts/trace_cornell_spp.csv
 best=docs/charts/trace_cornell_spp_best.csv
@@ -13,10 +21,6 @@ peer=docs/charts/trace_cornell_spp_mitsuba.csv
 ref=target/trace_cornell_spp/trace_cornell_spp_reference.exr
 spp=1,4,16,64
 title="Cornell box path tracing: RMSE against a 1024-spp reference (256x256, light masked)"
-if ! command -v python3 >/dev/null; then
-  echo "trace_cornell_spp.sh: python3 not found; keeping the sweep's own chart"
-  exit 0
-fi
 python3 - "$csv" "$best" <<'PY'
 import csv, sys
 src, dst = sys.argv[1], sys.argv[2]
@@ -34,11 +38,10 @@ with open(dst, "w", newline="") as f:
         w.writerow([best[key][c] for c in cols])
 PY
 files=("$best")
-if python3 -c 'import mitsuba' 2>/dev/null; then
-  mkdir -p target/trace_cornell_spp/mitsuba
-  python3 bench/peers/trace_mitsuba.py --spp "$spp" --variants scalar_rgb,llvm_ad_rgb \
-    --out target/trace_cornell_spp/mitsuba
-  python3 - "$ref" target/trace_cornell_spp/mitsuba "$peer" bench/graphs/trace_cornell_spp_mask.png <<'PY'
+mkdir -p target/trace_cornell_spp/mitsuba
+"$py" bench/peers/trace_mitsuba.py --spp "$spp" --variants scalar_rgb,llvm_ad_rgb \
+  --out target/trace_cornell_spp/mitsuba
+"$py" - "$ref" target/trace_cornell_spp/mitsuba "$peer" bench/graphs/trace_cornell_spp_mask.png <<'PY'
 import csv, json, os, sys
 import numpy as np
 import mitsuba as mi
@@ -58,10 +61,7 @@ with open(dst, "w", newline="") as f:
                     rmse, 20 * np.log10(1 / rmse), f"{1e3 * r['cpu_seconds']:.3f}"])
         print(f"mitsuba {r['variant']} {r['spp']:4d} spp: {1e3 * r['seconds']:8.1f} ms, RMSE {rmse:.5f}")
 PY
-  files+=("$peer")
-else
-  echo "trace_cornell_spp.sh: Mitsuba 3 is not installed (python3 -c 'import mitsuba' fails); charting cgnodes alone (pip install mitsuba to overlay it)"
-fi
+files+=("$peer")
 "$CGNODES" chart "${files[@]}" --x ms:render --y cmp.rmse --series render.strategy --log-x --log-y \
   --title "$title" --plot docs/charts/trace_cornell_spp.svg
 echo "wrote $best${files[1]:+ and $peer} and docs/charts/trace_cornell_spp.svg"

@@ -1,0 +1,180 @@
+#!/usr/bin/env python3
+"""Writes docs/benchmarks.md from the records alone: bench/results/NAME.json (one per peer
+comparison, written by bench/peers/compare.py; the other records of bench/*.py) and the
+charts' captions docs/charts/NAME.md with their CSVs (written by `cgnodes sweep`). Every figure
+in the page is copied from a record, which is named beside it with its commit and date.
+
+    python3 bench/benchmarks_doc.py      # what `bench/run_all --docs` runs
+"""
+import json
+import os
+import sys
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(HERE)
+sys.path.insert(0, os.path.join(HERE, "peers"))
+from compare import COMPARISONS  # noqa: E402
+
+RESULTS = os.path.join(ROOT, "bench", "results")
+
+
+def load(name):
+    try:
+        with open(os.path.join(RESULTS, name + ".json")) as f:
+            return json.load(f)
+    except (OSError, ValueError):
+        return None
+
+
+def num(x):
+    if x is None:
+        return "-"
+    if isinstance(x, bool):
+        return "yes" if x else "no"
+    if isinstance(x, int):
+        return f"{x:,}"
+    if isinstance(x, float):
+        if x == 0:
+            return "0"
+        a = abs(x)
+        if a >= 100:
+            return f"{x:,.0f}"
+        if a >= 1:
+            return f"{x:.2f}"
+        if a >= 0.01:
+            return f"{x:.3f}"
+        return f"{x:.1e}"
+    return str(x)
+
+
+def accuracy(d):
+    return "; ".join(f"{k.replace('_', ' ')} {num(v)}" for k, v in (d or {}).items()) or "-"
+
+
+def stamp(rec):
+    m = rec.get("machine", {})
+    rounds = rec.get("rounds")
+    return (f"record `bench/results/{rec['benchmark']}.json`: commit {rec.get('commit', '?')}, "
+            f"{rec.get('date', '?')}, {m.get('cores', '?')} cores ({m.get('cpu', '?')})"
+            + (f", {rounds} alternated round{'s' if rounds != 1 else ''}" if rounds else ""))
+
+
+def comparison(name, fn, out):
+    rec = load(name)
+    doc = " ".join(fn.__doc__.split())
+    out.append(f"### {name}\n")
+    if rec is None:
+        out.append(f"{doc}\n\n**Not measured**: no record yet (`bench/run_all --peers --only {name}`).\n")
+        return
+    out.append(f"{rec.get('method', doc)}\n")
+    out.append(f"Peer: {rec.get('peer') or '?'}. Threads: {rec.get('threads', '?')}. Ours: "
+               f"{rec.get('ours', '?')}; peer: {rec.get('peer_side', '?')}.\n")
+    out.append(f"Rerun: `{rec['command']}`; {stamp(rec)}.\n")
+    if rec.get("status", "measured") != "measured":
+        reason = (rec.get("reason") or "").splitlines()[0]
+        out.append(f"**Not measured** in the last run: {reason}\n")
+        return
+    if rec.get("smoke"):
+        out.append("This record is from a `--smoke` run (small sizes, one round).\n")
+    out.append("| case | cgnodes ms | peer ms | ratio cgnodes / peer | accuracy |")
+    out.append("|---|---|---|---|---|")
+    for c in rec.get("cases", []):
+        out.append(f"| {c['case']} | {num(c.get('median_ours_ms'))} | {num(c.get('median_peer_ms'))} | "
+                   f"{num(c.get('ratio'))} | {accuracy(c.get('accuracy'))} |")
+    out.append("")
+    out.append("Milliseconds are medians over the rounds (each round's times are in the record); "
+               "a ratio below 1 means cgnodes is faster.\n")
+
+
+def summary(out):
+    out.append("| comparison | peer | ratio cgnodes / peer (median per case) | record date |")
+    out.append("|---|---|---|---|")
+    for name in COMPARISONS:
+        rec = load(name)
+        if rec is None or rec.get("status", "measured") != "measured":
+            out.append(f"| [{name}](#{name}) | {rec.get('peer', '') if rec else ''} | not measured | "
+                       f"{rec.get('date', '') if rec else ''} |")
+            continue
+        ratios = [c["ratio"] for c in rec.get("cases", []) if c.get("ratio") is not None]
+        r = ", ".join(num(x) for x in ratios) if ratios else "accuracy only"
+        out.append(f"| [{name}](#{name}) | {rec.get('peer') or ''} | {r} | {rec.get('date', '')} |")
+    out.append("")
+
+
+def charts(out):
+    folder = os.path.join(ROOT, "docs", "charts")
+    for md in sorted(f for f in os.listdir(folder) if f.endswith(".md")):
+        name = md[:-3]
+        with open(os.path.join(folder, md)) as f:
+            out.append(f.read().rstrip() + "\n")
+        csvs = sorted(f for f in os.listdir(folder) if f.startswith(name) and f.endswith(".csv"))
+        if csvs:
+            out.append("Data: " + ", ".join(f"[{c}](charts/{c})" for c in csvs)
+                       + f" (written by `bench/run_all {name}`).\n")
+        rec = load("chart_" + name)
+        if rec and rec.get("status") == "not measured":
+            out.append(f"**Not measured** in the last run of `bench/run_all {name}` ({rec.get('date')}): "
+                       f"{(rec.get('reason') or '').splitlines()[0]}; the chart and data above are from "
+                       "the run before it.\n")
+
+
+def others(out):
+    known = set(COMPARISONS)
+    rows = []
+    for f in sorted(os.listdir(RESULTS)):
+        name = f[:-5]
+        if not f.endswith(".json") or name in known or name.startswith("chart_"):
+            continue
+        rec = load(name)
+        if rec is None:
+            continue
+        rows.append(f"| `bench/results/{f}` | `{rec.get('command', '?')}` | {rec.get('commit', '?')} | "
+                    f"{rec.get('date', '?')} |")
+    if rows:
+        out.append("## Other records\n")
+        out.append("Cited by the documentation of their subject (docs/report.md, docs/parameterization.md, "
+                   "docs/development.md).\n")
+        out.append("| record | command | commit | date |")
+        out.append("|---|---|---|---|")
+        out.extend(rows)
+        out.append("")
+
+
+def main():
+    out = [
+        "# Benchmarks and charts",
+        "",
+        "Generated by `bench/run_all --docs` (`bench/benchmarks_doc.py`) from the records in",
+        "`bench/results/` and the charts' data in `docs/charts/`; edit those, not this page. Every",
+        "figure below is copied from the record named beside it, with the commit and date it was",
+        "measured at. Speed is given as the ratio cgnodes / peer of times measured in the same run,",
+        "ours and the peer alternated round by round on the same machine; absolute milliseconds",
+        "depend on the machine and its load.",
+        "",
+        "- `bench/run_all --peers` reruns every comparison against a peer library (it installs the",
+        "  peers into `target/peers-venv` with pip) and rewrites its record; `--only NAME` one,",
+        "  `--rounds N` the rounds, `--smoke` each at a small size once (what CI runs),",
+        "  `--skip-missing` records a missing peer as not measured instead of failing.",
+        "- `bench/run_all NAME` reruns a chart's sweep (`bench/sweeps/NAME.json`, then",
+        "  `bench/sweeps/NAME.sh`); `bench/run_all` all of them.",
+        "",
+        "## Against peer libraries",
+        "",
+    ]
+    summary(out)
+    for name, fn in COMPARISONS.items():
+        comparison(name, fn, out)
+    out.append("## Charts\n")
+    out.append("Each chart is drawn by `cgnodes sweep` (and `cgnodes chart` for a peer's series) "
+               "from the CSV named below it.\n")
+    charts(out)
+    others(out)
+    text = "\n".join(out).rstrip() + "\n"
+    path = os.path.join(ROOT, "docs", "benchmarks.md")
+    with open(path, "w") as f:
+        f.write(text)
+    print(f"wrote docs/benchmarks.md ({text.count(chr(10))} lines)")
+
+
+if __name__ == "__main__":
+    main()

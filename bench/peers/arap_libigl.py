@@ -7,7 +7,7 @@ Starts from igl.harmonic (cotangent, boundary on the unit circle by arc length),
 (the first boundary vertex, at its harmonic position), with_dynamics = False, and calls
 igl.arap_solve one iteration at a time (max_iter = 1, warm-started from the previous UVs; the
 state of libigl's ARAP between iterations is the UVs alone) so that energy and flips can be
-logged after each (`energy`: UV area scaled to the 3-D area, as PEERS.md; `energy_raw`:
+logged after each (`energy`: UV area scaled to the 3-D area first; `energy_raw`:
 unscaled, the quantity ARAP minimizes). Writes OUT_PREFIX.json (timings, per-iteration log), OUT_PREFIX.uv
 (final UVs, little-endian float64, n x 2) and OUT_PREFIX.v (libigl's vertex positions, n x 3, to
 match its vertex order with ours) so that cgnodes measures both results with the same

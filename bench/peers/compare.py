@@ -241,9 +241,16 @@ def c_tutte_libigl(ctx):
         vp = rows(igl_obj, "v", 2)
         faces = sum(1 for ln in open(mesh) if ln.startswith("f "))
         acc = {"faces": faces}
-        if len(vt) == len(v_ours) == len(vp) == len(v_in):
-            # mesh_load may renumber the vertices: match ours to the input's by position
-            _, idx = cKDTree(v_ours).query(v_in)
+        faces_of = lambda path: np.array([[int(c.split("/")[0]) - 1 for c in ln.split()[1:4]]  # noqa: E731
+                                          for ln in open(path) if ln.startswith("f ")])
+        f_ours, f_in = faces_of(flat), faces_of(mesh)
+        if len(vt) == len(v_ours) == len(vp) == len(v_in) and f_ours.shape == f_in.shape:
+            # mesh_load renumbers the vertices (first use in the faces) and keeps the faces'
+            # order, so corresponding corners name corresponding vertices
+            idx = np.zeros(len(v_in), np.int64)
+            idx[f_in.ravel()] = f_ours.ravel()
+            if np.abs(v_ours[idx] - v_in).max() > 1e-4 * np.abs(v_in).max():
+                _, idx = cKDTree(v_ours).query(v_in)  # fall back on positions
             acc["uv_max_diff_after_similarity_rel"] = uv_similarity_error(vt[idx], vp)
         cases.add(name, None, None, acc)
     return cases.done(), {"peer": pkg_version("libigl"), "threads": "cgnodes: all cores; libigl: its own",
@@ -286,14 +293,47 @@ def c_arap_libigl(ctx):
                           "peer_side": "igl.harmonic + arap_precomputation + arap_solve"}
 
 
-def _trace_reference(ctx):
+def _igea_scene(ctx):
+    """assets/cornell/cornell_box.obj with the igea scan (assets/meshes/igea_front.obj, 154k
+    faces) added as a white diffuse object, scaled so its largest extent is 0.8 and its
+    bounding box centred at (0, -0.2, 0.2): the scene `cargo bench --bench trace -- --scene
+    igea` builds and `trace_mitsuba.py --scene igea` gives Mitsuba. Written once per run."""
+    path = os.path.join(ctx.shared, "cornell_igea", "cornell_igea.obj")
+    if os.path.exists(path):
+        return path
+    os.makedirs(os.path.dirname(path))
+    shutil.copy(os.path.join(ROOT, "assets/cornell/cornell_box.mtl"), os.path.dirname(path))
+    box = open(os.path.join(ROOT, "assets/cornell/cornell_box.obj")).read()
+    nv = sum(1 for ln in box.splitlines() if ln.startswith("v "))
+    v, f = [], []
+    for ln in open(os.path.join(ROOT, "assets/meshes/igea_front.obj")):
+        if ln.startswith("v "):
+            v.append([float(x) for x in ln.split()[1:4]])
+        elif ln.startswith("f "):
+            f.append([int(c.split("/")[0]) for c in ln.split()[1:]])
+    lo = [min(p[k] for p in v) for k in range(3)]
+    hi = [max(p[k] for p in v) for k in range(3)]
+    s = 0.8 / max(hi[k] - lo[k] for k in range(3))
+    at = [0.0, -0.2, 0.2]
+    with open(path, "w") as out:
+        out.write(box.rstrip("\n") + "\no igea\nusemtl white\n")
+        for p in v:
+            out.write("v %.9g %.9g %.9g\n" % tuple((p[k] - 0.5 * (lo[k] + hi[k])) * s + at[k] for k in range(3)))
+        for face in f:
+            out.write("f " + " ".join(str(i + nv if i > 0 else i) for i in face) + "\n")
+    return path
+
+
+def _trace_reference(ctx, scene, scene_path):
     """The 1024-spp MIS reference of bench/graphs/trace_cornell_spp.json (256 spp under
-    --smoke), rendered once per invocation and shared by both Mitsuba comparisons."""
+    --smoke) for `scene`, rendered once per invocation and shared by both Mitsuba
+    comparisons."""
     spp = 256 if ctx.smoke else 1024
-    path = os.path.join(ctx.shared, f"reference_{spp}", "trace_cornell_spp_reference.exr")
+    path = os.path.join(ctx.shared, f"reference_{scene}_{spp}", "trace_cornell_spp_reference.exr")
     if not os.path.exists(path):
         run([ctx.bin, "run", os.path.join(ROOT, "bench/graphs/trace_cornell_spp.json"),
              "--target", "save_reference", "--set", f"reference.spp={spp}", "--no-report", "-q",
+             *(["--set", f"scene.path={scene_path}"] if scene_path else []),
              "--out", os.path.dirname(path)])
     return path, spp
 
@@ -307,41 +347,49 @@ def _mitsuba(ctx, variant):
     mi.set_variant("scalar_rgb")
     load = lambda p: np.array(mi.Bitmap(p).convert(mi.Bitmap.PixelFormat.RGB, mi.Struct.Type.Float32, False),  # noqa: E731
                               dtype=np.float64)
-    ref_path, ref_spp = _trace_reference(ctx)
-    ref = load(ref_path)
     mask = np.array(mi.Bitmap(os.path.join(ROOT, "bench/graphs/trace_cornell_spp_mask.png")), dtype=np.float64)
-    keep = mask.reshape(ref.shape[0], ref.shape[1], -1)[..., 0] > 127
-    rmse = lambda img: float(np.sqrt(np.mean((img[keep] - ref[keep]) ** 2)))  # noqa: E731
+    graph = os.path.join(ROOT, "bench/graphs/trace_cornell_spp.json")
+    igea = os.path.join(ROOT, "assets/meshes/igea_front.obj")
+    scenes = [("box", None)] + ([] if ctx.smoke else [("igea", _igea_scene(ctx))])
     spps = [4] if ctx.smoke else [16, 64]
     cases = Cases()
-    graph = os.path.join(ROOT, "bench/graphs/trace_cornell_spp.json")
-    for _ in range(ctx.rounds):
-        for spp in spps:
-            out = os.path.join(ctx.tmp, "ours")
-            prof = os.path.join(ctx.tmp, "trace_profile.json")
-            run([ctx.bin, "run", graph, "--target", "save", "--set", f"render.spp={spp}", "--no-report",
-                 "-q", "--out", out, "--profile-json", prof])
-            ours_ms = profile_ms(prof, "render")
-            e_ours = rmse(load(os.path.join(out, "trace_cornell_spp.exr")))
-            mdir = os.path.join(ctx.tmp, "mitsuba")
-            run([sys.executable, os.path.join(HERE, "trace_mitsuba.py"), "--spp", str(spp),
-                 "--variants", variant, "--out", mdir], env=script_env(ctx), what="trace_mitsuba.py")
-            runs = [r for r in json.load(open(os.path.join(mdir, "mitsuba.json")))["runs"]
-                    if r["variant"] == variant and r["spp"] == spp and r.get("scene", "box") == "box"]
-            if not runs:
-                raise Failed(f"trace_mitsuba.py rendered nothing with {variant} (variant unavailable?)")
-            e_peer = rmse(load(os.path.join(mdir, runs[0]["exr"])))
-            cases.add(f"Cornell box 256x256, {spp} spp, MIS", ours_ms, runs[0]["seconds"] * 1e3,
-                      {"rmse_ours": e_ours, "rmse_peer": e_peer, "reference_spp": ref_spp})
+    for scene, scene_path in scenes:
+        ref_path, ref_spp = _trace_reference(ctx, scene, scene_path)
+        ref = load(ref_path)
+        keep = mask.reshape(ref.shape[0], ref.shape[1], -1)[..., 0] > 127
+        rmse = lambda img: float(np.sqrt(np.mean((img[keep] - ref[keep]) ** 2)))  # noqa: E731
+        label = "Cornell box" if scene == "box" else "Cornell box with igea (154k faces)"
+        for _ in range(ctx.rounds):
+            for spp in spps:
+                out = os.path.join(ctx.tmp, "ours")
+                prof = os.path.join(ctx.tmp, "trace_profile.json")
+                run([ctx.bin, "run", graph, "--target", "save", "--set", f"render.spp={spp}", "--no-report",
+                     *(["--set", f"scene.path={scene_path}"] if scene_path else []),
+                     "-q", "--out", out, "--profile-json", prof])
+                ours_ms = profile_ms(prof, "render")
+                e_ours = rmse(load(os.path.join(out, "trace_cornell_spp.exr")))
+                mdir = os.path.join(ctx.tmp, "mitsuba")
+                run([sys.executable, os.path.join(HERE, "trace_mitsuba.py"), "--spp", str(spp),
+                     "--variants", variant, "--scene", scene, "--igea", igea, "--out", mdir],
+                    env=script_env(ctx), what="trace_mitsuba.py")
+                runs = [r for r in json.load(open(os.path.join(mdir, "mitsuba.json")))["runs"]
+                        if r["variant"] == variant and r["spp"] == spp and r.get("scene", "box") == scene]
+                if not runs:
+                    raise Failed(f"trace_mitsuba.py rendered nothing with {variant} (variant unavailable?)")
+                e_peer = rmse(load(os.path.join(mdir, runs[0]["exr"])))
+                cases.add(f"{label} 256x256, {spp} spp, MIS", ours_ms, runs[0]["seconds"] * 1e3,
+                          {"rmse_ours": e_ours, "rmse_peer": e_peer, "reference_spp": ref_spp})
     return cases.done(), {"peer": f"{pkg_version('mitsuba')} {variant}", "threads": "both: all cores",
                           "ours": "render_path node (wall time)", "peer_side": "mi.render (after a warm-up render)"}
 
 
 def c_mitsuba_scalar(ctx):
-    """Path tracing mi.cornell_box() (256x256, max_depth 8, box filter) with cgnodes'
-    render_path (bench/graphs/trace_cornell_spp.json) and Mitsuba 3's scalar_rgb
+    """Path tracing mi.cornell_box() (256x256, max_depth 8, box filter), empty and with the
+    154k-face igea scan standing in it, with cgnodes' render_path
+    (bench/graphs/trace_cornell_spp.json) and Mitsuba 3's scalar_rgb
     (bench/peers/trace_mitsuba.py), equal spp. Accuracy: RMSE of each against cgnodes'
-    1024-spp MIS reference, light masked (bench/graphs/trace_cornell_spp_mask.png)."""
+    1024-spp MIS reference of the same scene, light masked
+    (bench/graphs/trace_cornell_spp_mask.png)."""
     return _mitsuba(ctx, "scalar_rgb")
 
 

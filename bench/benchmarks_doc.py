@@ -4,6 +4,11 @@ comparison, written by bench/peers/compare.py; the other records of bench/*.py) 
 charts' captions docs/charts/NAME.md with their CSVs (written by `cgnodes sweep`). Every figure
 in the page is copied from a record, which is named beside it with its commit and date.
 
+It also fills, in the other docs/*.md, every block between a line
+`<!-- record: NAME -->` and the next `<!-- end record -->` with the ratio table of
+bench/results/NAME.json (and nothing else in those files), so a subject's doc quotes the same
+record.
+
     python3 bench/benchmarks_doc.py      # what `bench/run_all --docs` runs
 """
 import json
@@ -59,6 +64,15 @@ def stamp(rec):
             + (f", {rounds} alternated round{'s' if rounds != 1 else ''}" if rounds else ""))
 
 
+def table(rec, out):
+    out.append("| case | cgnodes ms | peer ms | ratio cgnodes / peer | accuracy |")
+    out.append("|---|---|---|---|---|")
+    for c in rec.get("cases", []):
+        out.append(f"| {c['case']} | {num(c.get('median_ours_ms'))} | {num(c.get('median_peer_ms'))} | "
+                   f"{num(c.get('ratio'))} | {accuracy(c.get('accuracy'))} |")
+    out.append("")
+
+
 def comparison(name, fn, out):
     rec = load(name)
     doc = " ".join(fn.__doc__.split())
@@ -76,12 +90,7 @@ def comparison(name, fn, out):
         return
     if rec.get("smoke"):
         out.append("This record is from a `--smoke` run (small sizes, one round).\n")
-    out.append("| case | cgnodes ms | peer ms | ratio cgnodes / peer | accuracy |")
-    out.append("|---|---|---|---|---|")
-    for c in rec.get("cases", []):
-        out.append(f"| {c['case']} | {num(c.get('median_ours_ms'))} | {num(c.get('median_peer_ms'))} | "
-                   f"{num(c.get('ratio'))} | {accuracy(c.get('accuracy'))} |")
-    out.append("")
+    table(rec, out)
     out.append("Milliseconds are medians over the rounds (each round's times are in the record); "
                "a ratio below 1 means cgnodes is faster.\n")
 
@@ -140,6 +149,34 @@ def others(out):
         out.append("")
 
 
+def fill_blocks():
+    """Fills the `<!-- record: NAME -->` blocks of the other docs (see the module doc)."""
+    import re
+    block = re.compile(r"(<!-- record: ([a-z0-9_]+) -->\n)(.*?)(<!-- end record -->)", re.S)
+    folder = os.path.join(ROOT, "docs")
+
+    def fill(m):
+        rec = load(m.group(2))
+        out = []
+        if rec is None or rec.get("status", "measured") != "measured":
+            out.append(f"Not measured (`bench/run_all --peers --only {m.group(2)}`).\n")
+        else:
+            out.append(f"Peer: {rec.get('peer') or '?'}; rerun: `{rec['command']}`; {stamp(rec)}.\n")
+            table(rec, out)
+        return m.group(1) + "\n".join(out) + m.group(4)
+
+    for md in sorted(os.listdir(folder)):
+        if not md.endswith(".md") or md == "benchmarks.md":
+            continue
+        path = os.path.join(folder, md)
+        text = open(path).read()
+        new = block.sub(fill, text)
+        if new != text:
+            with open(path, "w") as f:
+                f.write(new)
+            print(f"filled the record blocks of docs/{md}")
+
+
 def main():
     out = [
         "# Benchmarks and charts",
@@ -174,6 +211,7 @@ def main():
     with open(path, "w") as f:
         f.write(text)
     print(f"wrote docs/benchmarks.md ({text.count(chr(10))} lines)")
+    fill_blocks()
 
 
 if __name__ == "__main__":

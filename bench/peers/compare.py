@@ -214,25 +214,41 @@ def c_tutte_libigl(ctx):
     """Tutte (cotangent weights, circle boundary) as a user runs it: `cgnodes run` of
     mesh_load -> tutte -> mesh_save with its run report, against a Python process that
     imports libigl and does the same (bench/tutte_whole_run.py's graph and script), whole
-    processes timed. Accuracy: the UV layouts after the best similarity transform."""
+    processes timed; and within the same runs the solve alone: the `tutte` node's wall time
+    (--profile-json: connectivity, boundary, weights, factorization, solve) against libigl's
+    boundary_loop + map_vertices_to_circle + harmonic. Accuracy: the largest UV difference
+    after the best similarity transform, relative to the layout's diameter."""
     need("igl", "numpy")
     import numpy as np
     import tutte_whole_run as tw
     meshes = ["camel_b"] if ctx.smoke else ["camel_b", "camelhead", "nefertiti_front", "igea_front"]
     cases = Cases()
     script = os.path.join(ctx.tmp, "tutte_libigl.py")
-    open(script, "w").write(tw.LIBIGL)
+    # tutte_whole_run.py's script, with the solve timed inside it (printed last)
+    timed_script = tw.LIBIGL.replace("bnd = igl.boundary_loop(F)", "import time\nt0 = time.perf_counter()\n"
+                                     "bnd = igl.boundary_loop(F)")
+    timed_script = timed_script.replace("igl.writeOBJ(", "print((time.perf_counter() - t0) * 1e3)\nigl.writeOBJ(")
+    assert timed_script.count("perf_counter") == 2, "tutte_whole_run.LIBIGL changed"
+    open(script, "w").write(timed_script)
     for name in meshes:
         mesh = os.path.join(ROOT, "assets/meshes", name + ".obj")
         g = os.path.join(ctx.tmp, name + ".json")
         json.dump(tw.graph(mesh), open(g, "w"))
         out = os.path.join(ctx.tmp, "tutte_out")
-        ours_cmd = [ctx.bin, "run", g, "--out", out, "-q"]
+        prof = os.path.join(ctx.tmp, "tutte_profile.json")
+        ours_cmd = [ctx.bin, "run", g, "--out", out, "-q", "--profile-json", prof]
         igl_obj = os.path.join(ctx.tmp, "igl.obj")
         peer_cmd = [sys.executable, script, mesh, igl_obj]
         timed(ours_cmd), timed(peer_cmd)  # page cache warm
         for _ in range(ctx.rounds):
-            cases.add(name, timed(ours_cmd), timed(peer_cmd))
+            t = time.perf_counter()
+            run(ours_cmd)
+            ours_ms = (time.perf_counter() - t) * 1e3
+            t = time.perf_counter()
+            solve_peer = float(run(peer_cmd).split()[-1])
+            peer_ms = (time.perf_counter() - t) * 1e3
+            cases.add(f"{name}, whole process", ours_ms, peer_ms)
+            cases.add(f"{name}, solve only", profile_ms(prof, "tutte"), solve_peer)
         from scipy.spatial import cKDTree
         rows = lambda path, tag, k: np.array([[float(x) for x in ln.split()[1:1 + k]]  # noqa: E731
                                               for ln in open(path) if ln.startswith(tag + " ")])
@@ -252,7 +268,8 @@ def c_tutte_libigl(ctx):
             if np.abs(v_ours[idx] - v_in).max() > 1e-4 * np.abs(v_in).max():
                 _, idx = cKDTree(v_ours).query(v_in)  # fall back on positions
             acc["uv_max_diff_after_similarity_rel"] = uv_similarity_error(vt[idx], vp)
-        cases.add(name, None, None, acc)
+        cases.add(f"{name}, whole process", None, None, acc)
+        cases.add(f"{name}, solve only", None, None, acc)
     return cases.done(), {"peer": pkg_version("libigl"), "threads": "cgnodes: all cores; libigl: its own",
                           "ours": "cgnodes run (whole process, report included)",
                           "peer_side": "python3 + libigl (whole process: import, read, solve, write)"}

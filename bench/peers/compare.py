@@ -284,10 +284,22 @@ def c_arap_libigl(ctx):
     (bench/peers/arap_libigl.py: harmonic + precomputation + iterations). Accuracy: the ARAP
     energy each reaches as minimized, sum A((s1-1)^2+(s2-1)^2)/sum A, and the flipped
     triangles (uv_metrics for ours, the same definition in the script for libigl's)."""
+    return _arap(ctx, 5 if ctx.smoke else 100,
+                 ["camelhead"] if ctx.smoke else ["camel_b", "camelhead", "nefertiti_front", "igea_front"])
+
+
+def c_arap_hard_libigl(ctx):
+    """As arap_libigl on the hard inputs of the fold-free benchmark, 20 iterations:
+    bunny_base (the closed bunny cut open at its base, whose Tutte start is crushed in the
+    middle), bunny_open (also cut at both ear tips) and beetle_11holes (eleven holes), made by
+    bench/peers/arap_meshes.py and shipped in assets/meshes/."""
+    return _arap(ctx, 5 if ctx.smoke else 20,
+                 ["bunny_open"] if ctx.smoke else ["bunny_base", "bunny_open", "beetle_11holes"])
+
+
+def _arap(ctx, iters, meshes):
     need("igl", "numpy")
     import csv
-    iters = 5 if ctx.smoke else 100
-    meshes = ["camelhead"] if ctx.smoke else ["camel_b", "camelhead", "nefertiti_front", "igea_front"]
     graph = os.path.join(ROOT, "graphs/arap_camelhead.json")
     cases = Cases()
     for name in meshes:
@@ -573,7 +585,7 @@ def c_splishsplash(ctx):
     (bench/peers/sph_front.py, as compare_series computes it)."""
     import csv
     import sph_front
-    radii = [0.025] if ctx.smoke else [0.014, 0.01]
+    radii = [0.025] if ctx.smoke else [0.01, 0.005]
     env = script_env(ctx)
     # as bench/sweeps/sph_dam_break.sh: the wheel needs libGLdispatch preloaded, and OpenMP
     # threads that wait passively on a shared machine
@@ -632,6 +644,7 @@ def c_usd_skin(ctx):
 COMPARISONS = {
     "tutte_libigl": c_tutte_libigl,
     "arap_libigl": c_arap_libigl,
+    "arap_hard_libigl": c_arap_hard_libigl,
     "mitsuba_scalar": c_mitsuba_scalar,
     "mitsuba_llvm": c_mitsuba_llvm,
     "opencv_seamless": c_opencv_seamless,

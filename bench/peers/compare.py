@@ -419,15 +419,18 @@ def _mitsuba(ctx, variant):
                 cases.add(f"{label} 256x256, {spp} spp, MIS", ours_ms, runs[0]["seconds"] * 1e3,
                           {"rmse_ours": e_ours, "rmse_peer": e_peer, "reference_spp": ref_spp})
     return cases.done(), {"peer": f"{pkg_version('mitsuba')} {variant}", "threads": "both: all cores",
-                          "ours": "render_path node (wall time)", "peer_side": "mi.render (after a warm-up render)"}
+                          "ours": "render_path node (wall time, scene preparation included)",
+                          "peer_side": "mi.render (after a warm-up render; scene loaded before)"}
 
 
 def c_mitsuba_scalar(ctx):
     """Path tracing mi.cornell_box() (256x256, max_depth 8, box filter), empty and with the
     154k-face igea scan standing in it, with cgnodes' render_path
     (bench/graphs/trace_cornell_spp.json) and Mitsuba 3's scalar_rgb
-    (bench/peers/trace_mitsuba.py), equal spp. Accuracy: RMSE of each against cgnodes'
-    1024-spp MIS reference of the same scene, light masked
+    (bench/peers/trace_mitsuba.py), equal spp. Times: the render_path node's wall time, which
+    includes preparing the scene (BVH build, shading normals), against mi.render after a
+    warm-up render, the scene loaded (and its BVH built) before. Accuracy: RMSE of each
+    against cgnodes' 1024-spp MIS reference of the same scene, light masked
     (bench/graphs/trace_cornell_spp_mask.png)."""
     return _mitsuba(ctx, "scalar_rgb")
 

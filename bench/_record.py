@@ -9,6 +9,18 @@ import time
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
+def _cpu_model():
+    """The processor's name from /proc/cpuinfo (Linux), else None."""
+    try:
+        with open("/proc/cpuinfo") as f:
+            for line in f:
+                if line.startswith("model name"):
+                    return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return None
+
+
 def write(name, command, out_dir=None, **fields):
     """Writes bench/results/NAME.json (or OUT_DIR/NAME.json) and returns its path."""
     commit = subprocess.run(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"],
@@ -18,7 +30,8 @@ def write(name, command, out_dir=None, **fields):
         "command": command,
         "commit": commit,
         "date": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
-        "machine": {"cpu": platform.processor() or platform.machine(), "cores": os.cpu_count()},
+        "machine": {"cpu": platform.processor() or platform.machine(), "cores": os.cpu_count(),
+                    "model": _cpu_model(), "load_average": [round(x, 2) for x in os.getloadavg()]},
         **fields,
     }
     path = os.path.join(out_dir or os.path.join(ROOT, "bench/results"), name + ".json")

@@ -59,17 +59,28 @@ def accuracy(d):
 def stamp(rec):
     m = rec.get("machine", {})
     rounds = rec.get("rounds")
+    load = m.get("load_average")
     return (f"record `bench/results/{rec['benchmark']}.json`: commit {rec.get('commit', '?')}, "
-            f"{rec.get('date', '?')}, {m.get('cores', '?')} cores ({m.get('cpu', '?')})"
+            f"{rec.get('date', '?')}, {m.get('cores', '?')} cores ({m.get('model') or m.get('cpu', '?')}"
+            + (f", load average {load[0]} at the end" if load else "") + ")"
             + (f", {rounds} alternated round{'s' if rounds != 1 else ''}" if rounds else ""))
 
 
+def ratio(c):
+    """The ratio of the medians, with the range of the rounds' own ratios."""
+    r = num(c.get("ratio"))
+    rr = c.get("round_ratios") or []
+    if len(rr) > 1:
+        r += f" ({num(min(rr))}-{num(max(rr))})"
+    return r
+
+
 def table(rec, out):
-    out.append("| case | cgnodes ms | peer ms | ratio cgnodes / peer | accuracy |")
+    out.append("| case | cgnodes ms | peer ms | ratio cgnodes / peer (rounds) | accuracy |")
     out.append("|---|---|---|---|---|")
     for c in rec.get("cases", []):
         out.append(f"| {c['case']} | {num(c.get('median_ours_ms'))} | {num(c.get('median_peer_ms'))} | "
-                   f"{num(c.get('ratio'))} | {accuracy(c.get('accuracy'))} |")
+                   f"{ratio(c)} | {accuracy(c.get('accuracy'))} |")
     out.append("")
 
 
@@ -91,8 +102,9 @@ def comparison(name, fn, out):
     if rec.get("smoke"):
         out.append("This record is from a `--smoke` run (small sizes, one round).\n")
     table(rec, out)
-    out.append("Milliseconds are medians over the rounds (each round's times are in the record); "
-               "a ratio below 1 means cgnodes is faster.\n")
+    out.append("Milliseconds are medians over the rounds (each round's times are in the record); the "
+               "ratio is that of the medians, in brackets the lowest and highest ratio within one round; "
+               "below 1 cgnodes is faster.\n")
 
 
 def summary(out):

@@ -179,6 +179,8 @@ class Cases:
             if r["ours_ms"] and r["peer_ms"]:
                 mo, mp = statistics.median(r["ours_ms"]), statistics.median(r["peer_ms"])
                 r.update(median_ours_ms=mo, median_peer_ms=mp, ratio=mo / mp if mp > 0 else None)
+                if len(r["ours_ms"]) == len(r["peer_ms"]):
+                    r["round_ratios"] = [o / p for o, p in zip(r["ours_ms"], r["peer_ms"]) if p > 0]
             else:
                 r.update(median_ours_ms=None, median_peer_ms=None, ratio=None)
             out.append(r)

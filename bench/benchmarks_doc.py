@@ -21,6 +21,10 @@ sys.path.insert(0, os.path.join(HERE, "peers"))
 from compare import COMPARISONS  # noqa: E402
 
 RESULTS = os.path.join(ROOT, "bench", "results")
+# The chart (docs/charts/NAME.svg, drawn by `bench/run_all NAME`) that shows a comparison's
+# peer as a series.
+CHART = {"arap_libigl": "arap_iterations", "mitsuba_scalar": "trace_cornell_spp",
+         "mitsuba_llvm": "trace_cornell_spp", "splishsplash": "sph_dam_break"}
 
 
 def load(name):
@@ -102,6 +106,11 @@ def comparison(name, fn, out):
     if rec.get("smoke"):
         out.append("This record is from a `--smoke` run (small sizes, one round).\n")
     table(rec, out)
+    chart = CHART.get(name)
+    if chart:
+        out.append(f"![{name}: the peer's series in docs/charts/{chart}.svg](charts/{chart}.svg)\n")
+        out.append(f"The chart is the sweep `bench/run_all {chart}` (its own run, data and caption "
+                   f"under Charts below), not this record.\n")
     out.append("Milliseconds are medians over the rounds (each round's times are in the record); the "
                "ratio is that of the medians, in brackets the lowest and highest ratio within one round; "
                "below 1 cgnodes is faster.\n")

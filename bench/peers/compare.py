@@ -138,10 +138,16 @@ def script_env(ctx, runs=1):
     return env
 
 
-def script_round(ctx, script, *args, runs=1):
+# BLAS held to one thread, for the comparisons where cgnodes runs on one (--threads 1):
+# like for like, and OpenBLAS's spinning threads lose several times over to other jobs on a
+# shared 2-core machine.
+ONE_THREAD = {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
+
+
+def script_round(ctx, script, *args, runs=1, env=None):
     """One round of a script that runs both sides: its RESULT line, else its JSON object."""
     out = run([sys.executable, os.path.join(HERE, script), *map(str, args)],
-              env=script_env(ctx, runs), what=script)
+              env={**script_env(ctx, runs), **(env or {})}, what=script)
     for line in out.splitlines():
         if line.startswith("RESULT "):
             return json.loads(line[7:])
@@ -452,10 +458,10 @@ def c_opencv_seamless(ctx):
                                                          "peer_side": "cv2.seamlessClone"})
 
 
-def _script_cases(ctx, script, args, extra):
+def _script_cases(ctx, script, args, extra, env=None):
     cases, version, more = Cases(), None, {}
     for _ in range(ctx.rounds):
-        res = script_round(ctx, script, *args)
+        res = script_round(ctx, script, *args, env=env)
         for c in res["cases"]:
             cases.add(c["case"], c["ours_ms"], c["peer_ms"], c.get("accuracy"))
         version = res.get("peer_version", version)
@@ -493,20 +499,21 @@ def c_seam_carving(ctx):
 
 def c_numpy_svd(ctx):
     """image_svd (rank 50, full and randomized) against numpy.linalg.svd + reconstruction on a
-    1024x1024 channel (bench/peers/svd_numpy.py). Accuracy: PSNR of the rank-50 image."""
+    1024x1024 channel (bench/peers/svd_numpy.py), both on one thread. Accuracy: PSNR of the
+    rank-50 image."""
     need("numpy")
-    return _script_cases(ctx, "svd_numpy.py", [], {
-        "threads": "cgnodes: one (--threads 1); numpy: its BLAS threads",
+    return _script_cases(ctx, "svd_numpy.py", [], env=ONE_THREAD, extra={
+        "threads": "both: one (cgnodes --threads 1, OPENBLAS_NUM_THREADS=1)",
         "ours": "image_svd node time", "peer_side": "np.linalg.svd + rank-50 product"})
 
 
 def c_numpy_rpca(ctx):
     """rpca against the course's numpy ADMM (SVD thresholding), equal iterations, 500x500
-    rank 25 with 5 % gross errors (bench/peers/rpca_numpy.py). Accuracy: relative error of
-    the recovered low-rank matrix for both, and between them."""
+    rank 25 with 5 % gross errors (bench/peers/rpca_numpy.py), both on one thread. Accuracy:
+    relative error of the recovered low-rank matrix for both, and between them."""
     need("numpy")
-    return _script_cases(ctx, "rpca_numpy.py", [5 if ctx.smoke else 60], {
-        "threads": "cgnodes: one (--threads 1); numpy: its BLAS threads",
+    return _script_cases(ctx, "rpca_numpy.py", [5 if ctx.smoke else 60], env=ONE_THREAD, extra={
+        "threads": "both: one (cgnodes --threads 1, OPENBLAS_NUM_THREADS=1)",
         "ours": "rpca node iterations (time_ms)", "peer_side": "numpy ADMM loop"})
 
 
@@ -531,15 +538,16 @@ def c_scipy_splines(ctx):
 def c_sklearn_mlp(ctx):
     """classifier_train (MLP, Adam, 200 epochs) against scikit-learn's MLPClassifier with the
     same layers, learning rate, batch and epochs on the course's insects data
-    (bench/peers/insects_sklearn.py, seed 0). Accuracy: test accuracy on all 210 points."""
+    (bench/peers/insects_sklearn.py, seed 0), both on one thread. Accuracy: test accuracy on
+    all 210 points."""
     need("sklearn", "numpy")
     cases, version = Cases(), None
     for _ in range(ctx.rounds):
-        r = script_round(ctx, "insects_sklearn.py", ctx.bin, 1)
+        r = script_round(ctx, "insects_sklearn.py", ctx.bin, 1, env=ONE_THREAD)
         cases.add("insects, 200 epochs, seed 0", r["mean_seconds"]["ours"] * 1e3, r["mean_seconds"]["sklearn"] * 1e3,
                   {"test_accuracy_ours": r["mean_all210"]["ours"], "test_accuracy_peer": r["mean_all210"]["sklearn"]})
         version = "scikit-learn " + r["sklearn"]
-    return cases.done(), {"peer": version, "threads": "cgnodes: one (--threads 1); sklearn: its BLAS threads",
+    return cases.done(), {"peer": version, "threads": "both: one (cgnodes --threads 1, OPENBLAS_NUM_THREADS=1)",
                           "ours": "classifier_train's train_seconds", "peer_side": "MLPClassifier.fit"}
 
 

@@ -50,8 +50,8 @@ def num(x):
             return f"{x:,.0f}"
         if a >= 1:
             return f"{x:.2f}"
-        if a >= 0.01:
-            return f"{x:.3f}"
+        if a >= 1e-3:
+            return f"{x:.4g}"
         return f"{x:.1e}"
     return str(x)
 
@@ -70,12 +70,18 @@ def stamp(rec):
             + (f", {rounds} alternated round{'s' if rounds != 1 else ''}" if rounds else ""))
 
 
+def rfmt(x):
+    return f"{x:.2f}" if x >= 0.1 else f"{x:.2g}"
+
+
 def ratio(c):
     """The ratio of the medians, with the range of the rounds' own ratios."""
-    r = num(c.get("ratio"))
+    if c.get("ratio") is None:
+        return "-"
+    r = rfmt(c["ratio"])
     rr = c.get("round_ratios") or []
     if len(rr) > 1:
-        r += f" ({num(min(rr))}-{num(max(rr))})"
+        r += f" ({rfmt(min(rr))}-{rfmt(max(rr))})"
     return r
 
 
@@ -111,9 +117,6 @@ def comparison(name, fn, out):
         out.append(f"![{name}: the peer's series in docs/charts/{chart}.svg](charts/{chart}.svg)\n")
         out.append(f"The chart is the sweep `bench/run_all {chart}` (its own run, data and caption "
                    f"under Charts below), not this record.\n")
-    out.append("Milliseconds are medians over the rounds (each round's times are in the record); the "
-               "ratio is that of the medians, in brackets the lowest and highest ratio within one round; "
-               "below 1 cgnodes is faster.\n")
 
 
 def summary(out):
@@ -126,7 +129,7 @@ def summary(out):
                        f"{rec.get('date', '') if rec else ''} |")
             continue
         ratios = [c["ratio"] for c in rec.get("cases", []) if c.get("ratio") is not None]
-        r = ", ".join(num(x) for x in ratios) if ratios else "accuracy only"
+        r = ", ".join(rfmt(x) for x in ratios) if ratios else "accuracy only"
         out.append(f"| [{name}](#{name}) | {rec.get('peer') or ''} | {r} | {rec.get('date', '')} |")
     out.append("")
 
@@ -217,6 +220,11 @@ def main():
         "  `bench/sweeps/NAME.sh`); `bench/run_all` all of them.",
         "",
         "## Against peer libraries",
+        "",
+        "In each table the milliseconds are medians over the rounds (every round's times are in the",
+        "record), the ratio is that of the medians, and in brackets the lowest and highest ratio",
+        "within one round; below 1 cgnodes is faster. The summary gives each case's ratio in the",
+        "order of its table.",
         "",
     ]
     summary(out)

@@ -494,7 +494,7 @@ def c_seam_carving(ctx):
     pixels both remove, on the colour image and on the peer's own grey image."""
     need("seam_carving", "numpy")
     return _script_cases(ctx, "seam_carving_peer.py", [], {
-        "threads": "both: one", "ours": "seam_carve node time", "peer_side": "seam_carving.resize"})
+        "peer": pkg_version("seam-carving"), "threads": "both: one", "ours": "seam_carve node time", "peer_side": "seam_carving.resize"})
 
 
 def c_numpy_svd(ctx):

@@ -16,9 +16,11 @@ mod progress;
 mod provenance;
 mod run;
 mod schema;
+mod serve;
 mod sweep;
 mod sweep_merge;
 mod validate;
+mod watch;
 
 use crate::registry::Registry;
 use clap::{Parser, Subcommand};
@@ -73,6 +75,12 @@ enum Cmd {
         after_help = "Example: cgnodes run graphs/arap_camelhead.json --out out --set arap.iterations=20 --profile"
     )]
     Run(RunArgs),
+    /// Serve a local web page for a graph: its outputs, and its parameters as widgets that
+    /// rerun it (docs/serve.md).
+    #[command(
+        after_help = "Example: cgnodes serve graphs/tutte_cotangent_circle.json --out out --port 0"
+    )]
+    Serve(serve::ServeArgs),
     /// Check every node of a graph without running it (exit 3 on any error).
     #[command(after_help = "Example: cgnodes validate graphs/cloth_sphere.json")]
     Validate(ValidateArgs),
@@ -392,6 +400,10 @@ struct RunArgs {
     max_memory: Option<u64>,
     #[command(flatten)]
     shard: ShardArgs,
+    /// After the run, rerun whenever the graph file or a file it reads changes (only what
+    /// changed recomputes; an invalid edit prints its errors and waits for the next save).
+    #[arg(long, conflicts_with = "shard")]
+    watch: bool,
 }
 
 /// Runs the command line with `registry` (`nodes::builtin_registry()` plus anything a crate
@@ -415,6 +427,7 @@ pub fn main_with(registry: Registry) -> i32 {
     };
     match cli.cmd {
         Cmd::Run(args) => run::cmd(&registry, args),
+        Cmd::Serve(args) => serve::cmd(&registry, args),
         Cmd::Validate(args) => validate::cmd(&registry, &args.load, &args.target),
         Cmd::Nodes { json } => nodes::cmd(&registry, json),
         Cmd::Describe { node_type } => describe::cmd(&registry, &node_type),

@@ -8,13 +8,100 @@ use crate::exec::{Executor, NodeStatus, RunOptions, RunReport};
 use crate::graph::parse_frames;
 use crate::node::FileEnv;
 use crate::registry::Registry;
+use std::path::PathBuf;
 
 /// `cgnodes run GRAPH ...`: runs the graph once per frame; exit code 1 when a node failed.
+/// With `--watch`, runs again after every change to the graph or its input files.
 pub(super) fn cmd(registry: &Registry, args: RunArgs) -> i32 {
+    let exec = match Executor::new(args.threads, args.cache.as_deref()) {
+        Ok(e) => e,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return EXIT_USAGE;
+        }
+    };
+    let (code, inputs) = run_once(registry, &args, &exec);
+    if !args.watch {
+        return code;
+    }
+    watch_loop(registry, &args, &exec, inputs)
+}
+
+/// `--watch`: waits for a change to the graph file or the files the last valid graph read,
+/// then runs again with the same executor, so only what changed (and what it feeds)
+/// recomputes. Ends only when interrupted.
+fn watch_loop(registry: &Registry, args: &RunArgs, exec: &Executor, inputs: Vec<PathBuf>) -> i32 {
+    let (tx, rx) = std::sync::mpsc::channel();
+    let mut w = match super::watch::FileWatch::new(move |p| {
+        let _ = tx.send(p);
+    }) {
+        Ok(w) => w,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return EXIT_USAGE;
+        }
+    };
+    let mut watched = watch_list(args, inputs);
+    w.set(&watched);
+    loop {
+        eprintln!(
+            "watching {} file{} (Ctrl-C stops)",
+            watched.len(),
+            if watched.len() == 1 { "" } else { "s" }
+        );
+        let changed = super::watch::wait_quiet(&rx);
+        if changed.is_empty() {
+            return 0;
+        }
+        let names: Vec<String> = changed.iter().map(|p| p.display().to_string()).collect();
+        eprintln!("changed: {}", names.join(", "));
+        // A frame range starts again from its first frame: simulations restart.
+        exec.reset_states();
+        let (_, inputs) = run_once(registry, args, exec);
+        // An invalid graph keeps the last valid graph's inputs watched.
+        if !inputs.is_empty() {
+            watched = watch_list(args, inputs);
+            w.set(&watched);
+        }
+    }
+}
+
+/// The graph file, the `--f3d-aliases` file and the graph's input files.
+fn watch_list(args: &RunArgs, inputs: Vec<PathBuf>) -> Vec<PathBuf> {
+    let mut v = vec![args.load.graph.clone()];
+    v.extend(args.load.f3d_aliases.clone());
+    v.extend(inputs);
+    v
+}
+
+/// One run of `run`: loads and validates the graph, runs its frames, writes the report; the
+/// exit code and the files the graph reads (empty when it did not load).
+fn run_once(registry: &Registry, args: &RunArgs, exec: &Executor) -> (i32, Vec<PathBuf>) {
+    let (code, graph) = run_graph(registry, args, exec);
+    let inputs = graph.map_or_else(Vec::new, |g| {
+        crate::exec::input_files(
+            &g,
+            &FileEnv {
+                graph_dir: g.dir.clone(),
+                asset_dirs: args.load.assets.clone(),
+                out_dir: args.out.clone(),
+                allow_write_anywhere: args.allow_write_anywhere,
+            },
+        )
+    });
+    (code, inputs)
+}
+
+/// Loads, validates and runs; the exit code and the graph when it loaded.
+fn run_graph(
+    registry: &Registry,
+    args: &RunArgs,
+    exec: &Executor,
+) -> (i32, Option<crate::validate::ValidGraph>) {
     let targets = (!args.target.is_empty()).then_some(args.target.as_slice());
     let (graph, hint) = match load_args(registry, &args.load, targets) {
         Ok(g) => g,
-        Err(c) => return c,
+        Err(c) => return (c, None),
     };
     for t in &args.target {
         if !graph.index.contains_key(t) {
@@ -22,7 +109,7 @@ pub(super) fn cmd(registry: &Registry, args: RunArgs) -> i32 {
                 "error: --target '{t}' is not a node of {}",
                 args.load.graph.display()
             );
-            return EXIT_USAGE;
+            return (EXIT_USAGE, Some(graph));
         }
     }
     if targets.is_none() && graph.targets.is_empty() {
@@ -30,26 +117,19 @@ pub(super) fn cmd(registry: &Registry, args: RunArgs) -> i32 {
             "error: {}: nothing to run: no node writes a file; name a --target",
             args.load.graph.display()
         );
-        return EXIT_INVALID;
+        return (EXIT_INVALID, Some(graph));
     }
     let (f0, f1) = match args.frames.as_deref().map(parse_frames).transpose() {
         Ok(r) => r.or(hint).unwrap_or((0, 0)),
         Err(e) => {
             eprintln!("error: {e}");
-            return EXIT_USAGE;
+            return (EXIT_USAGE, Some(graph));
         }
     };
-    let (f0, f1) = match shard_frames(&graph, &args, (f0, f1)) {
+    let (f0, f1) = match shard_frames(&graph, args, (f0, f1)) {
         Ok(Some(r)) => r,
-        Ok(None) => return 0,
-        Err(c) => return c,
-    };
-    let exec = match Executor::new(args.threads, args.cache.as_deref()) {
-        Ok(e) => e,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return EXIT_USAGE;
-        }
+        Ok(None) => return (0, Some(graph)),
+        Err(c) => return (c, Some(graph)),
     };
     let monitor = Monitor::new(Verbosity::from_flags(args.quiet, args.verbose));
     let opts = RunOptions {
@@ -89,7 +169,7 @@ pub(super) fn cmd(registry: &Registry, args: RunArgs) -> i32 {
                 eprintln!("error: {e}");
             }
             if frame < f1 {
-                print_stops(&exec, &report, f1);
+                print_stops(exec, &report, f1);
             }
             if args.profile {
                 print_profile(&report);
@@ -127,7 +207,7 @@ pub(super) fn cmd(registry: &Registry, args: RunArgs) -> i32 {
             code = code.max(EXIT_NODE_FAILED);
         }
     }
-    code
+    (code, Some(graph))
 }
 
 /// This process's frames under `--shard I/N` (a contiguous block of `f0..=f1`), `None` when

@@ -37,6 +37,7 @@ mod report;
 mod run_semantics;
 mod runtime;
 mod schema;
+mod serve;
 mod shard;
 mod sph;
 mod sweep;

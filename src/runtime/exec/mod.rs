@@ -6,7 +6,7 @@ mod evaluate;
 mod plan;
 mod report;
 
-pub use plan::cache_keys;
+pub use plan::{cache_keys, input_files};
 pub use report::{NodeReport, NodeStatus, RunReport};
 
 use crate::cache::{DiskCache, Evicted, Key, MemoryCache};

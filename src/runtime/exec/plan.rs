@@ -151,6 +151,39 @@ pub fn cache_keys(
     keys
 }
 
+/// The files a run of `graph` reads through literal file parameters, resolved as the run
+/// resolves them, with their companions (an OBJ's MTL libraries and textures). A path with a
+/// `{frame}` pattern gives its folder. `run --watch` and `serve` watch these; files named by
+/// links (computed paths) are not known before the run.
+pub fn input_files(graph: &ValidGraph, files: &FileEnv) -> Vec<std::path::PathBuf> {
+    let mut out = BTreeSet::new();
+    for node in &graph.nodes {
+        let d = &node.decl;
+        for (name, src) in &node.inputs {
+            let (InputSource::Literal(v) | InputSource::Default(v)) = src else {
+                continue;
+            };
+            if d.input(name).map(|s| s.file) != Some(FileRole::Input) {
+                continue;
+            }
+            for p in path_strings(v) {
+                if p.contains("{frame") {
+                    if let Some(dir) = files.input_path(p).parent() {
+                        out.insert(dir.to_path_buf());
+                    }
+                    continue;
+                }
+                let path = files.input_path(p);
+                if let Some(f) = d.companions {
+                    out.extend(f(&path));
+                }
+                out.insert(path);
+            }
+        }
+    }
+    out.into_iter().collect()
+}
+
 /// The paths a file socket's value names: a string, or each string of a list.
 pub(super) fn path_strings(v: &Value) -> Vec<&str> {
     match v {

@@ -75,8 +75,9 @@ pub fn graph_svg(g: &ValidGraph, status: &dyn Fn(usize) -> Status) -> String {
         let (x, y) = pos(i);
         let st = status(i);
         s.push_str(&format!(
-            "<g class=\"node {}\"><title>{} ({}): {}</title><rect x=\"{x:.1}\" y=\"{y:.1}\" width=\"{BOX_W}\" height=\"{BOX_H}\" rx=\"6\" fill=\"{}\" stroke=\"#334\"/><text x=\"{:.1}\" y=\"{:.1}\" text-anchor=\"middle\" font-weight=\"bold\">{}</text><text x=\"{:.1}\" y=\"{:.1}\" text-anchor=\"middle\" fill=\"#334\">{}</text></g>\n",
+            "<g class=\"node {}\" data-node=\"{}\"><title>{} ({}): {}</title><rect x=\"{x:.1}\" y=\"{y:.1}\" width=\"{BOX_W}\" height=\"{BOX_H}\" rx=\"6\" fill=\"{}\" stroke=\"#334\"/><text x=\"{:.1}\" y=\"{:.1}\" text-anchor=\"middle\" font-weight=\"bold\">{}</text><text x=\"{:.1}\" y=\"{:.1}\" text-anchor=\"middle\" fill=\"#334\">{}</text></g>\n",
             st.name(),
+            esc(&n.id),
             esc(&n.id),
             esc(&n.decl.type_name),
             st.name(),

@@ -85,10 +85,10 @@ fn run_report_shows_outputs_and_the_failed_node() {
     let html = std::fs::read_to_string(out.join("report.html")).unwrap();
     // The failed node and the writer it blocks, coloured as such in the graph.
     assert!(
-        html.contains("<g class=\"node failed\"><title>warp (image_warp)"),
+        html.contains("<g class=\"node failed\" data-node=\"warp\"><title>warp (image_warp)"),
         "{html}"
     );
-    assert!(html.contains("<g class=\"node blocked\"><title>save_warp"));
+    assert!(html.contains("<g class=\"node blocked\" data-node=\"save_warp\"><title>save_warp"));
     assert!(html.contains("node 'warp' (image_warp) failed"));
     let own = check_references(&out);
     // Two thumbnails: the copied image and the mesh preview.

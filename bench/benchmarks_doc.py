@@ -101,9 +101,8 @@ def comparison(name, fn, out):
     if rec is None:
         out.append(f"{doc}\n\n**Not measured**: no record yet (`bench/run_all --peers --only {name}`).\n")
         return
-    out.append(f"{rec.get('method', doc)}\n")
-    out.append(f"Peer: {rec.get('peer') or '?'}. Threads: {rec.get('threads', '?')}. Ours: "
-               f"{rec.get('ours', '?')}; peer: {rec.get('peer_side', '?')}.\n")
+    out.append(f"{rec.get('method', doc)} Peer: {rec.get('peer') or '?'}. Threads: {rec.get('threads', '?')}. "
+               f"Timed: ours {rec.get('ours', '?')}; peer {rec.get('peer_side', '?')}.")
     out.append(f"Rerun: `{rec['command']}`; {stamp(rec)}.\n")
     if rec.get("status", "measured") != "measured":
         reason = (rec.get("reason") or "").splitlines()[0]
@@ -114,7 +113,7 @@ def comparison(name, fn, out):
     table(rec, out)
     chart = CHART.get(name)
     if chart:
-        out.append(f"![{name}: the peer's series in docs/charts/{chart}.svg](charts/{chart}.svg)\n")
+        out.append(f"![{name}: the peer's series in docs/charts/{chart}.svg](charts/{chart}.svg)")
         out.append(f"The chart is the sweep `bench/run_all {chart}` (its own run, data and caption "
                    f"under Charts below), not this record.\n")
 

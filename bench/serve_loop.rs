@@ -9,6 +9,8 @@
 
 #[path = "../tests/it/support/browser.rs"]
 mod browser;
+#[path = "record.rs"]
+mod record;
 
 use browser::Browser;
 use serde_json::{json, Value as Json};
@@ -185,30 +187,10 @@ fn main() {
         .enumerate()
         .map(|(i, c)| measure(c, rounds, if i == 0 { shot.as_deref() } else { None }))
         .collect();
-    let git = |a: &[&str]| {
-        Command::new("git")
-            .args(a)
-            .current_dir(root())
-            .output()
-            .ok()
-            .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
-            .unwrap_or_default()
-    };
-    let date = Command::new("date")
-        .args(["-u", "+%Y-%m-%dT%H:%M:%SZ"])
-        .output()
-        .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
-        .unwrap_or_default();
-    let rec = json!({
-        "benchmark": "serve_loop",
-        "command": format!("cargo bench --bench serve_loop -- --rounds {rounds}"),
-        "commit": git(&["rev-parse", "--short", "HEAD"]),
-        "date": date,
-        "machine": { "cores": std::thread::available_parallelism().map_or(0, |n| n.get()) },
-        "rounds": rounds,
-        "cases": cases,
-    });
-    let path = root().join("bench/results/serve_loop.json");
-    std::fs::write(&path, serde_json::to_string_pretty(&rec).unwrap()).unwrap();
+    let path = record::write(
+        "serve_loop",
+        &format!("cargo bench --bench serve_loop -- --rounds {rounds}"),
+        json!({ "rounds": rounds, "cases": cases }),
+    );
     eprintln!("wrote {}", path.display());
 }

@@ -28,6 +28,7 @@ pub mod springs;
 pub use implicit::{Implicit, LinearSolver, NewtonError, NewtonOptions, NewtonProfile};
 pub use keyframes::{keyframed_center, parse_keyframes};
 pub use mass_spring::LOG_COLUMNS;
+pub use newton_pcg::Preconditioner;
 pub use projective::Projective;
 pub use semi_implicit::SemiImplicit;
 pub use simulator::{

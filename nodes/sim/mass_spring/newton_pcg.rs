@@ -18,6 +18,7 @@
 //! step error is `cg_tol` times a step already below the Newton tolerance.
 
 use super::springs::{spring_hessian_psd, sub, Model, Sphere};
+use cgnodes_linalg as linalg;
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::matrix_free::conjugate_gradient::{
     conjugate_gradient, conjugate_gradient_scratch, CgParams,
@@ -50,7 +51,30 @@ pub struct HessianPcg {
     /// The first Newton direction of the previous step, the first CG's initial guess.
     warm: Option<Mat<f64>>,
     mem: Option<MemBuffer>,
+    /// The per-axis Laplacian preconditioner (`AxisLaplacians`), when used.
+    axes: Option<AxisLaplacians>,
+    /// Which preconditioner CG uses.
+    pub preconditioner: Preconditioner,
 }
+
+/// The preconditioner of the Newton systems' CG.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Preconditioner {
+    /// `BlockJacobi` until one of its CG solves takes more than `STIFF_CG_ITERS` iterations
+    /// (stiff springs for their mass), then `AxisLaplacians` for the rest of the simulation.
+    #[default]
+    Auto,
+    /// The inverse of each vertex's 3x3 diagonal block: cheap per iteration (a tenth of a
+    /// millisecond at 128x128), but its CG iterations grow with stiffness per mass.
+    BlockJacobi,
+    /// Sparse Cholesky factors of the three per-axis Laplacians of the Hessian
+    /// (`AxisLaplacians`), reused across Newton iterations and steps while they pay: CG
+    /// iterations that do not grow with stiffness, at a few milliseconds per iteration.
+    AxisLaplacians,
+}
+
+/// `Preconditioner::Auto` leaves block Jacobi after a CG solve longer than this.
+pub const STIFF_CG_ITERS: usize = 100;
 
 /// What a CG solve did.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -90,6 +114,8 @@ impl HessianPcg {
             inv: vec![[0.0; 6]; n],
             warm: None,
             mem: None,
+            axes: None,
+            preconditioner: Preconditioner::default(),
         }
     }
 
@@ -178,11 +204,7 @@ impl HessianPcg {
             diag: &self.diag,
             free: &self.free,
         };
-        let pre = BlockJacobi { inv: &self.inv };
         let par = Par::Seq;
-        let mem = self
-            .mem
-            .get_or_insert_with(|| MemBuffer::new(conjugate_gradient_scratch(&pre, &op, 1, par)));
         let params = CgParams {
             // faer 0.24 leaves the residual unset for `Zero`; the guess is filled above
             initial_guess: InitialGuessStatus::MaybeNonZero,
@@ -191,17 +213,52 @@ impl HessianPcg {
             max_iters,
             ..Default::default()
         };
-        let info = conjugate_gradient(
-            dx.as_mut(),
-            &pre,
-            &op,
-            rhs,
-            params,
-            |_| {},
-            par,
-            MemStack::new(mem),
-        )
+        let info = match self.preconditioner {
+            Preconditioner::BlockJacobi | Preconditioner::Auto => {
+                let pre = BlockJacobi { inv: &self.inv };
+                let mem = self.mem.get_or_insert_with(|| {
+                    MemBuffer::new(conjugate_gradient_scratch(&pre, &op, 1, par))
+                });
+                conjugate_gradient(
+                    dx.as_mut(),
+                    &pre,
+                    &op,
+                    rhs,
+                    params,
+                    |_| {},
+                    par,
+                    MemStack::new(mem),
+                )
+            }
+            Preconditioner::AxisLaplacians => {
+                let axes = self
+                    .axes
+                    .get_or_insert_with(|| AxisLaplacians::new(&self.start, &self.adj, &self.free));
+                axes.update(&self.blocks, &self.diag)?;
+                let pre = &*axes;
+                let mem = self.mem.get_or_insert_with(|| {
+                    MemBuffer::new(conjugate_gradient_scratch(pre, &op, 1, par))
+                });
+                let r = conjugate_gradient(
+                    dx.as_mut(),
+                    pre,
+                    &op,
+                    rhs,
+                    params,
+                    |_| {},
+                    par,
+                    MemStack::new(mem),
+                );
+                if let Ok(info) = &r {
+                    axes.record(info.iter_count);
+                }
+                r
+            }
+        }
         .map_err(|e| format!("conjugate gradient: {e:?}"))?;
+        if self.preconditioner == Preconditioner::Auto && info.iter_count > STIFF_CG_ITERS {
+            self.preconditioner = Preconditioner::AxisLaplacians;
+        }
         if first {
             match &mut self.warm {
                 Some(w) if w.nrows() == dx.nrows() => w.copy_from(dx.as_ref()),
@@ -342,6 +399,173 @@ impl LinOp<f64> for BlockJacobi<'_> {
 }
 
 impl Precond<f64> for BlockJacobi<'_> {}
+
+/// Separate displacement components (Axelsson & Gustafsson's block-diagonal preconditioner
+/// for elasticity; Axelsson 1999, "Stabilization of algebraic multilevel iteration methods"):
+/// for each axis `a`, the scalar matrix `P_a = M/h^2 + sum_s w_s^a (e_u - e_v)(e_u - e_v)^T`
+/// with `w_s^a` the `aa` entry of spring `s`'s PSD block, a weighted graph Laplacian over the
+/// free vertices plus the mass. It keeps what block Jacobi loses on stiff cloth: the
+/// coupling of a vertex to its neighbours, so the CG iterations no longer grow with the
+/// stiffness per mass; it drops only the coupling between axes.
+///
+/// The three factors share one pattern (symbolic analysis once) and are refactored only when
+/// they stop paying: when a CG needs more than twice the iterations of the first CG after the
+/// last refactorization (and more than `REFACTOR_MIN_ITERS`).
+pub struct AxisLaplacians {
+    /// Row of each free vertex (`usize::MAX` for fixed ones).
+    row: Vec<usize>,
+    /// The lower-triangle entries: the diagonal of each free vertex, then one per spring
+    /// between free vertices (`(row, col, spring)`).
+    offdiag: Vec<(usize, usize, u32)>,
+    /// Springs around each vertex (the operator's adjacency).
+    start: Vec<usize>,
+    adj: Vec<(u32, u32)>,
+    factors: Vec<linalg::spd::SpdFactor>,
+    /// CG iterations of the first solve after the last factorization (`None`: refactor now).
+    baseline: Option<usize>,
+    /// Whether the last CG asks for new factors.
+    stale: bool,
+    /// Numeric factorizations so far.
+    pub factorizations: usize,
+    /// One axis's right-hand side in free-vertex order (the solve's workspace).
+    rhs: std::sync::Mutex<Mat<f64>>,
+}
+
+/// Below this many CG iterations the factors are kept however they compare.
+const REFACTOR_MIN_ITERS: usize = 8;
+
+impl AxisLaplacians {
+    fn new(start: &[usize], adj: &[(u32, u32)], free: &[bool]) -> AxisLaplacians {
+        let mut row = vec![usize::MAX; free.len()];
+        let mut n = 0;
+        for (v, &f) in free.iter().enumerate() {
+            if f {
+                row[v] = n;
+                n += 1;
+            }
+        }
+        let mut offdiag = Vec::new();
+        for v in 0..free.len() {
+            for &(u, s) in &adj[start[v]..start[v + 1]] {
+                let (rv, ru) = (row[v], row[u as usize]);
+                if rv != usize::MAX && ru != usize::MAX && rv > ru {
+                    offdiag.push((rv, ru, s));
+                }
+            }
+        }
+        AxisLaplacians {
+            row,
+            offdiag,
+            start: start.to_vec(),
+            adj: adj.to_vec(),
+            factors: Vec::new(),
+            baseline: None,
+            stale: true,
+            factorizations: 0,
+            rhs: std::sync::Mutex::new(Mat::zeros(n, 1)),
+        }
+    }
+
+    /// Refactors from the current blocks when the factors are stale.
+    fn update(&mut self, blocks: &[Sym3], diag: &[Sym3]) -> Result<(), String> {
+        if !self.stale && !self.factors.is_empty() {
+            return Ok(());
+        }
+        let n = self.rhs.lock().unwrap_or_else(|e| e.into_inner()).nrows();
+        // The aa entry of a Sym3 (xx, xy, xz, yy, yz, zz).
+        const AA: [usize; 3] = [0, 3, 5];
+        let mut fresh = Vec::with_capacity(3);
+        for (a, &aa) in AA.iter().enumerate() {
+            let mut d = vec![0.0; n];
+            for (v, &r) in self.row.iter().enumerate() {
+                if r == usize::MAX {
+                    continue;
+                }
+                let mut x = diag[v][aa];
+                for &(_, s) in &self.adj[self.start[v]..self.start[v + 1]] {
+                    x += blocks[s as usize][aa];
+                }
+                d[r] = x;
+            }
+            let trip: Vec<faer::sparse::Triplet<usize, usize, f64>> =
+                (0..n)
+                    .map(|r| faer::sparse::Triplet::new(r, r, d[r]))
+                    .chain(self.offdiag.iter().map(|&(r, c, s)| {
+                        faer::sparse::Triplet::new(r, c, -blocks[s as usize][aa])
+                    }))
+                    .collect();
+            match self.factors.get_mut(a) {
+                Some(f) => f.refactor(&trip, Par::Seq)?,
+                None => {
+                    let mut f = linalg::spd::SpdFactor::new(n, &trip, Par::Seq)?;
+                    f.prepare_many_solves();
+                    fresh.push(f);
+                }
+            }
+        }
+        if self.factors.is_empty() {
+            self.factors = fresh;
+        }
+        self.factorizations += 1;
+        self.baseline = None;
+        self.stale = false;
+        Ok(())
+    }
+
+    /// Notes a CG's iteration count; marks the factors stale when they stopped paying.
+    fn record(&mut self, iters: usize) {
+        match self.baseline {
+            None => self.baseline = Some(iters),
+            Some(b) => {
+                if iters > REFACTOR_MIN_ITERS && iters > 2 * b.max(1) {
+                    self.stale = true;
+                }
+            }
+        }
+    }
+}
+
+impl std::fmt::Debug for AxisLaplacians {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "per-axis Laplacians ({} vertices)", self.row.len())
+    }
+}
+
+impl LinOp<f64> for AxisLaplacians {
+    fn apply_scratch(&self, _rhs_ncols: usize, _par: Par) -> StackReq {
+        StackReq::EMPTY
+    }
+    fn nrows(&self) -> usize {
+        3 * self.row.len()
+    }
+    fn ncols(&self) -> usize {
+        3 * self.row.len()
+    }
+    fn apply(&self, out: MatMut<'_, f64>, rhs: MatRef<'_, f64>, _par: Par, _: &mut MemStack) {
+        per_column(out, rhs, |p, o| {
+            let mut col = self.rhs.lock().unwrap_or_else(|e| e.into_inner());
+            o.fill(0.0);
+            for (a, f) in self.factors.iter().enumerate() {
+                for (v, &r) in self.row.iter().enumerate() {
+                    if r != usize::MAX {
+                        col[(r, 0)] = p[3 * v + a];
+                    }
+                }
+                f.solve_in_place(col.as_mut());
+                for (v, &r) in self.row.iter().enumerate() {
+                    if r != usize::MAX {
+                        o[3 * v + a] = col[(r, 0)];
+                    }
+                }
+            }
+        });
+    }
+    fn conj_apply(&self, out: MatMut<'_, f64>, rhs: MatRef<'_, f64>, par: Par, s: &mut MemStack) {
+        self.apply(out, rhs, par, s);
+    }
+}
+
+impl Precond<f64> for AxisLaplacians {}
 
 #[inline]
 fn sym3_mul(b: &Sym3, p: [f64; 3]) -> [f64; 3] {

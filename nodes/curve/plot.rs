@@ -167,11 +167,11 @@ fn chart_builder<'a, 'b, DB: DrawingBackend>(
     b
 }
 
-fn draw_on<DB: DrawingBackend>(plot: &Plot, root: &DrawingArea<DB, Shift>) -> Result<(), String>
+fn draw_on<DB: DrawingBackend>(plot: &Plot, root: &DrawingArea<DB, Shift>) -> Result<(), PlotError>
 where
     DB::ErrorType: 'static,
 {
-    let e = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
+    let e = |e: DrawingAreaErrorKind<DB::ErrorType>| PlotError::Draw(e.to_string());
     root.fill(&WHITE).map_err(e)?;
     let (mut x, mut y) = bounds(plot);
     let builder = |root| chart_builder(root, &plot.title);
@@ -189,7 +189,8 @@ where
         .map_err(e)?;
     if let Some(m) = &plot.regions {
         let (pw, ph) = ctx.plotting_area().dim_in_pixel();
-        let rects = region_runs(m, x, y, (pw / 3).max(1) as usize, (ph / 3).max(1) as usize)?;
+        let rects = region_runs(m, x, y, (pw / 3).max(1) as usize, (ph / 3).max(1) as usize)
+            .map_err(PlotError::Regions)?;
         ctx.draw_series(rects.into_iter().map(|(k, a, b)| {
             let (r, g, bl) = COLORS[k % COLORS.len()];
             Rectangle::new([a, b], RGBColor(r, g, bl).mix(0.22).filled())
@@ -295,7 +296,7 @@ fn region_runs(
 ) -> Result<Vec<Run>, String> {
     if m.features.len() != 2 {
         return Err(format!(
-            "decision regions need a model of 2 features, this one has {}",
+            "need a model of 2 features, this one has {}",
             m.features.len()
         ));
     }
@@ -326,8 +327,29 @@ fn region_runs(
     Ok(runs)
 }
 
+/// Why a plot could not be drawn, by what it concerns.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum PlotError {
+    /// The decision regions of the classifier could not be drawn.
+    #[error("decision regions: {0}")]
+    Regions(String),
+    /// Drawing or encoding the chart failed.
+    #[error("{0}")]
+    Draw(String),
+}
+
+impl PlotError {
+    /// The input socket the error is about: `model` for the regions, else `path`.
+    pub fn socket(&self) -> &'static str {
+        match self {
+            PlotError::Regions(_) => "model",
+            PlotError::Draw(_) => "path",
+        }
+    }
+}
+
 /// Draws `plot` as file bytes in `format`.
-pub fn render_plot(plot: &Plot, format: PlotFormat) -> Result<Vec<u8>, String> {
+pub fn render_plot(plot: &Plot, format: PlotFormat) -> Result<Vec<u8>, PlotError> {
     cgnodes_formats::font::register_plot_font();
     let (w, h) = plot.size;
     match format {
@@ -336,7 +358,7 @@ pub fn render_plot(plot: &Plot, format: PlotFormat) -> Result<Vec<u8>, String> {
             {
                 let root = SVGBackend::with_string(&mut text, (w, h)).into_drawing_area();
                 draw_on(plot, &root)?;
-                root.present().map_err(|e| e.to_string())?;
+                root.present().map_err(|e| PlotError::Draw(e.to_string()))?;
             }
             Ok(text.into_bytes())
         }
@@ -345,9 +367,9 @@ pub fn render_plot(plot: &Plot, format: PlotFormat) -> Result<Vec<u8>, String> {
             {
                 let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
                 draw_on(plot, &root)?;
-                root.present().map_err(|e| e.to_string())?;
+                root.present().map_err(|e| PlotError::Draw(e.to_string()))?;
             }
-            cgnodes_formats::png::encode_png(w, h, 3, buf)
+            cgnodes_formats::png::encode_png(w, h, 3, buf).map_err(PlotError::Draw)
         }
     }
 }
@@ -440,14 +462,8 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let path = ctx.output_path("path", &p)?;
     let format = PlotFormat::from_path(&path)
         .ok_or_else(|| NodeError::invalid("path", format!("'{p}' should end in .png or .svg")))?;
-    let bytes = render_plot(&plot, format).map_err(|e| {
-        let socket = if e.contains("decision regions") {
-            "model"
-        } else {
-            "path"
-        };
-        NodeError::invalid(socket, e)
-    })?;
+    let bytes =
+        render_plot(&plot, format).map_err(|e| NodeError::invalid(e.socket(), e.to_string()))?;
     ctx.write_file(&path, &bytes)
 }
 

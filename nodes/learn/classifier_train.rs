@@ -56,7 +56,25 @@ fn declare(b: &mut NodeBuilder) {
 type Labelled = (Vec<String>, Vec<Vec<f64>>, Vec<i64>);
 
 /// Reads `t` as (features, labels) with the label column at `c`.
-fn labelled(t: &Table, c: usize) -> Result<Labelled, String> {
+/// Why a training table cannot be used, by the socket it concerns.
+#[derive(Debug)]
+enum TableError {
+    /// The label column is not integers (`label_column`).
+    Labels(String),
+    /// The features (`train`).
+    Features(String),
+}
+
+impl TableError {
+    fn into_node_error(self) -> NodeError {
+        match self {
+            TableError::Labels(e) => NodeError::invalid("label_column", e),
+            TableError::Features(e) => NodeError::invalid("train", e),
+        }
+    }
+}
+
+fn labelled(t: &Table, c: usize) -> Result<Labelled, TableError> {
     let names: Vec<String> = t
         .columns
         .iter()
@@ -65,12 +83,14 @@ fn labelled(t: &Table, c: usize) -> Result<Labelled, String> {
         .map(|(_, (n, _))| n.clone())
         .collect();
     if names.is_empty() {
-        return Err("no feature column besides the label column".into());
+        return Err(TableError::Features(
+            "no feature column besides the label column".into(),
+        ));
     }
-    let x = features(t, &names)?;
-    let y = int_labels(t, c)?;
+    let x = features(t, &names).map_err(TableError::Features)?;
+    let y = int_labels(t, c).map_err(TableError::Labels)?;
     if x.is_empty() {
-        return Err("no rows".into());
+        return Err(TableError::Features("no rows".into()));
     }
     Ok((names, x, y))
 }
@@ -82,14 +102,7 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let key: String = ctx.input("label_column")?;
     let c = label_index(&tr, &key).map_err(|e| NodeError::invalid("label_column", e))?;
     let label = tr.columns[c].0.clone();
-    let (names, mut x, y) = labelled(&tr, c).map_err(|e| {
-        let socket = if e.contains("integer") {
-            "label_column"
-        } else {
-            "train"
-        };
-        NodeError::invalid(socket, e)
-    })?;
+    let (names, mut x, y) = labelled(&tr, c).map_err(TableError::into_node_error)?;
     let mut classes = y.clone();
     classes.sort_unstable();
     classes.dedup();

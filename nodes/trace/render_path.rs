@@ -17,7 +17,7 @@
 use super::bvh::{Hit, Segment, TraceStacks};
 use super::direct::{delta_lights, environment_nee, Vertex};
 pub use super::path_film::{render, render_opts, Shortcuts};
-use super::render_scene::{prepare, RenderScene, SHADOW_END};
+use super::render_scene::{prepare, RenderScene, TraceError, SHADOW_END};
 use super::sampling::{add, dot, max_comp, mul, power_heuristic, scale, sub, Pcg32, V3};
 use super::tracer_node::{crease_input, declare_crease, reserve_image, trace_error};
 use cgnodes_api::prelude::*;
@@ -337,7 +337,7 @@ pub fn render_path(
     camera: Option<&Camera>,
     s: &PathSettings,
     progress: &(dyn Fn(f64) + Sync),
-) -> Result<(Image, Image), String> {
+) -> Result<(Image, Image), TraceError> {
     let (sc, cam) = prepare(scene, camera, s.crease_deg)?;
     Ok(render(&sc, &cam, s, progress))
 }

@@ -508,6 +508,30 @@ impl RenderScene {
     }
 }
 
+/// Why a tracer could not start, by the socket it concerns.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum TraceError {
+    /// No camera is linked and the scene has none.
+    #[error("no camera: connect one to `camera` or give the scene one")]
+    NoCamera,
+    /// The camera cannot be used (non-finite, degenerate, out-of-range size or field of view).
+    #[error("{0}")]
+    Camera(String),
+    /// The scene cannot be rendered (non-finite vertices, bad indices).
+    #[error("{0}")]
+    Scene(String),
+}
+
+impl TraceError {
+    /// The input socket the error is about: `camera` or `scene`.
+    pub fn socket(&self) -> &'static str {
+        match self {
+            TraceError::NoCamera | TraceError::Camera(_) => "camera",
+            TraceError::Scene(_) => "scene",
+        }
+    }
+}
+
 /// Flattens `scene` (normals smoothed below `crease_deg`) and builds the camera from
 /// `camera`, or the scene's own camera when `camera` is `None`: what both tracers do before
 /// rendering.
@@ -515,11 +539,11 @@ pub fn prepare(
     scene: &Scene,
     camera: Option<&Camera>,
     crease_deg: f64,
-) -> Result<(RenderScene, PinholeCamera), String> {
+) -> Result<(RenderScene, PinholeCamera), TraceError> {
     let cam = camera
         .or(scene.camera.as_ref())
-        .ok_or("no camera: connect one to `camera` or give the scene one")?;
-    let cam = PinholeCamera::new(cam)?;
-    let sc = RenderScene::with_crease(scene, crease_deg)?;
+        .ok_or(TraceError::NoCamera)?;
+    let cam = PinholeCamera::new(cam).map_err(TraceError::Camera)?;
+    let sc = RenderScene::with_crease(scene, crease_deg).map_err(TraceError::Scene)?;
     Ok((sc, cam))
 }

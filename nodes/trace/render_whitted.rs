@@ -17,7 +17,7 @@
 //! reflection or refraction.
 
 use super::bsdf::{fresnel_dielectric, reflect, Bsdf};
-use super::render_scene::{prepare, PinholeCamera, RenderScene, SHADOW_END};
+use super::render_scene::{prepare, PinholeCamera, RenderScene, TraceError, SHADOW_END};
 use super::sampling::{add, dot, max_comp, mul, normalize, scale, sub, uniform_triangle, v3, V3};
 use super::tracer_node::{crease_input, declare_crease, reserve_image, trace_error};
 use cgnodes_api::prelude::*;
@@ -295,7 +295,7 @@ pub fn render_whitted(
     camera: Option<&Camera>,
     s: &WhittedSettings,
     progress: &(dyn Fn(f64) + Sync),
-) -> Result<Image, String> {
+) -> Result<Image, TraceError> {
     let (sc, cam) = prepare(scene, camera, s.crease_deg)?;
     Ok(render(&sc, &cam, s, progress))
 }

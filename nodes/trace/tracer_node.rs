@@ -1,6 +1,7 @@
 //! What the tracer nodes (`render_path`, `render_whitted`) share around the renderers:
 //! the image-size check and the mapping of a renderer's error to the socket it concerns.
 
+use super::render_scene::TraceError;
 use cgnodes_api::prelude::*;
 
 /// Checks that a tracer's image buffers, `bytes_per_pixel` for every pixel of the camera's
@@ -24,15 +25,9 @@ pub fn reserve_image(
     )
 }
 
-/// A renderer's error as a node error on `camera` when it is about the camera, else on
-/// `scene`.
-pub fn trace_error(e: String) -> NodeError {
-    let socket = if e.contains("camera") {
-        "camera"
-    } else {
-        "scene"
-    };
-    NodeError::invalid(socket, e)
+/// A renderer's error as a node error on the socket it concerns.
+pub fn trace_error(e: TraceError) -> NodeError {
+    NodeError::invalid(e.socket(), e.to_string())
 }
 
 /// Declares the `crease_angle` input both tracers take.

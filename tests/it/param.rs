@@ -42,7 +42,8 @@ fn no_flips_with_positive_weights_on_every_disk_mesh() {
 
 #[test]
 fn arap_energy_matches_libigls_published_figures() {
-    // PEERS.md (libigl 2.6.3, same boundary placement and metric): ARAP energy after area
+    // libigl 2.6.3's figures (bench/peers/param_libigl.py, same boundary placement and
+    // metric; record bench/results/tutte_libigl.json): ARAP energy after area
     // scaling, uniform Tutte / cotangent harmonic map: camel_b 2.65 / 1.76, nefertiti 0.96 / 0.36.
     // Both maps are the unique solutions of the same systems, so the figures must agree to
     // libigl's two printed decimals; the harmonic map has no fold guarantee but 0 flips here.

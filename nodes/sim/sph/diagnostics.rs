@@ -48,8 +48,8 @@ impl Fluid {
     }
 
     /// Front position along +x, measured from the box's left wall: the 5th-largest particle
-    /// x (robust against a few splashed particles, as in the SPlisHSPlasH measurement of
-    /// `PEERS.md`) plus half a spacing (the particle's extent).
+    /// x (robust against a few splashed particles, as the SPlisHSPlasH comparison measures it,
+    /// `bench/peers/sph_front.py`) plus half a spacing (the particle's extent).
     pub fn front(&self) -> f64 {
         if self.positions.is_empty() {
             return 0.0;

@@ -14,22 +14,30 @@
 //! these sizes, and the sparse Cholesky, not run at 256^2), the per-phase time of one Newton
 //! iteration at 128^2, and the chart `target/cloth_scaling.svg` (ms/frame against grid size;
 //! copied to docs/mass_spring_scaling.svg). `--sizes 32,64` limits the grids; `--cg-tol`
-//! compares PCG at several CG tolerances with the Cholesky's exact Newton steps instead.
+//! compares PCG at several CG tolerances with the Cholesky's exact Newton steps instead;
+//! `--stiff [--frames N]` runs issue 59's stiff sheet (1.27 m, 1 cm spacing, 1 kg) with each
+//! preconditioner and writes `bench/results/cloth_stiff.json` (`stiff`).
 
 use cgnodes::chart::{draw, Chart, Series};
 use cgnodes::nodes::mesh::mesh_grid::grid_mesh;
 use cgnodes::nodes::sim::mass_spring::{
-    springs_from_mesh, LinearSolver, Method, Model, NewtonOptions, NewtonProfile, Simulator,
-    SolverOptions, SpringKinds,
+    springs_from_mesh, LinearSolver, Method, Model, NewtonOptions, NewtonProfile, Preconditioner,
+    Simulator, SolverOptions, SpringKinds,
 };
 use std::time::Instant;
 
-fn warp_model(n: usize) -> (Model, Vec<[f64; 3]>) {
-    let s = 0.1 * (n - 1) as f64;
+#[path = "record.rs"]
+mod record;
+
+/// An `n` x `n` sheet in the xz plane with `spacing` between vertices, stretch and shear
+/// springs (plus skip-one bending with `bending`) all k = 1000, `mass` per vertex, the two
+/// corners of the first row fixed, gravity `g` along -y.
+fn sheet(n: usize, spacing: f64, mass: f64, bending: bool, g: f64) -> (Model, Vec<[f64; 3]>) {
+    let s = spacing * (n - 1) as f64;
     let mesh = grid_mesh(n - 1, n - 1, [s, s], "xz", [s / 2.0, 0.0, s / 2.0], false).unwrap();
     let kinds = SpringKinds {
         shear: true,
-        bending: true,
+        bending,
         bending_scale: 1.0,
     };
     let springs = springs_from_mesh(&mesh, 1000.0, kinds);
@@ -39,12 +47,22 @@ fn warp_model(n: usize) -> (Model, Vec<[f64; 3]>) {
     fixed[n - 1] = true;
     let model = Model {
         springs,
-        mass: vec![0.1; nv],
+        mass: vec![mass; nv],
         fixed,
-        gravity: [0.0, -9.81, 0.0],
+        gravity: [0.0, -g, 0.0],
         damping: 1.0,
     };
     (model, mesh.positions)
+}
+
+/// Warp's benchmark scene: 10 cm spacing, 0.1 kg per particle, bending springs.
+fn warp_model(n: usize) -> (Model, Vec<[f64; 3]>) {
+    sheet(n, 0.1, 0.1, true, 9.81)
+}
+
+/// Issue 59's stiff scene: a 1.27 m sheet at 128 x 128 (1 cm spacing), 1 kg in all.
+fn stiff_model(n: usize) -> (Model, Vec<[f64; 3]>) {
+    sheet(n, 0.01, 1.0 / (n * n) as f64, false, 9.8)
 }
 
 fn median(mut v: Vec<f64>) -> f64 {
@@ -376,12 +394,114 @@ fn phases(label: &str, p: &NewtonProfile) {
     );
 }
 
+/// What one run of `stiff` measured, per frame.
+struct Frames {
+    ms: Vec<f64>,
+    newton: Vec<usize>,
+    cg: Vec<usize>,
+    energy: Vec<f64>,
+}
+
+/// `frames` backward Euler steps (h = 1/60) of `scene` with PCG Newton and `pre`, printed
+/// per frame.
+fn preconditioned(
+    label: &str,
+    (model, x0): (Model, Vec<[f64; 3]>),
+    frames: usize,
+    pre: Preconditioner,
+    tol: f64,
+) -> Frames {
+    let opts = SolverOptions {
+        newton: NewtonOptions {
+            solver: LinearSolver::Pcg,
+            preconditioner: pre,
+            tol,
+            ..NewtonOptions::default()
+        },
+        ..SolverOptions::default()
+    };
+    let mut sim = Simulator::new(model, x0, None, Method::Implicit, 1.0 / 60.0, opts).unwrap();
+    let mut last = 0;
+    let mut out = Frames {
+        ms: Vec::new(),
+        newton: Vec::new(),
+        cg: Vec::new(),
+        energy: Vec::new(),
+    };
+    for f in 1..=frames {
+        let t = Instant::now();
+        let log = sim.step(None).expect("stable");
+        let ms = t.elapsed().as_secs_f64() * 1e3;
+        let cg_total = sim.newton_profile().unwrap_or_default().cg_iterations;
+        let cg = cg_total - last;
+        last = cg_total;
+        println!(
+            "{label} {pre:?} tol {tol:e}: frame {f}: {ms:8.1} ms, {} Newton, {cg} CG, energy {:.6e}",
+            log.iterations,
+            log.energy.total()
+        );
+        out.ms.push(ms);
+        out.newton.push(log.iterations);
+        out.cg.push(cg);
+        out.energy.push(log.energy.total());
+    }
+    out
+}
+
+/// `--stiff`: issue 59's stiff sheet, frames 1-5, block Jacobi against `Auto` (which moves to
+/// the per-axis Laplacians) at two Newton tolerances; then Warp's scene at 128 x 128 with
+/// block Jacobi against the per-axis Laplacians outright (where they do not pay). Writes
+/// `bench/results/cloth_stiff.json`.
+fn stiff(frames: usize) {
+    let mut runs = Vec::new();
+    let cases = [
+        ("stiff", 1e-7, Preconditioner::BlockJacobi),
+        ("stiff", 1e-7, Preconditioner::Auto),
+        ("stiff", 1e-5, Preconditioner::BlockJacobi),
+        ("stiff", 1e-5, Preconditioner::Auto),
+        ("warp", 1e-7, Preconditioner::BlockJacobi),
+        ("warp", 1e-7, Preconditioner::AxisLaplacians),
+    ];
+    for (scene, tol, pre) in cases {
+        let model = if scene == "stiff" {
+            stiff_model(128)
+        } else {
+            warp_model(128)
+        };
+        let r = preconditioned(scene, model, frames, pre, tol);
+        runs.push(serde_json::json!({
+            "scene": scene, "preconditioner": format!("{pre:?}"), "newton_tol_m": tol,
+            "ms": r.ms, "newton": r.newton, "cg": r.cg, "energy": r.energy,
+            "median_ms": median(r.ms.clone()),
+        }));
+    }
+    let p = record::write(
+        "cloth_stiff",
+        &format!("cargo bench --bench cloth -- --stiff --frames {frames}"),
+        serde_json::json!({ "grid": 128, "frames": frames, "h": 1.0 / 60.0,
+            "stiff": { "spacing_m": 0.01, "mass_kg": 1.0, "stiffness": 1000.0 },
+            "warp": { "spacing_m": 0.1, "mass_per_vertex_kg": 0.1, "stiffness": 1000.0 },
+            "runs": runs }),
+    );
+    println!("wrote {}", p.display());
+}
+
 fn main() {
     if std::env::args().any(|a| a == "--sweep") {
         sweep();
         return;
     }
     let args: Vec<String> = std::env::args().collect();
+    if args.iter().any(|a| a == "--stiff") {
+        let frames = args
+            .iter()
+            .position(|a| a == "--frames")
+            .and_then(|i| args.get(i + 1))
+            .and_then(|f| f.parse().ok())
+            .unwrap_or(5);
+        stiff(frames);
+        return;
+    }
     if args.iter().any(|a| a == "--cg-tol") {
         cg_tol_sweep(64, 20);
         return;

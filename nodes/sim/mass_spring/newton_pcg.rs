@@ -213,51 +213,36 @@ impl HessianPcg {
             max_iters,
             ..Default::default()
         };
-        let info = match self.preconditioner {
-            Preconditioner::BlockJacobi | Preconditioner::Auto => {
-                let pre = BlockJacobi { inv: &self.inv };
-                let mem = self.mem.get_or_insert_with(|| {
-                    MemBuffer::new(conjugate_gradient_scratch(&pre, &op, 1, par))
-                });
-                conjugate_gradient(
-                    dx.as_mut(),
-                    &pre,
-                    &op,
-                    rhs,
-                    params,
-                    |_| {},
-                    par,
-                    MemStack::new(mem),
-                )
-            }
+        let pre = match self.preconditioner {
             Preconditioner::AxisLaplacians => {
                 let axes = self
                     .axes
                     .get_or_insert_with(|| AxisLaplacians::new(&self.start, &self.adj, &self.free));
-                axes.update(&self.blocks, &self.diag)?;
-                let pre = &*axes;
-                let mem = self.mem.get_or_insert_with(|| {
-                    MemBuffer::new(conjugate_gradient_scratch(pre, &op, 1, par))
-                });
-                let r = conjugate_gradient(
-                    dx.as_mut(),
-                    pre,
-                    &op,
-                    rhs,
-                    params,
-                    |_| {},
-                    par,
-                    MemStack::new(mem),
-                );
-                if let Ok(info) = &r {
-                    axes.record(info.iter_count);
-                }
-                r
+                axes.update(&self.start, &self.adj, &self.blocks, &self.diag)?;
+                Pre::Axes(axes)
             }
-        }
+            Preconditioner::BlockJacobi | Preconditioner::Auto => Pre::Jacobi(&self.inv),
+        };
+        let mem = self
+            .mem
+            .get_or_insert_with(|| MemBuffer::new(conjugate_gradient_scratch(&pre, &op, 1, par)));
+        let info = conjugate_gradient(
+            dx.as_mut(),
+            &pre,
+            &op,
+            rhs,
+            params,
+            |_| {},
+            par,
+            MemStack::new(mem),
+        )
         .map_err(|e| format!("conjugate gradient: {e:?}"))?;
-        if self.preconditioner == Preconditioner::Auto && info.iter_count > STIFF_CG_ITERS {
-            self.preconditioner = Preconditioner::AxisLaplacians;
+        match (self.preconditioner, self.axes.as_mut()) {
+            (Preconditioner::AxisLaplacians, Some(axes)) => axes.record(info.iter_count),
+            (Preconditioner::Auto, _) if info.iter_count > STIFF_CG_ITERS => {
+                self.preconditioner = Preconditioner::AxisLaplacians;
+            }
+            _ => {}
         }
         if first {
             match &mut self.warm {
@@ -362,35 +347,44 @@ impl LinOp<f64> for Operator<'_> {
     }
 }
 
-/// The block Jacobi preconditioner: each vertex's 3x3 diagonal block inverted.
-struct BlockJacobi<'a> {
-    inv: &'a [Sym3],
+/// The preconditioner a CG solve applies.
+enum Pre<'a> {
+    /// Block Jacobi: each free vertex's inverted 3x3 diagonal block (zero for fixed ones).
+    Jacobi(&'a [Sym3]),
+    /// The per-axis Laplacians.
+    Axes(&'a AxisLaplacians),
 }
 
-impl std::fmt::Debug for BlockJacobi<'_> {
+impl std::fmt::Debug for Pre<'_> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "block Jacobi ({} vertices)", self.inv.len())
+        match self {
+            Pre::Jacobi(inv) => write!(f, "block Jacobi ({} vertices)", inv.len()),
+            Pre::Axes(a) => write!(f, "per-axis Laplacians ({} vertices)", a.row.len()),
+        }
     }
 }
 
-impl LinOp<f64> for BlockJacobi<'_> {
+impl LinOp<f64> for Pre<'_> {
     fn apply_scratch(&self, _rhs_ncols: usize, _par: Par) -> StackReq {
         StackReq::EMPTY
     }
     fn nrows(&self) -> usize {
-        3 * self.inv.len()
+        3 * match self {
+            Pre::Jacobi(inv) => inv.len(),
+            Pre::Axes(a) => a.row.len(),
+        }
     }
     fn ncols(&self) -> usize {
-        3 * self.inv.len()
+        self.nrows()
     }
     fn apply(&self, out: MatMut<'_, f64>, rhs: MatRef<'_, f64>, _par: Par, _: &mut MemStack) {
-        per_column(out, rhs, |p, o| {
-            for (v, ov) in o.chunks_mut(3).enumerate() {
-                ov.copy_from_slice(&sym3_mul(
-                    &self.inv[v],
-                    [p[3 * v], p[3 * v + 1], p[3 * v + 2]],
-                ));
+        per_column(out, rhs, |p, o| match self {
+            Pre::Jacobi(inv) => {
+                for (v, ov) in o.chunks_mut(3).enumerate() {
+                    ov.copy_from_slice(&sym3_mul(&inv[v], [p[3 * v], p[3 * v + 1], p[3 * v + 2]]));
+                }
             }
+            Pre::Axes(a) => a.solve(p, o),
         });
     }
     fn conj_apply(&self, out: MatMut<'_, f64>, rhs: MatRef<'_, f64>, par: Par, s: &mut MemStack) {
@@ -398,7 +392,7 @@ impl LinOp<f64> for BlockJacobi<'_> {
     }
 }
 
-impl Precond<f64> for BlockJacobi<'_> {}
+impl Precond<f64> for Pre<'_> {}
 
 /// Separate displacement components (Axelsson & Gustafsson's block-diagonal preconditioner
 /// for elasticity; Axelsson 1999, "Stabilization of algebraic multilevel iteration methods"):
@@ -417,9 +411,6 @@ pub struct AxisLaplacians {
     /// The lower-triangle entries: the diagonal of each free vertex, then one per spring
     /// between free vertices (`(row, col, spring)`).
     offdiag: Vec<(usize, usize, u32)>,
-    /// Springs around each vertex (the operator's adjacency).
-    start: Vec<usize>,
-    adj: Vec<(u32, u32)>,
     factors: Vec<linalg::spd::SpdFactor>,
     /// CG iterations of the first solve after the last factorization (`None`: refactor now).
     baseline: Option<usize>,
@@ -456,8 +447,6 @@ impl AxisLaplacians {
         AxisLaplacians {
             row,
             offdiag,
-            start: start.to_vec(),
-            adj: adj.to_vec(),
             factors: Vec::new(),
             baseline: None,
             stale: true,
@@ -466,15 +455,21 @@ impl AxisLaplacians {
         }
     }
 
-    /// Refactors from the current blocks when the factors are stale.
-    fn update(&mut self, blocks: &[Sym3], diag: &[Sym3]) -> Result<(), String> {
+    /// Refactors from the current blocks when the factors are stale (`start` and `adj`: the
+    /// springs around each vertex, as `HessianPcg` keeps them).
+    fn update(
+        &mut self,
+        start: &[usize],
+        adj: &[(u32, u32)],
+        blocks: &[Sym3],
+        diag: &[Sym3],
+    ) -> Result<(), String> {
         if !self.stale && !self.factors.is_empty() {
             return Ok(());
         }
         let n = self.rhs.lock().unwrap_or_else(|e| e.into_inner()).nrows();
         // The aa entry of a Sym3 (xx, xy, xz, yy, yz, zz).
         const AA: [usize; 3] = [0, 3, 5];
-        let mut fresh = Vec::with_capacity(3);
         for (a, &aa) in AA.iter().enumerate() {
             let mut d = vec![0.0; n];
             for (v, &r) in self.row.iter().enumerate() {
@@ -482,7 +477,7 @@ impl AxisLaplacians {
                     continue;
                 }
                 let mut x = diag[v][aa];
-                for &(_, s) in &self.adj[self.start[v]..self.start[v + 1]] {
+                for &(_, s) in &adj[start[v]..start[v + 1]] {
                     x += blocks[s as usize][aa];
                 }
                 d[r] = x;
@@ -499,12 +494,9 @@ impl AxisLaplacians {
                 None => {
                     let mut f = linalg::spd::SpdFactor::new(n, &trip, Par::Seq)?;
                     f.prepare_many_solves();
-                    fresh.push(f);
+                    self.factors.push(f);
                 }
             }
-        }
-        if self.factors.is_empty() {
-            self.factors = fresh;
         }
         self.factorizations += 1;
         self.baseline = None;
@@ -525,47 +517,26 @@ impl AxisLaplacians {
     }
 }
 
-impl std::fmt::Debug for AxisLaplacians {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "per-axis Laplacians ({} vertices)", self.row.len())
-    }
-}
-
-impl LinOp<f64> for AxisLaplacians {
-    fn apply_scratch(&self, _rhs_ncols: usize, _par: Par) -> StackReq {
-        StackReq::EMPTY
-    }
-    fn nrows(&self) -> usize {
-        3 * self.row.len()
-    }
-    fn ncols(&self) -> usize {
-        3 * self.row.len()
-    }
-    fn apply(&self, out: MatMut<'_, f64>, rhs: MatRef<'_, f64>, _par: Par, _: &mut MemStack) {
-        per_column(out, rhs, |p, o| {
-            let mut col = self.rhs.lock().unwrap_or_else(|e| e.into_inner());
-            o.fill(0.0);
-            for (a, f) in self.factors.iter().enumerate() {
-                for (v, &r) in self.row.iter().enumerate() {
-                    if r != usize::MAX {
-                        col[(r, 0)] = p[3 * v + a];
-                    }
-                }
-                f.solve_in_place(col.as_mut());
-                for (v, &r) in self.row.iter().enumerate() {
-                    if r != usize::MAX {
-                        o[3 * v + a] = col[(r, 0)];
-                    }
+impl AxisLaplacians {
+    /// `o = P^-1 p` (three entries per vertex, zero at fixed vertices), axis by axis.
+    fn solve(&self, p: &[f64], o: &mut [f64]) {
+        let mut col = self.rhs.lock().unwrap_or_else(|e| e.into_inner());
+        o.fill(0.0);
+        for (a, f) in self.factors.iter().enumerate() {
+            for (v, &r) in self.row.iter().enumerate() {
+                if r != usize::MAX {
+                    col[(r, 0)] = p[3 * v + a];
                 }
             }
-        });
-    }
-    fn conj_apply(&self, out: MatMut<'_, f64>, rhs: MatRef<'_, f64>, par: Par, s: &mut MemStack) {
-        self.apply(out, rhs, par, s);
+            f.solve_in_place(col.as_mut());
+            for (v, &r) in self.row.iter().enumerate() {
+                if r != usize::MAX {
+                    o[3 * v + a] = col[(r, 0)];
+                }
+            }
+        }
     }
 }
-
-impl Precond<f64> for AxisLaplacians {}
 
 #[inline]
 fn sym3_mul(b: &Sym3, p: [f64; 3]) -> [f64; 3] {

@@ -14,7 +14,7 @@ mod record;
 
 use browser::Browser;
 use serde_json::{json, Value as Json};
-use std::io::{BufRead, BufReader, Write};
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::Duration;
@@ -45,10 +45,6 @@ const CASES: &[Case] = &[
     },
 ];
 
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
 fn median(v: &mut [f64]) -> f64 {
     v.sort_by(f64::total_cmp);
     let n = v.len();
@@ -62,30 +58,11 @@ fn median(v: &mut [f64]) -> f64 {
 /// Runs one case: `rounds` changes; each round's loop time and node time, ms.
 fn measure(case: &Case, rounds: usize, screenshot: Option<&Path>) -> Json {
     let dir = tempfile::tempdir().unwrap();
-    let text = std::fs::read_to_string(root().join(case.graph))
-        .unwrap()
-        .replace(
-            "../assets/",
-            &format!("{}/", root().join("assets").display()),
-        );
     let g = dir.path().join(Path::new(case.graph).file_name().unwrap());
-    std::fs::write(&g, text).unwrap();
-    let mut child = Command::new(env!("CARGO_BIN_EXE_cgnodes"))
-        .arg("serve")
-        .arg(&g)
-        .arg("--out")
-        .arg(dir.path().join("out"))
-        .args(["--port", "0", "--quiet"])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
-    let mut url = String::new();
-    BufReader::new(child.stdout.take().unwrap())
-        .read_line(&mut url)
-        .unwrap();
+    browser::graph_copy(case.graph, &g);
+    let served = browser::serve(&g, &dir.path().join("out"));
     let mut b = Browser::launch();
-    b.open(url.trim()).unwrap();
+    b.open(&served.url).unwrap();
     let long = Duration::from_secs(120);
     b.wait_for("window.cgnodes && window.cgnodes.shown[1]", long)
         .unwrap();
@@ -116,12 +93,7 @@ fn measure(case: &Case, rounds: usize, screenshot: Option<&Path>) -> Json {
     for r in 0..rounds {
         let v = case.values[r % 2];
         let version = r + 2;
-        let set = format!(
-            "(() => {{ const i = document.querySelector('#node-{} [data-param={}] input');
-                       i.value = {v}; i.dispatchEvent(new Event('change')); return true; }})()",
-            case.node, case.socket
-        );
-        b.eval(&set).unwrap();
+        b.set_widget(case.node, case.socket, "input", &v.to_string());
         let shown = format!("window.cgnodes.shown[{version}]");
         b.wait_for(&shown, long).unwrap();
         let ms = b
@@ -149,8 +121,7 @@ fn measure(case: &Case, rounds: usize, screenshot: Option<&Path>) -> Json {
         dones.push(to_done);
         nodes.push(ran);
     }
-    let _ = child.kill();
-    let _ = child.wait();
+    drop(served);
     let over: Vec<f64> = loops.iter().zip(&nodes).map(|(l, n)| l - n).collect();
     let (ml, mn, mo) = (
         median(&mut loops.clone()),

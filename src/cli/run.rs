@@ -79,17 +79,19 @@ fn watch_list(args: &RunArgs, inputs: Vec<PathBuf>) -> Vec<PathBuf> {
 fn run_once(registry: &Registry, args: &RunArgs, exec: &Executor) -> (i32, Vec<PathBuf>) {
     let (code, graph) = run_graph(registry, args, exec);
     let inputs = graph.map_or_else(Vec::new, |g| {
-        crate::exec::input_files(
-            &g,
-            &FileEnv {
-                graph_dir: g.dir.clone(),
-                asset_dirs: args.load.assets.clone(),
-                out_dir: args.out.clone(),
-                allow_write_anywhere: args.allow_write_anywhere,
-            },
-        )
+        crate::exec::input_files(&g, &file_env(args, &g.dir))
     });
     (code, inputs)
+}
+
+/// Where a run of the graph in `graph_dir` reads and writes, from `run`'s options.
+fn file_env(args: &RunArgs, graph_dir: &std::path::Path) -> FileEnv {
+    FileEnv {
+        graph_dir: graph_dir.to_path_buf(),
+        asset_dirs: args.load.assets.clone(),
+        out_dir: args.out.clone(),
+        allow_write_anywhere: args.allow_write_anywhere,
+    }
 }
 
 /// Loads, validates and runs; the exit code and the graph when it loaded.
@@ -134,12 +136,7 @@ fn run_graph(
     let monitor = Monitor::new(Verbosity::from_flags(args.quiet, args.verbose));
     let opts = RunOptions {
         targets: (!args.target.is_empty()).then(|| args.target.clone()),
-        files: FileEnv {
-            graph_dir: graph.dir.clone(),
-            asset_dirs: args.load.assets.clone(),
-            out_dir: args.out.clone(),
-            allow_write_anywhere: args.allow_write_anywhere,
-        },
+        files: file_env(args, &graph.dir),
         progress: monitor.progress_fn(),
         log: monitor.log_fn(),
         measure_memory: args.profile || args.profile_json.is_some(),

@@ -3,67 +3,18 @@
 //! slider reruns the graph and the new image appears, a broken edit shows its error on its
 //! node; requests without the token or from a foreign `Host` or `Origin` are refused.
 
-use crate::common::{asset, skip_or_fail};
-use crate::support::browser::{chromium_available, Browser};
+use crate::common::skip_or_fail;
+use crate::support::browser::{chromium_available, graph_copy, serve, Browser};
 use std::io::{BufRead, BufReader, Read, Write};
 use std::net::TcpStream;
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
+use std::process::{Command, Stdio};
 use std::time::Duration;
 
-/// A `cgnodes serve` process on a free port; killed when dropped.
-pub struct Served {
-    child: Child,
-    /// The URL it printed, with its token.
-    pub url: String,
-    /// Its port.
-    pub port: u16,
-    /// Its token.
-    pub token: String,
-}
-
-impl Drop for Served {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
-
-/// Starts `cgnodes serve graph --out out --port 0` and reads the URL it prints.
-pub fn serve(graph: &Path, out: &Path) -> Served {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_cgnodes"))
-        .arg("serve")
-        .arg(graph)
-        .arg("--out")
-        .arg(out)
-        .args(["--port", "0", "--quiet"])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
-    let mut line = String::new();
-    BufReader::new(child.stdout.take().unwrap())
-        .read_line(&mut line)
-        .unwrap();
-    let url = line.trim().to_string();
-    let rest = url.strip_prefix("http://127.0.0.1:").expect("a local URL");
-    let port = rest.split('/').next().unwrap().parse().unwrap();
-    let token = url.split("token=").nth(1).unwrap().to_string();
-    Served {
-        child,
-        url,
-        port,
-        token,
-    }
-}
-
 /// A copy of the README's Tutte graph in `dir`, reading the mesh from the repository.
-pub fn tutte_graph(dir: &Path) -> PathBuf {
-    let text = std::fs::read_to_string(asset("graphs/tutte_cotangent_circle.json"))
-        .unwrap()
-        .replace("../assets/", &format!("{}/", asset("assets").display()));
+fn tutte_graph(dir: &Path) -> PathBuf {
     let g = dir.join("tutte.json");
-    std::fs::write(&g, text).unwrap();
+    graph_copy("graphs/tutte_cotangent_circle.json", &g);
     g
 }
 
@@ -204,11 +155,7 @@ fn serve_page_shows_outputs_reruns_on_a_slider_and_shows_a_broken_edit_on_its_no
     let png1 = std::fs::read(out.join("tutte_cotangent_circle_layout.png")).unwrap();
 
     // Moving the slider writes the file and reruns; the new image appears.
-    b.eval(
-        "(() => { const r = document.querySelector('#node-checker [data-param=checker_squares] input[type=range]');
-                  r.value = 4; r.dispatchEvent(new Event('change')); return true; })()",
-    )
-    .unwrap();
+    b.set_widget("checker", "checker_squares", "input[type=range]", "4");
     b.wait_for("window.cgnodes.shown[2]", long).unwrap();
     // The rewritten file has a new URL (its modification time); the run's other files keep
     // theirs.
@@ -230,11 +177,7 @@ fn serve_page_shows_outputs_reruns_on_a_slider_and_shows_a_broken_edit_on_its_no
     assert_eq!(statuses["checker"], "ran", "{statuses}");
 
     // A value out of range is refused next to its widget, and the file is left alone.
-    b.eval(
-        "(() => { const n = document.querySelector('#node-checker [data-param=checker_size] input[type=number]');
-                  n.value = 2; n.dispatchEvent(new Event('change')); return true; })()",
-    )
-    .unwrap();
+    b.set_widget("checker", "checker_size", "input[type=number]", "2");
     let perr = b
         .wait_for(
             "document.querySelector('#node-checker [data-param=checker_size] .perr')?.textContent",

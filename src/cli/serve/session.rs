@@ -314,11 +314,7 @@ impl<'r> Session<'r> {
                             ),
                             InputSource::Unset => (None, Json::Null, false),
                         };
-                        let mut p = serde_json::to_value(decl).ok()?;
-                        p["value"] = value.unwrap_or(Json::Null);
-                        p["linked"] = linked;
-                        p["set"] = json!(set);
-                        Some(p)
+                        param_json(decl, value.unwrap_or(Json::Null), set, linked)
                     })
                     .collect();
                 let files: Vec<Json> = s
@@ -413,15 +409,13 @@ fn spec_nodes(
                     d.inputs
                         .iter()
                         .filter_map(|s| {
-                            let mut p = serde_json::to_value(s).ok()?;
                             let lit = n.params.get(&s.name);
-                            p["value"] = lit.cloned().or(s.default.clone()).unwrap_or(Json::Null);
-                            p["set"] = json!(lit.is_some());
-                            p["linked"] = n
+                            let value = lit.cloned().or(s.default.clone()).unwrap_or(Json::Null);
+                            let linked = n
                                 .inputs
                                 .get(&s.name)
                                 .map_or(Json::Null, |l| json!(l.links()));
-                            Some(p)
+                            param_json(s, value, lit.is_some(), linked)
                         })
                         .collect()
                 })
@@ -435,6 +429,16 @@ fn spec_nodes(
             })
         })
         .collect()
+}
+
+/// A parameter as the page's widgets read it: the socket's declaration (type, default, range,
+/// choices), its value, whether the file sets it, and its links (`null` when literal).
+fn param_json(s: &crate::node::SocketDecl, value: Json, set: bool, linked: Json) -> Option<Json> {
+    let mut p = serde_json::to_value(s).ok()?;
+    p["value"] = value;
+    p["set"] = json!(set);
+    p["linked"] = linked;
+    Some(p)
 }
 
 /// `rel` with each segment percent-encoded for a URL path.

@@ -1,13 +1,15 @@
 //! Headless Debian chromium driven through the DevTools protocol over a pipe
 //! (`--remote-debugging-pipe`: JSON messages ending in a NUL byte, commands on the child's
-//! fd 3, answers and events on its fd 4), for the tests of `cgnodes serve`'s page and its
-//! benchmark. No WebSocket client needed.
+//! fd 3, answers and events on its fd 4), and a `cgnodes serve` process to point it at: for
+//! the tests of `serve`'s page and its benchmark (`bench/serve_loop.rs` includes this file).
+//! No WebSocket client needed.
 
 use serde_json::{json, Value as Json};
 use std::fs::File;
 use std::io::{BufRead, BufReader, Write};
 use std::os::fd::{FromRawFd, RawFd};
 use std::os::unix::process::CommandExt;
+use std::path::Path;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
@@ -189,5 +191,76 @@ impl Drop for Browser {
     fn drop(&mut self) {
         let _ = self.child.kill();
         let _ = self.child.wait();
+    }
+}
+
+/// A `cgnodes serve` process on a free port; killed when dropped.
+pub struct Served {
+    child: Child,
+    /// The URL it printed, with its token.
+    pub url: String,
+    /// Its port.
+    #[allow(dead_code)]
+    pub port: u16,
+    /// Its token.
+    #[allow(dead_code)]
+    pub token: String,
+}
+
+impl Drop for Served {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// Starts `cgnodes serve graph --out out --port 0` and reads the URL it prints.
+pub fn serve(graph: &Path, out: &Path) -> Served {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_cgnodes"))
+        .arg("serve")
+        .arg(graph)
+        .arg("--out")
+        .arg(out)
+        .args(["--port", "0", "--quiet"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut line = String::new();
+    BufReader::new(child.stdout.take().unwrap())
+        .read_line(&mut line)
+        .unwrap();
+    let url = line.trim().to_string();
+    let rest = url.strip_prefix("http://127.0.0.1:").expect("a local URL");
+    let port = rest.split('/').next().unwrap().parse().unwrap();
+    let token = url.split("token=").nth(1).unwrap().to_string();
+    Served {
+        child,
+        url,
+        port,
+        token,
+    }
+}
+
+/// Copies the repository's graph `rel` to `dest` with its `../assets/` paths made absolute,
+/// so that it runs from any folder.
+pub fn graph_copy(rel: &str, dest: &Path) {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let text = std::fs::read_to_string(root.join(rel))
+        .unwrap()
+        .replace("../assets/", &format!("{}/", root.join("assets").display()));
+    std::fs::write(dest, text).unwrap();
+}
+
+impl Browser {
+    /// Sets the `input` element (a selector such as `input[type=range]`) of parameter
+    /// `param` on node `node`'s card to `value` and fires its `change` event, as a user's
+    /// edit does.
+    pub fn set_widget(&mut self, node: &str, param: &str, input: &str, value: &str) {
+        self.eval(&format!(
+            "(() => {{ const i = document.querySelector('#node-{node} [data-param={param}] {input}');
+                       i.value = {value}; i.dispatchEvent(new Event('change')); return true; }})()"
+        ))
+        .unwrap();
     }
 }

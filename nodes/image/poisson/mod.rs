@@ -15,6 +15,8 @@ pub mod mask;
 pub mod multigrid;
 pub mod rect;
 pub mod system;
+#[cfg(test)]
+mod timing;
 
 pub use guidance::Mode;
 pub use mask::{MaskShape, ShapeKey};

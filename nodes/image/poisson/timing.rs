@@ -1,0 +1,78 @@
+//! Phase timings of the course paste (BearInWater into NewBackGround), first and reused, as
+//! `bench/peers/poisson_opencv.py` chains them: `cargo test --release -p cgnodes-image
+//! course_paste_phases -- --ignored --nocapture`. Measurements only (no assertion on time).
+
+use super::*;
+use std::path::Path;
+
+fn load(name: &str, raw: bool) -> Image {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/images").join(name);
+    let img = image::open(&path).expect("course image").to_rgba32f();
+    let mut out = Image::new(img.width(), img.height(), [0.0; 4]);
+    for (d, s) in out.pixels.iter_mut().zip(img.pixels()) {
+        *d = if raw { s.0 } else { [s.0[0].powf(2.2), s.0[1].powf(2.2), s.0[2].powf(2.2), s.0[3]] };
+    }
+    out
+}
+
+fn ms(t: Instant) -> f64 {
+    t.elapsed().as_secs_f64() * 1e3
+}
+
+#[test]
+#[ignore]
+fn course_paste_phases() {
+    let sea = load("NewBackGround.jpg", false);
+    let bear = load("BearInWater.jpg", false);
+    let mask = load("BearInWater_mask.png", true);
+    for mode in [Mode::Seamless, Mode::Mixed] {
+        // a warm-up paste of another shape (the mask less its first inside row)
+        let t = Instant::now();
+        let shape = MaskShape::from_image(&mask);
+        let key = shape.key();
+        let t_region = ms(t);
+        let mut flags: Vec<bool> = shape.index.iter().map(|&k| k != u32::MAX).collect();
+        let first_row = shape.inside[0][1] as usize * mask.width as usize;
+        flags[first_row..first_row + mask.width as usize].fill(false);
+        let warm = MaskShape::from_flags(mask.width, mask.height, &flags);
+        let s = solve_keyed(&warm, &warm.key(), &sea, &bear, [62, 162], mode, Solver::Auto).unwrap();
+        recycle(s.values);
+        let mut target = sea.clone();
+        for (i, off) in [[40, 150], [90, 170], [20, 140], [100, 160], [50, 155], [80, 165]]
+            .into_iter()
+            .enumerate()
+        {
+            let t = Instant::now();
+            let mut b = RHS_BUFFER.take();
+            guidance::right_hand_side_into(&shape, &target, &bear, off, mode, &mut b);
+            let t_rhs = ms(t);
+            let t = Instant::now();
+            let (factor, reused) = cached_factor_keyed(&shape, &key, Solver::Auto).unwrap();
+            let t_factor = ms(t);
+            let t = Instant::now();
+            let mut x = b.clone();
+            let it = factor.solve_in_place(x.as_mut()).unwrap();
+            let t_solve = ms(t);
+            let t = Instant::now();
+            let r = system::residual_norm(&shape, x.as_ref(), b.as_ref());
+            let t_res = ms(t);
+            let t = Instant::now();
+            let mut out = copy_target(&target).unwrap();
+            let t_copy = ms(t);
+            let t = Instant::now();
+            write_solution(&mut out, &shape, off, &x);
+            let t_write = ms(t);
+            let t = Instant::now();
+            let s = solve_keyed(&shape, &key, &target, &bear, off, mode, Solver::Auto).unwrap();
+            let t_again = ms(t);
+            eprintln!(
+                "{mode:?} paste {i}: region {t_region:.2} rhs {t_rhs:.2} factor {t_factor:.2} ({}, reused {reused}) \
+                 solve {t_solve:.2} ({it} it.) residual {t_res:.2} ({r:.1e}) copy {t_copy:.2} write {t_write:.2}; whole solve again {t_again:.2} ({} it.)",
+                factor.name(), s.iterations
+            );
+            RHS_BUFFER.keep(b);
+            recycle(s.values);
+            target = out;
+        }
+    }
+}

@@ -12,6 +12,8 @@ pub mod image_warp;
 pub mod poisson_blend;
 pub mod rpca;
 pub mod seam_carve;
+#[cfg(test)]
+mod test_images;
 pub mod warp;
 pub use cgnodes_formats::{animation, file_check, srgb};
 

@@ -323,28 +323,9 @@ mod tests {
     use super::poisson::system;
     use super::*;
 
-    /// A deterministic image with smooth structure and noise.
+    /// A deterministic image with smooth structure and noise (`crate::test_images::waves`).
     fn image(w: u32, h: u32, seed: u64) -> Image {
-        let mut s = seed
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        let mut img = Image::new(w, h, [0.0, 0.0, 0.0, 1.0]);
-        for y in 0..h {
-            for x in 0..w {
-                let mut p = [0.0f32, 0.0, 0.0, 1.0];
-                for (c, v) in p.iter_mut().take(3).enumerate() {
-                    s = s
-                        .wrapping_mul(6364136223846793005)
-                        .wrapping_add(1442695040888963407);
-                    let noise = (s >> 40) as f32 / (1u64 << 24) as f32;
-                    *v = 0.5
-                        + 0.3 * ((x as f32 * 0.3 + c as f32) + y as f32 * 0.2).sin()
-                        + 0.1 * noise;
-                }
-                img.set(x, y, p);
-            }
-        }
-        img
+        crate::test_images::waves(w, h, seed, [0.3, 0.2], 0.1)
     }
 
     /// An opaque mask: a disc of radius `r` at the centre of a `w x h` image (white inside).

@@ -6,11 +6,17 @@ use super::*;
 use std::path::Path;
 
 fn load(name: &str, raw: bool) -> Image {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/images").join(name);
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../assets/images")
+        .join(name);
     let img = image::open(&path).expect("course image").to_rgba32f();
     let mut out = Image::new(img.width(), img.height(), [0.0; 4]);
     for (d, s) in out.pixels.iter_mut().zip(img.pixels()) {
-        *d = if raw { s.0 } else { [s.0[0].powf(2.2), s.0[1].powf(2.2), s.0[2].powf(2.2), s.0[3]] };
+        *d = if raw {
+            s.0
+        } else {
+            [s.0[0].powf(2.2), s.0[1].powf(2.2), s.0[2].powf(2.2), s.0[3]]
+        };
     }
     out
 }
@@ -35,12 +41,28 @@ fn course_paste_phases() {
         let first_row = shape.inside[0][1] as usize * mask.width as usize;
         flags[first_row..first_row + mask.width as usize].fill(false);
         let warm = MaskShape::from_flags(mask.width, mask.height, &flags);
-        let s = solve_keyed(&warm, &warm.key(), &sea, &bear, [62, 162], mode, Solver::Auto).unwrap();
+        let s = solve_keyed(
+            &warm,
+            &warm.key(),
+            &sea,
+            &bear,
+            [62, 162],
+            mode,
+            Solver::Auto,
+        )
+        .unwrap();
         recycle(s.values);
         let mut target = sea.clone();
-        for (i, off) in [[40, 150], [90, 170], [20, 140], [100, 160], [50, 155], [80, 165]]
-            .into_iter()
-            .enumerate()
+        for (i, off) in [
+            [40, 150],
+            [90, 170],
+            [20, 140],
+            [100, 160],
+            [50, 155],
+            [80, 165],
+        ]
+        .into_iter()
+        .enumerate()
         {
             let t = Instant::now();
             let mut b = RHS_BUFFER.take();

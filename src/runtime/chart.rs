@@ -33,8 +33,28 @@ pub struct Chart {
     pub log_y: bool,
 }
 
+/// Why a chart was not drawn.
+#[derive(Debug, thiserror::Error)]
+pub enum ChartError {
+    /// Plotters could not draw it.
+    #[error("{0}")]
+    Draw(String),
+    /// The PNG could not be encoded.
+    #[error("{0}")]
+    Encode(String),
+    /// The file could not be written.
+    #[error(transparent)]
+    Write(#[from] std::io::Error),
+    /// The file name asks for another format.
+    #[error("{}: charts are .svg or .png, not '.{ext}'", path.display())]
+    Format {
+        path: std::path::PathBuf,
+        ext: String,
+    },
+}
+
 /// Draws `chart` to `path` (`.svg` or `.png`), written atomically.
-pub fn draw(chart: &Chart, path: &Path) -> Result<(), String> {
+pub fn draw(chart: &Chart, path: &Path) -> Result<(), ChartError> {
     cgnodes_formats::font::register_plot_font();
     let ext = path
         .extension()
@@ -48,26 +68,31 @@ pub fn draw(chart: &Chart, path: &Path) -> Result<(), String> {
             {
                 let root = SVGBackend::with_string(&mut text, (w, h)).into_drawing_area();
                 draw_on(chart, &root)?;
-                root.present().map_err(|e| e.to_string())?;
+                root.present()
+                    .map_err(|e| ChartError::Draw(e.to_string()))?;
             }
-            cgnodes_api::io::write_atomic(path, |wr| wr.write_all(text.as_bytes()))
-                .map_err(|e| e.to_string())
+            Ok(cgnodes_api::io::write_atomic(path, |wr| {
+                wr.write_all(text.as_bytes())
+            })?)
         }
         "png" => {
             let mut buf = vec![0u8; (w * h * 3) as usize];
             {
                 let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
                 draw_on(chart, &root)?;
-                root.present().map_err(|e| e.to_string())?;
+                root.present()
+                    .map_err(|e| ChartError::Draw(e.to_string()))?;
             }
-            let bytes = cgnodes_formats::png::encode_png(w, h, 3, buf)?;
-            cgnodes_api::io::write_atomic(path, |wr| wr.write_all(&bytes))
-                .map_err(|e| e.to_string())
+            let bytes =
+                cgnodes_formats::png::encode_png(w, h, 3, buf).map_err(ChartError::Encode)?;
+            Ok(cgnodes_api::io::write_atomic(path, |wr| {
+                wr.write_all(&bytes)
+            })?)
         }
-        other => Err(format!(
-            "{}: charts are .svg or .png, not '.{other}'",
-            path.display()
-        )),
+        other => Err(ChartError::Format {
+            path: path.to_path_buf(),
+            ext: other.to_string(),
+        }),
     }
 }
 
@@ -150,11 +175,14 @@ fn legend_corner(chart: &Chart, x: (f64, f64), y: (f64, f64)) -> SeriesLabelPosi
     best.0.clone()
 }
 
-fn draw_on<DB: DrawingBackend>(chart: &Chart, root: &DrawingArea<DB, Shift>) -> Result<(), String>
+fn draw_on<DB: DrawingBackend>(
+    chart: &Chart,
+    root: &DrawingArea<DB, Shift>,
+) -> Result<(), ChartError>
 where
     DB::ErrorType: 'static,
 {
-    let e = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
+    let e = |e: DrawingAreaErrorKind<DB::ErrorType>| ChartError::Draw(e.to_string());
     root.fill(&WHITE).map_err(e)?;
     let xs = chart
         .series

@@ -15,6 +15,78 @@ use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
+/// Why a sweep stopped.
+#[derive(Debug, thiserror::Error)]
+pub enum SweepError {
+    /// The graph did not load, or the frame range did not parse.
+    #[error("{0}")]
+    Graph(String),
+    /// The temporary output folder could not be made.
+    #[error("{0}")]
+    TempDir(std::io::Error),
+    /// The executor did not start.
+    #[error(transparent)]
+    Start(#[from] crate::exec::StartError),
+    /// A measure could not be read.
+    #[error(transparent)]
+    Measure(#[from] MeasureError),
+    /// An axis of the chart could not be read.
+    #[error(transparent)]
+    Axis(#[from] AxisError),
+    /// The chart was not drawn.
+    #[error(transparent)]
+    Chart(#[from] crate::chart::ChartError),
+    /// The CSV was not written.
+    #[error("{}: {source}", path.display())]
+    Write {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    /// The provenance of a written file was not recorded.
+    #[error("{0}")]
+    Record(String),
+}
+
+/// A measure (`node.socket[:column[:summary]]`) that could not be read from a run.
+#[derive(Debug, thiserror::Error)]
+#[error("measure '{spec}': {problem}")]
+pub struct MeasureError {
+    /// The measure as given.
+    pub spec: String,
+    /// What is wrong with it.
+    pub problem: MeasureProblem,
+}
+
+/// What is wrong with a measure.
+#[derive(Debug, thiserror::Error)]
+pub enum MeasureProblem {
+    #[error("expected NODE.SOCKET")]
+    NotALink,
+    #[error("no output {node}.{socket}")]
+    NoOutput { node: String, socket: String },
+    #[error("unknown summary '{0}' (last, first, mean, max, min, sum)")]
+    UnknownSummary(String),
+    #[error("the table has no column '{column}' (it has {})", have.join(", "))]
+    NoColumn { column: String, have: Vec<String> },
+    #[error("name a column, NODE.SOCKET:COLUMN")]
+    ColumnNeeded,
+    #[error("a {0} is not a number or a table")]
+    NotNumeric(cgnodes_api::types::SocketType),
+}
+
+/// A chart axis that names nothing a sweep records.
+#[derive(Debug, thiserror::Error)]
+pub enum AxisError {
+    #[error("nothing to plot: give --measure")]
+    NothingToPlot,
+    #[error("no node '{0}' for the time axis")]
+    NoNode(String),
+    #[error("'{0}' has non-numeric values")]
+    NotNumeric(String),
+    #[error("'{0}' is neither time, time:NODE, a measure nor a varied parameter")]
+    Unknown(String),
+}
+
 /// A sweep: which graph, which parameters to vary, what to measure, where to write.
 #[derive(Clone, Debug, Default, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
@@ -175,32 +247,22 @@ fn split_values(s: &str) -> Vec<&str> {
 }
 
 /// Reads one measure from a run's outputs.
-pub fn measure(outputs: &crate::exec::RunReport, spec: &str) -> Result<f64, String> {
+pub fn measure(outputs: &crate::exec::RunReport, spec: &str) -> Result<f64, MeasureError> {
+    let err = |problem| MeasureError {
+        spec: spec.to_string(),
+        problem,
+    };
     let mut parts = spec.split(':');
     let link = parts.next().unwrap_or_default();
-    let (node, socket) =
-        split_link(link).ok_or_else(|| format!("measure '{spec}': expected NODE.SOCKET"))?;
-    let v = outputs
-        .output(node, socket)
-        .ok_or_else(|| format!("measure '{spec}': no output {node}.{socket}"))?;
+    let (node, socket) = split_link(link).ok_or_else(|| err(MeasureProblem::NotALink))?;
+    let v = outputs.output(node, socket).ok_or_else(|| {
+        err(MeasureProblem::NoOutput {
+            node: node.to_string(),
+            socket: socket.to_string(),
+        })
+    })?;
     let column = parts.next();
     let summary = parts.next().unwrap_or("last");
-    let summarize = |c: &[f64]| -> Result<f64, String> {
-        let finite = c.iter().copied();
-        Ok(match summary {
-            "last" => c.last().copied().unwrap_or(f64::NAN),
-            "first" => c.first().copied().unwrap_or(f64::NAN),
-            "mean" => finite.clone().sum::<f64>() / c.len().max(1) as f64,
-            "max" => finite.fold(f64::NEG_INFINITY, f64::max),
-            "min" => finite.fold(f64::INFINITY, f64::min),
-            "sum" => finite.sum(),
-            other => {
-                return Err(format!(
-                "measure '{spec}': unknown summary '{other}' (last, first, mean, max, min, sum)"
-            ))
-            }
-        })
-    };
     match v {
         Value::Float(x) => Ok(*x),
         Value::Int(x) => Ok(*x as f64),
@@ -208,20 +270,15 @@ pub fn measure(outputs: &crate::exec::RunReport, spec: &str) -> Result<f64, Stri
         Value::Table(t) => {
             let col = match column {
                 Some(c) => t.column(c).ok_or_else(|| {
-                    let names: Vec<&str> = t.columns.iter().map(|(n, _)| n.as_str()).collect();
-                    format!(
-                        "measure '{spec}': the table has no column '{c}' (it has {})",
-                        names.join(", ")
-                    )
+                    err(MeasureProblem::NoColumn {
+                        column: c.to_string(),
+                        have: t.columns.iter().map(|(n, _)| n.clone()).collect(),
+                    })
                 })?,
                 None if t.columns.len() == 1 => &t.columns[0].1,
-                None => {
-                    return Err(format!(
-                        "measure '{spec}': name a column, NODE.SOCKET:COLUMN"
-                    ))
-                }
+                None => return Err(err(MeasureProblem::ColumnNeeded)),
             };
-            summarize(col)
+            summarize(col, summary).map_err(err)
         }
         Value::List(items) => {
             let nums: Vec<f64> = items
@@ -232,13 +289,24 @@ pub fn measure(outputs: &crate::exec::RunReport, spec: &str) -> Result<f64, Stri
                     _ => None,
                 })
                 .collect();
-            summarize(&nums)
+            summarize(&nums, summary).map_err(err)
         }
-        other => Err(format!(
-            "measure '{spec}': a {} is not a number or a table",
-            other.socket_type()
-        )),
+        other => Err(err(MeasureProblem::NotNumeric(other.socket_type()))),
     }
+}
+
+/// One number from a column: its `last`, `first`, `mean`, `max`, `min` or `sum`.
+fn summarize(c: &[f64], summary: &str) -> Result<f64, MeasureProblem> {
+    let finite = c.iter().copied();
+    Ok(match summary {
+        "last" => c.last().copied().unwrap_or(f64::NAN),
+        "first" => c.first().copied().unwrap_or(f64::NAN),
+        "mean" => finite.clone().sum::<f64>() / c.len().max(1) as f64,
+        "max" => finite.fold(f64::NEG_INFINITY, f64::max),
+        "min" => finite.fold(f64::INFINITY, f64::min),
+        "sum" => finite.sum(),
+        other => return Err(MeasureProblem::UnknownSummary(other.to_string())),
+    })
 }
 
 /// Runs a sweep. `base` is the folder relative paths in the spec resolve against.
@@ -247,44 +315,37 @@ pub fn run(
     base: &Path,
     registry: &Registry,
     threads: Option<usize>,
-) -> Result<Vec<SweepRow>, String> {
+) -> Result<Vec<SweepRow>, SweepError> {
     let gpath = base.join(&spec.graph);
-    let graph0 =
-        graph::load_with(&gpath, &Aliases::default(), registry).map_err(|e| e.to_string())?;
+    let graph = graph::load_with(&gpath, &Aliases::default(), registry)
+        .map_err(|e| SweepError::Graph(e.to_string()))?;
     let frames = match &spec.frames {
-        Some(f) => parse_frames(f)?,
-        None => graph0.spec.frames_hint().unwrap_or((0, 0)),
+        Some(f) => parse_frames(f).map_err(SweepError::Graph)?,
+        None => graph.spec.frames_hint().unwrap_or((0, 0)),
     };
     // Registered so that Ctrl-C removes it (`io::interrupt`).
     let (_tracked, tmp) = cgnodes_api::io::interrupt::track(tempfile::tempdir, |t| {
         cgnodes_api::io::interrupt::Resource::Path(t.path().to_path_buf())
     })
-    .map_err(|e| e.to_string())?;
-    let out_dir = spec
-        .out
-        .as_ref()
-        .map(|o| base.join(o))
-        .unwrap_or_else(|| tmp.path().to_path_buf());
-    let exec = Executor::new(threads, spec.cache.as_deref())?;
-    let varied_nodes: Vec<String> = spec
-        .vary
-        .iter()
-        .filter_map(|v| split_link(&v.param).map(|(n, _)| n.to_string()))
-        .collect();
-    // Cartesian product of the varied values.
-    let mut combos: Vec<Vec<serde_json::Value>> = vec![Vec::new()];
-    for v in &spec.vary {
-        combos = combos
-            .into_iter()
-            .flat_map(|c| {
-                v.values.iter().map(move |x| {
-                    let mut c = c.clone();
-                    c.push(x.clone());
-                    c
-                })
-            })
-            .collect();
-    }
+    .map_err(SweepError::TempDir)?;
+    let sweep = Sweep {
+        spec,
+        registry,
+        graph,
+        frames,
+        out_dir: spec
+            .out
+            .as_ref()
+            .map(|o| base.join(o))
+            .unwrap_or_else(|| tmp.path().to_path_buf()),
+        exec: Executor::new(threads, spec.cache.as_deref())?,
+        varied_nodes: spec
+            .vary
+            .iter()
+            .filter_map(|v| split_link(&v.param).map(|(n, _)| n.to_string()))
+            .collect(),
+    };
+    let combos = combinations(&spec.vary);
     let mut rows = Vec::new();
     let shard = spec.shard.unwrap_or_default();
     let total_runs = (0..combos.len()).filter(|&ci| shard.takes(ci)).count() * spec.repeat.max(1);
@@ -299,109 +360,180 @@ pub fn run(
             continue;
         }
         for rep in 0..spec.repeat.max(1) {
-            let mut g = graph0.clone();
-            let mut sets = spec.set.clone();
-            for (v, x) in spec.vary.iter().zip(combo) {
-                sets.push(format!("{}={}", v.param, value_text(x)));
-            }
-            let mut row = SweepRow {
-                combination: ci,
-                values: combo.clone(),
-                repeat: rep,
-                ok: true,
-                error_kind: String::new(),
-                error: String::new(),
-                total_ms: 0.0,
-                node_ms: BTreeMap::new(),
-                measures: vec![f64::NAN; spec.measure.len()],
-            };
-            let valid = apply_sets(&mut g, &sets).and_then(|_| {
-                crate::validate::validate(&g, registry).map_err(|e| e[0].to_string())
-            });
-            let valid = match valid {
-                Ok(v) => v,
-                Err(e) => {
-                    row.ok = false;
-                    row.error_kind = "invalid".into();
-                    row.error = e;
-                    rows.push(row);
-                    tell(rows.len());
-                    continue;
-                }
-            };
-            let opts = RunOptions {
-                files: FileEnv {
-                    graph_dir: valid.dir.clone(),
-                    out_dir: out_dir.clone(),
-                    ..Default::default()
-                },
-                // The measured outputs are read after the run: their nodes run even when the
-                // graph's outputs do not need them (a metric node is usually no writer), and
-                // they compute those outputs even when nothing links them.
-                read_outputs: spec
-                    .measure
-                    .iter()
-                    .filter_map(|m| m.split(':').next().map(str::to_string))
-                    .collect(),
-                max_memory: spec.max_memory,
-                recompute: if rep > 0 {
-                    varied_nodes.clone()
-                } else {
-                    Vec::new()
-                },
-                ..Default::default()
-            };
-            exec.reset_states();
-            // Before the last frame, only failures of the simulations and what they read end
-            // the run: a node that feeds no stateful node (a metric over a series that is
-            // still too short, say) runs again at the last frame, where it counts.
-            let stateful: Vec<usize> = (0..valid.nodes.len())
-                .filter(|&i| valid.nodes[i].decl.stateful)
-                .collect();
-            let feeds_state = valid.needed(&stateful);
-            let mut last = None;
-            for f in frames.0..=frames.1 {
-                let r = exec.run(&valid, &opts, f);
-                row.total_ms += r.total_ms;
-                for n in &r.nodes {
-                    *row.node_ms.entry(n.id.clone()).or_default() +=
-                        if matches!(n.status, NodeStatus::Ran) {
-                            n.ms
-                        } else {
-                            0.0
-                        };
-                }
-                let counts = |id: &str| {
-                    f == frames.1 || valid.index.get(id).is_some_and(|&i| feeds_state[i])
-                };
-                let failed = r.nodes.iter().find_map(|n| match &n.status {
-                    NodeStatus::Failed(e) if counts(&n.id) => Some((
-                        e.kind.to_string(),
-                        format!("{} ({}): {e}", n.id, n.node_type),
-                    )),
-                    _ => None,
-                });
-                if let Some((kind, msg)) = failed {
-                    row.ok = false;
-                    row.error_kind = kind;
-                    row.error = format!("frame {f}: {msg}");
-                    break;
-                }
-                last = Some(r);
-            }
-            if let (true, Some(r)) = (row.ok, &last) {
-                for (k, m) in spec.measure.iter().enumerate() {
-                    match measure(r, m) {
-                        Ok(x) => row.measures[k] = x,
-                        Err(e) => return Err(e),
-                    }
-                }
-            }
-            rows.push(row);
+            rows.push(sweep.run_one(ci, combo, rep)?);
             tell(rows.len());
         }
     }
     Ok(rows)
+}
+
+/// The cartesian product of the varied values, the first parameter slowest.
+fn combinations(vary: &[Vary]) -> Vec<Vec<serde_json::Value>> {
+    let mut combos: Vec<Vec<serde_json::Value>> = vec![Vec::new()];
+    for v in vary {
+        combos = combos
+            .into_iter()
+            .flat_map(|c| {
+                v.values.iter().map(move |x| {
+                    let mut c = c.clone();
+                    c.push(x.clone());
+                    c
+                })
+            })
+            .collect();
+    }
+    combos
+}
+
+/// Why one combination's graph is invalid (a failed row, not a failed sweep).
+#[derive(Debug, thiserror::Error)]
+enum Invalid {
+    /// An override does not apply.
+    #[error("{0}")]
+    Set(String),
+    /// The first validation error.
+    #[error(transparent)]
+    Graph(crate::validate::GraphError),
+}
+
+/// What every run of a sweep shares.
+struct Sweep<'a> {
+    spec: &'a SweepSpec,
+    registry: &'a Registry,
+    graph: graph::Graph,
+    frames: (i64, i64),
+    out_dir: PathBuf,
+    exec: Executor,
+    /// The nodes whose parameters vary (re-executed by repeats, for their timings).
+    varied_nodes: Vec<String>,
+}
+
+impl Sweep<'_> {
+    /// Repeat `rep` of combination `ci`: a failed row when the graph is invalid with these
+    /// values or a node fails, else the timings and the measures.
+    fn run_one(
+        &self,
+        ci: usize,
+        combo: &[serde_json::Value],
+        rep: usize,
+    ) -> Result<SweepRow, SweepError> {
+        let mut row = SweepRow {
+            combination: ci,
+            values: combo.to_vec(),
+            repeat: rep,
+            ok: true,
+            error_kind: String::new(),
+            error: String::new(),
+            total_ms: 0.0,
+            node_ms: BTreeMap::new(),
+            measures: vec![f64::NAN; self.spec.measure.len()],
+        };
+        let valid = match self.validate(combo) {
+            Ok(v) => v,
+            Err(e) => {
+                row.ok = false;
+                row.error_kind = "invalid".into();
+                row.error = e.to_string();
+                return Ok(row);
+            }
+        };
+        let last = self.run_frames(&valid, rep, &mut row);
+        if let (true, Some(r)) = (row.ok, &last) {
+            for (k, m) in self.spec.measure.iter().enumerate() {
+                row.measures[k] = measure(r, m)?;
+            }
+        }
+        Ok(row)
+    }
+
+    /// The graph with the fixed and the varied values set, validated.
+    fn validate(
+        &self,
+        combo: &[serde_json::Value],
+    ) -> Result<crate::validate::ValidGraph, Invalid> {
+        let mut g = self.graph.clone();
+        let mut sets = self.spec.set.clone();
+        for (v, x) in self.spec.vary.iter().zip(combo) {
+            sets.push(format!("{}={}", v.param, value_text(x)));
+        }
+        apply_sets(&mut g, &sets).map_err(Invalid::Set)?;
+        crate::validate::validate(&g, self.registry).map_err(|mut e| Invalid::Graph(e.remove(0)))
+    }
+
+    /// Run options of repeat `rep`: the measured outputs are read after the run, so their
+    /// nodes run even when the graph's outputs do not need them (a metric node is usually no
+    /// writer), and they compute those outputs even when nothing links them.
+    fn options(&self, valid: &crate::validate::ValidGraph, rep: usize) -> RunOptions {
+        RunOptions {
+            files: FileEnv {
+                graph_dir: valid.dir.clone(),
+                out_dir: self.out_dir.clone(),
+                ..Default::default()
+            },
+            read_outputs: self
+                .spec
+                .measure
+                .iter()
+                .filter_map(|m| m.split(':').next().map(str::to_string))
+                .collect(),
+            max_memory: self.spec.max_memory,
+            recompute: if rep > 0 {
+                self.varied_nodes.clone()
+            } else {
+                Vec::new()
+            },
+            ..Default::default()
+        }
+    }
+
+    /// Runs every frame, adding the wall times to `row` and marking it failed at the first
+    /// failure that counts; returns the last frame's report when every frame ran.
+    fn run_frames(
+        &self,
+        valid: &crate::validate::ValidGraph,
+        rep: usize,
+        row: &mut SweepRow,
+    ) -> Option<crate::exec::RunReport> {
+        let opts = self.options(valid, rep);
+        let (f0, f1) = self.frames;
+        self.exec.reset_states();
+        // Before the last frame, only failures of the simulations and what they read end
+        // the run: a node that feeds no stateful node (a metric over a series that is
+        // still too short, say) runs again at the last frame, where it counts.
+        let stateful: Vec<usize> = (0..valid.nodes.len())
+            .filter(|&i| valid.nodes[i].decl.stateful)
+            .collect();
+        let feeds_state = valid.needed(&stateful);
+        let mut last = None;
+        for f in f0..=f1 {
+            let r = self.exec.run(valid, &opts, f);
+            row.total_ms += r.total_ms;
+            for n in &r.nodes {
+                *row.node_ms.entry(n.id.clone()).or_default() +=
+                    if matches!(n.status, NodeStatus::Ran) {
+                        n.ms
+                    } else {
+                        0.0
+                    };
+            }
+            let counts = |id: &str| f == f1 || valid.index.get(id).is_some_and(|&i| feeds_state[i]);
+            let failed = r.nodes.iter().find_map(|n| match &n.status {
+                NodeStatus::Failed(e) if counts(&n.id) => Some((
+                    e.kind.to_string(),
+                    format!("{} ({}): {e}", n.id, n.node_type),
+                )),
+                _ => None,
+            });
+            if let Some((kind, msg)) = failed {
+                row.ok = false;
+                row.error_kind = kind;
+                row.error = format!("frame {f}: {msg}");
+                return None;
+            }
+            last = Some(r);
+        }
+        last
+    }
 }
 
 /// CSV text of a sweep's rows: the varied values, repeat, status, error, total and per-node
@@ -455,36 +587,14 @@ pub fn value_text(v: &serde_json::Value) -> String {
 }
 
 /// The chart of a sweep: y against x, one series per value of the series parameter.
-pub fn to_chart(spec: &SweepSpec, rows: &[SweepRow]) -> Result<Chart, String> {
+pub fn to_chart(spec: &SweepSpec, rows: &[SweepRow]) -> Result<Chart, AxisError> {
     let xs = spec.x.clone().unwrap_or_else(|| "time".into());
     let ys = spec
         .y
         .clone()
         .or_else(|| spec.measure.first().cloned())
-        .ok_or("nothing to plot: give --measure")?;
-    let axis = |name: &str, r: &SweepRow| -> Result<f64, String> {
-        if name == "time" {
-            return Ok(r.total_ms);
-        }
-        if let Some(node) = name.strip_prefix("time:") {
-            return r
-                .node_ms
-                .get(node)
-                .copied()
-                .ok_or_else(|| format!("no node '{node}' for the time axis"));
-        }
-        if let Some(k) = spec.measure.iter().position(|m| m == name) {
-            return Ok(r.measures[k]);
-        }
-        if let Some(k) = spec.vary.iter().position(|v| v.param == name) {
-            return r.values[k]
-                .as_f64()
-                .ok_or_else(|| format!("'{name}' has non-numeric values"));
-        }
-        Err(format!(
-            "'{name}' is neither time, time:NODE, a measure nor a varied parameter"
-        ))
-    };
+        .ok_or(AxisError::NothingToPlot)?;
+    let axis = |name: &str, r: &SweepRow| axis(spec, name, r);
     let series_param = spec.series.clone().or_else(|| {
         spec.vary
             .iter()
@@ -537,26 +647,53 @@ pub fn to_chart(spec: &SweepSpec, rows: &[SweepRow]) -> Result<Chart, String> {
     })
 }
 
+/// The value of axis `name` (`time`, `time:NODE`, a measure or a varied parameter) in row `r`.
+fn axis(spec: &SweepSpec, name: &str, r: &SweepRow) -> Result<f64, AxisError> {
+    if name == "time" {
+        return Ok(r.total_ms);
+    }
+    if let Some(node) = name.strip_prefix("time:") {
+        return r
+            .node_ms
+            .get(node)
+            .copied()
+            .ok_or_else(|| AxisError::NoNode(node.to_string()));
+    }
+    if let Some(k) = spec.measure.iter().position(|m| m == name) {
+        return Ok(r.measures[k]);
+    }
+    if let Some(k) = spec.vary.iter().position(|v| v.param == name) {
+        return r.values[k]
+            .as_f64()
+            .ok_or_else(|| AxisError::NotNumeric(name.to_string()));
+    }
+    Err(AxisError::Unknown(name.to_string()))
+}
+
 /// Runs a sweep and writes its CSV and chart; returns the rows.
 pub fn run_and_write(
     spec: &SweepSpec,
     base: &Path,
     registry: &Registry,
     threads: Option<usize>,
-) -> Result<Vec<SweepRow>, String> {
+) -> Result<Vec<SweepRow>, SweepError> {
     let rows = run(spec, base, registry, threads)?;
     let record = sweep_provenance(spec, base);
     if let Some(csv) = &spec.csv {
         let p = base.join(csv);
         let text = to_csv(spec, &rows);
-        cgnodes_api::io::write_atomic(&p, |w| w.write_all(text.as_bytes()))
-            .map_err(|e| format!("{}: {e}", p.display()))?;
-        record.record_in(&p)?;
+        cgnodes_api::io::write_atomic(&p, |w| w.write_all(text.as_bytes())).map_err(|source| {
+            SweepError::Write {
+                path: p.clone(),
+                source,
+            }
+        })?;
+        record.record_in(&p).map_err(SweepError::Record)?;
     }
     if let Some(plot) = &spec.plot {
         let p = base.join(plot);
         crate::chart::draw(&to_chart(spec, &rows)?, &p)?;
-        record.record_in(&p)?;
+        record.record_in(&p).map_err(SweepError::Record)?;
     }
     Ok(rows)
 }

@@ -3,6 +3,8 @@
 
 use super::Mesh;
 
+mod build;
+
 /// Marks an absent face in `edge_faces`.
 pub const NONE: u32 = u32::MAX;
 
@@ -48,202 +50,33 @@ impl Topology {
     /// Builds the connectivity of `mesh`.
     pub fn build(mesh: &Mesh) -> Topology {
         let nv = mesh.num_vertices();
-        let nf = mesh.num_faces();
-        let idx = mesh.face_indices();
-        let starts = mesh.face_starts();
-        let nc = idx.len();
-        let mut corner_face = vec![0u32; nc];
-        let mut next_corner = vec![0u32; nc];
-        for f in 0..nf {
-            let (s, e) = (starts[f] as usize, starts[f + 1] as usize);
-            for c in s..e {
-                corner_face[c] = f as u32;
-                next_corner[c] = if c + 1 == e { s as u32 } else { c as u32 + 1 };
-            }
-        }
-        // Undirected edges: every corner's outgoing edge, bucketed by its smaller vertex
-        // (counting sort), each short bucket sorted by the larger one, so edges come out in
-        // (min, max) order without a global sort.
-        let ends = |c: usize| {
-            let (a, b) = (idx[c], idx[next_corner[c] as usize]);
-            if a < b {
-                (a, b)
-            } else {
-                (b, a)
-            }
-        };
-        let mut bucket = vec![0u32; nv + 1];
-        for c in 0..nc {
-            bucket[ends(c).0 as usize + 1] += 1;
-        }
-        for v in 0..nv {
-            bucket[v + 1] += bucket[v];
-        }
-        let mut slot = bucket.clone();
-        let mut keyed: Vec<(u32, u32)> = vec![(0, 0); nc];
-        for c in 0..nc {
-            let (lo, hi) = ends(c);
-            keyed[slot[lo as usize] as usize] = (hi, c as u32);
-            slot[lo as usize] += 1;
-        }
-        let mut edges = Vec::with_capacity(nc / 2 + nv);
-        let mut edge_faces = Vec::with_capacity(nc / 2 + nv);
-        let mut corner_edge = vec![0u32; nc];
-        let mut nonmanifold_edges = Vec::new();
-        let mut misoriented_edges = Vec::new();
-        // Fans: corners at the same vertex whose faces share an edge at that vertex are joined
-        // (union-find over corners); a vertex with corners in two groups is not manifold.
-        let mut fan: Vec<u32> = (0..nc as u32).collect();
-        fn root(p: &mut [u32], mut x: u32) -> u32 {
-            while p[x as usize] != x {
-                p[x as usize] = p[p[x as usize] as usize];
-                x = p[x as usize];
-            }
-            x
-        }
-        fn join(p: &mut [u32], a: u32, b: u32) {
-            let (ra, rb) = (root(p, a), root(p, b));
-            if ra != rb {
-                p[ra.max(rb) as usize] = ra.min(rb);
-            }
-        }
-        for lo in 0..nv {
-            let run = &mut keyed[bucket[lo] as usize..bucket[lo + 1] as usize];
-            run.sort_unstable();
-            let mut i = 0;
-            while i < run.len() {
-                let hi = run[i].0;
-                let mut j = i;
-                let e = edges.len() as u32;
-                let mut ef = [NONE, NONE];
-                let mut cs = [0u32; 2];
-                while j < run.len() && run[j].0 == hi {
-                    let c = run[j].1 as usize;
-                    corner_edge[c] = e;
-                    let k = j - i;
-                    if k < 2 {
-                        ef[k] = corner_face[c];
-                        cs[k] = c as u32;
-                    }
-                    j += 1;
-                }
-                edges.push([lo as u32, hi]);
-                edge_faces.push(ef);
-                if j - i >= 2 {
-                    // the first two faces are joined across the edge, as for a manifold edge
-                    let [c0, c1] = cs;
-                    let (n0, n1) = (next_corner[c0 as usize], next_corner[c1 as usize]);
-                    let same_direction = idx[c0 as usize] == idx[c1 as usize];
-                    if same_direction {
-                        join(&mut fan, c0, c1);
-                        join(&mut fan, n0, n1);
-                    } else {
-                        join(&mut fan, c0, n1);
-                        join(&mut fan, n0, c1);
-                    }
-                    if j - i > 2 {
-                        nonmanifold_edges.push(e);
-                    } else if same_direction {
-                        misoriented_edges.push(e);
-                    }
-                }
-                i = j;
-            }
-        }
-        // One-rings.
+        let corners = build::Corners::new(mesh.face_indices(), mesh.face_starts());
+        let mut t = build::Edges::build(&corners, nv);
         let (neighbor_start, neighbors) =
-            compressed_rows(nv, edges.iter().flat_map(|&[a, b]| [(a, b), (b, a)]));
-        let (vface_start, vfaces) = compressed_rows(nv, (0..nc).map(|c| (idx[c], corner_face[c])));
-        // Boundary half-edges: corners whose edge has a single face.
-        let boundary_out = |c: usize| edge_faces[corner_edge[c] as usize][1] == NONE;
-        let mut out_start = vec![0u32; nv + 1];
-        for c in 0..nc {
-            if boundary_out(c) {
-                out_start[idx[c] as usize + 1] += 1;
-            }
-        }
-        for v in 0..nv {
-            out_start[v + 1] += out_start[v];
-        }
-        let mut fill = out_start.clone();
-        let mut out_corner = vec![0u32; out_start[nv] as usize];
-        for (c, &v) in idx.iter().enumerate() {
-            if boundary_out(c) {
-                let v = v as usize;
-                out_corner[fill[v] as usize] = c as u32;
-                fill[v] += 1;
-            }
-        }
-        let mut used = vec![false; out_corner.len()];
-        let mut boundary_loops = Vec::new();
-        let mut nonmanifold_vertices = Vec::new();
-        for v in 0..nv {
-            if out_start[v + 1] - out_start[v] > 1 {
-                nonmanifold_vertices.push(v as u32);
-            }
-        }
-        for start in 0..out_corner.len() {
-            if used[start] {
-                continue;
-            }
-            let mut lp = Vec::new();
-            let mut h = start;
-            loop {
-                used[h] = true;
-                let c = out_corner[h] as usize;
-                lp.push(idx[c]);
-                let w = idx[next_corner[c] as usize] as usize;
-                let cand = (out_start[w]..out_start[w + 1])
-                    .map(|k| k as usize)
-                    .find(|&k| !used[k]);
-                match cand {
-                    Some(k) => h = k,
-                    None => break,
-                }
-            }
-            boundary_loops.push(lp);
-        }
-        // Interior fans: a vertex whose corners fall into several groups (two cones touching
-        // at a tip) is not manifold.
-        let mut fans_at = vec![0u8; nv];
-        for c in 0..nc {
-            if root(&mut fan, c as u32) == c as u32 {
-                let f = &mut fans_at[idx[c] as usize];
-                *f = f.saturating_add(1);
-            }
-        }
-        nonmanifold_vertices.extend((0..nv as u32).filter(|&v| fans_at[v as usize] > 1));
+            compressed_rows(nv, t.edges.iter().flat_map(|&[a, b]| [(a, b), (b, a)]));
+        let (vface_start, vfaces) = compressed_rows(
+            nv,
+            corners
+                .idx
+                .iter()
+                .copied()
+                .zip(corners.face.iter().copied()),
+        );
+        let (boundary_loops, mut nonmanifold_vertices) = build::boundary(&corners, &t, nv);
+        nonmanifold_vertices.extend(build::split_fans(&corners, &mut t.fan, nv));
         nonmanifold_vertices.sort_unstable();
         nonmanifold_vertices.dedup();
-        // Components by union-find over edges.
-        let mut parent: Vec<u32> = (0..nv as u32).collect();
-        for &[a, b] in &edges {
-            let (ra, rb) = (root(&mut parent, a), root(&mut parent, b));
-            if ra != rb {
-                parent[ra.max(rb) as usize] = ra.min(rb);
-            }
-        }
-        let mut comp_id = vec![NONE; nv];
-        let mut vertex_component = vec![0u32; nv];
-        let mut num_components = 0;
-        for (v, comp) in vertex_component.iter_mut().enumerate() {
-            let r = root(&mut parent, v as u32) as usize;
-            if comp_id[r] == NONE {
-                comp_id[r] = num_components as u32;
-                num_components += 1;
-            }
-            *comp = comp_id[r];
-        }
+        let (vertex_component, num_components) = build::components(&t.edges, nv);
         let isolated_vertices = (0..nv)
             .filter(|&v| vface_start[v] == vface_start[v + 1])
             .count();
         Topology {
             num_vertices: nv,
-            num_faces: nf,
-            edges,
-            edge_faces,
-            corner_edge,
-            corner_face,
+            num_faces: mesh.num_faces(),
+            edges: t.edges,
+            edge_faces: t.edge_faces,
+            corner_edge: t.corner_edge,
+            corner_face: corners.face,
             neighbor_start,
             neighbors,
             vface_start,
@@ -252,9 +85,9 @@ impl Topology {
             vertex_component,
             num_components,
             isolated_vertices,
-            nonmanifold_edges,
+            nonmanifold_edges: t.nonmanifold_edges,
             nonmanifold_vertices,
-            misoriented_edges,
+            misoriented_edges: t.misoriented_edges,
         }
     }
 

@@ -2,41 +2,39 @@
 //! stamps of files named through links, serves it from the caches when its key is unchanged, else gathers its inputs, runs it (catching panics), checks its
 //! outputs against the declaration and stores the result.
 
-use super::{Executor, NodeReport, NodeStatus, Shared};
+use super::{Executor, Failed, NodeReport, NodeStatus, Shared};
 use crate::cache::{stamp_input, Entry, Key};
 use crate::validate::InputSource;
-use cgnodes_api::node::{ErrorKind, ExecContext, FileRole, NodeError, RunSetup};
+use cgnodes_api::node::{ErrorKind, ExecContext, FileRole, NodeDecl, NodeError, RunSetup};
 use cgnodes_api::types::{SocketType, Value};
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 use std::sync::Arc;
 
+/// Outputs by socket name, shared with the nodes that read them.
+type Outputs = Arc<BTreeMap<String, Value>>;
+
 impl Executor {
-    /// Gathers inputs, consults the caches, runs the node and checks its outputs.
+    /// Gathers inputs, consults the caches, runs the node and checks its outputs. Fails with
+    /// the node that failed: an upstream one that blocks this node, or this node.
     pub(super) fn evaluate(
         &self,
         sh: &Shared,
         i: usize,
         report: &mut NodeReport,
-    ) -> Result<Arc<BTreeMap<String, Value>>, String> {
+    ) -> Result<Outputs, Failed> {
         let node = &sh.graph.nodes[i];
-        let decl = &node.decl;
-        // Upstream failures block this node.
-        for &d in &node.deps {
-            if let Some(Err(failed)) = sh.slots[d]
-                .lock()
-                .unwrap_or_else(|p| p.into_inner())
-                .as_ref()
-            {
-                report.status = NodeStatus::Blocked { by: failed.clone() };
-                return Err(failed.clone());
-            }
+        if let Some(failed) = blocked_by(sh, i) {
+            report.status = NodeStatus::Blocked {
+                by: failed.0.clone(),
+            };
+            return Err(failed);
         }
         let key = complete_key(sh, i);
         let _ = sh.final_keys[i].set(key);
         let wanted = sh.wanted[i].as_ref();
         // A cached entry that skipped an output wanted now is kept, to merge with the rerun.
         let mut older = None;
-        if !decl.stateful && !sh.fresh[i] {
+        if !node.decl.stateful && !sh.fresh[i] {
             if let Some(e) = self.lookup(&key) {
                 if e.serves(wanted) {
                     report.status = NodeStatus::Cached;
@@ -46,174 +44,19 @@ impl Executor {
                 older = Some(e);
             }
         }
-        let fail = |report: &mut NodeReport, e: NodeError| {
-            report.status = NodeStatus::Failed(e);
-            Err(node.id.clone())
-        };
-        // Inputs.
-        let mut inputs = BTreeMap::new();
-        for (name, src) in &node.inputs {
-            let Some(sdecl) = decl.input(name) else {
-                continue;
-            };
-            let v = match src {
-                InputSource::Literal(v) | InputSource::Default(v) => v.clone(),
-                InputSource::Unset => continue,
-                InputSource::Links(links) => {
-                    let mut vals = Vec::new();
-                    for (j, out) in links {
-                        let slot = sh.slots[*j].lock().unwrap_or_else(|p| p.into_inner());
-                        let v = slot
-                            .as_ref()
-                            .and_then(|r| r.as_ref().ok())
-                            .and_then(|o| o.get(out))
-                            .cloned();
-                        match v {
-                            Some(v) => vals.push(v),
-                            None => {
-                                let e = NodeError::new(
-                                    ErrorKind::Internal,
-                                    format!(
-                                        "'{}' produced no output '{out}'",
-                                        sh.graph.nodes[*j].id
-                                    ),
-                                )
-                                .at(name);
-                                return fail(report, e);
-                            }
-                        }
-                    }
-                    if let SocketType::List(_) = sdecl.ty {
-                        let mut flat = Vec::new();
-                        for v in vals {
-                            match v {
-                                Value::List(items) => flat.extend(items.iter().cloned()),
-                                other => flat.push(other),
-                            }
-                        }
-                        Value::List(Arc::new(flat))
-                    } else {
-                        vals.pop().unwrap_or(Value::Bool(false))
-                    }
-                }
-            };
-            match v.convert_to(&sdecl.ty) {
-                Some(v) => {
-                    // Validation checked literals against the declared range and choices; a
-                    // linked value arrives only now and gets the same check (issue 23).
-                    if matches!(src, InputSource::Links(_)) {
-                        if let Err(msg) = sdecl.check_literal(&v) {
-                            return fail(report, NodeError::invalid(name, msg));
-                        }
-                    }
-                    inputs.insert(name.clone(), v);
-                }
-                None => {
-                    let e = NodeError::invalid(
-                        name,
-                        format!("cannot convert {} to {}", v.socket_type(), sdecl.ty),
-                    );
-                    return fail(report, e);
-                }
+        let ran = gather_inputs(sh, i)
+            .and_then(|inputs| self.execute(sh, i, inputs, key, report))
+            .and_then(|outputs| {
+                let skipped = check_outputs(&node.decl, &outputs, wanted)?;
+                Ok((outputs, skipped))
+            });
+        let (outputs, skipped) = match ran {
+            Ok(r) => r,
+            Err(e) => {
+                report.status = NodeStatus::Failed(e);
+                return Err(Failed(node.id.clone()));
             }
-        }
-        // State (taken out while the node runs, put back after).
-        let mut state = if decl.stateful {
-            self.states
-                .lock()
-                .unwrap_or_else(|p| p.into_inner())
-                .remove(&node.id)
-        } else {
-            None
         };
-        let Some(exec) = decl.exec.clone() else {
-            return fail(
-                report,
-                NodeError::new(ErrorKind::Internal, "node has no implementation"),
-            );
-        };
-        let setup = RunSetup {
-            inputs,
-            frame: sh.frame,
-            state: &mut state,
-            files: &sh.opts.files,
-            progress: sh.opts.progress.clone(),
-            log_sink: sh.opts.log.clone(),
-            wanted: wanted.cloned(),
-            memory_limit: sh.opts.memory_limit(),
-            provenance: Some(Arc::new(provenance(sh, node))),
-        };
-        let mut ctx = ExecContext::for_run(&node.id, decl, setup);
-        let res = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| exec(&mut ctx)));
-        // Ends the node's progress bar, if it started one, whether it succeeded or not.
-        ctx.progress(1.0);
-        let done = ctx.finish();
-        let outputs = done.outputs;
-        report.logs = done.logs;
-        report.written = done.written;
-        report.written_values = done.written_values;
-        drop(ctx);
-        if decl.stateful {
-            // The history follows the state: the next frame's key chains onto this one while
-            // the node holds state, and starts anew when it dropped it.
-            // Locked in the order the planner locks them.
-            let mut states = self.states.lock().unwrap_or_else(|p| p.into_inner());
-            let mut hist = self.histories.lock().unwrap_or_else(|p| p.into_inner());
-            if let Some(s) = state {
-                states.insert(node.id.clone(), s);
-                hist.insert(node.id.clone(), key);
-            } else {
-                hist.remove(&node.id);
-            }
-        }
-        match res {
-            Ok(Ok(())) => {}
-            Ok(Err(e)) => return fail(report, e),
-            Err(panic) => {
-                let msg = panic
-                    .downcast_ref::<String>()
-                    .cloned()
-                    .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
-                    .unwrap_or_default();
-                return fail(
-                    report,
-                    NodeError::new(ErrorKind::Internal, format!("the node panicked: {msg}")),
-                );
-            }
-        }
-        let is_wanted = |name: &str| wanted.is_none_or(|w| w.contains(name));
-        let mut skipped = Vec::new();
-        for o in &decl.outputs {
-            match outputs.get(&o.name) {
-                None if !is_wanted(&o.name) => skipped.push(o.name.clone()),
-                None if o.optional => {}
-                None => {
-                    return fail(
-                        report,
-                        NodeError::new(
-                            ErrorKind::Internal,
-                            format!("produced no output '{}'", o.name),
-                        ),
-                    )
-                }
-                Some(v)
-                    if !o.ty.accepts(&v.socket_type())
-                        && !matches!(v, Value::List(l) if l.is_empty()) =>
-                {
-                    let e = NodeError::new(
-                        ErrorKind::Internal,
-                        format!(
-                            "output '{}' should be {} but is {}",
-                            o.name,
-                            o.ty,
-                            v.socket_type()
-                        ),
-                    );
-                    return fail(report, e);
-                }
-                _ => {}
-            }
-        }
         let mut e = Entry {
             outputs: Arc::new(outputs),
             written: report.written.clone(),
@@ -223,16 +66,102 @@ impl Executor {
             e = e.merged_with(older);
         }
         let outputs = e.outputs.clone();
-        if !decl.stateful {
-            if let Some(d) = &self.disk {
-                d.put(&key, &e);
-            }
-            self.memory
-                .lock()
-                .unwrap_or_else(|p| p.into_inner())
-                .put(key, e);
+        if !node.decl.stateful {
+            self.store(key, e);
         }
         Ok(outputs)
+    }
+
+    /// Runs node `i` on `inputs` (catching panics), with its state taken out while it runs
+    /// and put back after; the logs and written files go into `report`.
+    fn execute(
+        &self,
+        sh: &Shared,
+        i: usize,
+        inputs: BTreeMap<String, Value>,
+        key: Key,
+        report: &mut NodeReport,
+    ) -> Result<BTreeMap<String, Value>, NodeError> {
+        let node = &sh.graph.nodes[i];
+        let decl = &node.decl;
+        let mut state = if decl.stateful {
+            self.states
+                .lock()
+                .unwrap_or_else(|p| p.into_inner())
+                .remove(&node.id)
+        } else {
+            None
+        };
+        let Some(exec) = decl.exec.clone() else {
+            return Err(NodeError::new(
+                ErrorKind::Internal,
+                "node has no implementation",
+            ));
+        };
+        let setup = RunSetup {
+            inputs,
+            frame: sh.frame,
+            state: &mut state,
+            files: &sh.opts.files,
+            progress: sh.opts.progress.clone(),
+            log_sink: sh.opts.log.clone(),
+            wanted: sh.wanted[i].clone(),
+            memory_limit: sh.opts.memory_limit(),
+            provenance: Some(Arc::new(provenance(sh, node))),
+        };
+        let mut ctx = ExecContext::for_run(&node.id, decl, setup);
+        let res = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| exec(&mut ctx)));
+        // Ends the node's progress bar, if it started one, whether it succeeded or not.
+        ctx.progress(1.0);
+        let done = ctx.finish();
+        report.logs = done.logs;
+        report.written = done.written;
+        report.written_values = done.written_values;
+        drop(ctx);
+        if decl.stateful {
+            self.keep_state(&node.id, state, key);
+        }
+        match res {
+            Ok(Ok(())) => Ok(done.outputs),
+            Ok(Err(e)) => Err(e),
+            Err(panic) => {
+                let msg = panic
+                    .downcast_ref::<String>()
+                    .cloned()
+                    .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
+                    .unwrap_or_default();
+                Err(NodeError::new(
+                    ErrorKind::Internal,
+                    format!("the node panicked: {msg}"),
+                ))
+            }
+        }
+    }
+
+    /// Puts a stateful node's state back after it ran. The history follows the state: the
+    /// next frame's key chains onto this one while the node holds state, and starts anew
+    /// when it dropped it.
+    fn keep_state(&self, id: &str, state: Option<Box<dyn std::any::Any + Send>>, key: Key) {
+        // Locked in the order the planner locks them.
+        let mut states = self.states.lock().unwrap_or_else(|p| p.into_inner());
+        let mut hist = self.histories.lock().unwrap_or_else(|p| p.into_inner());
+        if let Some(s) = state {
+            states.insert(id.to_string(), s);
+            hist.insert(id.to_string(), key);
+        } else {
+            hist.remove(id);
+        }
+    }
+
+    /// Stores a node's result in the memory cache and, when there is one, the disk cache.
+    fn store(&self, key: Key, e: Entry) {
+        if let Some(d) = &self.disk {
+            d.put(&key, &e);
+        }
+        self.memory
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .put(key, e);
     }
 
     fn lookup(&self, key: &Key) -> Option<Entry> {
@@ -251,6 +180,129 @@ impl Executor {
         });
         hit.filter(|e| e.files_present())
     }
+}
+
+/// The upstream node whose failure blocks node `i`, if any.
+fn blocked_by(sh: &Shared, i: usize) -> Option<Failed> {
+    sh.graph.nodes[i].deps.iter().find_map(|&d| {
+        match sh.slots[d]
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .as_ref()
+        {
+            Some(Err(failed)) => Some(failed.clone()),
+            _ => None,
+        }
+    })
+}
+
+/// Node `i`'s inputs, each converted to its socket's type; linked values get the range and
+/// choice check validation gave literals.
+fn gather_inputs(sh: &Shared, i: usize) -> Result<BTreeMap<String, Value>, NodeError> {
+    let node = &sh.graph.nodes[i];
+    let mut inputs = BTreeMap::new();
+    for (name, src) in &node.inputs {
+        let Some(sdecl) = node.decl.input(name) else {
+            continue;
+        };
+        let v = match src {
+            InputSource::Literal(v) | InputSource::Default(v) => v.clone(),
+            InputSource::Unset => continue,
+            InputSource::Links(links) => linked_value(sh, name, &sdecl.ty, links)?,
+        };
+        let Some(v) = v.convert_to(&sdecl.ty) else {
+            return Err(NodeError::invalid(
+                name,
+                format!("cannot convert {} to {}", v.socket_type(), sdecl.ty),
+            ));
+        };
+        // Validation checked literals against the declared range and choices; a linked
+        // value arrives only now and gets the same check (issue 23).
+        if matches!(src, InputSource::Links(_)) {
+            sdecl
+                .check_literal(&v)
+                .map_err(|msg| NodeError::invalid(name, msg))?;
+        }
+        inputs.insert(name.clone(), v);
+    }
+    Ok(inputs)
+}
+
+/// The value input `name` of type `ty` gets through `links`: a list input gets every linked
+/// value (lists flattened), another input the last.
+fn linked_value(
+    sh: &Shared,
+    name: &str,
+    ty: &SocketType,
+    links: &[(usize, String)],
+) -> Result<Value, NodeError> {
+    let mut vals = Vec::new();
+    for (j, out) in links {
+        let slot = sh.slots[*j].lock().unwrap_or_else(|p| p.into_inner());
+        let v = slot
+            .as_ref()
+            .and_then(|r| r.as_ref().ok())
+            .and_then(|o| o.get(out))
+            .cloned();
+        let Some(v) = v else {
+            return Err(NodeError::new(
+                ErrorKind::Internal,
+                format!("'{}' produced no output '{out}'", sh.graph.nodes[*j].id),
+            )
+            .at(name));
+        };
+        vals.push(v);
+    }
+    if !matches!(ty, SocketType::List(_)) {
+        return Ok(vals.pop().unwrap_or(Value::Bool(false)));
+    }
+    let mut flat = Vec::new();
+    for v in vals {
+        match v {
+            Value::List(items) => flat.extend(items.iter().cloned()),
+            other => flat.push(other),
+        }
+    }
+    Ok(Value::List(Arc::new(flat)))
+}
+
+/// Checks a node's outputs against its declaration: every output it must give is there and
+/// of its type. Returns the outputs skipped because no one wanted them.
+fn check_outputs(
+    decl: &NodeDecl,
+    outputs: &BTreeMap<String, Value>,
+    wanted: Option<&BTreeSet<String>>,
+) -> Result<Vec<String>, NodeError> {
+    let is_wanted = |name: &str| wanted.is_none_or(|w| w.contains(name));
+    let mut skipped = Vec::new();
+    for o in &decl.outputs {
+        match outputs.get(&o.name) {
+            None if !is_wanted(&o.name) => skipped.push(o.name.clone()),
+            None if o.optional => {}
+            None => {
+                return Err(NodeError::new(
+                    ErrorKind::Internal,
+                    format!("produced no output '{}'", o.name),
+                ))
+            }
+            Some(v)
+                if !o.ty.accepts(&v.socket_type())
+                    && !matches!(v, Value::List(l) if l.is_empty()) =>
+            {
+                return Err(NodeError::new(
+                    ErrorKind::Internal,
+                    format!(
+                        "output '{}' should be {} but is {}",
+                        o.name,
+                        o.ty,
+                        v.socket_type()
+                    ),
+                ));
+            }
+            _ => {}
+        }
+    }
+    Ok(skipped)
 }
 
 /// The node's key completed at evaluation time: the planned key, plus the completed keys of

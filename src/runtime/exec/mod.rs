@@ -71,7 +71,25 @@ pub struct Executor {
     stopped: Mutex<HashMap<String, i64>>,
 }
 
-type Slot = Mutex<Option<Result<Arc<BTreeMap<String, Value>>, String>>>;
+/// The node whose failure stopped a node: itself, or the upstream node that blocked it.
+#[derive(Clone, Debug)]
+struct Failed(String);
+
+type Slot = Mutex<Option<Result<Arc<BTreeMap<String, Value>>, Failed>>>;
+
+/// Why an executor could not start.
+#[derive(Debug, thiserror::Error)]
+pub enum StartError {
+    /// The thread pool could not be built.
+    #[error("cannot start threads: {0}")]
+    Threads(#[from] rayon::ThreadPoolBuildError),
+    /// The disk cache folder could not be opened.
+    #[error("cache folder {}: {source}", dir.display())]
+    Cache {
+        dir: std::path::PathBuf,
+        source: std::io::Error,
+    },
+}
 
 impl Executor {
     /// An executor with `threads` worker threads (all cores when `None`) and an optional
@@ -79,18 +97,17 @@ impl Executor {
     pub fn new(
         threads: Option<usize>,
         cache_dir: Option<&std::path::Path>,
-    ) -> Result<Executor, String> {
+    ) -> Result<Executor, StartError> {
         let mut b = rayon::ThreadPoolBuilder::new();
         if let Some(n) = threads {
             b = b.num_threads(n.max(1));
         }
-        let pool = b
-            .build()
-            .map_err(|e| format!("cannot start threads: {e}"))?;
+        let pool = b.build()?;
         let disk = match cache_dir {
-            Some(d) => {
-                Some(DiskCache::open(d).map_err(|e| format!("cache folder {}: {e}", d.display()))?)
-            }
+            Some(d) => Some(DiskCache::open(d).map_err(|source| StartError::Cache {
+                dir: d.to_path_buf(),
+                source,
+            })?),
             None => None,
         };
         Ok(Executor {
@@ -256,7 +273,7 @@ impl Executor {
         let result = match self.stopped_since(&node.id) {
             Some(since) if node.decl.stateful => {
                 report.status = NodeStatus::Stopped { since };
-                Err(node.id.clone())
+                Err(Failed(node.id.clone()))
             }
             _ => self.evaluate(sh, i, &mut report),
         };

@@ -135,20 +135,80 @@ pub fn call(
     state: Option<J>,
     timeout: f64,
 ) -> Result<CallResult, NodeError> {
-    let fail =
-        |msg: String| NodeError::new(ErrorKind::Plugin, format!("plugin '{}': {msg}", r.plugin));
+    let fail = Fail {
+        plugin: &r.plugin,
+        stderr: None,
+    };
     let t0 = Instant::now();
     // Registered so that Ctrl-C removes it (`io::interrupt`).
     let (_tracked, tmp) = cgnodes_api::io::interrupt::track(
         || tempfile::Builder::new().prefix("cgnodes-call-").tempdir(),
         |t| cgnodes_api::io::interrupt::Resource::Path(t.path().to_path_buf()),
     )
-    .map_err(|e| fail(format!("cannot create the call folder: {e}")))?;
+    .map_err(|e| fail.err(format!("cannot create the call folder: {e}")))?;
     let dir = tmp.path();
+    let body = request(decl, inputs, dir, frame, state, &fail)?;
+    let encode_ms = t0.elapsed().as_secs_f64() * 1e3;
+    let proto = PROTOCOL.to_string();
+    let env = [
+        ("CGNODES_PROTOCOL", std::ffi::OsStr::new(&proto)),
+        ("CGNODES_PLUGIN_DIR", r.dir.as_os_str()),
+        ("CGNODES_CALL_DIR", dir.as_os_str()),
+    ];
+    let limit = Duration::from_secs_f64(timeout.clamp(0.001, 1e7));
+    let fin = process::run(&r.argv, &r.dir, &env, body, limit).map_err(|e| fail.err(e))?;
+    let t1 = Instant::now();
+    let stderr = String::from_utf8_lossy(&fin.stderr).into_owned();
+    let fail = Fail {
+        plugin: &r.plugin,
+        stderr: Some(&stderr),
+    };
+    let resp = response(&fin, timeout, &fail)?;
+    let mut result = CallResult {
+        outputs: decode_outputs(decl, &resp, dir, inputs, &fail)?,
+        logs: logs(&resp, &stderr),
+        state: resp.get("state").cloned(),
+        stats: CallStats::default(),
+    };
+    result.stats = CallStats {
+        encode_ms,
+        spawn_ms: fin.spawn_ms,
+        run_ms: fin.run_ms,
+        decode_ms: t1.elapsed().as_secs_f64() * 1e3,
+    };
+    Ok(result)
+}
+
+/// Makes a plugin call's node errors: `plugin 'NAME': ...`, with the tail of stderr once the
+/// process ran.
+struct Fail<'a> {
+    plugin: &'a str,
+    stderr: Option<&'a str>,
+}
+
+impl Fail<'_> {
+    fn err(&self, msg: impl std::fmt::Display) -> NodeError {
+        let tail = self.stderr.map(stderr_tail).unwrap_or_default();
+        NodeError::new(
+            ErrorKind::Plugin,
+            format!("plugin '{}': {msg}{tail}", self.plugin),
+        )
+    }
+}
+
+/// The request's bytes: the inputs encoded into `dir`, the outputs wanted, the state.
+fn request(
+    decl: &NodeDecl,
+    inputs: &BTreeMap<String, Value>,
+    dir: &Path,
+    frame: i64,
+    state: Option<J>,
+    fail: &Fail,
+) -> Result<Vec<u8>, NodeError> {
     let mut enc = serde_json::Map::new();
     for (name, v) in inputs {
         let j = codec::encode(v, dir, &format!("in.{name}"))
-            .map_err(|e| fail(format!("input '{name}': {e}")))?;
+            .map_err(|e| fail.err(format!("input '{name}': {e}")))?;
         enc.insert(name.clone(), j);
     }
     let outputs: Vec<J> = decl
@@ -167,26 +227,14 @@ pub fn call(
     if decl.stateful {
         req["state"] = state.unwrap_or(J::Null);
     }
-    let body = serde_json::to_vec(&req).map_err(|e| fail(e.to_string()))?;
-    let encode_ms = t0.elapsed().as_secs_f64() * 1e3;
-    let proto = PROTOCOL.to_string();
-    let env = [
-        ("CGNODES_PROTOCOL", std::ffi::OsStr::new(&proto)),
-        ("CGNODES_PLUGIN_DIR", r.dir.as_os_str()),
-        ("CGNODES_CALL_DIR", dir.as_os_str()),
-    ];
-    let limit = Duration::from_secs_f64(timeout.clamp(0.001, 1e7));
-    let fin = process::run(&r.argv, &r.dir, &env, body, limit).map_err(fail)?;
-    let t1 = Instant::now();
-    let stderr = String::from_utf8_lossy(&fin.stderr).into_owned();
-    let with_tail = |msg: String| fail(format!("{msg}{}", stderr_tail(&stderr)));
-    let status = match fin.status {
-        None => {
-            return Err(with_tail(format!(
-                "timed out after {timeout} s and was killed"
-            )))
-        }
-        Some(s) => s,
+    serde_json::to_vec(&req).map_err(|e| fail.err(e))
+}
+
+/// The response of a process that ran: it did not time out, report an error or fail, and
+/// its stdout is JSON of this protocol.
+fn response(fin: &process::Finished, timeout: f64, fail: &Fail) -> Result<J, NodeError> {
+    let Some(status) = fin.status else {
+        return Err(fail.err(format!("timed out after {timeout} s and was killed")));
     };
     // A response that parses is read even after a failure exit: it may carry the
     // plugin's own error message.
@@ -200,13 +248,10 @@ pub fn call(
             .as_str()
             .map(String::from)
             .unwrap_or_else(|| msg.to_string());
-        return Err(with_tail(format!("reported an error: {msg}")));
+        return Err(fail.err(format!("reported an error: {msg}")));
     }
     if !status.success() {
-        return Err(with_tail(format!(
-            "exited with {}",
-            describe_status(&status)
-        )));
+        return Err(fail.err(format!("exited with {}", describe_status(&status))));
     }
     let Some(resp) = resp else {
         let out = String::from_utf8_lossy(&fin.stdout);
@@ -216,77 +261,77 @@ pub fn call(
         } else {
             ""
         };
-        return Err(with_tail(format!(
+        return Err(fail.err(format!(
             "the response on stdout is not JSON{nan} (log lines go to stderr): {:?}{}",
             shown,
             if out.chars().count() > 200 { "..." } else { "" }
         )));
     };
     match resp.get("protocol").and_then(J::as_u64) {
-        Some(v) if v == PROTOCOL as u64 => {}
-        other => {
-            return Err(with_tail(format!(
-                "the response should carry \"protocol\": {PROTOCOL}, got {}",
-                other
-                    .map(|v| v.to_string())
-                    .unwrap_or_else(|| "none".into())
-            )))
-        }
+        Some(v) if v == PROTOCOL as u64 => Ok(resp),
+        other => Err(fail.err(format!(
+            "the response should carry \"protocol\": {PROTOCOL}, got {}",
+            other
+                .map(|v| v.to_string())
+                .unwrap_or_else(|| "none".into())
+        ))),
     }
+}
+
+/// The response's outputs, each declared and decoded to its socket's type; every output
+/// that is not optional present.
+fn decode_outputs(
+    decl: &NodeDecl,
+    resp: &J,
+    dir: &Path,
+    inputs: &BTreeMap<String, Value>,
+    fail: &Fail,
+) -> Result<BTreeMap<String, Value>, NodeError> {
     let outs = resp
         .get("outputs")
         .and_then(J::as_object)
-        .ok_or_else(|| with_tail("the response has no \"outputs\" object".into()))?;
-    let mut result = CallResult::default();
-    for name in outs.keys() {
-        if decl.output(name).is_none() {
-            return Err(with_tail(format!(
-                "returned output '{name}', which the manifest does not declare"
-            )));
-        }
+        .ok_or_else(|| fail.err("the response has no \"outputs\" object"))?;
+    if let Some(name) = outs.keys().find(|name| decl.output(name).is_none()) {
+        return Err(fail.err(format!(
+            "returned output '{name}', which the manifest does not declare"
+        )));
     }
+    let mut outputs = BTreeMap::new();
     for o in &decl.outputs {
         match outs.get(&o.name) {
             None | Some(J::Null) if o.optional => {}
             None | Some(J::Null) => {
-                return Err(with_tail(format!("returned no output '{}'", o.name)))
+                return Err(fail.err(format!("returned no output '{}'", o.name)))
             }
             Some(j) => {
                 let v = codec::decode(&o.ty, j, dir, inputs)
-                    .map_err(|e| with_tail(format!("output '{}' ({}): {e}", o.name, o.ty)))?;
-                result.outputs.insert(o.name.clone(), v);
+                    .map_err(|e| fail.err(format!("output '{}' ({}): {e}", o.name, o.ty)))?;
+                outputs.insert(o.name.clone(), v);
             }
         }
     }
-    if let Some(log) = resp.get("log") {
-        match log {
-            J::Array(lines) => result.logs.extend(lines.iter().map(|l| {
-                l.as_str()
-                    .map(String::from)
-                    .unwrap_or_else(|| l.to_string())
-            })),
-            J::String(s) => result.logs.extend(s.lines().map(String::from)),
-            _ => {}
-        }
+    Ok(outputs)
+}
+
+/// Log lines: the response's `log`, then the last 20 non-empty lines of stderr.
+fn logs(resp: &J, stderr: &str) -> Vec<String> {
+    let mut logs = Vec::new();
+    match resp.get("log") {
+        Some(J::Array(lines)) => logs.extend(lines.iter().map(|l| {
+            l.as_str()
+                .map(String::from)
+                .unwrap_or_else(|| l.to_string())
+        })),
+        Some(J::String(s)) => logs.extend(s.lines().map(String::from)),
+        _ => {}
     }
     let lines: Vec<&str> = stderr.lines().filter(|l| !l.trim().is_empty()).collect();
     let skip = lines.len().saturating_sub(20);
     if skip > 0 {
-        result
-            .logs
-            .push(format!("({skip} earlier stderr lines not shown)"));
+        logs.push(format!("({skip} earlier stderr lines not shown)"));
     }
-    result
-        .logs
-        .extend(lines[skip..].iter().map(|l| l.to_string()));
-    result.state = resp.get("state").cloned();
-    result.stats = CallStats {
-        encode_ms,
-        spawn_ms: fin.spawn_ms,
-        run_ms: fin.run_ms,
-        decode_ms: t1.elapsed().as_secs_f64() * 1e3,
-    };
-    Ok(result)
+    logs.extend(lines[skip..].iter().map(|l| l.to_string()));
+    logs
 }
 
 fn describe_status(s: &std::process::ExitStatus) -> String {

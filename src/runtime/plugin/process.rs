@@ -4,7 +4,7 @@
 
 use std::io::{Read, Write};
 use std::path::Path;
-use std::process::{Command, ExitStatus, Stdio};
+use std::process::{Child, Command, ExitStatus, Stdio};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
@@ -26,6 +26,22 @@ pub struct Finished {
     pub run_ms: f64,
 }
 
+/// Why a plugin process could not be run.
+#[derive(Debug, thiserror::Error)]
+pub enum ProcessError {
+    #[error("the plugin command is empty")]
+    EmptyCommand,
+    /// The command did not start.
+    #[error("cannot start {program}: {source}")]
+    Start {
+        program: String,
+        source: std::io::Error,
+    },
+    /// Waiting for it failed (it was killed).
+    #[error("waiting for the plugin failed: {0}")]
+    Wait(std::io::Error),
+}
+
 /// Runs `argv` in `cwd` with `stdin` as input; kills it after `timeout`.
 pub fn run(
     argv: &[std::ffi::OsString],
@@ -33,8 +49,33 @@ pub fn run(
     env: &[(&str, &std::ffi::OsStr)],
     stdin: Vec<u8>,
     timeout: Duration,
-) -> Result<Finished, String> {
-    let (prog, args) = argv.split_first().ok_or("the plugin command is empty")?;
+) -> Result<Finished, ProcessError> {
+    let t0 = Instant::now();
+    // The group is registered so that Ctrl-C kills it (`io::interrupt`): it does not get the
+    // terminal's SIGINT itself.
+    let (_tracked, mut child) = spawn(argv, cwd, env)?;
+    let spawn_ms = t0.elapsed().as_secs_f64() * 1e3;
+    let rx = start_pipes(&mut child, stdin);
+    let status = wait(&mut child, t0 + timeout)?;
+    let run_ms = t0.elapsed().as_secs_f64() * 1e3;
+    let (stdout, stderr) = collect(&rx, &mut child);
+    Ok(Finished {
+        status,
+        stdout,
+        stderr,
+        spawn_ms,
+        run_ms,
+    })
+}
+
+/// Starts `argv` in `cwd` with piped stdio, in a process group of its own, registered so
+/// that an interrupt kills the group.
+fn spawn(
+    argv: &[std::ffi::OsString],
+    cwd: &Path,
+    env: &[(&str, &std::ffi::OsStr)],
+) -> Result<(cgnodes_api::io::interrupt::Tracked, Child), ProcessError> {
+    let (prog, args) = argv.split_first().ok_or(ProcessError::EmptyCommand)?;
     let mut cmd = Command::new(prog);
     cmd.args(args)
         .current_dir(cwd)
@@ -49,16 +90,19 @@ pub fn run(
         use std::os::unix::process::CommandExt;
         cmd.process_group(0);
     }
-    let t0 = Instant::now();
-    // The group is registered so that Ctrl-C kills it (`io::interrupt`): it does not get the
-    // terminal's SIGINT itself.
-    let (_tracked, mut child) = cgnodes_api::io::interrupt::track(
+    cgnodes_api::io::interrupt::track(
         || cmd.spawn(),
         |c| cgnodes_api::io::interrupt::Resource::ProcessGroup(i32::try_from(c.id()).unwrap_or(0)),
     )
-    .map_err(|e| format!("cannot start {}: {e}", prog.to_string_lossy()))?;
-    let spawn_ms = t0.elapsed().as_secs_f64() * 1e3;
-    let pid = child.id();
+    .map_err(|source| ProcessError::Start {
+        program: prog.to_string_lossy().into_owned(),
+        source,
+    })
+}
+
+/// Threads feeding `stdin` to the child and reading its stdout and (the tail of) its
+/// stderr; each reader sends (is stdout, bytes) when its pipe closes.
+fn start_pipes(child: &mut Child, stdin: Vec<u8>) -> mpsc::Receiver<(bool, Vec<u8>)> {
     let (tx, rx) = mpsc::channel::<(bool, Vec<u8>)>();
     if let Some(mut input) = child.stdin.take() {
         // A plugin that exits without reading its input is not an error here; its exit
@@ -75,53 +119,65 @@ pub fn run(
             let _ = tx.send((true, buf));
         });
     }
-    if let Some(mut err) = child.stderr.take() {
-        let tx = tx.clone();
+    if let Some(err) = child.stderr.take() {
         std::thread::spawn(move || {
-            let mut buf = Vec::new();
-            let mut chunk = [0u8; 8192];
-            loop {
-                let n = match err.read(&mut chunk) {
-                    Ok(0) => break,
-                    Ok(n) => n,
-                    Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
-                    Err(_) => break,
-                };
-                buf.extend_from_slice(&chunk[..n]);
-                if buf.len() > 2 * STDERR_KEEP {
-                    buf.drain(..buf.len() - STDERR_KEEP);
-                }
-            }
-            if buf.len() > STDERR_KEEP {
-                buf.drain(..buf.len() - STDERR_KEEP);
-            }
-            let _ = tx.send((false, buf));
+            let _ = tx.send((false, read_tail(err)));
         });
     }
-    drop(tx);
-    let deadline = t0 + timeout;
+    rx
+}
+
+/// Reads a pipe to its end, keeping the last `STDERR_KEEP` bytes.
+fn read_tail(mut pipe: impl Read) -> Vec<u8> {
+    let mut buf = Vec::new();
+    let mut chunk = [0u8; 8192];
+    loop {
+        let n = match pipe.read(&mut chunk) {
+            Ok(0) => break,
+            Ok(n) => n,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+            Err(_) => break,
+        };
+        buf.extend_from_slice(&chunk[..n]);
+        if buf.len() > 2 * STDERR_KEEP {
+            buf.drain(..buf.len() - STDERR_KEEP);
+        }
+    }
+    if buf.len() > STDERR_KEEP {
+        buf.drain(..buf.len() - STDERR_KEEP);
+    }
+    buf
+}
+
+/// Waits for the child to exit, polling with a growing nap; kills its group at `deadline`
+/// (`None`: killed).
+fn wait(child: &mut Child, deadline: Instant) -> Result<Option<ExitStatus>, ProcessError> {
+    let pid = child.id();
     let mut nap = Duration::from_micros(200);
-    let status = loop {
+    loop {
         match child.try_wait() {
-            Ok(Some(s)) => break Some(s),
+            Ok(Some(s)) => return Ok(Some(s)),
             Ok(None) => {}
             Err(e) => {
-                kill_group(pid, &mut child);
-                return Err(format!("waiting for the plugin failed: {e}"));
+                kill_group(pid, child);
+                return Err(ProcessError::Wait(e));
             }
         }
         let now = Instant::now();
         if now >= deadline {
-            kill_group(pid, &mut child);
+            kill_group(pid, child);
             let _ = child.wait();
-            break None;
+            return Ok(None);
         }
         std::thread::sleep(nap.min(deadline - now));
         nap = (nap * 2).min(Duration::from_millis(10));
-    };
-    let run_ms = t0.elapsed().as_secs_f64() * 1e3;
-    // Collect the pipes; a process the plugin left behind may hold them open, so wait only
-    // briefly and then end the whole group.
+    }
+}
+
+/// Collects stdout and stderr; a process the plugin left behind may hold the pipes open, so
+/// waits only briefly and then ends the whole group.
+fn collect(rx: &mpsc::Receiver<(bool, Vec<u8>)>, child: &mut Child) -> (Vec<u8>, Vec<u8>) {
+    let pid = child.id();
     let mut stdout = Vec::new();
     let mut stderr = Vec::new();
     let grace = Instant::now() + Duration::from_secs(2);
@@ -131,18 +187,12 @@ pub fn run(
             Ok((true, b)) => stdout = b,
             Ok((false, b)) => stderr = b,
             Err(_) => {
-                kill_group(pid, &mut child);
+                kill_group(pid, child);
                 break;
             }
         }
     }
-    Ok(Finished {
-        status,
-        stdout,
-        stderr,
-        spawn_ms,
-        run_ms,
-    })
+    (stdout, stderr)
 }
 
 /// Kills the plugin's process group (the plugin and anything it started).

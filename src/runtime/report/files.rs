@@ -4,7 +4,7 @@
 //! shown as they are; SVG charts inline; CSV files as a table of their first rows; meshes as
 //! a preview render (sequences animated, framed on the first frame).
 
-use super::esc;
+use super::{esc, ReportError};
 use cgnodes_api::registry::MeshHooks;
 use cgnodes_api::types::Value;
 use cgnodes_formats::animation::{self, AnimFormat, AnimOptions};
@@ -48,9 +48,12 @@ impl FileRenderer {
         dir: &Path,
         hooks: MeshHooks,
         prefetched: Prefetched,
-    ) -> Result<FileRenderer, String> {
+    ) -> Result<FileRenderer, ReportError> {
         let files = dir.join("report_files");
-        std::fs::create_dir_all(&files).map_err(|e| format!("{}: {e}", files.display()))?;
+        std::fs::create_dir_all(&files).map_err(|source| ReportError::Write {
+            path: files.clone(),
+            source,
+        })?;
         Ok(FileRenderer {
             dir: dir.to_path_buf(),
             files,
@@ -115,7 +118,7 @@ impl FileRenderer {
                     "<figure><figcaption class=\"err\">{} file(s) *.{}: {}</figcaption></figure>\n",
                     paths.len(),
                     esc(&ext),
-                    esc(&e)
+                    esc(&e.to_string())
                 )
             }));
         }
@@ -165,7 +168,7 @@ impl FileRenderer {
         &self,
         paths: &[PathBuf],
         values: &HashMap<PathBuf, Value>,
-    ) -> Result<String, String> {
+    ) -> Result<String, ReportError> {
         // The image a file was written from, encoded as the file is (tone-mapped when the
         // file is EXR or HDR); else the file read back.
         let read = |p: &PathBuf| match values.get(p) {
@@ -173,7 +176,7 @@ impl FileRenderer {
                 Ok(animation::tone_map(img))
             }
             Some(Value::Image(img)) => Ok(animation::to_rgba8(img)),
-            _ => animation::read_rgba8(p),
+            _ => animation::read_rgba8(p).map_err(|e| ReportError::Image(e.to_string())),
         };
         if let [one] = paths {
             let t = thumbnail(&read(one)?);
@@ -192,7 +195,7 @@ impl FileRenderer {
     /// Writes `frames` as an APNG under report_files/ and returns its figure. APNG, not GIF:
     /// no palette to quantize per frame (NeuQuant made the report of an 8-frame cloth run
     /// cost more than the run), lossless, and shown by every current browser.
-    fn animation(&self, frames: &[RgbaImage], paths: &[PathBuf]) -> Result<String, String> {
+    fn animation(&self, frames: &[RgbaImage], paths: &[PathBuf]) -> Result<String, ReportError> {
         self.animation_at(frames, paths, frames[0].dimensions())
     }
 
@@ -202,7 +205,7 @@ impl FileRenderer {
         frames: &[RgbaImage],
         paths: &[PathBuf],
         shown: (u32, u32),
-    ) -> Result<String, String> {
+    ) -> Result<String, ReportError> {
         let opts = AnimOptions {
             format: AnimFormat::Apng,
             fps: 12.0,
@@ -210,10 +213,11 @@ impl FileRenderer {
             max_width: 0,
             fast: true,
         };
-        let bytes = animation::encode_animation(frames, &opts)?;
+        let bytes = animation::encode_animation(frames, &opts)
+            .map_err(|e| ReportError::Image(e.to_string()))?;
         let (file, href) = self.new_file("png");
         cgnodes_api::io::write_atomic(&file, |w| w.write_all(&bytes))
-            .map_err(|e| format!("{}: {e}", file.display()))?;
+            .map_err(|source| ReportError::Write { path: file, source })?;
         Ok(self.figure(&href, shown, paths))
     }
 
@@ -288,13 +292,15 @@ impl FileRenderer {
         &self,
         paths: &[PathBuf],
         values: &HashMap<PathBuf, Value>,
-    ) -> Result<String, String> {
+    ) -> Result<String, ReportError> {
         let picked = sample(paths);
         let load = |p: &PathBuf| {
             if let Some(Value::Mesh(m)) = values.get(p) {
                 return Ok(m.clone());
             }
-            cgnodes_formats::mesh_file::load_mesh(p, &Default::default()).map(Arc::new)
+            cgnodes_formats::mesh_file::load_mesh(p, &Default::default())
+                .map(Arc::new)
+                .map_err(|e| ReportError::Mesh(e.to_string()))
         };
         let first = load(picked[0])?;
         if first.num_faces() == 0 {
@@ -306,7 +312,7 @@ impl FileRenderer {
                 more_files(paths.len())
             ));
         }
-        let preview = self.hooks.preview.ok_or("no mesh preview in this build")?;
+        let preview = self.hooks.preview.ok_or(ReportError::NoPreview)?;
         // Thumbnails drawn while the frames ran (`Prefetch`) are used when framed on the
         // same first file; the rest are drawn now, in parallel.
         let framed_on = picked[0];
@@ -325,10 +331,11 @@ impl FileRenderer {
                     } else {
                         load(p)?
                     };
-                    Ok(animation::to_rgba8(&preview(&first, &m, w, h)?))
+                    let img = preview(&first, &m, w, h).map_err(ReportError::Image)?;
+                    Ok(animation::to_rgba8(&img))
                 }
             })
-            .collect::<Result<Vec<RgbaImage>, String>>()?;
+            .collect::<Result<Vec<RgbaImage>, ReportError>>()?;
         if paths.len() == 1 {
             let t = &frames[0];
             let (file, href) = self.new_file("png");
@@ -389,10 +396,15 @@ pub fn thumbnail(img: &RgbaImage) -> RgbaImage {
     image::imageops::resize(img, w, h, image::imageops::FilterType::Triangle)
 }
 
-fn save_png(img: &RgbaImage, path: &Path) -> Result<(), String> {
-    let bytes = cgnodes_formats::png::encode_png_fast(img.width(), img.height(), img.as_raw())?;
-    cgnodes_api::io::write_atomic(path, |w| w.write_all(&bytes))
-        .map_err(|e| format!("{}: {e}", path.display()))
+fn save_png(img: &RgbaImage, path: &Path) -> Result<(), ReportError> {
+    let bytes = cgnodes_formats::png::encode_png_fast(img.width(), img.height(), img.as_raw())
+        .map_err(|e| ReportError::Image(e.to_string()))?;
+    cgnodes_api::io::write_atomic(path, |w| w.write_all(&bytes)).map_err(|source| {
+        ReportError::Write {
+            path: path.to_path_buf(),
+            source,
+        }
+    })
 }
 
 /// At most `MAX_ANIM_FRAMES` of `paths`, evenly spaced, the first and last included.

@@ -369,7 +369,7 @@ pub fn write_run_report(
     c: &Collector,
     dir: &Path,
     hooks: MeshHooks,
-) -> Result<PathBuf, String> {
+) -> Result<PathBuf, ReportError> {
     let mut body = format!(
         "<h1>cgnodes run: {}</h1>\n",
         esc(&graph.file.display().to_string())
@@ -490,7 +490,7 @@ pub fn write_sweep_report(
     files: &[PathBuf],
     dir: &Path,
     hooks: MeshHooks,
-) -> Result<PathBuf, String> {
+) -> Result<PathBuf, ReportError> {
     let mut body = format!("<h1>cgnodes sweep: {}</h1>\n", esc(title));
     let fr = files::FileRenderer::new(dir, hooks, Default::default())?;
     let parts: Vec<String> = files
@@ -504,10 +504,30 @@ pub fn write_sweep_report(
     write_page(dir, "cgnodes sweep", &body)
 }
 
-fn write_page(dir: &Path, title: &str, body: &str) -> Result<PathBuf, String> {
+/// Why a report (or one of its figures) was not written.
+#[derive(Debug, thiserror::Error)]
+pub enum ReportError {
+    /// A file or folder of the report could not be written.
+    #[error("{}: {source}", path.display())]
+    Write {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    /// An image did not read or encode.
+    #[error("{0}")]
+    Image(String),
+    /// A mesh file did not read.
+    #[error("{0}")]
+    Mesh(String),
+    #[error("no mesh preview in this build")]
+    NoPreview,
+}
+
+fn write_page(dir: &Path, title: &str, body: &str) -> Result<PathBuf, ReportError> {
     let path = dir.join("report.html");
     let html = page(title, body);
-    cgnodes_api::io::write_atomic(&path, |w| w.write_all(html.as_bytes()))
-        .map_err(|e| format!("{}: {e}", path.display()))?;
+    if let Err(source) = cgnodes_api::io::write_atomic(&path, |w| w.write_all(html.as_bytes())) {
+        return Err(ReportError::Write { path, source });
+    }
     Ok(path)
 }

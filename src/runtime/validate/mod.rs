@@ -1,9 +1,9 @@
 //! Validation: checks a graph against the registry before anything runs, reporting every
 //! error together, each naming the file, node id, node type and socket.
 
-use crate::graph::format::{split_link, Graph};
-use cgnodes_api::node::{FileRole, NodeDecl};
-use cgnodes_api::registry::{closest, Registry};
+use crate::graph::format::Graph;
+use cgnodes_api::node::NodeDecl;
+use cgnodes_api::registry::Registry;
 use cgnodes_api::types::{SocketType, Value};
 use petgraph::graph::{DiGraph, NodeIndex};
 use std::collections::HashMap;
@@ -11,6 +11,7 @@ use std::fmt;
 use std::path::PathBuf;
 use std::sync::Arc;
 
+mod check;
 mod partial;
 pub use partial::validate_needed;
 
@@ -207,299 +208,14 @@ pub fn validate_with(
     registry: &Registry,
     asset_dirs: &[std::path::PathBuf],
 ) -> Result<ValidGraph, Vec<GraphError>> {
-    let file = graph.file.clone();
-    let spec = &graph.spec;
-    let mut errors = Vec::new();
-    // Node types.
-    let mut decls: HashMap<&str, Arc<NodeDecl>> = HashMap::new();
-    for (id, n) in &spec.nodes {
-        match registry.get(&n.node_type) {
-            Some(d) => {
-                decls.insert(id, d.clone());
-            }
-            None => errors.push(GraphError::UnknownNodeType {
-                file: file.clone(),
-                node: id.clone(),
-                node_type: n.node_type.clone(),
-                suggestion: registry.closest(&n.node_type),
-            }),
-        }
+    let mut c = check::Checker::new(graph, registry, asset_dirs);
+    let raw_inputs = c.inputs();
+    let target_ids = c.targets();
+    let ids = c.order();
+    if !c.errors.is_empty() {
+        return Err(c.errors);
     }
-    // Sockets, literals and links.
-    let mut edges: Vec<(String, String)> = Vec::new();
-    let mut raw_inputs: HashMap<&str, Vec<(String, RawSource)>> = HashMap::new();
-    for (id, n) in &spec.nodes {
-        let Some(decl) = decls.get(id.as_str()) else {
-            continue;
-        };
-        let ctx = |socket: &str| {
-            (
-                file.clone(),
-                id.clone(),
-                n.node_type.clone(),
-                socket.to_string(),
-            )
-        };
-        let names = || decl.inputs.iter().map(|s| s.name.as_str());
-        for key in n.params.keys().chain(n.inputs.keys()) {
-            if decl.input(key).is_none() {
-                let (file, node, node_type, socket) = ctx(key);
-                errors.push(GraphError::UnknownSocket {
-                    file,
-                    node,
-                    node_type,
-                    side: Side::Input,
-                    suggestion: closest(key, names()),
-                    socket,
-                });
-            }
-        }
-        let mut ins = Vec::new();
-        for s in &decl.inputs {
-            let (file, node, node_type, socket) = ctx(&s.name);
-            let lit = n.params.get(&s.name);
-            let link = n.inputs.get(&s.name);
-            let src = match (lit, link) {
-                (Some(_), Some(_)) => {
-                    errors.push(GraphError::LiteralAndLink {
-                        file,
-                        node,
-                        node_type,
-                        socket,
-                    });
-                    continue;
-                }
-                (Some(j), None) => {
-                    match Value::from_json(&s.ty, j).and_then(|v| s.check_literal(&v).map(|()| v)) {
-                        Err(message) => {
-                            errors.push(GraphError::BadParam {
-                                file,
-                                node,
-                                node_type,
-                                socket,
-                                message,
-                            });
-                            continue;
-                        }
-                        Ok(v) => {
-                            if s.file == FileRole::Input {
-                                if let Value::String(p) = &v {
-                                    let path = cgnodes_api::node::FileEnv {
-                                        graph_dir: graph.dir.clone(),
-                                        asset_dirs: asset_dirs.to_vec(),
-                                        ..Default::default()
-                                    }
-                                    .input_path(p);
-                                    if !p.contains('{') && !path.exists() {
-                                        errors.push(GraphError::MissingFile {
-                                            file,
-                                            node,
-                                            node_type,
-                                            socket,
-                                            path: path.display().to_string(),
-                                        });
-                                        continue;
-                                    }
-                                }
-                            }
-                            RawSource::Literal(v)
-                        }
-                    }
-                }
-                (None, Some(l)) => {
-                    let links = l.links();
-                    if links.len() != 1 && !matches!(s.ty, SocketType::List(_)) {
-                        errors.push(GraphError::TooManyLinks {
-                            file,
-                            node,
-                            node_type,
-                            socket,
-                            count: links.len(),
-                        });
-                        continue;
-                    }
-                    let mut parsed = Vec::new();
-                    for link in links {
-                        let dangling = |reason: String| GraphError::DanglingLink {
-                            file: file.clone(),
-                            node: node.clone(),
-                            node_type: node_type.clone(),
-                            socket: socket.clone(),
-                            link: link.to_string(),
-                            reason,
-                        };
-                        let Some((from, out)) = split_link(link) else {
-                            errors.push(dangling(
-                                "which is not of the form \"<node id>.<output socket>\"".into(),
-                            ));
-                            continue;
-                        };
-                        let Some(up) = spec.nodes.get(from) else {
-                            errors.push(dangling(format!(
-                                "but there is no node '{from}'{}",
-                                hint(&closest(from, spec.nodes.keys().map(String::as_str)))
-                            )));
-                            continue;
-                        };
-                        edges.push((from.to_string(), id.clone()));
-                        let Some(up_decl) = decls.get(from) else {
-                            continue;
-                        };
-                        let Some(out_decl) = up_decl.output(out) else {
-                            errors.push(GraphError::UnknownSocket {
-                                file: file.clone(),
-                                node: from.to_string(),
-                                node_type: up.node_type.clone(),
-                                side: Side::Output,
-                                socket: out.to_string(),
-                                suggestion: closest(
-                                    out,
-                                    up_decl.outputs.iter().map(|s| s.name.as_str()),
-                                ),
-                            });
-                            continue;
-                        };
-                        if !s.ty.accepts(&out_decl.ty) {
-                            errors.push(GraphError::MismatchedInputSlotType {
-                                file: file.clone(),
-                                node: node.clone(),
-                                node_type: node_type.clone(),
-                                socket: socket.clone(),
-                                expected: s.ty.clone(),
-                                actual: out_decl.ty.clone(),
-                                from_node: from.to_string(),
-                                from_socket: out.to_string(),
-                            });
-                            continue;
-                        }
-                        parsed.push((from.to_string(), out.to_string()));
-                    }
-                    RawSource::Links(parsed)
-                }
-                (None, None) => match s.default_value() {
-                    Some(v) => RawSource::Default(v),
-                    None if s.optional => RawSource::Unset,
-                    None => {
-                        errors.push(GraphError::MissingInput {
-                            file,
-                            node,
-                            node_type,
-                            socket,
-                        });
-                        continue;
-                    }
-                },
-            };
-            ins.push((s.name.clone(), src));
-        }
-        raw_inputs.insert(id, ins);
-    }
-    // Targets.
-    let mut target_ids: Vec<String> = Vec::new();
-    match &spec.outputs {
-        Some(outs) => {
-            for o in outs {
-                if spec.nodes.contains_key(o) {
-                    target_ids.push(o.clone());
-                } else {
-                    errors.push(GraphError::UnknownTarget {
-                        file: file.clone(),
-                        node: o.clone(),
-                        suggestion: closest(o, spec.nodes.keys().map(String::as_str)),
-                    });
-                }
-            }
-        }
-        None => {
-            target_ids.extend(
-                spec.nodes
-                    .keys()
-                    .filter(|id| decls.get(id.as_str()).is_some_and(|d| d.sink))
-                    .cloned(),
-            );
-        }
-    }
-    // Cycles and order, with petgraph.
-    let mut g: DiGraph<&str, ()> = DiGraph::new();
-    let mut gi: HashMap<&str, NodeIndex> = HashMap::new();
-    for id in spec.nodes.keys() {
-        gi.insert(id, g.add_node(id));
-    }
-    for (a, b) in &edges {
-        g.add_edge(gi[a.as_str()], gi[b.as_str()], ());
-    }
-    let order = match petgraph::algo::toposort(&g, None) {
-        Ok(o) => o,
-        Err(_) => {
-            for scc in petgraph::algo::tarjan_scc(&g) {
-                let cyclic = scc.len() > 1 || g.contains_edge(scc[0], scc[0]);
-                if cyclic {
-                    errors.push(GraphError::Cycle {
-                        file: file.clone(),
-                        path: cycle_path(&g, &scc),
-                    });
-                }
-            }
-            Vec::new()
-        }
-    };
-    if !errors.is_empty() {
-        return Err(errors);
-    }
-    let ids: Vec<&str> = order.iter().map(|&i| g[i]).collect();
-    let index: HashMap<String, usize> = ids
-        .iter()
-        .enumerate()
-        .map(|(i, id)| (id.to_string(), i))
-        .collect();
-    let mut nodes = Vec::with_capacity(ids.len());
-    for id in &ids {
-        let raw = raw_inputs.remove(id).unwrap_or_default();
-        let mut deps = Vec::new();
-        let inputs = raw
-            .into_iter()
-            .map(|(name, r)| {
-                let src = match r {
-                    RawSource::Literal(v) => InputSource::Literal(v),
-                    RawSource::Default(v) => InputSource::Default(v),
-                    RawSource::Unset => InputSource::Unset,
-                    RawSource::Links(ls) => InputSource::Links(
-                        ls.into_iter()
-                            .map(|(n, s)| {
-                                deps.push(index[&n]);
-                                (index[&n], s)
-                            })
-                            .collect(),
-                    ),
-                };
-                (name, src)
-            })
-            .collect();
-        deps.sort_unstable();
-        deps.dedup();
-        nodes.push(ValidNode {
-            id: id.to_string(),
-            decl: decls[id].clone(),
-            inputs,
-            deps,
-        });
-    }
-    let targets = target_ids.iter().map(|t| index[t]).collect();
-    Ok(ValidGraph {
-        file,
-        dir: graph.dir.clone(),
-        nodes,
-        index,
-        targets,
-        hash: graph.hash.clone(),
-    })
-}
-
-enum RawSource {
-    Literal(Value),
-    Links(Vec<(String, String)>),
-    Default(Value),
-    Unset,
+    Ok(c.finish(&ids, raw_inputs, &target_ids))
 }
 
 /// An ordered cycle through the nodes of a strongly connected component.

@@ -306,7 +306,7 @@ fn region_runs(
             (0..nx).map(move |i| vec![x.0 + (i as f64 + 0.5) * dx, y.0 + (j as f64 + 0.5) * dy])
         })
         .collect();
-    let pred = cgnodes_nn::dataset::predict(m, &cells)?;
+    let pred = cgnodes_nn::dataset::predict(m, &cells).map_err(|e| e.to_string())?;
     let index = |v: i64| m.classes.iter().position(|c| *c == v).unwrap_or(0);
     let mut runs = Vec::new();
     for j in 0..ny {

@@ -138,6 +138,58 @@ fn locate_bad_line(path: &Path) -> Option<(usize, String)> {
         .and_then(|t| find_bad_obj_line(&t))
 }
 
+/// The first bad line of the file at `path` if there is one, else `otherwise`.
+fn located(path: &Path, otherwise: ObjError) -> ObjError {
+    match locate_bad_line(path) {
+        Some((line, message)) => ObjError::Line { line, message },
+        None => otherwise,
+    }
+}
+
+/// Why an OBJ file could not be read: the line at fault when one is found.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum ObjError {
+    /// The file could not be read.
+    #[error("{0}")]
+    Read(String),
+    /// The file is not UTF-8.
+    #[error("not UTF-8 text: {0}")]
+    NotText(String),
+    /// A malformed line or an index past the data read so far.
+    #[error("line {line}: {message}")]
+    Line {
+        /// The 1-based line.
+        line: usize,
+        /// What is wrong with it.
+        message: String,
+    },
+    /// tobj refused the file and no bad line was found.
+    #[error("{0}")]
+    Tobj(String),
+    /// `group` names no `o`/`g` block.
+    #[error("no group or object named '{group}'; the file has: {names}")]
+    NoGroup {
+        /// The group asked for.
+        group: String,
+        /// The file's block names, comma-separated.
+        names: String,
+    },
+    /// No face in the selected blocks.
+    #[error("no faces: a mesh needs at least one polygon (f lines)")]
+    NoFaces,
+    /// The faces do not make a valid mesh (`Mesh::new`).
+    #[error("{0}")]
+    Mesh(String),
+    /// One block's faces do not make a valid mesh.
+    #[error("object '{object}': {message}")]
+    Object {
+        /// The `o`/`g` block.
+        object: String,
+        /// `Mesh::new`'s error.
+        message: String,
+    },
+}
+
 /// The tobj materials of an OBJ file, or why its material library could not be read.
 pub type ObjMaterials = Result<Vec<tobj::Material>, tobj::LoadError>;
 
@@ -146,24 +198,24 @@ pub type ObjMaterials = Result<Vec<tobj::Material>, tobj::LoadError>;
 /// tobj never sees an index it would mishandle (issue 23: a huge negative texture index
 /// overflowed its `vt * 2`, and index 0 became "the previous corner's UV"); a later failure
 /// is located by `find_bad_obj_line` when it can be. MTL libraries are read through `load_mtl`.
-fn read_tobj(path: &Path) -> Result<(Vec<tobj::Model>, ObjMaterials, [bool; 2]), String> {
+fn read_tobj(path: &Path) -> Result<(Vec<tobj::Model>, ObjMaterials, [bool; 2]), ObjError> {
     let opts = tobj::LoadOptions {
         triangulate: false,
         single_index: false,
         ..Default::default()
     };
-    let bytes = std::fs::read(path).map_err(|e| e.to_string())?;
-    let text = std::str::from_utf8(&bytes).map_err(|e| format!("not UTF-8 text: {e}"))?;
+    let bytes = std::fs::read(path).map_err(|e| ObjError::Read(e.to_string()))?;
+    let text = std::str::from_utf8(&bytes).map_err(|e| ObjError::NotText(e.to_string()))?;
     let (bad, complete) = find_bad_obj_index(text);
-    if let Some((ln, msg)) = bad {
-        return Err(format!("line {ln}: {msg}"));
+    if let Some((line, message)) = bad {
+        return Err(ObjError::Line { line, message });
     }
     let dir = path.parent().unwrap_or(Path::new(""));
     let (models, mats) =
         tobj::load_obj_buf(&mut text.as_bytes(), &opts, |mtl| load_mtl(&dir.join(mtl))).map_err(
             |e| match find_bad_obj_line(text) {
-                Some((ln, msg)) => format!("line {ln}: {msg}"),
-                None => e.to_string(),
+                Some((line, message)) => ObjError::Line { line, message },
+                None => ObjError::Tobj(e.to_string()),
             },
         )?;
     Ok((models, mats, complete))
@@ -253,7 +305,7 @@ pub struct ObjObject {
 /// merged or welded), plus the materials of its MTL libraries, for scene loaders that keep
 /// objects and materials apart. Errors name the first bad line when there is one, like
 /// `load_obj`; a block whose mesh is invalid otherwise gives `object '<name>': <error>`.
-pub fn load_obj_objects(path: &Path) -> Result<(Vec<ObjObject>, ObjMaterials), String> {
+pub fn load_obj_objects(path: &Path) -> Result<(Vec<ObjObject>, ObjMaterials), ObjError> {
     let (models, materials, [all_uv, all_n]) = read_tobj(path)?;
     let mut objects = Vec::new();
     for m in models {
@@ -268,10 +320,13 @@ pub fn load_obj_objects(path: &Path) -> Result<(Vec<ObjObject>, ObjMaterials), S
             .collect();
         let mut out =
             Mesh::new(positions, face_counts(mesh), mesh.indices.clone()).map_err(|e| {
-                match locate_bad_line(path) {
-                    Some((ln, msg)) => format!("line {ln}: {msg}"),
-                    None => format!("object '{}': {e}", m.name),
-                }
+                located(
+                    path,
+                    ObjError::Object {
+                        object: m.name.clone(),
+                        message: e.to_string(),
+                    },
+                )
             })?;
         out.uvs = corner_uvs(mesh).filter(|_| all_uv).map(|values| Attribute {
             domain: Domain::Corner,
@@ -296,19 +351,18 @@ pub fn load_obj_objects(path: &Path) -> Result<(Vec<ObjObject>, ObjMaterials), S
 /// `group` picks one `o`/`g` block by name; empty merges them all. tobj renumbers vertices
 /// per block, so when merging, vertices of different blocks at bit-identical positions are
 /// welded back together (OBJ blocks share one vertex list).
-pub fn load_obj(path: &Path, group: &str) -> Result<Mesh, String> {
+pub fn load_obj(path: &Path, group: &str) -> Result<Mesh, ObjError> {
     let (models, _, [all_uv, all_n]) = read_tobj(path)?;
-    let locate = || locate_bad_line(path);
     let models: Vec<&tobj::Model> = if group.is_empty() {
         models.iter().collect()
     } else {
         let sel: Vec<_> = models.iter().filter(|m| m.name == group).collect();
         if sel.is_empty() {
             let names: Vec<&str> = models.iter().map(|m| m.name.as_str()).collect();
-            return Err(format!(
-                "no group or object named '{group}'; the file has: {}",
-                names.join(", ")
-            ));
+            return Err(ObjError::NoGroup {
+                group: group.to_string(),
+                names: names.join(", "),
+            });
         }
         sel
     };
@@ -350,15 +404,10 @@ pub fn load_obj(path: &Path, group: &str) -> Result<Mesh, String> {
     }
     if counts.is_empty() {
         // tobj drops vertices that no face uses, so an empty mesh would hide the file's points
-        return Err(match locate() {
-            Some((ln, msg)) => format!("line {ln}: {msg}"),
-            None => "no faces: a mesh needs at least one polygon (f lines)".into(),
-        });
+        return Err(located(path, ObjError::NoFaces));
     }
-    let mut mesh = Mesh::new(positions, counts, idx).map_err(|e| match locate() {
-        Some((ln, msg)) => format!("line {ln}: {msg}"),
-        None => e.to_string(),
-    })?;
+    let mut mesh = Mesh::new(positions, counts, idx)
+        .map_err(|e| located(path, ObjError::Mesh(e.to_string())))?;
     if has_uv && !uvs.is_empty() {
         mesh.uvs = Some(Attribute {
             domain: Domain::Corner,
@@ -502,7 +551,7 @@ mod tests {
         let p = d.path().join("points.obj");
         for text in ["v 0 0 0\nv 1 0 0\n", ""] {
             std::fs::write(&p, text).unwrap();
-            let e = load_obj(&p, "").unwrap_err();
+            let e = load_obj(&p, "").unwrap_err().to_string();
             assert!(e.contains("no faces"), "{e}");
         }
     }
@@ -562,17 +611,19 @@ mod tests {
                 format!("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvn 0 0 1\nf {corner} 2/1/1 3/1/1\n");
             let d = folder(&[("t.obj", &obj)]);
             let p = d.path().join("t.obj");
-            let e = load_obj(&p, "").unwrap_err();
+            let e = load_obj(&p, "").unwrap_err().to_string();
             assert!(
                 e.starts_with("line 6: ") && e.contains(what),
                 "{corner}: {e}"
             );
-            let e = load_obj_objects(&p).unwrap_err();
+            let e = load_obj_objects(&p).unwrap_err().to_string();
             assert!(e.starts_with("line 6: "), "{e}");
         }
         // Polylines are checked too.
         let d = folder(&[("t.obj", "v 0 0 0\nvt 0 0\nl 1/-9223372036854775807 1/1\n")]);
-        let e = load_obj(&d.path().join("t.obj"), "").unwrap_err();
+        let e = load_obj(&d.path().join("t.obj"), "")
+            .unwrap_err()
+            .to_string();
         assert!(e.starts_with("line 3: "), "{e}");
     }
 

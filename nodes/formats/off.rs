@@ -4,24 +4,61 @@
 use cgnodes_api::prelude::*;
 use std::io::Write;
 
+/// Why OFF text is not a mesh: the line at fault where there is one.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum OffError {
+    /// No non-comment line.
+    #[error("empty file")]
+    Empty,
+    /// The header ends before the counts.
+    #[error("missing vertex/face counts")]
+    NoCounts,
+    /// A malformed line.
+    #[error("line {line}: {message}")]
+    Line {
+        /// The 1-based line.
+        line: usize,
+        /// What is wrong with it.
+        message: String,
+    },
+    /// The file ends before the declared vertices or faces.
+    #[error("file ends after {read} of {declared} {what}")]
+    EndsEarly {
+        /// Items read.
+        read: usize,
+        /// Items the header declares.
+        declared: usize,
+        /// "vertices" or "faces".
+        what: &'static str,
+    },
+    /// The faces do not make a valid mesh (`Mesh::new`).
+    #[error("{0}")]
+    Mesh(String),
+}
+
+/// An `OffError` at line `line`.
+fn at(line: usize, message: String) -> OffError {
+    OffError::Line { line, message }
+}
+
 /// Reads OFF text. Errors carry the line number.
-pub fn read_off(text: &str) -> Result<Mesh, String> {
+pub fn read_off(text: &str) -> Result<Mesh, OffError> {
     // Tokens with their line numbers, comments removed.
     let mut lines = text
         .lines()
         .enumerate()
         .map(|(i, l)| (i + 1, l.split('#').next().unwrap_or("").trim()))
         .filter(|(_, l)| !l.is_empty());
-    let (ln, head) = lines.next().ok_or("empty file")?;
+    let (ln, head) = lines.next().ok_or(OffError::Empty)?;
     let rest_of_head = if let Some(r) = head.strip_prefix("COFF") {
         r
     } else if let Some(r) = head.strip_prefix("OFF") {
         r
     } else {
-        return Err(format!("line {ln}: expected 'OFF', found '{head}'"));
+        return Err(at(ln, format!("expected 'OFF', found '{head}'")));
     };
     let (ln, counts_line) = if rest_of_head.trim().is_empty() {
-        lines.next().ok_or("missing vertex/face counts")?
+        lines.next().ok_or(OffError::NoCounts)?
     } else {
         (ln, rest_of_head.trim())
     };
@@ -30,11 +67,15 @@ pub fn read_off(text: &str) -> Result<Mesh, String> {
         .map(|s| s.parse::<usize>())
         .collect::<Result<_, _>>()
         .map_err(|_| {
-            format!("line {ln}: expected vertex, face and edge counts, found '{counts_line}'")
+            at(
+                ln,
+                format!("expected vertex, face and edge counts, found '{counts_line}'"),
+            )
         })?;
     if counts.len() < 2 {
-        return Err(format!(
-            "line {ln}: expected vertex, face and edge counts, found '{counts_line}'"
+        return Err(at(
+            ln,
+            format!("expected vertex, face and edge counts, found '{counts_line}'"),
         ));
     }
     let (nv, nf) = (counts[0], counts[1]);
@@ -42,20 +83,23 @@ pub fn read_off(text: &str) -> Result<Mesh, String> {
     // ("0 0 0") and a face line at least 7 ("3 0 1 2"), so no file holds more than that.
     let mut positions = Vec::with_capacity(nv.min(text.len() / 5));
     for k in 0..nv {
-        let (ln, l) = lines
-            .next()
-            .ok_or_else(|| format!("file ends after {k} of {nv} vertices"))?;
+        let (ln, l) = lines.next().ok_or(OffError::EndsEarly {
+            read: k,
+            declared: nv,
+            what: "vertices",
+        })?;
         let v: Vec<f64> = l
             .split_whitespace()
             .map(|s| s.parse::<f64>())
             .collect::<Result<_, _>>()
-            .map_err(|_| format!("line {ln}: malformed vertex '{l}'"))?;
+            .map_err(|_| at(ln, format!("malformed vertex '{l}'")))?;
         if v.len() < 3 {
-            return Err(format!("line {ln}: a vertex needs 3 coordinates: '{l}'"));
+            return Err(at(ln, format!("a vertex needs 3 coordinates: '{l}'")));
         }
         if v[..3].iter().any(|x| !x.is_finite()) {
-            return Err(format!(
-                "line {ln}: vertex {k} has a non-finite coordinate: '{l}'"
+            return Err(at(
+                ln,
+                format!("vertex {k} has a non-finite coordinate: '{l}'"),
             ));
         }
         positions.push([v[0], v[1], v[2]]);
@@ -63,16 +107,18 @@ pub fn read_off(text: &str) -> Result<Mesh, String> {
     let mut fc = Vec::with_capacity(nf.min(text.len() / 7));
     let mut fi = Vec::with_capacity(nf.saturating_mul(3).min(text.len() / 2));
     for k in 0..nf {
-        let (ln, l) = lines
-            .next()
-            .ok_or_else(|| format!("file ends after {k} of {nf} faces"))?;
+        let (ln, l) = lines.next().ok_or(OffError::EndsEarly {
+            read: k,
+            declared: nf,
+            what: "faces",
+        })?;
         let mut w = l.split_whitespace();
         let n: usize = w
             .next()
             .and_then(|s| s.parse().ok())
-            .ok_or_else(|| format!("line {ln}: malformed face '{l}'"))?;
+            .ok_or_else(|| at(ln, format!("malformed face '{l}'")))?;
         if n < 3 {
-            return Err(format!("line {ln}: degenerate face with {n} corners"));
+            return Err(at(ln, format!("degenerate face with {n} corners")));
         }
         let start = fi.len();
         // Repeats: a scan for small faces, a set for large ones (a scan per corner was
@@ -82,10 +128,11 @@ pub fn read_off(text: &str) -> Result<Mesh, String> {
             let i: usize = w
                 .next()
                 .and_then(|s| s.parse().ok())
-                .ok_or_else(|| format!("line {ln}: malformed face '{l}'"))?;
+                .ok_or_else(|| at(ln, format!("malformed face '{l}'")))?;
             if i >= nv {
-                return Err(format!(
-                    "line {ln}: vertex index {i} out of range ({nv} vertices)"
+                return Err(at(
+                    ln,
+                    format!("vertex index {i} out of range ({nv} vertices)"),
                 ));
             }
             let repeated = if n > 32 {
@@ -94,15 +141,13 @@ pub fn read_off(text: &str) -> Result<Mesh, String> {
                 fi[start..].contains(&(i as u32))
             };
             if repeated {
-                return Err(format!(
-                    "line {ln}: degenerate face, vertex {i} appears twice"
-                ));
+                return Err(at(ln, format!("degenerate face, vertex {i} appears twice")));
             }
             fi.push(i as u32);
         }
         fc.push(n as u32);
     }
-    Mesh::new(positions, fc, fi).map_err(|e| e.to_string())
+    Mesh::new(positions, fc, fi).map_err(|e| OffError::Mesh(e.to_string()))
 }
 
 /// Writes OFF text (positions and faces only).
@@ -131,9 +176,13 @@ mod tests {
         let t = "OFF\n# a square\n4 1 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n";
         let m = read_off(t).unwrap();
         assert_eq!(m.face(0), &[0, 1, 2, 3]);
-        let e = read_off(&t.replace("4 0 1 2 3", "4 0 1 2 9")).unwrap_err();
+        let e = read_off(&t.replace("4 0 1 2 3", "4 0 1 2 9"))
+            .unwrap_err()
+            .to_string();
         assert!(e.starts_with("line 8:"), "{e}");
-        let e = read_off(&t.replace("1 1 0", "1 inf 0")).unwrap_err();
+        let e = read_off(&t.replace("1 1 0", "1 inf 0"))
+            .unwrap_err()
+            .to_string();
         assert!(e.starts_with("line 6:"), "{e}");
     }
 
@@ -141,12 +190,14 @@ mod tests {
     /// `nf * 3` could overflow) are an error about the missing data, not an abort.
     #[test]
     fn huge_header_counts_are_refused_without_allocating() {
-        let e = read_off("OFF\n100000000000 0 0").unwrap_err();
+        let e = read_off("OFF\n100000000000 0 0").unwrap_err().to_string();
         assert!(
             e.contains("file ends after 0 of 100000000000 vertices"),
             "{e}"
         );
-        let e = read_off(&format!("OFF\n3 {} 0\n0 0 0\n1 0 0\n0 1 0\n", usize::MAX)).unwrap_err();
+        let e = read_off(&format!("OFF\n3 {} 0\n0 0 0\n1 0 0\n0 1 0\n", usize::MAX))
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("file ends after 0 of"), "{e}");
     }
 
@@ -163,7 +214,9 @@ mod tests {
         let ok = format!("{t}{n} {}\n", idx.join(" "));
         assert_eq!(read_off(&ok).unwrap().face(0).len(), n);
         idx[n - 1] = "7".into();
-        let e = read_off(&format!("{t}{n} {}\n", idx.join(" "))).unwrap_err();
+        let e = read_off(&format!("{t}{n} {}\n", idx.join(" ")))
+            .unwrap_err()
+            .to_string();
         assert_eq!(
             e,
             format!("line {}: degenerate face, vertex 7 appears twice", n + 3)

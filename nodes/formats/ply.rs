@@ -63,14 +63,161 @@ enum Format {
     Be,
 }
 
+/// Why a PLY file could not be read: the header line, body line (ASCII), byte offset
+/// (binary) or element instance at fault.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum PlyError {
+    /// The file does not start with the `ply` magic.
+    #[error("line 1: not a PLY file (it must start with 'ply')")]
+    NotPly,
+    /// The header never ends.
+    #[error("no 'end_header' line")]
+    NoEndHeader,
+    /// The header is not UTF-8.
+    #[error("header is not text")]
+    HeaderNotText,
+    /// A header line that cannot be read, by its 1-based number and a description.
+    #[error("line {line}: {what} '{text}'")]
+    Header {
+        /// The header line's 1-based number.
+        line: usize,
+        /// What is wrong: "unknown format", "malformed element", ...
+        what: &'static str,
+        /// The line's text.
+        text: String,
+    },
+    /// A `property` line before any `element` line.
+    #[error("line {0}: property before any element")]
+    PropertyBeforeElement(usize),
+    /// The header has no `format` line.
+    #[error("the header has no 'format' line")]
+    NoFormat,
+    /// An element count larger than the body could hold.
+    #[error(
+        "element '{element}' declares {count} instances, more than the {body} bytes of data can hold"
+    )]
+    TooManyInstances {
+        /// The element's name.
+        element: String,
+        /// Its declared count.
+        count: usize,
+        /// The body's size in bytes.
+        body: usize,
+    },
+    /// An element with instances but no property to read.
+    #[error("element '{element}' declares {count} instances but no properties")]
+    NoProperties {
+        /// The element's name.
+        element: String,
+        /// Its declared count.
+        count: usize,
+    },
+    /// The ASCII body is not UTF-8.
+    #[error("ASCII body is not text")]
+    BodyNotText,
+    /// The binary body ends inside a value.
+    #[error("binary data ends early (at byte {0})")]
+    BinaryEnds(usize),
+    /// The ASCII body ends before the last element instance.
+    #[error("the file ends before all elements are read")]
+    AsciiEnds,
+    /// An ASCII line has fewer values than its element's properties.
+    #[error("line {0}: too few values")]
+    TooFewValues(usize),
+    /// An ASCII value is not a number.
+    #[error("line {line}: '{text}' is not a number")]
+    NotANumber {
+        /// The file's 1-based line.
+        line: usize,
+        /// The token.
+        text: String,
+    },
+    /// An ASCII line has more values than its element's properties.
+    #[error("line {line}: {expected} values expected, {found} found")]
+    ValueCount {
+        /// The file's 1-based line.
+        line: usize,
+        /// Values the properties read.
+        expected: usize,
+        /// Values on the line.
+        found: usize,
+    },
+    /// The vertex element lacks a coordinate property.
+    #[error("the vertex element has no x, y, z properties")]
+    NoCoordinates,
+    /// The face element lacks its index list.
+    #[error("the face element has no vertex_indices list")]
+    NoIndices,
+    /// A list length that is negative or fractional.
+    #[error("{element} {index}: bad list length {len}")]
+    ListLength {
+        /// The element's name.
+        element: String,
+        /// The instance.
+        index: usize,
+        /// The length read.
+        len: f64,
+    },
+    /// A vertex whose x, y or z list is empty.
+    #[error("vertex {0}: x, y and z need one value each")]
+    EmptyCoordinate(usize),
+    /// A vertex with a NaN or infinite coordinate.
+    #[error("vertex {vertex} has a non-finite coordinate {position:?}")]
+    NonFinite {
+        /// The vertex.
+        vertex: usize,
+        /// Its coordinates.
+        position: [f64; 3],
+    },
+    /// A face of fewer than three corners.
+    #[error("face {face} is degenerate: {corners} corners")]
+    TooFewCorners {
+        /// The face.
+        face: usize,
+        /// Its corner count.
+        corners: usize,
+    },
+    /// A face index that is not a vertex.
+    #[error("face {face} refers to vertex {index}, but there are {vertices} vertices")]
+    BadIndex {
+        /// The face.
+        face: usize,
+        /// The index read.
+        index: f64,
+        /// Vertices read so far.
+        vertices: usize,
+    },
+    /// A face naming a vertex twice.
+    #[error("face {face} is degenerate: vertex {vertex} appears twice")]
+    RepeatedVertex {
+        /// The face.
+        face: usize,
+        /// The repeated vertex.
+        vertex: f64,
+    },
+    /// A face whose texcoord list is not two values per corner.
+    #[error("face {face}: texcoord list has {values} values for {corners} corners")]
+    Texcoords {
+        /// The face.
+        face: usize,
+        /// Values in the list.
+        values: usize,
+        /// The face's corners.
+        corners: usize,
+    },
+    /// The faces and vertices do not make a mesh (`Mesh::new`).
+    #[error("{0}")]
+    Mesh(String),
+}
+
 /// Reads the values of a PLY body, one element instance at a time.
 trait Source {
-    fn scalar(&mut self, ty: Scalar) -> Result<f64, String>;
+    fn scalar(&mut self, ty: Scalar) -> Result<f64, PlyError>;
     /// Called at the start of each element instance (ASCII: moves to the next line).
-    fn begin(&mut self) -> Result<(), String> {
+    fn begin(&mut self) -> Result<(), PlyError> {
         Ok(())
     }
-    fn end(&mut self) -> Result<(), String> {
+    fn end(&mut self) -> Result<(), PlyError> {
         Ok(())
     }
 }
@@ -82,10 +229,10 @@ struct Binary<'a> {
 }
 
 impl Source for Binary<'_> {
-    fn scalar(&mut self, ty: Scalar) -> Result<f64, String> {
+    fn scalar(&mut self, ty: Scalar) -> Result<f64, PlyError> {
         let n = ty.size();
         if self.i + n > self.b.len() {
-            return Err(format!("binary data ends early (at byte {})", self.i));
+            return Err(PlyError::BinaryEnds(self.i));
         }
         let mut a = [0u8; 8];
         a[..n].copy_from_slice(&self.b[self.i..self.i + n]);
@@ -116,12 +263,9 @@ struct Ascii<'a> {
 }
 
 impl Source for Ascii<'_> {
-    fn begin(&mut self) -> Result<(), String> {
+    fn begin(&mut self) -> Result<(), PlyError> {
         loop {
-            let (i, l) = self
-                .lines
-                .next()
-                .ok_or("the file ends before all elements are read")?;
+            let (i, l) = self.lines.next().ok_or(PlyError::AsciiEnds)?;
             self.line = i + 1 + self.offset;
             self.cur = l.split_whitespace().collect();
             self.pos = 0;
@@ -130,23 +274,24 @@ impl Source for Ascii<'_> {
             }
         }
     }
-    fn scalar(&mut self, _ty: Scalar) -> Result<f64, String> {
+    fn scalar(&mut self, _ty: Scalar) -> Result<f64, PlyError> {
         let s = self
             .cur
             .get(self.pos)
-            .ok_or_else(|| format!("line {}: too few values", self.line))?;
+            .ok_or(PlyError::TooFewValues(self.line))?;
         self.pos += 1;
-        s.parse::<f64>()
-            .map_err(|_| format!("line {}: '{s}' is not a number", self.line))
+        s.parse::<f64>().map_err(|_| PlyError::NotANumber {
+            line: self.line,
+            text: s.to_string(),
+        })
     }
-    fn end(&mut self) -> Result<(), String> {
+    fn end(&mut self) -> Result<(), PlyError> {
         if self.pos != self.cur.len() {
-            return Err(format!(
-                "line {}: {} values expected, {} found",
-                self.line,
-                self.pos,
-                self.cur.len()
-            ));
+            return Err(PlyError::ValueCount {
+                line: self.line,
+                expected: self.pos,
+                found: self.cur.len(),
+            });
         }
         Ok(())
     }
@@ -156,7 +301,7 @@ impl Source for Ascii<'_> {
 /// (issue 23): every instance takes at least its fixed-size values and list counts in a
 /// binary body, and at least two bytes (a digit and a separator) per property in an ASCII
 /// one. Overflowing totals count as too large.
-fn check_counts(elements: &[Element], format: Format, body: usize) -> Result<(), String> {
+fn check_counts(elements: &[Element], format: Format, body: usize) -> Result<(), PlyError> {
     let mut need: u128 = 0;
     for el in elements {
         let per: u128 = el
@@ -171,36 +316,73 @@ fn check_counts(elements: &[Element], format: Format, body: usize) -> Result<(),
         // The last value of an ASCII body may end the file without a separator.
         let slack = u128::from(format == Format::Ascii);
         if need > body as u128 + slack {
-            return Err(format!(
-                "element '{}' declares {} instances, more than the {body} bytes of data can hold",
-                el.name, el.count
-            ));
+            return Err(PlyError::TooManyInstances {
+                element: el.name.clone(),
+                count: el.count,
+                body,
+            });
         }
     }
     Ok(())
 }
 
-/// Reads a PLY file (ASCII or binary). Errors give the header or body line (ASCII) or the
-/// byte offset (binary).
-pub fn read_ply(bytes: &[u8]) -> Result<Mesh, String> {
+/// A PLY header: the body's format and elements, where the body starts (byte) and how
+/// many lines precede it.
+struct Header {
+    format: Format,
+    elements: Vec<Element>,
+    body: usize,
+    lines: usize,
+}
+
+/// One `property` line (`w` its words) as a property.
+fn parse_property(w: &[&str], ln: usize, l: &str) -> Result<Prop, PlyError> {
+    let bad = || PlyError::Header {
+        line: ln,
+        what: "malformed property",
+        text: l.to_string(),
+    };
+    let scalar = |i: usize| w.get(i).and_then(|s| Scalar::parse(s)).ok_or_else(bad);
+    Ok(if w.get(1) == Some(&"list") {
+        Prop {
+            list_count: Some(scalar(2)?),
+            ty: scalar(3)?,
+            name: w.get(4).ok_or_else(bad)?.to_string(),
+        }
+    } else {
+        Prop {
+            list_count: None,
+            ty: scalar(1)?,
+            name: w.get(2).ok_or_else(bad)?.to_string(),
+        }
+    })
+}
+
+/// Reads the header up to `end_header` and checks the declared counts against the body.
+fn parse_header(bytes: &[u8]) -> Result<Header, PlyError> {
     if !bytes.starts_with(b"ply") {
-        return Err("line 1: not a PLY file (it must start with 'ply')".into());
+        return Err(PlyError::NotPly);
     }
     // Header: text up to and including "end_header\n".
     let end = bytes
         .windows(10)
         .position(|w| w == b"end_header")
-        .ok_or("no 'end_header' line")?;
+        .ok_or(PlyError::NoEndHeader)?;
     let mut body = end + 10;
     while body < bytes.len() && bytes[body] != b'\n' {
         body += 1;
     }
     body += 1;
-    let header = std::str::from_utf8(&bytes[..end]).map_err(|_| "header is not text")?;
+    let header = std::str::from_utf8(&bytes[..end]).map_err(|_| PlyError::HeaderNotText)?;
     let mut format = None;
     let mut elements: Vec<Element> = Vec::new();
     for (i, l) in header.lines().enumerate() {
         let ln = i + 1;
+        let bad = |what| PlyError::Header {
+            line: ln,
+            what,
+            text: l.to_string(),
+        };
         let w: Vec<&str> = l.split_whitespace().collect();
         match w.first().copied() {
             None | Some("ply") | Some("comment") | Some("obj_info") => {}
@@ -209,13 +391,13 @@ pub fn read_ply(bytes: &[u8]) -> Result<Mesh, String> {
                     Some("ascii") => Format::Ascii,
                     Some("binary_little_endian") => Format::Le,
                     Some("binary_big_endian") => Format::Be,
-                    _ => return Err(format!("line {ln}: unknown format '{l}'")),
+                    _ => return Err(bad("unknown format")),
                 })
             }
             Some("element") => {
                 let (Some(name), Some(count)) = (w.get(1), w.get(2).and_then(|c| c.parse().ok()))
                 else {
-                    return Err(format!("line {ln}: malformed element '{l}'"));
+                    return Err(bad("malformed element"));
                 };
                 elements.push(Element {
                     name: name.to_string(),
@@ -226,201 +408,279 @@ pub fn read_ply(bytes: &[u8]) -> Result<Mesh, String> {
             Some("property") => {
                 let el = elements
                     .last_mut()
-                    .ok_or_else(|| format!("line {ln}: property before any element"))?;
-                let bad = || format!("line {ln}: malformed property '{l}'");
-                let p = if w.get(1) == Some(&"list") {
-                    Prop {
-                        list_count: Some(w.get(2).and_then(|s| Scalar::parse(s)).ok_or_else(bad)?),
-                        ty: w.get(3).and_then(|s| Scalar::parse(s)).ok_or_else(bad)?,
-                        name: w.get(4).ok_or_else(bad)?.to_string(),
-                    }
-                } else {
-                    Prop {
-                        list_count: None,
-                        ty: w.get(1).and_then(|s| Scalar::parse(s)).ok_or_else(bad)?,
-                        name: w.get(2).ok_or_else(bad)?.to_string(),
-                    }
-                };
-                el.props.push(p);
+                    .ok_or(PlyError::PropertyBeforeElement(ln))?;
+                el.props.push(parse_property(&w, ln, l)?);
             }
-            Some(_) => return Err(format!("line {ln}: unknown header line '{l}'")),
+            Some(_) => return Err(bad("unknown header line")),
         }
     }
-    let format = format.ok_or("the header has no 'format' line")?;
+    let format = format.ok_or(PlyError::NoFormat)?;
     check_counts(&elements, format, bytes.len().saturating_sub(body))?;
-    let header_lines = header.lines().count() + 1;
-    let text_body;
-    let mut src: Box<dyn Source> = match format {
+    Ok(Header {
+        format,
+        elements,
+        body,
+        lines: header.lines().count() + 1,
+    })
+}
+
+/// The reader of the body that follows `h` in `bytes`.
+fn body_source<'a>(bytes: &'a [u8], h: &Header) -> Result<Box<dyn Source + 'a>, PlyError> {
+    Ok(match h.format {
         Format::Ascii => {
-            text_body = std::str::from_utf8(&bytes[body.min(bytes.len())..])
-                .map_err(|_| "ASCII body is not text")?;
+            let text = std::str::from_utf8(&bytes[h.body.min(bytes.len())..])
+                .map_err(|_| PlyError::BodyNotText)?;
             Box::new(Ascii {
-                lines: text_body.lines().enumerate().peekable(),
+                lines: text.lines().enumerate().peekable(),
                 cur: Vec::new(),
                 pos: 0,
                 line: 0,
-                offset: header_lines,
+                offset: h.lines,
             })
         }
         f => Box::new(Binary {
             b: bytes,
-            i: body,
+            i: h.body,
             be: f == Format::Be,
         }),
-    };
-    let mut positions = Vec::new();
-    let mut normals = Vec::new();
-    let mut uvs = Vec::new();
-    let mut colors = Vec::new();
-    let mut corner_uvs = Vec::new();
-    let mut fc = Vec::new();
-    let mut fi = Vec::new();
-    for el in &elements {
+    })
+}
+
+/// Where the properties the mesh uses sit in an element's property list.
+struct Layout {
+    xyz: [Option<usize>; 3],
+    normal: [Option<usize>; 3],
+    uv: [Option<usize>; 2],
+    color: [Option<usize>; 3],
+    indices: Option<usize>,
+    texcoord: Option<usize>,
+}
+
+impl Layout {
+    fn of(el: &Element) -> Layout {
         let find = |n: &[&str]| el.props.iter().position(|p| n.contains(&p.name.as_str()));
-        let (px, py, pz) = (find(&["x"]), find(&["y"]), find(&["z"]));
-        let (nx, ny, nz) = (find(&["nx"]), find(&["ny"]), find(&["nz"]));
-        let (tu, tv) = (
-            find(&["s", "u", "texture_u", "texture_s"]),
-            find(&["t", "v", "texture_v", "texture_t"]),
-        );
-        let (cr, cg, cb) = (
-            find(&["red", "r", "diffuse_red"]),
-            find(&["green", "g", "diffuse_green"]),
-            find(&["blue", "b", "diffuse_blue"]),
-        );
-        let fv = find(&["vertex_indices", "vertex_index"]);
-        let ft = find(&["texcoord"]);
-        let is_vertex = el.name == "vertex";
-        let is_face = el.name == "face";
-        if is_vertex && (px.is_none() || py.is_none() || pz.is_none()) {
-            return Err("the vertex element has no x, y, z properties".into());
+        Layout {
+            xyz: [find(&["x"]), find(&["y"]), find(&["z"])],
+            normal: [find(&["nx"]), find(&["ny"]), find(&["nz"])],
+            uv: [
+                find(&["s", "u", "texture_u", "texture_s"]),
+                find(&["t", "v", "texture_v", "texture_t"]),
+            ],
+            color: [
+                find(&["red", "r", "diffuse_red"]),
+                find(&["green", "g", "diffuse_green"]),
+                find(&["blue", "b", "diffuse_blue"]),
+            ],
+            indices: find(&["vertex_indices", "vertex_index"]),
+            texcoord: find(&["texcoord"]),
         }
-        if is_face && fv.is_none() {
-            return Err("the face element has no vertex_indices list".into());
+    }
+}
+
+/// The mesh's arrays as the elements are read.
+#[derive(Default)]
+struct MeshArrays {
+    positions: Vec<[f64; 3]>,
+    normals: Vec<[f64; 3]>,
+    uvs: Vec<[f64; 2]>,
+    colors: Vec<[f64; 3]>,
+    corner_uvs: Vec<[f64; 2]>,
+    face_counts: Vec<u32>,
+    face_indices: Vec<u32>,
+}
+
+impl MeshArrays {
+    /// Vertex `k` from its property values `vals`.
+    fn vertex(
+        &mut self,
+        k: usize,
+        vals: &[Vec<f64>],
+        el: &Element,
+        at: &Layout,
+    ) -> Result<(), PlyError> {
+        // A property declared as a list may hold no value: read the first one, if any.
+        let first = |i: usize| vals[i].first().copied();
+        let g = |i: Option<usize>| i.and_then(first);
+        let (Some(x), Some(y), Some(z)) = (g(at.xyz[0]), g(at.xyz[1]), g(at.xyz[2])) else {
+            return Err(PlyError::EmptyCoordinate(k));
+        };
+        let p = [x, y, z];
+        if p.iter().any(|x| !x.is_finite()) {
+            return Err(PlyError::NonFinite {
+                vertex: k,
+                position: p,
+            });
         }
-        if el.props.is_empty() && el.count > 0 {
-            // Nothing to read per instance: a binary body would be looped over `count` times
-            // without consuming a byte.
-            return Err(format!(
-                "element '{}' declares {} instances but no properties",
-                el.name, el.count
-            ));
+        self.positions.push(p);
+        if let (Some(a), Some(b), Some(c)) = (g(at.normal[0]), g(at.normal[1]), g(at.normal[2])) {
+            self.normals.push([a, b, c]);
         }
-        let mut vals: Vec<Vec<f64>> = vec![Vec::new(); el.props.len()];
-        for k in 0..el.count {
-            src.begin()?;
-            for v in vals.iter_mut() {
-                v.clear();
-            }
-            for (pi, p) in el.props.iter().enumerate() {
-                match p.list_count {
-                    None => vals[pi].push(src.scalar(p.ty)?),
-                    Some(ct) => {
-                        let n = src.scalar(ct)?;
-                        if n < 0.0 || n.fract() != 0.0 {
-                            return Err(format!("{} {k}: bad list length {n}", el.name));
-                        }
-                        for _ in 0..n as usize {
-                            vals[pi].push(src.scalar(p.ty)?);
-                        }
-                    }
-                }
-            }
-            src.end()?;
-            // A property declared as a list may hold no value: read the first one, if any.
-            let first = |i: usize| vals[i].first().copied();
-            let g = |i: Option<usize>| i.and_then(first);
-            if is_vertex {
-                let (Some(x), Some(y), Some(z)) = (g(px), g(py), g(pz)) else {
-                    return Err(format!("vertex {k}: x, y and z need one value each"));
-                };
-                let p = [x, y, z];
-                if p.iter().any(|x| !x.is_finite()) {
-                    return Err(format!("vertex {k} has a non-finite coordinate {p:?}"));
-                }
-                positions.push(p);
-                if let (Some(a), Some(b), Some(c)) = (g(nx), g(ny), g(nz)) {
-                    normals.push([a, b, c]);
-                }
-                if let (Some(a), Some(b)) = (g(tu), g(tv)) {
-                    uvs.push([a, b]);
-                }
-                if let (Some(r), Some(gg), Some(b)) = (cr, cg, cb) {
-                    let scale = if el.props[r].ty == Scalar::U8 {
-                        1.0 / 255.0
-                    } else {
-                        1.0
-                    };
-                    if let (Some(r), Some(gg), Some(b)) = (first(r), first(gg), first(b)) {
-                        colors.push([r * scale, gg * scale, b * scale]);
-                    }
-                }
-            } else if is_face {
-                let idx = &vals[fv.unwrap_or(0)];
-                if idx.len() < 3 {
-                    return Err(format!("face {k} is degenerate: {} corners", idx.len()));
-                }
-                // Large faces find repeats through a set: a scan per corner was O(k²).
-                let mut seen = std::collections::HashSet::new();
-                for (c, &i) in idx.iter().enumerate() {
-                    // `i as usize` would turn NaN into 0 and 1.5 into 1: only whole numbers.
-                    if !(i >= 0.0 && i.fract() == 0.0 && i < positions.len() as f64) {
-                        return Err(format!(
-                            "face {k} refers to vertex {i}, but there are {} vertices",
-                            positions.len()
-                        ));
-                    }
-                    let repeated = if idx.len() > 32 {
-                        !seen.insert(i as u32)
-                    } else {
-                        idx[..c].contains(&i)
-                    };
-                    if repeated {
-                        return Err(format!("face {k} is degenerate: vertex {i} appears twice"));
-                    }
-                    fi.push(i as u32);
-                }
-                fc.push(idx.len() as u32);
-                if let Some(t) = ft {
-                    let t = &vals[t];
-                    if t.len() != 2 * idx.len() {
-                        return Err(format!(
-                            "face {k}: texcoord list has {} values for {} corners",
-                            t.len(),
-                            idx.len()
-                        ));
-                    }
-                    corner_uvs.extend(t.chunks_exact(2).map(|c| [c[0], c[1]]));
-                }
+        if let (Some(a), Some(b)) = (g(at.uv[0]), g(at.uv[1])) {
+            self.uvs.push([a, b]);
+        }
+        if let [Some(r), Some(gg), Some(b)] = at.color {
+            let scale = if el.props[r].ty == Scalar::U8 {
+                1.0 / 255.0
+            } else {
+                1.0
+            };
+            if let (Some(r), Some(gg), Some(b)) = (first(r), first(gg), first(b)) {
+                self.colors.push([r * scale, gg * scale, b * scale]);
             }
         }
+        Ok(())
     }
-    let nv = positions.len();
-    let mut mesh = Mesh::new(positions, fc, fi).map_err(|e| e.to_string())?;
-    if normals.len() == nv && nv > 0 {
-        mesh.normals = Some(Attribute {
+
+    /// Face `k` from its property values `vals`: whole, distinct, existing vertex indices.
+    fn face(&mut self, k: usize, vals: &[Vec<f64>], at: &Layout) -> Result<(), PlyError> {
+        let idx = &vals[at.indices.unwrap_or(0)];
+        if idx.len() < 3 {
+            return Err(PlyError::TooFewCorners {
+                face: k,
+                corners: idx.len(),
+            });
+        }
+        // Large faces find repeats through a set: a scan per corner was O(k²).
+        let mut seen = std::collections::HashSet::new();
+        for (c, &i) in idx.iter().enumerate() {
+            // `i as usize` would turn NaN into 0 and 1.5 into 1: only whole numbers.
+            if !(i >= 0.0 && i.fract() == 0.0 && i < self.positions.len() as f64) {
+                return Err(PlyError::BadIndex {
+                    face: k,
+                    index: i,
+                    vertices: self.positions.len(),
+                });
+            }
+            let repeated = if idx.len() > 32 {
+                !seen.insert(i as u32)
+            } else {
+                idx[..c].contains(&i)
+            };
+            if repeated {
+                return Err(PlyError::RepeatedVertex { face: k, vertex: i });
+            }
+            self.face_indices.push(i as u32);
+        }
+        self.face_counts.push(idx.len() as u32);
+        if let Some(t) = at.texcoord {
+            let t = &vals[t];
+            if t.len() != 2 * idx.len() {
+                return Err(PlyError::Texcoords {
+                    face: k,
+                    values: t.len(),
+                    corners: idx.len(),
+                });
+            }
+            self.corner_uvs
+                .extend(t.chunks_exact(2).map(|c| [c[0], c[1]]));
+        }
+        Ok(())
+    }
+
+    /// The mesh, with the attributes every vertex (or corner) has.
+    fn finish(self) -> Result<Mesh, PlyError> {
+        let nv = self.positions.len();
+        let mut mesh = Mesh::new(self.positions, self.face_counts, self.face_indices)
+            .map_err(|e| PlyError::Mesh(e.to_string()))?;
+        let vertex = |values| Attribute {
             domain: Domain::Vertex,
-            values: normals,
+            values,
+        };
+        if self.normals.len() == nv && nv > 0 {
+            mesh.normals = Some(vertex(self.normals));
+        }
+        if !self.corner_uvs.is_empty() {
+            mesh.uvs = Some(Attribute {
+                domain: Domain::Corner,
+                values: self.corner_uvs,
+            });
+        } else if self.uvs.len() == nv && nv > 0 {
+            mesh.uvs = Some(Attribute {
+                domain: Domain::Vertex,
+                values: self.uvs,
+            });
+        }
+        if self.colors.len() == nv && nv > 0 {
+            mesh.colors = Some(vertex(self.colors));
+        }
+        Ok(mesh)
+    }
+}
+
+/// Reads one element instance's property values into `vals` (one list per property).
+fn read_instance(
+    src: &mut dyn Source,
+    el: &Element,
+    k: usize,
+    vals: &mut [Vec<f64>],
+) -> Result<(), PlyError> {
+    src.begin()?;
+    for v in vals.iter_mut() {
+        v.clear();
+    }
+    for (pi, p) in el.props.iter().enumerate() {
+        match p.list_count {
+            None => vals[pi].push(src.scalar(p.ty)?),
+            Some(ct) => {
+                let n = src.scalar(ct)?;
+                if n < 0.0 || n.fract() != 0.0 {
+                    return Err(PlyError::ListLength {
+                        element: el.name.clone(),
+                        index: k,
+                        len: n,
+                    });
+                }
+                for _ in 0..n as usize {
+                    vals[pi].push(src.scalar(p.ty)?);
+                }
+            }
+        }
+    }
+    src.end()
+}
+
+/// Reads every instance of `el`, adding vertices and faces to `out` (other elements are
+/// read and skipped).
+fn read_element(src: &mut dyn Source, el: &Element, out: &mut MeshArrays) -> Result<(), PlyError> {
+    let at = Layout::of(el);
+    let is_vertex = el.name == "vertex";
+    let is_face = el.name == "face";
+    if is_vertex && at.xyz.iter().any(Option::is_none) {
+        return Err(PlyError::NoCoordinates);
+    }
+    if is_face && at.indices.is_none() {
+        return Err(PlyError::NoIndices);
+    }
+    if el.props.is_empty() && el.count > 0 {
+        // Nothing to read per instance: a binary body would be looped over `count` times
+        // without consuming a byte.
+        return Err(PlyError::NoProperties {
+            element: el.name.clone(),
+            count: el.count,
         });
     }
-    if !corner_uvs.is_empty() {
-        mesh.uvs = Some(Attribute {
-            domain: Domain::Corner,
-            values: corner_uvs,
-        });
-    } else if uvs.len() == nv && nv > 0 {
-        mesh.uvs = Some(Attribute {
-            domain: Domain::Vertex,
-            values: uvs,
-        });
+    let mut vals: Vec<Vec<f64>> = vec![Vec::new(); el.props.len()];
+    for k in 0..el.count {
+        read_instance(src, el, k, &mut vals)?;
+        if is_vertex {
+            out.vertex(k, &vals, el, &at)?;
+        } else if is_face {
+            out.face(k, &vals, &at)?;
+        }
     }
-    if colors.len() == nv && nv > 0 {
-        mesh.colors = Some(Attribute {
-            domain: Domain::Vertex,
-            values: colors,
-        });
+    Ok(())
+}
+
+/// Reads a PLY file (ASCII or binary). Errors give the header or body line (ASCII) or the
+/// byte offset (binary).
+pub fn read_ply(bytes: &[u8]) -> Result<Mesh, PlyError> {
+    let header = parse_header(bytes)?;
+    let mut src = body_source(bytes, &header)?;
+    let mut out = MeshArrays::default();
+    for el in &header.elements {
+        read_element(src.as_mut(), el, &mut out)?;
     }
-    Ok(mesh)
+    out.finish()
 }
 
 /// The first lines of every PLY file written here: magic, format (ASCII or binary little

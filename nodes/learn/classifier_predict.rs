@@ -37,10 +37,10 @@ pub fn confusion(classes: &[i64], truth: &[i64], pred: &[i64]) -> (f64, Vec<Vec<
 fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let m: Arc<Model> = ctx.input("model")?;
     let t: Arc<Table> = ctx.input("data")?;
-    let x = features(&t, &m.features).map_err(|e| NodeError::invalid("data", e))?;
-    let pred = predict(&m, &x).map_err(|e| NodeError::invalid("model", e))?;
+    let x = features(&t, &m.features).map_err(|e| NodeError::invalid("data", e.to_string()))?;
+    let pred = predict(&m, &x).map_err(|e| NodeError::invalid("model", e.to_string()))?;
     let truth = match t.columns.iter().position(|(n, _)| *n == m.label) {
-        Some(c) => Some(int_labels(&t, c).map_err(|e| NodeError::invalid("data", e))?),
+        Some(c) => Some(int_labels(&t, c).map_err(|e| NodeError::invalid("data", e.to_string()))?),
         None => None,
     };
     let mut cols: Vec<&str> = vec!["class"];

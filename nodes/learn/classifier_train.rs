@@ -2,8 +2,8 @@
 //! (the modeling course's insect classification, homework 3): every column but the label
 //! column is a feature. The networks and their training are in `mlp.rs` and `rnn.rs`.
 
-use super::dataset::{self, features, int_labels, label_index, standardization};
-use super::mlp::{train, Activation, Optimizer, TrainParams};
+use super::dataset::{self, features, int_labels, label_index, standardization, TableError};
+use super::mlp::{train, Activation, EpochLog, Optimizer, TrainParams};
 use cgnodes_api::prelude::*;
 
 /// The network (the `model` input).
@@ -55,26 +55,35 @@ fn declare(b: &mut NodeBuilder) {
 /// Feature names, feature rows and labels.
 type Labelled = (Vec<String>, Vec<Vec<f64>>, Vec<i64>);
 
-/// Reads `t` as (features, labels) with the label column at `c`.
 /// Why a training table cannot be used, by the socket it concerns.
-#[derive(Debug)]
-enum TableError {
+#[derive(Debug, thiserror::Error)]
+enum LabelledError {
     /// The label column is not integers (`label_column`).
-    Labels(String),
-    /// The features (`train`).
-    Features(String),
+    #[error("{0}")]
+    Labels(TableError),
+    /// A feature value (`train`).
+    #[error("{0}")]
+    Features(TableError),
+    /// Only the label column (`train`).
+    #[error("no feature column besides the label column")]
+    NoFeatures,
+    /// No rows (`train`).
+    #[error("no rows")]
+    NoRows,
 }
 
-impl TableError {
+impl LabelledError {
     fn into_node_error(self) -> NodeError {
-        match self {
-            TableError::Labels(e) => NodeError::invalid("label_column", e),
-            TableError::Features(e) => NodeError::invalid("train", e),
-        }
+        let socket = match self {
+            LabelledError::Labels(_) => "label_column",
+            _ => "train",
+        };
+        NodeError::invalid(socket, self.to_string())
     }
 }
 
-fn labelled(t: &Table, c: usize) -> Result<Labelled, TableError> {
+/// Reads `t` as (features, labels) with the label column at `c`.
+fn labelled(t: &Table, c: usize) -> Result<Labelled, LabelledError> {
     let names: Vec<String> = t
         .columns
         .iter()
@@ -83,66 +92,66 @@ fn labelled(t: &Table, c: usize) -> Result<Labelled, TableError> {
         .map(|(_, (n, _))| n.clone())
         .collect();
     if names.is_empty() {
-        return Err(TableError::Features(
-            "no feature column besides the label column".into(),
-        ));
+        return Err(LabelledError::NoFeatures);
     }
-    let x = features(t, &names).map_err(TableError::Features)?;
-    let y = int_labels(t, c).map_err(TableError::Labels)?;
+    let x = features(t, &names).map_err(LabelledError::Features)?;
+    let y = int_labels(t, c).map_err(LabelledError::Labels)?;
     if x.is_empty() {
-        return Err(TableError::Features("no rows".into()));
+        return Err(LabelledError::NoRows);
     }
     Ok((names, x, y))
 }
 
-fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
-    let t0 = std::time::Instant::now();
-    let tr: Arc<Table> = ctx.input("train")?;
-    let te: Option<Arc<Table>> = ctx.input_opt("test")?;
-    let key: String = ctx.input("label_column")?;
-    let c = label_index(&tr, &key).map_err(|e| NodeError::invalid("label_column", e))?;
-    let label = tr.columns[c].0.clone();
-    let (names, mut x, y) = labelled(&tr, c).map_err(TableError::into_node_error)?;
-    let mut classes = y.clone();
+/// The training classes (sorted distinct labels) and every row's class index.
+fn classes_of(y: &[i64]) -> Result<(Vec<i64>, Vec<usize>), NodeError> {
+    let mut classes = y.to_vec();
     classes.sort_unstable();
     classes.dedup();
     if classes.len() < 2 {
         return Err(NodeError::invalid("train", "needs at least 2 classes"));
     }
-    let class_of = |v: i64| classes.binary_search(&v).ok();
-    let yi: Vec<usize> = y.iter().map(|&v| class_of(v).unwrap_or(0)).collect();
-    let standardize: bool = ctx.input("standardize")?;
-    let (mean, scale) = if standardize {
-        standardization(&x)
-    } else {
-        (vec![0.0; names.len()], vec![1.0; names.len()])
-    };
-    dataset::apply_standardization(&mut x, &mean, &scale);
-    let test = match &te {
-        None => None,
-        Some(t) => {
-            let mut tx = features(t, &names).map_err(|e| NodeError::invalid("test", e))?;
-            let col = t
-                .columns
-                .iter()
-                .position(|(n, _)| *n == label)
-                .ok_or_else(|| NodeError::invalid("test", format!("no label column '{label}'")))?;
-            let ty = int_labels(t, col).map_err(|e| NodeError::invalid("test", e))?;
-            let ty: Vec<usize> = ty
-                .iter()
-                .map(|&v| {
-                    class_of(v).ok_or_else(|| {
-                        NodeError::invalid(
-                            "test",
-                            format!("label {v} is not among the training classes {classes:?}"),
-                        )
-                    })
-                })
-                .collect::<Result<_, _>>()?;
-            dataset::apply_standardization(&mut tx, &mean, &scale);
-            Some((tx, ty))
-        }
-    };
+    let yi = y
+        .iter()
+        .map(|v| classes.binary_search(v).unwrap_or(0))
+        .collect();
+    Ok((classes, yi))
+}
+
+/// The features and labels a trained model is judged on after every epoch.
+type TestSet = (Vec<Vec<f64>>, Vec<usize>);
+
+/// The `test` table as a standardized test set over the training's features, label column
+/// and classes.
+fn test_set(
+    t: &Table,
+    (names, label): (&[String], &str),
+    classes: &[i64],
+    (mean, scale): (&[f64], &[f64]),
+) -> Result<TestSet, NodeError> {
+    let mut tx = features(t, names).map_err(|e| NodeError::invalid("test", e.to_string()))?;
+    let col = t
+        .columns
+        .iter()
+        .position(|(n, _)| *n == label)
+        .ok_or_else(|| NodeError::invalid("test", format!("no label column '{label}'")))?;
+    let ty = int_labels(t, col).map_err(|e| NodeError::invalid("test", e.to_string()))?;
+    let ty: Vec<usize> = ty
+        .iter()
+        .map(|&v| {
+            classes.binary_search(&v).map_err(|_| {
+                NodeError::invalid(
+                    "test",
+                    format!("label {v} is not among the training classes {classes:?}"),
+                )
+            })
+        })
+        .collect::<Result<_, _>>()?;
+    dataset::apply_standardization(&mut tx, mean, scale);
+    Ok((tx, ty))
+}
+
+/// The training parameters from the sockets, checked against the architecture.
+fn train_params(ctx: &mut ExecContext, arch: Architecture) -> Result<TrainParams, NodeError> {
     let hidden: Vec<i64> = ctx.input("hidden")?;
     let hidden: Vec<usize> = hidden
         .iter()
@@ -169,13 +178,51 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
         seed: u64::try_from(ctx.input::<i64>("seed")?)
             .map_err(|_| NodeError::invalid("seed", "must be >= 0"))?,
     };
-    let arch: Architecture = ctx.choice("model")?;
     if arch == Architecture::Rnn && p.hidden.len() != 1 {
         return Err(NodeError::invalid(
             "hidden",
             "an rnn has one hidden size (its state), e.g. [16]",
         ));
     }
+    Ok(p)
+}
+
+/// The `log` output: one row per epoch, the training time in the metadata.
+fn log_table(log: &[EpochLog], t0: std::time::Instant) -> Table {
+    let mut table = Table::with_columns(&["epoch", "loss", "train_accuracy", "test_accuracy"]);
+    for (e, l) in log.iter().enumerate() {
+        table.push_row(&[(e + 1) as f64, l.loss, l.train_accuracy, l.test_accuracy]);
+    }
+    table.meta.insert(
+        "train_seconds".into(),
+        format!("{}", t0.elapsed().as_secs_f64()),
+    );
+    table
+}
+
+fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
+    let t0 = std::time::Instant::now();
+    let tr: Arc<Table> = ctx.input("train")?;
+    let te: Option<Arc<Table>> = ctx.input_opt("test")?;
+    let key: String = ctx.input("label_column")?;
+    let c =
+        label_index(&tr, &key).map_err(|e| NodeError::invalid("label_column", e.to_string()))?;
+    let label = tr.columns[c].0.clone();
+    let (names, mut x, y) = labelled(&tr, c).map_err(LabelledError::into_node_error)?;
+    let (classes, yi) = classes_of(&y)?;
+    let standardize: bool = ctx.input("standardize")?;
+    let (mean, scale) = if standardize {
+        standardization(&x)
+    } else {
+        (vec![0.0; names.len()], vec![1.0; names.len()])
+    };
+    dataset::apply_standardization(&mut x, &mean, &scale);
+    let test = match &te {
+        None => None,
+        Some(t) => Some(test_set(t, (&names, &label), &classes, (&mean, &scale))?),
+    };
+    let arch: Architecture = ctx.choice("model")?;
+    let p = train_params(ctx, arch)?;
     let test = test.as_ref().map(|(a, b)| (a.as_slice(), b.as_slice()));
     let (net, log) = match arch {
         Architecture::Mlp => train(&x, &yi, classes.len(), test, &p),
@@ -186,14 +233,6 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
             "the training loss is not finite: lower learning_rate",
         ));
     }
-    let mut table = Table::with_columns(&["epoch", "loss", "train_accuracy", "test_accuracy"]);
-    for (e, l) in log.iter().enumerate() {
-        table.push_row(&[(e + 1) as f64, l.loss, l.train_accuracy, l.test_accuracy]);
-    }
-    table.meta.insert(
-        "train_seconds".into(),
-        format!("{}", t0.elapsed().as_secs_f64()),
-    );
     let model = Model {
         kind: match arch {
             Architecture::Mlp => "mlp",
@@ -209,7 +248,7 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
         scale,
     };
     ctx.set_output("model", model);
-    ctx.set_output("log", table);
+    ctx.set_output("log", log_table(&log, t0));
     Ok(())
 }
 

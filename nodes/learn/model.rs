@@ -1,7 +1,7 @@
 //! `model_save` and `model_load`: a trained classifier as JSON (the `Model` value's fields:
 //! kind, activation, layers with row-major weights, features, label, classes, mean, scale).
 
-use super::dataset::network;
+use super::dataset::{network, ModelError};
 use cgnodes_api::prelude::*;
 use std::path::Path;
 
@@ -37,9 +37,20 @@ fn declare_load(b: &mut NodeBuilder) {
     b.add_output::<Model>("model");
 }
 
+/// Why a model file's text is not a model.
+#[derive(Debug, thiserror::Error)]
+pub enum ModelFileError {
+    /// Not JSON of the `Model` shape.
+    #[error("{0}")]
+    Json(#[from] serde_json::Error),
+    /// JSON of the right shape whose network does not fit together.
+    #[error("{0}")]
+    Network(#[from] ModelError),
+}
+
 /// Parses and checks a model's JSON text.
-pub fn parse_model(text: &str) -> Result<Model, String> {
-    let m: Model = serde_json::from_str(text).map_err(|e| e.to_string())?;
+pub fn parse_model(text: &str) -> Result<Model, ModelFileError> {
+    let m: Model = serde_json::from_str(text)?;
     network(&m)?;
     Ok(m)
 }
@@ -50,7 +61,7 @@ fn execute_load(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let text = std::fs::read_to_string(&path).map_err(|e| NodeError::io(&path, e).at("path"))?;
     let m = parse_model(&text).map_err(|e| {
         let e = if ctx.files().is_within_run_folders(&path) {
-            e
+            e.to_string()
         } else {
             "not a cgnodes model file".into()
         };

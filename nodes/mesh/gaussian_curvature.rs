@@ -95,25 +95,12 @@ mod tests {
     use std::f64::consts::PI;
 
     fn octahedron(r: f64) -> Mesh {
-        let p = vec![
-            [r, 0.0, 0.0],
-            [-r, 0.0, 0.0],
-            [0.0, r, 0.0],
-            [0.0, -r, 0.0],
-            [0.0, 0.0, r],
-            [0.0, 0.0, -r],
-        ];
-        let t = [
-            [0, 2, 4],
-            [2, 1, 4],
-            [1, 3, 4],
-            [3, 0, 4],
-            [2, 0, 5],
-            [1, 2, 5],
-            [3, 1, 5],
-            [0, 3, 5],
-        ];
-        Mesh::from_triangles(p, &t).unwrap()
+        use cgnodes_geometry::octahedron;
+        Mesh::from_triangles(
+            octahedron::positions([0.0; 3], r).to_vec(),
+            &octahedron::FACES,
+        )
+        .unwrap()
     }
 
     #[test]

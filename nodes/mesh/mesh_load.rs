@@ -29,7 +29,8 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
         group: ctx.input("group")?,
         apply_transform: ctx.input("transform")?,
     };
-    let mesh = load_mesh(&path, &opts).map_err(|e| NodeError::new(ErrorKind::Io, e).at("path"))?;
+    let mesh = load_mesh(&path, &opts)
+        .map_err(|e| NodeError::new(ErrorKind::Io, e.to_string()).at("path"))?;
     let topo = mesh.topology();
     if !topo.is_manifold() {
         ctx.log(format!(

@@ -504,12 +504,7 @@ mod tests {
         assert_valid(&p, &triangulate_polygon(&p).unwrap());
         // Random star-shaped (hence simple) polygons, from a fixed linear congruential stream.
         let mut seed = 12345u64;
-        let mut rnd = || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rnd = || cgnodes_api::rng::lcg_next(&mut seed);
         for _ in 0..300 {
             let n = 4 + (rnd() * 60.0) as usize;
             let p: Vec<[f64; 3]> = (0..n)

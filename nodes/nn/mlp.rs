@@ -385,23 +385,49 @@ pub fn train(
     let mut sizes = vec![xs.first().map_or(0, Vec::len)];
     sizes.extend(&p.hidden);
     sizes.push(classes);
-    let mut net = Mlp::new(&sizes, p.activation, &mut rng);
+    let net = Mlp::new(&sizes, p.activation, &mut rng);
+    let score = Classifier {
+        loss_and_gradient: |net, xs, ys, grads| net.loss_and_gradient(xs, ys, grads),
+        accuracy,
+    };
+    train_classifier(net, &mut rng, (xs, ys), test, p, &score)
+}
+
+/// How a classifier stored as an `Mlp` scores a batch and a whole set: the multilayer
+/// perceptron and the Elman network (`rnn`) differ only in these two functions.
+pub struct Classifier {
+    /// Mean loss of a batch, its gradient written into the per-layer (weights, biases).
+    pub loss_and_gradient: fn(&Mlp, &[&[f64]], &[usize], &mut [(Vec<f64>, Vec<f64>)]) -> f64,
+    /// The fraction of a set classified correctly.
+    pub accuracy: fn(&Mlp, &[Vec<f64>], &[usize]) -> f64,
+}
+
+/// Trains the initialized classifier `net` on `(xs, ys)` with `optimize`, logging the mean
+/// loss and the train and test accuracies after every epoch.
+pub fn train_classifier(
+    mut net: Mlp,
+    rng: &mut Pcg32,
+    (xs, ys): (&[Vec<f64>], &[usize]),
+    test: Option<(&[Vec<f64>], &[usize])>,
+    p: &TrainParams,
+    score: &Classifier,
+) -> (Mlp, Vec<EpochLog>) {
     let mut log = Vec::with_capacity(p.epochs);
     optimize(
         &mut net,
         xs.len(),
         p,
-        &mut rng,
+        rng,
         |net, idx, grads| {
             let bx: Vec<&[f64]> = idx.iter().map(|&i| xs[i].as_slice()).collect();
             let by: Vec<usize> = idx.iter().map(|&i| ys[i]).collect();
-            net.loss_and_gradient(&bx, &by, grads)
+            (score.loss_and_gradient)(net, &bx, &by, grads)
         },
         |net, loss| {
             log.push(EpochLog {
                 loss,
-                train_accuracy: accuracy(net, xs, ys),
-                test_accuracy: test.map_or(f64::NAN, |(tx, ty)| accuracy(net, tx, ty)),
+                train_accuracy: (score.accuracy)(net, xs, ys),
+                test_accuracy: test.map_or(f64::NAN, |(tx, ty)| (score.accuracy)(net, tx, ty)),
             })
         },
     );

@@ -10,7 +10,7 @@
 //! The network is stored as an `Mlp` of two layers (the cell W = [W_x | W_h] with its bias, the
 //! output V, c), so `mlp::optimize` trains it and `Model` saves it unchanged.
 
-use super::mlp::{argmax, optimize, EpochLog, Mlp, TrainParams};
+use super::mlp::{argmax, train_classifier, Classifier, EpochLog, Mlp, TrainParams};
 use cgnodes_api::rng::Pcg32;
 
 /// Forward pass: the hidden states h_0..h_T and pre-activations z_1..z_T, then the logits.
@@ -124,35 +124,22 @@ pub fn train(
     let mut rng = Pcg32::new(p.seed, 27);
     let h = p.hidden.first().copied().unwrap_or(16);
     // Initialized as a [1 + h] -> h -> classes network: the cell's fan-in is x_t and h_{t-1}.
-    let mut net = Mlp::new(&[1 + h, h, classes], p.activation, &mut rng);
-    let acc = |net: &Mlp, x: &[Vec<f64>], y: &[usize]| {
-        let ok = x
-            .iter()
-            .zip(y)
-            .filter(|(a, &b)| predict(net, a) == b)
-            .count();
-        ok as f64 / x.len().max(1) as f64
+    let net = Mlp::new(&[1 + h, h, classes], p.activation, &mut rng);
+    let score = Classifier {
+        loss_and_gradient,
+        accuracy,
     };
-    let mut log = Vec::with_capacity(p.epochs);
-    optimize(
-        &mut net,
-        xs.len(),
-        p,
-        &mut rng,
-        |net, idx, grads| {
-            let bx: Vec<&[f64]> = idx.iter().map(|&i| xs[i].as_slice()).collect();
-            let by: Vec<usize> = idx.iter().map(|&i| ys[i]).collect();
-            loss_and_gradient(net, &bx, &by, grads)
-        },
-        |net, loss| {
-            log.push(EpochLog {
-                loss,
-                train_accuracy: acc(net, xs, ys),
-                test_accuracy: test.map_or(f64::NAN, |(tx, ty)| acc(net, tx, ty)),
-            })
-        },
-    );
-    (net, log)
+    train_classifier(net, &mut rng, (xs, ys), test, p, &score)
+}
+
+/// The fraction of `xs` classified as `ys` (0 for no samples).
+fn accuracy(net: &Mlp, xs: &[Vec<f64>], ys: &[usize]) -> f64 {
+    let ok = xs
+        .iter()
+        .zip(ys)
+        .filter(|(a, &b)| predict(net, a) == b)
+        .count();
+    ok as f64 / xs.len().max(1) as f64
 }
 
 #[cfg(test)]

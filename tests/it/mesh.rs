@@ -88,7 +88,7 @@ fn usda_uvs_normals_and_transform() {
         prim: "/_materials".into(),
         ..opts()
     };
-    let e = load_mesh(&asset("assets/course/Balls.usda"), &o).unwrap_err();
+    let e = load_mesh(&asset("assets/course/Balls.usda"), &o).unwrap_err().to_string();
     assert!(
         e.contains("not a Mesh") && e.contains("/Balls/Balls"),
         "{e}"
@@ -212,12 +212,12 @@ fn obj_groups_merge_or_select() {
         group: "middle".into(),
         ..opts()
     };
-    let e = load_mesh(&p, &o).unwrap_err();
+    let e = load_mesh(&p, &o).unwrap_err().to_string();
     assert!(e.contains("left") && e.contains("right"), "{e}");
 }
 
 fn load_err(p: &str) -> String {
-    load_mesh(&asset(p), &opts()).unwrap_err()
+    load_mesh(&asset(p), &opts()).unwrap_err().to_string()
 }
 
 #[test]
@@ -240,7 +240,7 @@ fn bad_inputs_give_clear_errors() {
     assert!(e.contains("line 11") && e.contains("variant"), "{e}");
     let (_d, p) = tmp("mesh.stl");
     std::fs::write(&p, "solid x").unwrap();
-    let e = load_mesh(&p, &opts()).unwrap_err();
+    let e = load_mesh(&p, &opts()).unwrap_err().to_string();
     assert!(e.contains("unknown mesh format"), "{e}");
 }
 

@@ -1,11 +1,12 @@
 //! Typed access to parsed USDA values (numbers, integer arrays, tuple arrays) and prim lookup
 //! by path, with errors that name the attribute's line. Shared by every schema reader.
 
+use super::error::UsdaError;
 use super::layer::{UsdAttr, UsdLayer, UsdPrim, UsdValue};
 use super::lexer::err;
 
 /// A number value.
-pub fn num(v: &UsdValue, line: usize) -> Result<f64, String> {
+pub fn num(v: &UsdValue, line: usize) -> Result<f64, UsdaError> {
     match v {
         UsdValue::Num(x) => Ok(*x),
         other => Err(err(line, format!("expected a number, found {other:?}"))),
@@ -13,7 +14,7 @@ pub fn num(v: &UsdValue, line: usize) -> Result<f64, String> {
 }
 
 /// An attribute's array value (refusing time samples).
-pub fn list(a: &UsdAttr) -> Result<&[UsdValue], String> {
+pub fn list(a: &UsdAttr) -> Result<&[UsdValue], UsdaError> {
     match &a.value {
         Some(UsdValue::List(v)) => Ok(v),
         Some(UsdValue::Dict(_)) => Err(err(
@@ -32,7 +33,7 @@ pub fn list(a: &UsdAttr) -> Result<&[UsdValue], String> {
 }
 
 /// Refuses an animated (`.timeSamples`) attribute.
-pub fn check_time_samples(a: &UsdAttr) -> Result<(), String> {
+pub fn check_time_samples(a: &UsdAttr) -> Result<(), UsdaError> {
     if a.name.ends_with(".timeSamples") {
         return Err(err(
             a.line,
@@ -43,7 +44,7 @@ pub fn check_time_samples(a: &UsdAttr) -> Result<(), String> {
 }
 
 /// An integer array attribute.
-pub fn ints(a: &UsdAttr) -> Result<Vec<i64>, String> {
+pub fn ints(a: &UsdAttr) -> Result<Vec<i64>, UsdaError> {
     list(a)?
         .iter()
         .map(|v| {
@@ -69,7 +70,11 @@ pub fn ints(a: &UsdAttr) -> Result<Vec<i64>, String> {
 }
 
 /// An `N`-tuple of numbers.
-pub fn tuple_n<const N: usize>(v: &UsdValue, line: usize, name: &str) -> Result<[f64; N], String> {
+pub fn tuple_n<const N: usize>(
+    v: &UsdValue,
+    line: usize,
+    name: &str,
+) -> Result<[f64; N], UsdaError> {
     match v {
         UsdValue::Tuple(t) if t.len() == N => {
             let mut out = [0.0; N];
@@ -86,7 +91,7 @@ pub fn tuple_n<const N: usize>(v: &UsdValue, line: usize, name: &str) -> Result<
 }
 
 /// An array-of-`N`-tuples attribute (`point3f[]`, `texCoord2f[]`, ...).
-pub fn tuples<const N: usize>(a: &UsdAttr) -> Result<Vec<[f64; N]>, String> {
+pub fn tuples<const N: usize>(a: &UsdAttr) -> Result<Vec<[f64; N]>, UsdaError> {
     list(a)?
         .iter()
         .map(|v| tuple_n::<N>(v, a.line, &a.name))
@@ -94,7 +99,7 @@ pub fn tuples<const N: usize>(a: &UsdAttr) -> Result<Vec<[f64; N]>, String> {
 }
 
 /// A number array attribute.
-pub fn floats(a: &UsdAttr) -> Result<Vec<f64>, String> {
+pub fn floats(a: &UsdAttr) -> Result<Vec<f64>, UsdaError> {
     list(a)?.iter().map(|v| num(v, a.line)).collect()
 }
 

@@ -2,6 +2,7 @@
 //! relationships and metadata, parsed from text. Schema-agnostic so that mesh reading and
 //! (later) skeleton reading share it; typed access to values is in `access`.
 
+use super::error::UsdaError;
 use super::lexer::{err, show, Lexer, Tok};
 
 /// A parsed USDA value.
@@ -73,7 +74,8 @@ pub struct UsdLayer {
     pub prims: Vec<UsdPrim>,
 }
 
-fn parse_value(lx: &mut Lexer) -> Result<UsdValue, String> {
+// One match over the value grammar (number, string, path, list, tuple, dictionary): long but flat.
+fn parse_value(lx: &mut Lexer) -> Result<UsdValue, UsdaError> {
     let (t, line) = lx.expect_next("a value")?;
     Ok(match t {
         Tok::Num(v) => UsdValue::Num(v),
@@ -184,7 +186,7 @@ fn parse_value(lx: &mut Lexer) -> Result<UsdValue, String> {
 
 /// Metadata in parentheses: `key = value` items, list edits (`prepend`, `append`, ...)
 /// and a bare doc string.
-fn parse_meta(lx: &mut Lexer) -> Result<Vec<(String, UsdValue)>, String> {
+fn parse_meta(lx: &mut Lexer) -> Result<Vec<(String, UsdValue)>, UsdaError> {
     lx.expect_punct(b'(')?;
     let mut out = Vec::new();
     loop {
@@ -233,7 +235,7 @@ fn parse_prim(
     specifier: String,
     parent: &str,
     line: usize,
-) -> Result<UsdPrim, String> {
+) -> Result<UsdPrim, UsdaError> {
     let (mut t, mut l) = lx.expect_next("a prim name")?;
     let mut type_name = String::new();
     if let Tok::Ident(ty) = t {
@@ -300,7 +302,7 @@ fn parse_prim(
 
 /// The entries of a typed dictionary after its `{`, as `(name, value)` pairs:
 /// `type name = value` items (`dictionary` values nest), separated by newlines or `;`.
-fn parse_typed_dict(lx: &mut Lexer) -> Result<UsdValue, String> {
+fn parse_typed_dict(lx: &mut Lexer) -> Result<UsdValue, UsdaError> {
     let mut items = Vec::new();
     loop {
         if lx.is_punct(b'}')? {
@@ -339,7 +341,7 @@ fn parse_typed_dict(lx: &mut Lexer) -> Result<UsdValue, String> {
     Ok(UsdValue::Dict(items))
 }
 
-fn parse_property(lx: &mut Lexer, first: String, line: usize) -> Result<UsdAttr, String> {
+fn parse_property(lx: &mut Lexer, first: String, line: usize) -> Result<UsdAttr, UsdaError> {
     let mut word = first;
     while matches!(word.as_str(), "uniform" | "custom" | "varying" | "config") {
         match lx.expect_next("a property type")? {
@@ -389,7 +391,7 @@ fn parse_property(lx: &mut Lexer, first: String, line: usize) -> Result<UsdAttr,
 }
 
 /// Parses USDA text into prims. Errors carry the line number.
-pub fn parse_usda(text: &str) -> Result<UsdLayer, String> {
+pub fn parse_usda(text: &str) -> Result<UsdLayer, UsdaError> {
     let first = text.lines().next().unwrap_or("");
     if !first.starts_with("#usda ") {
         return Err(err(

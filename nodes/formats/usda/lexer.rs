@@ -2,6 +2,8 @@
 //! (with `:` and `.` inside, as in `primvars:st` or `points.timeSamples`) and punctuation,
 //! each with its 1-based line so every parse error can name the line.
 
+use super::error::UsdaError;
+
 /// One token.
 #[derive(Clone, Debug, PartialEq)]
 pub(super) enum Tok {
@@ -27,8 +29,11 @@ pub(super) struct Lexer<'a> {
 pub const MAX_NESTING: usize = 200;
 
 /// An error message prefixed with its line.
-pub(super) fn err(line: usize, msg: impl std::fmt::Display) -> String {
-    format!("line {line}: {msg}")
+pub(super) fn err(line: usize, msg: impl std::fmt::Display) -> UsdaError {
+    UsdaError::Line {
+        line,
+        message: msg.to_string(),
+    }
 }
 
 impl<'a> Lexer<'a> {
@@ -44,7 +49,7 @@ impl<'a> Lexer<'a> {
     }
 
     /// Enters one more level of nesting, opened on `line`; an error past `MAX_NESTING`.
-    pub(super) fn enter(&mut self, line: usize) -> Result<(), String> {
+    pub(super) fn enter(&mut self, line: usize) -> Result<(), UsdaError> {
         self.depth += 1;
         if self.depth > MAX_NESTING {
             return Err(err(
@@ -78,7 +83,8 @@ impl<'a> Lexer<'a> {
         }
     }
 
-    fn lex(&mut self) -> Result<Option<(Tok, usize)>, String> {
+    // One match over the first byte of a token, one arm per token kind: it reads better whole.
+    fn lex(&mut self) -> Result<Option<(Tok, usize)>, UsdaError> {
         self.skip_ws();
         if self.i >= self.s.len() {
             return Ok(None);
@@ -203,31 +209,31 @@ impl<'a> Lexer<'a> {
         Ok(Some((tok, line)))
     }
 
-    pub(super) fn peek(&mut self) -> Result<Option<&(Tok, usize)>, String> {
+    pub(super) fn peek(&mut self) -> Result<Option<&(Tok, usize)>, UsdaError> {
         if self.peeked.is_none() {
             self.peeked = self.lex()?;
         }
         Ok(self.peeked.as_ref())
     }
 
-    pub(super) fn next(&mut self) -> Result<Option<(Tok, usize)>, String> {
+    pub(super) fn next(&mut self) -> Result<Option<(Tok, usize)>, UsdaError> {
         if let Some(t) = self.peeked.take() {
             return Ok(Some(t));
         }
         self.lex()
     }
 
-    pub(super) fn expect_next(&mut self, what: &str) -> Result<(Tok, usize), String> {
+    pub(super) fn expect_next(&mut self, what: &str) -> Result<(Tok, usize), UsdaError> {
         let line = self.line;
         self.next()?
             .ok_or_else(|| err(line, format!("unexpected end of file, expected {what}")))
     }
 
-    pub(super) fn is_punct(&mut self, c: u8) -> Result<bool, String> {
+    pub(super) fn is_punct(&mut self, c: u8) -> Result<bool, UsdaError> {
         Ok(matches!(self.peek()?, Some((Tok::Punct(p), _)) if *p == c))
     }
 
-    pub(super) fn expect_punct(&mut self, c: u8) -> Result<usize, String> {
+    pub(super) fn expect_punct(&mut self, c: u8) -> Result<usize, UsdaError> {
         let (t, line) = self.expect_next(&format!("'{}'", c as char))?;
         if t != Tok::Punct(c) {
             return Err(err(

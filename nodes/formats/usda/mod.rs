@@ -9,12 +9,15 @@
 //! ancestors (USD row-vector convention: `p_world = p * M_local * M_parent ...`). Anything
 //! it does not understand is an error with the line number, never a guess.
 //!
+//! Errors are `UsdaError` (`error`), with the line or prim at fault.
+//!
 //! Layout: `lexer` (tokens) -> `layer` (the prim tree) -> `access` (typed values, prim
 //! lookup) and `transform` (xformOps), used by `read` (Mesh prims) and `skel` (UsdSkel: skeletons,
 //! animations, a mesh's skinning binding);
 //! `write` emits a layer, `write_anim` one with the points of many frames as `timeSamples`.
 
 pub mod access;
+pub mod error;
 pub mod layer;
 mod lexer;
 pub mod read;
@@ -24,6 +27,7 @@ pub mod write;
 pub mod write_anim;
 
 pub use access::mesh_paths;
+pub use error::UsdaError;
 pub use layer::{parse_usda, UsdAttr, UsdLayer, UsdPrim, UsdValue};
 pub use read::{read_usda, reverse_faces};
 pub use skel::read_skeleton;

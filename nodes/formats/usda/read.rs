@@ -5,6 +5,7 @@
 use super::access::{
     absolute_path, check_time_samples, find_prim_chain, floats, ints, mesh_paths, tuples,
 };
+use super::error::UsdaError;
 use super::layer::{parse_usda, UsdAttr, UsdLayer, UsdPrim, UsdValue};
 use super::lexer::err;
 use super::transform::{transform_normals, transform_points, world_transform, Mat4};
@@ -12,7 +13,7 @@ use cgnodes_api::prelude::*;
 
 /// Finds the prim at `path` (or the first `Mesh`, depth first, when `path` is empty) and
 /// the chain of its ancestors, root first.
-fn find_mesh<'a>(layer: &'a UsdLayer, path: &str) -> Result<Vec<&'a UsdPrim>, String> {
+fn find_mesh<'a>(layer: &'a UsdLayer, path: &str) -> Result<Vec<&'a UsdPrim>, UsdaError> {
     let norm = absolute_path(path);
     let want: Box<dyn Fn(&UsdPrim) -> bool> = if norm.is_empty() {
         Box::new(|p: &UsdPrim| p.type_name == "Mesh" && p.specifier != "class")
@@ -22,27 +23,29 @@ fn find_mesh<'a>(layer: &'a UsdLayer, path: &str) -> Result<Vec<&'a UsdPrim>, St
     if let Some(chain) = find_prim_chain(layer, &*want) {
         let last = chain[chain.len() - 1];
         if last.type_name != "Mesh" {
-            return Err(format!(
-                "prim '{}' (line {}) is a '{}', not a Mesh; meshes in the file: {}",
-                last.path,
-                last.line,
-                last.type_name,
-                mesh_paths(layer).join(", ")
-            ));
+            return Err(UsdaError::WrongType {
+                path: last.path.clone(),
+                line: last.line,
+                found: last.type_name.clone(),
+                wanted: "Mesh",
+                kinds: "meshes",
+                others: mesh_paths(layer).join(", "),
+            });
         }
         return Ok(chain);
     }
     if path.is_empty() {
-        Err("the file has no Mesh prim".into())
+        Err(UsdaError::NoneOfType("Mesh"))
     } else {
-        Err(format!(
-            "no prim at '{path}'; meshes in the file: {}",
-            mesh_paths(layer).join(", ")
-        ))
+        Err(UsdaError::NoPrimAt {
+            path: path.to_string(),
+            kinds: "meshes",
+            found: mesh_paths(layer).join(", "),
+        })
     }
 }
 
-fn interpolation(a: &UsdAttr) -> Result<Option<Domain>, String> {
+fn interpolation(a: &UsdAttr) -> Result<Option<Domain>, UsdaError> {
     let i = a.meta.iter().find(|(k, _)| k == "interpolation");
     Ok(match i.map(|(_, v)| v) {
         None => None,
@@ -57,7 +60,7 @@ fn interpolation(a: &UsdAttr) -> Result<Option<Domain>, String> {
     })
 }
 
-fn element_size(a: &UsdAttr) -> Result<usize, String> {
+fn element_size(a: &UsdAttr) -> Result<usize, UsdaError> {
     match a.meta.iter().find(|(k, _)| k == "elementSize") {
         None => Ok(1),
         Some((_, UsdValue::Num(n))) if *n >= 1.0 && n.fract() == 0.0 => Ok(*n as usize),
@@ -72,7 +75,7 @@ fn domain_for<T: Clone>(
     values: Vec<T>,
     declared: Option<Domain>,
     counts: (usize, usize, usize),
-) -> Result<Attribute<T>, String> {
+) -> Result<Attribute<T>, UsdaError> {
     let (nv, nc, nf) = counts;
     let size = |d: Domain| match d {
         Domain::Vertex => nv,
@@ -113,7 +116,11 @@ fn domain_for<T: Clone>(
 }
 
 /// Expands an indexed primvar (`primvars:st:indices`).
-fn expand_indexed<T: Clone>(prim: &UsdPrim, a: &UsdAttr, values: Vec<T>) -> Result<Vec<T>, String> {
+fn expand_indexed<T: Clone>(
+    prim: &UsdPrim,
+    a: &UsdAttr,
+    values: Vec<T>,
+) -> Result<Vec<T>, UsdaError> {
     let Some(ix) = prim.attr(&format!("{}:indices", a.name)) else {
         return Ok(values);
     };
@@ -140,7 +147,7 @@ fn expand_indexed<T: Clone>(prim: &UsdPrim, a: &UsdAttr, values: Vec<T>) -> Resu
 
 /// Reads the mesh at `prim_path` (the first Mesh when empty) from USDA text, with the
 /// transforms of the prim and its ancestors applied when `apply_transform` is set.
-pub fn read_usda(text: &str, prim_path: &str, apply_transform: bool) -> Result<Mesh, String> {
+pub fn read_usda(text: &str, prim_path: &str, apply_transform: bool) -> Result<Mesh, UsdaError> {
     let layer = parse_usda(text)?;
     let chain = find_mesh(&layer, prim_path)?;
     read_mesh_chain(&layer, &chain, apply_transform)
@@ -153,7 +160,7 @@ pub fn read_mesh_chain(
     layer: &UsdLayer,
     chain: &[&UsdPrim],
     apply_transform: bool,
-) -> Result<Mesh, String> {
+) -> Result<Mesh, UsdaError> {
     let prim = chain[chain.len() - 1];
     for a in &prim.attrs {
         check_time_samples(a).or_else(|e| {
@@ -170,8 +177,12 @@ pub fn read_mesh_chain(
         })?;
     }
     let need = |n: &str| {
-        prim.attr(n)
-            .ok_or_else(|| format!("Mesh '{}' (line {}) has no '{n}'", prim.path, prim.line))
+        prim.attr(n).ok_or_else(|| {
+            UsdaError::prim(
+                &prim.path,
+                format!("Mesh '{}' (line {}) has no '{n}'", prim.path, prim.line),
+            )
+        })
     };
     let pa = need("points")?;
     let mut positions = tuples::<3>(pa)?;
@@ -302,8 +313,12 @@ pub fn read_mesh_chain(
             applied = Some(m);
             transform_points(&m, &mut positions);
             if let Some(n) = normals.as_mut() {
-                transform_normals(&m, &mut n.values)
-                    .ok_or_else(|| format!("the transform of '{}' is singular", prim.path))?;
+                transform_normals(&m, &mut n.values).ok_or_else(|| {
+                    UsdaError::prim(
+                        &prim.path,
+                        format!("the transform of '{}' is singular", prim.path),
+                    )
+                })?;
             }
         }
     }
@@ -320,7 +335,8 @@ pub fn read_mesh_chain(
     if left {
         reverse_faces(&mut mesh);
     }
-    mesh.check().map_err(|e| e.to_string())?;
+    mesh.check()
+        .map_err(|e| UsdaError::prim(&prim.path, e.to_string()))?;
     Ok(mesh)
 }
 

@@ -7,6 +7,7 @@
 use super::access::{
     absolute_path, find_prim_chain, floats, ints, list, prim_paths_of_type, tuple_n,
 };
+use super::error::UsdaError;
 use super::layer::{UsdAttr, UsdLayer, UsdPrim, UsdValue};
 use super::lexer::err;
 use super::transform::{matrix, world_transform, Mat4};
@@ -43,7 +44,7 @@ fn inherited_rel<'a>(chain: &[&'a UsdPrim], name: &str) -> Option<(&'a UsdPrim, 
         .find_map(|p| p.attr(name).map(|a| (*p, a)))
 }
 
-fn rel_target(a: &UsdAttr) -> Result<String, String> {
+fn rel_target(a: &UsdAttr) -> Result<String, UsdaError> {
     match &a.value {
         Some(UsdValue::Path(p)) => Ok(p.clone()),
         Some(UsdValue::List(v)) if v.len() == 1 => match &v[0] {
@@ -60,7 +61,7 @@ fn rel_target(a: &UsdAttr) -> Result<String, String> {
     }
 }
 
-fn tokens(a: &UsdAttr) -> Result<Vec<String>, String> {
+fn tokens(a: &UsdAttr) -> Result<Vec<String>, UsdaError> {
     list(a)?
         .iter()
         .map(|v| match v {
@@ -73,7 +74,7 @@ fn tokens(a: &UsdAttr) -> Result<Vec<String>, String> {
         .collect()
 }
 
-fn matrices(a: &UsdAttr) -> Result<Vec<RowMatrix>, String> {
+fn matrices(a: &UsdAttr) -> Result<Vec<RowMatrix>, UsdaError> {
     list(a)?
         .iter()
         .map(|v| matrix(v, a.line, &a.name).map(|m| to_rows(&m)))
@@ -81,35 +82,40 @@ fn matrices(a: &UsdAttr) -> Result<Vec<RowMatrix>, String> {
 }
 
 /// Reads the Skeleton at `path` (the first Skeleton when empty), with its animation.
-pub fn read_skeleton(layer: &UsdLayer, path: &str) -> Result<Skeleton, String> {
+pub fn read_skeleton(layer: &UsdLayer, path: &str) -> Result<Skeleton, UsdaError> {
     let chain = if path.is_empty() {
         find_prim_chain(layer, &|p: &UsdPrim| {
             p.type_name == "Skeleton" && p.specifier != "class"
         })
-        .ok_or("the file has no Skeleton prim")?
+        .ok_or(UsdaError::NoneOfType("Skeleton"))?
     } else {
-        chain_to(layer, path).ok_or_else(|| {
-            format!(
-                "no prim at '{path}'; skeletons in the file: {}",
-                prim_paths_of_type(layer, "Skeleton").join(", ")
-            )
+        chain_to(layer, path).ok_or_else(|| UsdaError::NoPrimAt {
+            path: path.to_string(),
+            kinds: "skeletons",
+            found: prim_paths_of_type(layer, "Skeleton").join(", "),
         })?
     };
     skeleton_from_chain(layer, &chain)
 }
 
-fn skeleton_from_chain(layer: &UsdLayer, chain: &[&UsdPrim]) -> Result<Skeleton, String> {
+fn skeleton_from_chain(layer: &UsdLayer, chain: &[&UsdPrim]) -> Result<Skeleton, UsdaError> {
     let prim = chain[chain.len() - 1];
     if prim.type_name != "Skeleton" {
-        return Err(format!(
-            "prim '{}' (line {}) is a '{}', not a Skeleton; skeletons in the file: {}",
-            prim.path,
-            prim.line,
-            prim.type_name,
-            prim_paths_of_type(layer, "Skeleton").join(", ")
-        ));
+        return Err(UsdaError::WrongType {
+            path: prim.path.clone(),
+            line: prim.line,
+            found: prim.type_name.clone(),
+            wanted: "Skeleton",
+            kinds: "skeletons",
+            others: prim_paths_of_type(layer, "Skeleton").join(", "),
+        });
     }
-    let here = |what: &str| format!("Skeleton '{}' (line {}) {what}", prim.path, prim.line);
+    let here = |what: &str| {
+        UsdaError::prim(
+            &prim.path,
+            format!("Skeleton '{}' (line {}) {what}", prim.path, prim.line),
+        )
+    };
     let ja = prim.attr("joints").ok_or_else(|| here("has no joints"))?;
     let paths = tokens(ja)?;
     if paths.is_empty() {
@@ -226,15 +232,15 @@ fn track<T: Clone, F>(
     name: &str,
     n: usize,
     elem: F,
-) -> Result<Option<Track<T>>, String>
+) -> Result<Option<Track<T>>, UsdaError>
 where
-    F: Fn(&UsdValue, usize, &str) -> Result<T, String>,
+    F: Fn(&UsdValue, usize, &str) -> Result<T, UsdaError>,
 {
     let sampled = prim.attr(&format!("{name}.timeSamples"));
     let Some(a) = sampled.or(prim.attr(name)) else {
         return Ok(None);
     };
-    let array = |v: &UsdValue| -> Result<Vec<T>, String> {
+    let array = |v: &UsdValue| -> Result<Vec<T>, UsdaError> {
         let UsdValue::List(items) = v else {
             return Err(err(
                 a.line,
@@ -288,19 +294,26 @@ where
     Ok(Some(t))
 }
 
-fn read_animation(prim: &UsdPrim, skel: &Skeleton) -> Result<SkelAnimation, String> {
+fn read_animation(prim: &UsdPrim, skel: &Skeleton) -> Result<SkelAnimation, UsdaError> {
     if prim.type_name != "SkelAnimation" {
-        return Err(format!(
-            "skel:animationSource of '{}' names '{}' (line {}), a '{}', not a SkelAnimation",
-            skel.prim, prim.path, prim.line, prim.type_name
+        return Err(UsdaError::prim(
+            &skel.prim,
+            format!(
+                "skel:animationSource of '{}' names '{}' (line {}), a '{}', not a SkelAnimation",
+                skel.prim, prim.path, prim.line, prim.type_name
+            ),
         ));
     }
-    let ja = prim.attr("joints").ok_or_else(|| {
-        format!(
-            "SkelAnimation '{}' (line {}) has no joints",
-            prim.path, prim.line
+    let need = |what: &str| {
+        UsdaError::prim(
+            &prim.path,
+            format!(
+                "SkelAnimation '{}' (line {}) has no {what}",
+                prim.path, prim.line
+            ),
         )
-    })?;
+    };
+    let ja = prim.attr("joints").ok_or_else(|| need("joints"))?;
     let mut joints = Vec::new();
     for name in tokens(ja)? {
         let j = skel.joint_index(&name).ok_or_else(|| {
@@ -315,12 +328,6 @@ fn read_animation(prim: &UsdPrim, skel: &Skeleton) -> Result<SkelAnimation, Stri
         joints.push(j);
     }
     let n = joints.len();
-    let need = |what: &str| {
-        format!(
-            "SkelAnimation '{}' (line {}) has no {what}",
-            prim.path, prim.line
-        )
-    };
     let translations =
         track(prim, "translations", n, tuple_n::<3>)?.ok_or_else(|| need("translations"))?;
     let rotations = track(prim, "rotations", n, tuple_n::<4>)?.ok_or_else(|| need("rotations"))?;
@@ -336,7 +343,7 @@ fn read_animation(prim: &UsdPrim, skel: &Skeleton) -> Result<SkelAnimation, Stri
 
 /// A world transform of `chain` that reads a time-sampled `xformOp` holding one value (as
 /// Blender writes for a static skeleton) as that value; other animated ops are errors.
-fn static_world(chain: &[&UsdPrim]) -> Result<Mat4, String> {
+fn static_world(chain: &[&UsdPrim]) -> Result<Mat4, UsdaError> {
     let mut owned: Vec<UsdPrim> = Vec::with_capacity(chain.len());
     for p in chain {
         let mut q = UsdPrim {
@@ -370,7 +377,7 @@ pub fn read_binding(
     nv: usize,
     points_to_mesh: Option<&Mat4>,
     world: bool,
-) -> Result<Option<SkinBinding>, String> {
+) -> Result<Option<SkinBinding>, UsdaError> {
     let prim = chain[chain.len() - 1];
     let Some((_, rel)) = inherited_rel(chain, "skel:skeleton") else {
         return Ok(None);
@@ -386,14 +393,19 @@ pub fn read_binding(
         )
     })?;
     let skeleton = skeleton_from_chain(layer, &schain)?;
-    let here = |what: String| format!("Mesh '{}' (line {}) {what}", prim.path, prim.line);
+    let here = |what: String| {
+        UsdaError::prim(
+            &prim.path,
+            format!("Mesh '{}' (line {}) {what}", prim.path, prim.line),
+        )
+    };
     let ia = prim.attr("primvars:skel:jointIndices").ok_or_else(|| {
         here("is bound to a skeleton but has no primvars:skel:jointIndices".into())
     })?;
     let wa = prim.attr("primvars:skel:jointWeights").ok_or_else(|| {
         here("is bound to a skeleton but has no primvars:skel:jointWeights".into())
     })?;
-    let size = |a: &UsdAttr| -> Result<usize, String> {
+    let size = |a: &UsdAttr| -> Result<usize, UsdaError> {
         match a.meta.iter().find(|(k, _)| k == "elementSize") {
             None => Ok(1),
             Some((_, UsdValue::Num(n))) if *n >= 1.0 && n.fract() == 0.0 && *n < 1e6 => {
@@ -499,7 +511,10 @@ pub fn read_binding(
     }
     let skel_to_world = if world {
         static_world(&schain).map_err(|e| {
-            format!("the transform of Skeleton '{}': {e} (load with transform off to skin in skeleton space)", skeleton.prim)
+            UsdaError::prim(
+                &skeleton.prim,
+                format!("the transform of Skeleton '{}': {e} (load with transform off to skin in skeleton space)", skeleton.prim),
+            )
         })?
     } else {
         Mat4::identity()

@@ -3,6 +3,7 @@
 //! and applying it to points and normals.
 
 use super::access::{list, num, tuple_n};
+use super::error::UsdaError;
 use super::layer::{UsdPrim, UsdValue};
 use super::lexer::err;
 use nalgebra::{Matrix3, Matrix4, RowVector3, RowVector4};
@@ -12,7 +13,7 @@ use nalgebra::{Matrix3, Matrix4, RowVector3, RowVector4};
 pub type Mat4 = Matrix4<f64>;
 
 /// A `matrix4d` value (four 4-tuples), rows as written.
-pub fn matrix(v: &UsdValue, line: usize, name: &str) -> Result<Mat4, String> {
+pub fn matrix(v: &UsdValue, line: usize, name: &str) -> Result<Mat4, UsdaError> {
     match v {
         UsdValue::Tuple(rows) if rows.len() == 4 => {
             let mut m = Mat4::zeros();
@@ -46,7 +47,7 @@ pub fn rotation(k: usize, deg: f64) -> Mat4 {
 
 /// The local transform of a prim from its `xformOpOrder` (row vectors: the first op in the
 /// order applies last, `M = op_n * ... * op_1`).
-pub fn local_transform(p: &UsdPrim) -> Result<Mat4, String> {
+pub fn local_transform(p: &UsdPrim) -> Result<Mat4, UsdaError> {
     let Some(order) = p.attr("xformOpOrder") else {
         if let Some(a) = p.attrs.iter().find(|a| a.name.starts_with("xformOp:")) {
             return Err(err(
@@ -120,7 +121,7 @@ pub fn local_transform(p: &UsdPrim) -> Result<Mat4, String> {
 
 /// The world transform of the last prim of `chain` (root first): its local transform, then
 /// each ancestor's (`world = local(prim) * local(parent) * ...`).
-pub fn world_transform(chain: &[&UsdPrim]) -> Result<Mat4, String> {
+pub fn world_transform(chain: &[&UsdPrim]) -> Result<Mat4, UsdaError> {
     let mut m = Mat4::identity();
     for p in chain {
         // prepend each deeper prim

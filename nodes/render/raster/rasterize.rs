@@ -419,12 +419,7 @@ mod tests {
         // at 64x48: the span walk must give bit-identical depth and coverage.
         let (w, h) = (64u32, 48u32);
         let mut state = 12345u64;
-        let mut rnd = || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rnd = || cgnodes_api::rng::lcg_next(&mut state);
         let mut checked = 0;
         for i in 0..400 {
             let hv: [[f64; 3]; 3] = std::array::from_fn(|_| {

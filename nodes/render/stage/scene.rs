@@ -9,6 +9,7 @@ use cgnodes_api::types::{
     Attribute, Camera, Domain, Image, Light, Material, Mesh, Scene, SceneObject,
 };
 use cgnodes_formats::usda::transform::Mat4;
+use cgnodes_geometry::octahedron;
 use std::sync::Arc;
 
 /// Vertical field of view of the default framing, degrees.
@@ -112,25 +113,6 @@ pub fn splat_points(p: &StagePoints) -> (Mesh, Material) {
     let mut positions = Vec::with_capacity(6 * n);
     let mut uvs = Vec::with_capacity(6 * n);
     let mut indices = Vec::with_capacity(24 * n);
-    const DIRS: [[f64; 3]; 6] = [
-        [1.0, 0.0, 0.0],
-        [-1.0, 0.0, 0.0],
-        [0.0, 1.0, 0.0],
-        [0.0, -1.0, 0.0],
-        [0.0, 0.0, 1.0],
-        [0.0, 0.0, -1.0],
-    ];
-    // Counter-clockwise seen from outside: (+x, +y, +z) and its mirror images.
-    const FACES: [[u32; 3]; 8] = [
-        [0, 2, 4],
-        [2, 1, 4],
-        [1, 3, 4],
-        [3, 0, 4],
-        [2, 0, 5],
-        [1, 2, 5],
-        [3, 1, 5],
-        [0, 3, 5],
-    ];
     for (i, q) in p.points.iter().enumerate() {
         let r = 0.5
             * p.widths
@@ -148,11 +130,9 @@ pub fn splat_points(p: &StagePoints) -> (Mesh, Material) {
             1.0 - (ty as f64 + 0.5) / h as f64,
         ];
         let base = positions.len() as u32;
-        for d in DIRS {
-            positions.push([q[0] + r * d[0], q[1] + r * d[1], q[2] + r * d[2]]);
-            uvs.push(uv);
-        }
-        for f in FACES {
+        positions.extend(octahedron::positions(*q, r));
+        uvs.extend([uv; 6]);
+        for f in octahedron::FACES {
             indices.extend(f.iter().map(|k| base + k));
         }
     }

@@ -236,7 +236,7 @@ fn meshes_without_faces_are_read_as_points_and_bad_input_is_an_error() {
     assert_eq!(s.points[0].points.len(), 2);
     assert!(s.points[0].widths[0] > 0.0);
     let bad = "#usda 1.0\ndef Points \"p\"\n{\n    point3f[] points = [(0, 0, 0)]\n    float[] widths = [1, 2]\n}\n";
-    assert!(read_stage(bad).unwrap_err().contains("widths"));
+    assert!(read_stage(bad).unwrap_err().to_string().contains("widths"));
     let bad_light = "#usda 1.0\ndef SphereLight \"l\"\n{\n    float inputs:intensity = -1\n}\n";
     assert!(read_stage(bad_light).is_err());
 }

@@ -145,12 +145,7 @@ mod tests {
     fn grid_finds_exactly_the_brute_force_neighbours() {
         let mut pts = Vec::new();
         let mut s = 12345u64;
-        let mut rnd = || {
-            s = s
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (s >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rnd = || cgnodes_api::rng::lcg_next(&mut s);
         for _ in 0..500 {
             pts.push([rnd(), rnd() * 0.5, rnd() * 0.3]);
         }

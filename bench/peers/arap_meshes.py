@@ -15,7 +15,11 @@ Writes, in OUT_DIR (skipping a file that already exists):
 - nefertiti_open4.obj: nefertiti_front with two holes punched about where the eyes are (faces
   with a vertex within 12 units of (x, z) = (+-32, 28), three boundary loops), then 1-to-4
   midpoint subdivision:
-  about 177k faces, generated at benchmark time (too big for git).
+  about 175k faces, generated at benchmark time (too big for git).
+- bunny_base4.obj, bunny_base16.obj: bunny_base after one and two 1-to-4 midpoint
+  subdivisions (20,336 and 81,344 faces, generated at benchmark time): the same shape as
+  bunny_base at 4x and 16x the faces, where libigl's harmonic start plus 20 ARAP iterations
+  leaves thousands of flipped triangles.
 
 Each file starts with comment lines saying how it was made.
 """
@@ -199,15 +203,30 @@ def nefertiti_open4(src):
     return V, F, header
 
 
+def refined(make, times):
+    """`make`'s mesh after `times` 1-to-4 midpoint subdivisions."""
+
+    def build(src):
+        V, F, header = make(src)
+        for _ in range(times):
+            V, F = subdivide(V, F)
+        return V, F, header + ["then %d 1-to-4 midpoint subdivision(s)" % times]
+
+    return build
+
+
 def main():
     out = sys.argv[1]
     here = os.path.dirname(os.path.abspath(__file__))
     shared = sys.argv[2] if len(sys.argv) > 2 else os.path.join(here, "../../assets/meshes")
     os.makedirs(out, exist_ok=True)
+    bunny_base = lambda src: bunny_open(src, top=1.0)  # noqa: E731
     for name, make, src in [
         ("bunny_open", bunny_open, "bunny_closed.obj"),
-        ("bunny_base", lambda src: bunny_open(src, top=1.0), "bunny_closed.obj"),
+        ("bunny_base", bunny_base, "bunny_closed.obj"),
         ("nefertiti_open4", nefertiti_open4, "nefertiti_front.obj"),
+        ("bunny_base4", refined(bunny_base, 1), "bunny_closed.obj"),
+        ("bunny_base16", refined(bunny_base, 2), "bunny_closed.obj"),
     ]:
         path = os.path.join(out, name + ".obj")
         if os.path.exists(path):

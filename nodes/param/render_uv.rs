@@ -17,95 +17,131 @@ pub fn render_uv_layout(
     size: u32,
 ) -> Image {
     let size = size.max(2);
-    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-    for t in uvs.iter().filter(|t| t[0].is_finite() && t[1].is_finite()) {
-        for k in 0..2 {
-            lo[k] = lo[k].min(t[k]);
-            hi[k] = hi[k].max(t[k]);
-        }
-    }
-    let eps = 1e-9;
-    let (origin, extent) =
-        if lo[0] >= -eps && lo[1] >= -eps && hi[0] <= 1.0 + eps && hi[1] <= 1.0 + eps {
-            ([-0.02, -0.02], 1.04)
-        } else if lo[0].is_finite() {
-            let ext = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(1e-12) * 1.04;
-            let c = [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1])];
-            ([c[0] - 0.5 * ext, c[1] - 0.5 * ext], ext)
-        } else {
-            ([0.0, 0.0], 1.0)
-        };
-    let s = size as f64;
-    let to_px = |t: [f64; 2]| -> [f64; 2] {
-        [
-            (t[0] - origin[0]) / extent * s,
-            (1.0 - (t[1] - origin[1]) / extent) * s,
-        ]
-    };
+    let view = UvView::fit(uvs, size);
     let mut img = Image::new(size, size, [1.0; 4]);
     if let Some(tex) = texture.filter(|t| t.width > 0 && t.height > 0) {
-        for y in 0..size {
-            for x in 0..size {
-                let u = origin[0] + (x as f64 + 0.5) / s * extent;
-                let v = origin[1] + (1.0 - (y as f64 + 0.5) / s) * extent;
-                let tx = ((u.rem_euclid(1.0)) * tex.width as f64) as u32;
-                let ty = ((1.0 - v.rem_euclid(1.0)) * tex.height as f64) as u32;
-                let c = tex.get(tx.min(tex.width - 1), ty.min(tex.height - 1));
-                // lighten the texture so the wireframe stands out
-                img.set(
-                    x,
-                    y,
-                    [0.5 + 0.5 * c[0], 0.5 + 0.5 * c[1], 0.5 + 0.5 * c[2], 1.0],
-                );
-            }
-        }
+        draw_texture(&mut img, &view, tex);
     }
-    // red fill of flipped triangles (scanline over the bounding box with edge functions)
     for (t, _) in triangles.iter().zip(flipped).filter(|(_, &f)| f) {
-        let p = t.map(|v| to_px(uvs[v as usize]));
-        let xmin = p
-            .iter()
-            .map(|q| q[0])
-            .fold(f64::INFINITY, f64::min)
-            .max(0.0) as u32;
-        let xmax = p
-            .iter()
-            .map(|q| q[0])
-            .fold(f64::NEG_INFINITY, f64::max)
-            .min(s - 1.0) as u32;
-        let ymin = p
-            .iter()
-            .map(|q| q[1])
-            .fold(f64::INFINITY, f64::min)
-            .max(0.0) as u32;
-        let ymax = p
-            .iter()
-            .map(|q| q[1])
-            .fold(f64::NEG_INFINITY, f64::max)
-            .min(s - 1.0) as u32;
-        let edge = |a: [f64; 2], b: [f64; 2], q: [f64; 2]| {
-            (b[0] - a[0]) * (q[1] - a[1]) - (b[1] - a[1]) * (q[0] - a[0])
-        };
-        for y in ymin..=ymax {
-            for x in xmin..=xmax {
-                let q = [x as f64 + 0.5, y as f64 + 0.5];
-                let e = [
-                    edge(p[0], p[1], q),
-                    edge(p[1], p[2], q),
-                    edge(p[2], p[0], q),
-                ];
-                if e.iter().all(|&v| v >= 0.0) || e.iter().all(|&v| v <= 0.0) {
-                    img.set(x, y, [0.9, 0.1, 0.1, 1.0]);
-                }
+        fill_triangle(&mut img, t.map(|v| view.to_px(uvs[v as usize])), FLIPPED);
+    }
+    draw_wireframe(&mut img, &view, triangles, uvs);
+    img
+}
+
+/// Colour of a flipped triangle.
+const FLIPPED: [f32; 4] = [0.9, 0.1, 0.1, 1.0];
+/// Colour of the edges.
+const LINE: [f32; 4] = [0.1, 0.1, 0.2, 1.0];
+
+/// The square of UV space the image shows: `origin` at the bottom-left, `extent` on a side,
+/// over `size` pixels.
+struct UvView {
+    origin: [f64; 2],
+    extent: f64,
+    size: f64,
+}
+
+impl UvView {
+    /// [0,1]^2 when every UV is inside it, else the bounding square of the finite UVs; both
+    /// with a 2% margin.
+    fn fit(uvs: &[[f64; 2]], size: u32) -> UvView {
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for t in uvs.iter().filter(|t| t[0].is_finite() && t[1].is_finite()) {
+            for k in 0..2 {
+                lo[k] = lo[k].min(t[k]);
+                hi[k] = hi[k].max(t[k]);
+            }
+        }
+        let eps = 1e-9;
+        let (origin, extent) =
+            if lo[0] >= -eps && lo[1] >= -eps && hi[0] <= 1.0 + eps && hi[1] <= 1.0 + eps {
+                ([-0.02, -0.02], 1.04)
+            } else if lo[0].is_finite() {
+                let ext = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(1e-12) * 1.04;
+                let c = [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1])];
+                ([c[0] - 0.5 * ext, c[1] - 0.5 * ext], ext)
+            } else {
+                ([0.0, 0.0], 1.0)
+            };
+        UvView {
+            origin,
+            extent,
+            size: size as f64,
+        }
+    }
+
+    /// Pixel coordinates (x right, y down) of a UV.
+    fn to_px(&self, t: [f64; 2]) -> [f64; 2] {
+        [
+            (t[0] - self.origin[0]) / self.extent * self.size,
+            (1.0 - (t[1] - self.origin[1]) / self.extent) * self.size,
+        ]
+    }
+
+    /// The UV at the centre of pixel (x, y).
+    fn to_uv(&self, x: u32, y: u32) -> [f64; 2] {
+        [
+            self.origin[0] + (x as f64 + 0.5) / self.size * self.extent,
+            self.origin[1] + (1.0 - (y as f64 + 0.5) / self.size) * self.extent,
+        ]
+    }
+}
+
+/// Background: `tex` sampled at each pixel's UV (repeating), lightened so that the wireframe
+/// stands out.
+fn draw_texture(img: &mut Image, view: &UvView, tex: &Image) {
+    for y in 0..img.height {
+        for x in 0..img.width {
+            let [u, v] = view.to_uv(x, y);
+            let tx = ((u.rem_euclid(1.0)) * tex.width as f64) as u32;
+            let ty = ((1.0 - v.rem_euclid(1.0)) * tex.height as f64) as u32;
+            let c = tex.get(tx.min(tex.width - 1), ty.min(tex.height - 1));
+            img.set(
+                x,
+                y,
+                [0.5 + 0.5 * c[0], 0.5 + 0.5 * c[1], 0.5 + 0.5 * c[2], 1.0],
+            );
+        }
+    }
+}
+
+/// Fills the triangle with corners `p` (pixel coordinates, either orientation) in `colour`:
+/// a scan over its bounding box with edge functions.
+fn fill_triangle(img: &mut Image, p: [[f64; 2]; 3], colour: [f32; 4]) {
+    let (w, h) = (img.width as f64, img.height as f64);
+    let bound = |k: usize, hi: f64| {
+        let lo = p.iter().map(|q| q[k]).fold(f64::INFINITY, f64::min);
+        let up = p.iter().map(|q| q[k]).fold(f64::NEG_INFINITY, f64::max);
+        (lo.max(0.0) as u32, up.min(hi - 1.0) as u32)
+    };
+    let ((xmin, xmax), (ymin, ymax)) = (bound(0, w), bound(1, h));
+    let edge = |a: [f64; 2], b: [f64; 2], q: [f64; 2]| {
+        (b[0] - a[0]) * (q[1] - a[1]) - (b[1] - a[1]) * (q[0] - a[0])
+    };
+    for y in ymin..=ymax {
+        for x in xmin..=xmax {
+            let q = [x as f64 + 0.5, y as f64 + 0.5];
+            let e = [
+                edge(p[0], p[1], q),
+                edge(p[1], p[2], q),
+                edge(p[2], p[0], q),
+            ];
+            if e.iter().all(|&v| v >= 0.0) || e.iter().all(|&v| v <= 0.0) {
+                img.set(x, y, colour);
             }
         }
     }
-    // wireframe: every triangle edge once per triangle (shared edges drawn twice, harmless)
-    let line = [0.1f32, 0.1, 0.2, 1.0];
+}
+
+/// Every triangle edge as a dark line, once per triangle (shared edges drawn twice,
+/// harmless); edges with a non-finite end are skipped.
+fn draw_wireframe(img: &mut Image, view: &UvView, triangles: &[[u32; 3]], uvs: &[[f64; 2]]) {
+    let s = view.size;
     for t in triangles {
         for k in 0..3 {
-            let a = to_px(uvs[t[k] as usize]);
-            let b = to_px(uvs[t[(k + 1) % 3] as usize]);
+            let a = view.to_px(uvs[t[k] as usize]);
+            let b = view.to_px(uvs[t[(k + 1) % 3] as usize]);
             if !(a[0].is_finite() && a[1].is_finite() && b[0].is_finite() && b[1].is_finite()) {
                 continue;
             }
@@ -119,12 +155,11 @@ pub fn render_uv_layout(
                 let x = a[0] + f * (b[0] - a[0]);
                 let y = a[1] + f * (b[1] - a[1]);
                 if x >= 0.0 && y >= 0.0 && x < s && y < s {
-                    img.set(x as u32, y as u32, line);
+                    img.set(x as u32, y as u32, LINE);
                 }
             }
         }
     }
-    img
 }
 
 fn declare(b: &mut NodeBuilder) {

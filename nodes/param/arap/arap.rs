@@ -16,7 +16,9 @@ impl From<ArapError> for NodeError {
             ArapError::InitLength { .. } | ArapError::InitNotFinite(_) => {
                 NodeError::invalid("init", message)
             }
-            ArapError::NoTriangles | ArapError::Mesh(_) => NodeError::invalid("mesh", message),
+            ArapError::NoTriangles
+            | ArapError::VertexOutOfRange(_)
+            | ArapError::DegenerateTriangle { .. } => NodeError::invalid("mesh", message),
             ArapError::Tolerance => NodeError::invalid("tolerance", message),
             ArapError::Lambda => NodeError::invalid("lambda", message),
             ArapError::Pin { .. } => NodeError::invalid("pin", message),

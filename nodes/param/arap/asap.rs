@@ -48,34 +48,13 @@ pub fn asap_parameterize(
     if triangles.is_empty() {
         return Err(ArapError::NoTriangles);
     }
-    let frames = TriangleFrames::new(positions, triangles).map_err(ArapError::Mesh)?;
+    let frames = TriangleFrames::new(positions, triangles)?;
     let (comp, ncomp) = component_of(n, triangles);
     if ncomp != 1 {
         return Err(ArapError::Components(ncomp));
     }
     let used: Vec<bool> = comp.iter().map(|&c| c != u32::MAX).collect();
-    let [a, b] = match pins {
-        Some([a, b]) => {
-            if a >= n || b >= n || a == b || !used[a] || !used[b] {
-                return Err(ArapError::Pins);
-            }
-            [a, b]
-        }
-        None => {
-            let far = |from: usize| {
-                (0..n)
-                    .filter(|&v| used[v])
-                    .max_by(|&x, &y| {
-                        dist2(positions[x], positions[from])
-                            .total_cmp(&dist2(positions[y], positions[from]))
-                    })
-                    .unwrap_or(from)
-            };
-            let v0 = (0..n).find(|&v| used[v]).unwrap_or(0);
-            let a = far(v0);
-            [a, far(a)]
-        }
-    };
+    let [a, b] = choose_pins(positions, &used, pins)?;
     let mut uv = vec![[0.0; 2]; n];
     uv[b] = [dist2(positions[a], positions[b]).sqrt(), 0.0];
     let mut fixed: Vec<bool> = used.iter().map(|u| !u).collect();
@@ -83,34 +62,74 @@ pub fn asap_parameterize(
     fixed[b] = true;
     let (free_index, free_vertices) = free_rows(&fixed);
     let nf = free_vertices.len();
+    if nf > 0 {
+        let (trip, mut rhs) = asap_system(&frames, &free_index, nf, &uv);
+        let factor = SpdFactor::new(2 * nf, &trip, Par::Seq).map_err(ArapError::SingularAsap)?;
+        factor.solve_in_place(rhs.as_mut());
+        for v in 0..n {
+            if free_index[v] != u32::MAX {
+                let i = 2 * free_index[v] as usize;
+                uv[v] = [rhs[(i, 0)], rhs[(i + 1, 0)]];
+            }
+        }
+    }
+    let (energy, arap_energy) = energies(&frames, &uv);
+    let (_, flips) = orientation_and_flips(&frames, &uv);
+    Ok(AsapResult {
+        uv,
+        pins: [a, b],
+        energy,
+        arap_energy,
+        flips,
+        elapsed_ms: start.elapsed().as_secs_f64() * 1e3,
+    })
+}
 
-    // Per triangle, the 6x6 block 2A (f fᵀ + g gᵀ) over (x0, x1, x2, y0, y1, y2), with
-    // F = f·u and G = g·u. J's rows are (g1·x, g2·x) and (g1·y, g2·y) with
-    // g1 = (-p, p, 0), g2 = (-q-r, q, r) from [x1-x0, x2-x0]^-1 = [[p, q], [0, r]].
+/// The two pinned vertices: `pins` checked (two different vertices of the triangles, `used`),
+/// or by default a vertex farthest from the first used vertex and a vertex farthest from it
+/// (two far-apart vertices, so the similarity is well fixed).
+fn choose_pins(
+    positions: &[[f64; 3]],
+    used: &[bool],
+    pins: Option<[usize; 2]>,
+) -> Result<[usize; 2], ArapError> {
+    let n = positions.len();
+    if let Some([a, b]) = pins {
+        if a >= n || b >= n || a == b || !used[a] || !used[b] {
+            return Err(ArapError::Pins);
+        }
+        return Ok([a, b]);
+    }
+    let far = |from: usize| {
+        (0..n)
+            .filter(|&v| used[v])
+            .max_by(|&x, &y| {
+                dist2(positions[x], positions[from])
+                    .total_cmp(&dist2(positions[y], positions[from]))
+            })
+            .unwrap_or(from)
+    };
+    let v0 = (0..n).find(|&v| used[v]).unwrap_or(0);
+    let a = far(v0);
+    Ok([a, far(a)])
+}
+
+/// The `2nf x 2nf` ASAP system over the free vertices (`free_index`: a vertex's row, or
+/// `u32::MAX` when pinned; unknowns interleaved `(u, v)` per vertex): its lower triangle as
+/// triplets, and the right-hand side that moves the pinned vertices' terms (at `uv`) over.
+fn asap_system(
+    frames: &TriangleFrames,
+    free_index: &[u32],
+    nf: usize,
+    uv: &[[f64; 2]],
+) -> (Vec<Triplet<usize, usize, f64>>, Mat<f64>) {
     let mut trip: Vec<Triplet<usize, usize, f64>> = Vec::with_capacity(21 * frames.len());
     let mut rhs = Mat::<f64>::zeros(2 * nf, 1);
     for t in 0..frames.len() {
-        let [p, q, r] = frames.inv_edges[t];
-        let g1 = [-p, p, 0.0];
-        let g2 = [-q - r, q, r];
-        let f = [
-            0.5 * g1[0],
-            0.5 * g1[1],
-            0.5 * g1[2],
-            -0.5 * g2[0],
-            -0.5 * g2[1],
-            -0.5 * g2[2],
-        ];
-        let g = [
-            0.5 * g2[0],
-            0.5 * g2[1],
-            0.5 * g2[2],
-            0.5 * g1[0],
-            0.5 * g1[1],
-            0.5 * g1[2],
-        ];
+        let (f, g) = anti_similarity_rows(frames, t);
         let w = 2.0 * frames.area[t];
         let tri = frames.triangles[t];
+        // local unknown l: coordinate l / 3 of corner l % 3
         let var = |l: usize| -> (usize, usize) { (tri[l % 3] as usize, l / 3) };
         for l1 in 0..6 {
             let (v1, c1) = var(l1);
@@ -134,26 +153,34 @@ pub fn asap_parameterize(
             }
         }
     }
-    if nf > 0 {
-        let factor = SpdFactor::new(2 * nf, &trip, Par::Seq).map_err(ArapError::SingularAsap)?;
-        factor.solve_in_place(rhs.as_mut());
-        for v in 0..n {
-            if free_index[v] != u32::MAX {
-                let i = 2 * free_index[v] as usize;
-                uv[v] = [rhs[(i, 0)], rhs[(i + 1, 0)]];
-            }
-        }
-    }
-    let (energy, arap_energy) = energies(&frames, &uv);
-    let (_, flips) = orientation_and_flips(&frames, &uv);
-    Ok(AsapResult {
-        uv,
-        pins: [a, b],
-        energy,
-        arap_energy,
-        flips,
-        elapsed_ms: start.elapsed().as_secs_f64() * 1e3,
-    })
+    (trip, rhs)
+}
+
+/// Triangle `t`'s anti-similarity part of `J` as two rows `f`, `g` over its unknowns
+/// `(x0, x1, x2, y0, y1, y2)`: `F = f·u`, `G = g·u`, so its energy block is
+/// `2A (f fᵀ + g gᵀ)`. J's rows are `(g1·x, g2·x)` and `(g1·y, g2·y)` with `g1 = (-p, p, 0)`,
+/// `g2 = (-q-r, q, r)` from `[x1-x0, x2-x0]⁻¹ = [[p, q], [0, r]]`.
+fn anti_similarity_rows(frames: &TriangleFrames, t: usize) -> ([f64; 6], [f64; 6]) {
+    let [p, q, r] = frames.inv_edges[t];
+    let g1 = [-p, p, 0.0];
+    let g2 = [-q - r, q, r];
+    let f = [
+        0.5 * g1[0],
+        0.5 * g1[1],
+        0.5 * g1[2],
+        -0.5 * g2[0],
+        -0.5 * g2[1],
+        -0.5 * g2[2],
+    ];
+    let g = [
+        0.5 * g2[0],
+        0.5 * g2[1],
+        0.5 * g2[2],
+        0.5 * g1[0],
+        0.5 * g1[1],
+        0.5 * g1[2],
+    ];
+    (f, g)
 }
 
 /// The ASAP (conformal) and ARAP energies of `uv`, each as an area-weighted mean.

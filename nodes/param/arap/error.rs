@@ -19,9 +19,20 @@ pub enum ArapError {
     /// The mesh has no triangle.
     #[error("mesh has no triangles")]
     NoTriangles,
-    /// A triangle is degenerate or refers to a missing vertex (`TriangleFrames::new`).
-    #[error("{0}")]
-    Mesh(String),
+    /// A triangle refers to a vertex the mesh does not have (`TriangleFrames::new`).
+    #[error("triangle {0} refers to a vertex out of range")]
+    VertexOutOfRange(usize),
+    /// A triangle has zero or non-finite area (`TriangleFrames::new`).
+    #[error(
+        "triangle {triangle} (vertices {}, {}, {}) has zero area; ARAP needs non-degenerate triangles",
+        .vertices[0], .vertices[1], .vertices[2]
+    )]
+    DegenerateTriangle {
+        /// The triangle's index.
+        triangle: usize,
+        /// Its vertices.
+        vertices: [u32; 3],
+    },
     /// `ArapOptions::tolerance` is negative or not finite.
     #[error("tolerance must be finite and >= 0")]
     Tolerance,

@@ -32,12 +32,72 @@ pub(super) struct FoldFree {
     pub local_solves: usize,
     /// The triangles of each vertex, in compressed rows (`vertex_triangles`).
     adjacency: (Vec<usize>, Vec<u32>),
-    /// Scratch of `local_resolve` (all `u32::MAX` between calls).
+    /// Scratch of `local_resolve`; its `touched` lists the triangles whose direction the last
+    /// local re-solve changed.
+    pub scratch: LocalScratch,
+}
+
+/// Scratch of `local_resolve`, sized for the mesh once.
+pub(super) struct LocalScratch {
+    /// Per vertex: its ring while the region grows, then its index in the region
+    /// (all `u32::MAX` between calls).
     mark: Vec<u32>,
-    /// Scratch of `local_resolve` (all `false` between calls).
+    /// Per triangle: already in `touched` (all `false` between calls).
     seen: Vec<bool>,
-    /// The triangles whose direction the last local re-solve changed.
+    /// The triangles whose direction the last call changed.
     pub touched: Vec<u32>,
+}
+
+impl LocalScratch {
+    /// Scratch for `n` vertices and `m` triangles.
+    pub fn new(n: usize, m: usize) -> LocalScratch {
+        LocalScratch {
+            mark: vec![u32::MAX; n],
+            seen: vec![false; m],
+            touched: Vec::new(),
+        }
+    }
+}
+
+/// Why `local_resolve` left the direction as it was.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub(super) enum LocalError {
+    /// No blocking triangle has a free vertex.
+    #[error("no free vertex to re-solve")]
+    NoFreeVertex,
+    /// The region is larger than `LocalProblem::max_region`: refactor instead.
+    #[error("region of {0} vertices: refactor instead")]
+    RegionTooLarge(usize),
+    /// The region's system could not be factored.
+    #[error("local factorization failed: {0}")]
+    Factor(String),
+    /// The region's solution is not finite.
+    #[error("non-finite local solution")]
+    NotFinite,
+}
+
+/// What a local stiffened re-solve works on (`local_resolve`).
+pub(super) struct LocalProblem<'a> {
+    /// The triangles' frames and cotangents.
+    pub frames: &'a TriangleFrames,
+    /// Each triangle's stiffening factor on its Laplacian weights.
+    pub weights: &'a [f64],
+    /// Each triangle's largest step before it reaches its area floor.
+    pub limits: &'a [f64],
+    /// The step the direction's model asks for; triangles with
+    /// `STEP_SAFETY * limit < best_step` seed the region.
+    pub best_step: f64,
+    /// Rings of vertices added around the seeds.
+    pub rings: usize,
+    /// Largest region re-solved (vertices).
+    pub max_region: usize,
+    /// A vertex's row in the global factor's elimination order, also its row in `gradient`
+    /// (`u32::MAX` when fixed).
+    pub row_of: &'a [u32],
+    /// `∇E` on the free vertices, in elimination order.
+    pub gradient: &'a Mat<f64>,
+    /// Each vertex's triangles, in compressed rows.
+    pub adjacency: &'a (Vec<usize>, Vec<u32>),
 }
 
 impl FoldFree {
@@ -52,9 +112,11 @@ impl FoldFree {
             reweighted: 0,
             refactors: 0,
             local_solves: 0,
-            touched: Vec::new(),
-            mark: vec![u32::MAX; if opts.injective { n } else { 0 }],
-            seen: vec![false; if opts.injective { m } else { 0 }],
+            scratch: if opts.injective {
+                LocalScratch::new(n, m)
+            } else {
+                LocalScratch::new(0, 0)
+            },
             adjacency: if opts.injective && opts.local_rings > 0 {
                 cgnodes_api::types::Topology::vertex_triangles(n, &frames.triangles)
             } else {
@@ -82,9 +144,9 @@ impl FoldFree {
             || dir.max_step < MIN_STEP
     }
 
-    /// `local_resolve` with this state's weights, adjacency and scratch; `touched` receives
-    /// the triangles whose direction changed.
-    #[allow(clippy::too_many_arguments)]
+    /// `local_resolve` with this state's weights, adjacency and scratch (`scratch.touched`
+    /// receives the triangles whose direction changed), the region capped at
+    /// `LOCAL_MAX_FRACTION` of the free vertices.
     pub fn local_resolve(
         &mut self,
         frames: &TriangleFrames,
@@ -94,64 +156,72 @@ impl FoldFree {
         row_of: &[u32],
         gradient: &Mat<f64>,
         d: &mut [[f64; 2]],
-    ) -> Result<usize, String> {
-        local_resolve(
+    ) -> Result<usize, LocalError> {
+        let problem = LocalProblem {
             frames,
-            &self.weights,
+            weights: &self.weights,
             limits,
             best_step,
             rings,
-            (LOCAL_MAX_FRACTION * gradient.nrows() as f64) as usize,
+            max_region: (LOCAL_MAX_FRACTION * gradient.nrows() as f64) as usize,
             row_of,
             gradient,
-            &self.adjacency,
-            &mut self.mark,
-            &mut self.seen,
-            &mut self.touched,
-            d,
-        )
+            adjacency: &self.adjacency,
+        };
+        local_resolve(&problem, &mut self.scratch, d)
     }
 }
 
-/// Local stiffened re-solve of a blocked step: on the vertices within `rings` rings of the
-/// triangles that would reach their area floor before `best_step`, replaces `d` by the
+/// Local stiffened re-solve of a blocked step: on the vertices within `p.rings` rings of the
+/// triangles that would reach their area floor before `p.best_step`, replaces `d` by the
 /// minimizer of the global step's model `g·δ + ½ δᵀ Δ_W δ` (stiffened weights `Δ_W`) with `δ`
 /// held at `d` everywhere else, a small Dirichlet problem factored on the spot, its vertices
-/// numbered in the global factor's elimination order (`row_of`: a vertex's row in it, also
-/// its row in `gradient`; `u32::MAX` when fixed), which fills no more than the global factor
-/// does there and spares computing an ordering. The blocking
-/// triangles then move almost rigidly with their surroundings instead of cutting the step for
-/// the whole mesh, without refactoring the global Laplacian. Returns the number of vertices
-/// re-solved, or `Err` when the region holds more than `max_region` vertices (see
-/// `LOCAL_MAX_FRACTION`: a refactorization of the whole Laplacian then costs about as much and
-/// does better), `d` then unchanged; `touched` receives the triangles whose direction changed. `adjacency` lists each
-/// vertex's triangles (compressed rows); `mark` and `seen` are scratch (all `u32::MAX` and
-/// `false` on entry and exit).
-#[allow(clippy::too_many_arguments)]
+/// numbered in the global factor's elimination order (`p.row_of`), which fills no more than
+/// the global factor does there and spares computing an ordering. The blocking triangles then
+/// move almost rigidly with their surroundings instead of cutting the step for the whole
+/// mesh, without refactoring the global Laplacian. Returns the number of vertices re-solved,
+/// or an error when there is nothing to re-solve or the region holds more than
+/// `p.max_region` vertices (see `LOCAL_MAX_FRACTION`: a refactorization of the whole
+/// Laplacian then costs about as much and does better), `d` then unchanged;
+/// `scratch.touched` receives the triangles whose direction changed.
 pub(super) fn local_resolve(
-    frames: &TriangleFrames,
-    weights: &[f64],
-    limits: &[f64],
-    best_step: f64,
-    rings: usize,
-    max_region: usize,
-    row_of: &[u32],
-    gradient: &Mat<f64>,
-    adjacency: &(Vec<usize>, Vec<u32>),
-    mark: &mut [u32],
-    seen: &mut [bool],
-    touched: &mut Vec<u32>,
+    p: &LocalProblem,
+    scratch: &mut LocalScratch,
     d: &mut [[f64; 2]],
-) -> Result<usize, String> {
-    let tris = &frames.triangles;
-    let (vt_start, vt) = (&adjacency.0, &adjacency.1);
-    // seed (ring 0): free vertices of the blocking triangles; `mark` holds the ring while
-    // growing, then the local index
+) -> Result<usize, LocalError> {
+    let region = grow_region(p, &mut scratch.mark);
+    // numbered in the global factor's elimination order, a fill-reducing order for the region
+    for (k, &v) in region.iter().enumerate() {
+        scratch.mark[v as usize] = k as u32;
+    }
+    scratch.touched.clear();
+    let r = region.len();
+    let result = if r == 0 {
+        Err(LocalError::NoFreeVertex)
+    } else if r > p.max_region {
+        Err(LocalError::RegionTooLarge(r))
+    } else {
+        solve_region(p, &region, scratch, d)
+    };
+    for &v in &region {
+        scratch.mark[v as usize] = u32::MAX;
+    }
+    for &t in scratch.touched.iter() {
+        scratch.seen[t as usize] = false;
+    }
+    result
+}
+
+/// The free vertices of the blocking triangles (ring 0) and `p.rings` rings around them,
+/// sorted by their row in the global factor. `mark` holds each one's ring on return.
+fn grow_region(p: &LocalProblem, mark: &mut [u32]) -> Vec<u32> {
+    let tris = &p.frames.triangles;
+    let (vt_start, vt) = (&p.adjacency.0, &p.adjacency.1);
     let mut region: Vec<u32> = Vec::new();
-    for (tri, &lim) in tris.iter().zip(limits) {
-        if STEP_SAFETY * lim < best_step {
+    for (tri, &lim) in tris.iter().zip(p.limits) {
+        if STEP_SAFETY * lim < p.best_step {
             for &v in tri {
-                if mark[v as usize] == u32::MAX && row_of[v as usize] != u32::MAX {
+                if mark[v as usize] == u32::MAX && p.row_of[v as usize] != u32::MAX {
                     mark[v as usize] = 0;
                     region.push(v);
                 }
@@ -159,13 +229,13 @@ pub(super) fn local_resolve(
         }
     }
     let mut ring_start = 0;
-    for ring in 0..rings as u32 {
+    for ring in 0..p.rings as u32 {
         let ring_end = region.len();
         for k in ring_start..ring_end {
             let v = region[k] as usize;
             for &t in &vt[vt_start[v]..vt_start[v + 1]] {
                 for &u in &tris[t as usize] {
-                    if mark[u as usize] == u32::MAX && row_of[u as usize] != u32::MAX {
+                    if mark[u as usize] == u32::MAX && p.row_of[u as usize] != u32::MAX {
                         mark[u as usize] = ring + 1;
                         region.push(u);
                     }
@@ -174,92 +244,96 @@ pub(super) fn local_resolve(
         }
         ring_start = ring_end;
     }
-    // numbered in the global factor's elimination order, a fill-reducing order for the region
-    region.sort_unstable_by_key(|&v| row_of[v as usize]);
-    for (k, &v) in region.iter().enumerate() {
-        mark[v as usize] = k as u32;
-    }
+    region.sort_unstable_by_key(|&v| p.row_of[v as usize]);
+    region
+}
+
+/// Assembles, factors and solves the region's Dirichlet problem (`scratch.mark`: each
+/// region vertex's index, `u32::MAX` outside) and writes its solution into `d`.
+fn solve_region(
+    p: &LocalProblem,
+    region: &[u32],
+    scratch: &mut LocalScratch,
+    d: &mut [[f64; 2]],
+) -> Result<usize, LocalError> {
     let r = region.len();
-    touched.clear();
-    let result = (|| {
-        if r == 0 {
-            return Err("no free vertex to re-solve".to_string());
-        }
-        if r > max_region {
-            return Err(format!("region of {r} vertices: refactor instead"));
-        }
-        // Δ_W restricted to the region (upper triangle in compressed columns, assembled column
-        // by column in the region's order) and -g - Δ_W,RO d_O
-        let mut rhs = Mat::<f64>::zeros(r, 2);
-        let mut col_ptr = Vec::with_capacity(r + 1);
-        let mut rows: Vec<usize> = Vec::with_capacity(5 * r);
-        let mut vals: Vec<f64> = Vec::with_capacity(5 * r);
-        let mut column: Vec<(usize, f64)> = Vec::new();
-        col_ptr.push(0);
-        for (k, &v) in region.iter().enumerate() {
-            let f = row_of[v as usize] as usize;
-            let (mut r0, mut r1) = (-gradient[(f, 0)], -gradient[(f, 1)]);
-            let mut diag = 0.0;
-            column.clear();
-            for &t in &vt[vt_start[v as usize]..vt_start[v as usize + 1]] {
-                if !seen[t as usize] {
-                    seen[t as usize] = true;
-                    touched.push(t);
-                }
-                let (t, tri) = (t as usize, tris[t as usize]);
-                let c = (0..3).find(|&c| tri[c] == v).unwrap_or(0);
-                // edge (v, tri[c+1]) is opposite corner c+2, edge (v, tri[c+2]) opposite c+1
-                for (u, opposite) in [
-                    (tri[(c + 1) % 3], (c + 2) % 3),
-                    (tri[(c + 2) % 3], (c + 1) % 3),
-                ] {
-                    let w = frames.cot[t][opposite] * weights[t];
-                    diag += w;
-                    let ru = mark[u as usize];
-                    if ru == u32::MAX {
-                        // neighbour outside: held at d (zero when pinned)
-                        r0 += w * d[u as usize][0];
-                        r1 += w * d[u as usize][1];
-                    } else if (ru as usize) < k {
-                        match column.iter_mut().find(|e| e.0 == ru as usize) {
-                            Some(e) => e.1 -= w,
-                            None => column.push((ru as usize, -w)),
-                        }
+    let (upper, mut rhs) = region_system(p, region, scratch, d);
+    let f = SpdFactor::from_upper_in_order(upper, Par::Seq).map_err(LocalError::Factor)?;
+    f.solve_in_place(rhs.as_mut());
+    if !rhs.col_iter().all(|c| c.iter().all(|x| x.is_finite())) {
+        return Err(LocalError::NotFinite);
+    }
+    for (k, &v) in region.iter().enumerate() {
+        d[v as usize] = [rhs[(k, 0)], rhs[(k, 1)]];
+    }
+    Ok(r)
+}
+
+/// `Δ_W` restricted to the region (upper triangle in compressed columns, assembled column by
+/// column in the region's order) and the right-hand side `-g - Δ_W,RO d_O`, the neighbours
+/// outside held at `d` (zero when pinned). Lists the region's triangles in `scratch.touched`.
+fn region_system(
+    p: &LocalProblem,
+    region: &[u32],
+    scratch: &mut LocalScratch,
+    d: &[[f64; 2]],
+) -> (SparseColMat<usize, f64>, Mat<f64>) {
+    let (tris, cot) = (&p.frames.triangles, &p.frames.cot);
+    let (vt_start, vt) = (&p.adjacency.0, &p.adjacency.1);
+    let r = region.len();
+    let mut rhs = Mat::<f64>::zeros(r, 2);
+    let mut col_ptr = Vec::with_capacity(r + 1);
+    let mut rows: Vec<usize> = Vec::with_capacity(5 * r);
+    let mut vals: Vec<f64> = Vec::with_capacity(5 * r);
+    let mut column: Vec<(usize, f64)> = Vec::new();
+    col_ptr.push(0);
+    for (k, &v) in region.iter().enumerate() {
+        let f = p.row_of[v as usize] as usize;
+        let (mut r0, mut r1) = (-p.gradient[(f, 0)], -p.gradient[(f, 1)]);
+        let mut diag = 0.0;
+        column.clear();
+        for &t in &vt[vt_start[v as usize]..vt_start[v as usize + 1]] {
+            if !scratch.seen[t as usize] {
+                scratch.seen[t as usize] = true;
+                scratch.touched.push(t);
+            }
+            let (t, tri) = (t as usize, tris[t as usize]);
+            let c = (0..3).find(|&c| tri[c] == v).unwrap_or(0);
+            // edge (v, tri[c+1]) is opposite corner c+2, edge (v, tri[c+2]) opposite c+1
+            for (u, opposite) in [
+                (tri[(c + 1) % 3], (c + 2) % 3),
+                (tri[(c + 2) % 3], (c + 1) % 3),
+            ] {
+                let w = cot[t][opposite] * p.weights[t];
+                diag += w;
+                let ru = scratch.mark[u as usize];
+                if ru == u32::MAX {
+                    r0 += w * d[u as usize][0];
+                    r1 += w * d[u as usize][1];
+                } else if (ru as usize) < k {
+                    match column.iter_mut().find(|e| e.0 == ru as usize) {
+                        Some(e) => e.1 -= w,
+                        None => column.push((ru as usize, -w)),
                     }
                 }
             }
-            rhs[(k, 0)] = r0;
-            rhs[(k, 1)] = r1;
-            column.sort_unstable_by_key(|e| e.0);
-            for &(row, val) in &column {
-                rows.push(row);
-                vals.push(val);
-            }
-            rows.push(k);
-            vals.push(diag);
-            col_ptr.push(rows.len());
         }
-        let upper = SparseColMat::new(
-            SymbolicSparseColMat::new_checked(r, r, col_ptr, None, rows),
-            vals,
-        );
-        let f = SpdFactor::from_upper_in_order(upper, Par::Seq)?;
-        f.solve_in_place(rhs.as_mut());
-        if !rhs.col_iter().all(|c| c.iter().all(|x| x.is_finite())) {
-            return Err("non-finite local solution".to_string());
+        rhs[(k, 0)] = r0;
+        rhs[(k, 1)] = r1;
+        column.sort_unstable_by_key(|e| e.0);
+        for &(row, val) in &column {
+            rows.push(row);
+            vals.push(val);
         }
-        for (k, &v) in region.iter().enumerate() {
-            d[v as usize] = [rhs[(k, 0)], rhs[(k, 1)]];
-        }
-        Ok(r)
-    })();
-    for &v in &region {
-        mark[v as usize] = u32::MAX;
+        rows.push(k);
+        vals.push(diag);
+        col_ptr.push(rows.len());
     }
-    for &t in touched.iter() {
-        seen[t as usize] = false;
-    }
-    result
+    let upper = SparseColMat::new(
+        SymbolicSparseColMat::new_checked(r, r, col_ptr, None, rows),
+        vals,
+    );
+    (upper, rhs)
 }
 
 /// Multiplies by `REWEIGHT_FACTOR` the weight of every triangle that would flip before
@@ -359,7 +433,7 @@ mod tests {
             limits[b] = 0.1;
         }
         let adjacency = cgnodes_api::types::Topology::vertex_triangles(n, &frames.triangles);
-        let (mut mark, mut seen, mut touched) = (vec![u32::MAX; n], vec![false; m], Vec::new());
+        let mut scratch = LocalScratch::new(n, m);
         let dmax = d
             .iter()
             .map(|x| x[0].abs().max(x[1].abs()))
@@ -367,44 +441,33 @@ mod tests {
         assert!(dmax > 1e-3);
 
         // a region larger than the cap is refused, the direction left as it was
+        let stiff = vec![10.0; m];
+        let base = LocalProblem {
+            frames: &frames,
+            weights: &stiff,
+            limits: &limits,
+            best_step: 1.0,
+            rings: 2,
+            max_region: 6,
+            row_of: &row_of,
+            gradient: &g,
+            adjacency: &adjacency,
+        };
         let mut d0 = d.clone();
-        let refused = local_resolve(
-            &frames,
-            &vec![10.0; m],
-            &limits,
-            1.0,
-            2,
-            6,
-            &row_of,
-            &g,
-            &adjacency,
-            &mut mark,
-            &mut seen,
-            &mut touched,
-            &mut d0,
-        );
+        let refused = local_resolve(&base, &mut scratch, &mut d0);
         assert!(refused.is_err());
         assert_eq!(d0, d);
+        let (mark, seen) = (&scratch.mark, &scratch.seen);
         assert!(mark.iter().all(|&x| x == u32::MAX) && seen.iter().all(|&x| !x));
 
         let mut resolve = |w: &[f64], d: &mut [[f64; 2]]| {
-            let r = local_resolve(
-                &frames,
-                w,
-                &limits,
-                1.0,
-                2,
-                n,
-                &row_of,
-                &g,
-                &adjacency,
-                &mut mark,
-                &mut seen,
-                &mut touched,
-                d,
-            )
-            .unwrap();
-            (r, touched.len())
+            let p = LocalProblem {
+                weights: w,
+                max_region: n,
+                ..base
+            };
+            let r = local_resolve(&p, &mut scratch, d).unwrap();
+            (r, scratch.touched.len())
         };
         let mut d1 = d.clone();
         let (r, changed) = resolve(&vec![1.0; m], &mut d1);
@@ -420,6 +483,7 @@ mod tests {
         }
         let mut d2 = d.clone();
         resolve(&w, &mut d2);
+        let (mark, seen) = (&scratch.mark, &scratch.seen);
         assert!(mark.iter().all(|&x| x == u32::MAX) && seen.iter().all(|&x| !x));
         let norm = |j: [[f64; 2]; 2]| {
             (j[0][0].powi(2) + j[0][1].powi(2) + j[1][0].powi(2) + j[1][1].powi(2)).sqrt()

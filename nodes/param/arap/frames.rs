@@ -6,6 +6,7 @@
 //! edge 0→1 on the x axis, corner 2 above it), so the map from that frame to the UV plane is
 //! linear with Jacobian `J = [u1-u0, u2-u0] · [x1-x0, x2-x0]^-1`.
 
+use super::error::ArapError;
 use cgnodes_api::types::vec3::{cross, cross2, dot, norm, sub, sub2};
 use rayon::prelude::*;
 
@@ -35,16 +36,19 @@ pub struct TriangleFrames {
 
 impl TriangleFrames {
     /// Builds the frames; fails on a triangle with zero or non-finite area, naming it.
-    pub fn new(positions: &[[f64; 3]], triangles: &[[u32; 3]]) -> Result<TriangleFrames, String> {
+    pub fn new(
+        positions: &[[f64; 3]],
+        triangles: &[[u32; 3]],
+    ) -> Result<TriangleFrames, ArapError> {
         let n = positions.len();
         type Frame = ([[f64; 2]; 3], f64, [f64; 3], [f64; 3]);
-        let per: Vec<Result<Frame, String>> = triangles
+        let per: Vec<Result<Frame, ArapError>> = triangles
             .par_iter()
             .with_min_len(PAR_CHUNK)
             .enumerate()
             .map(|(t, tri)| {
                 if tri.iter().any(|&v| v as usize >= n) {
-                    return Err(format!("triangle {t} refers to a vertex out of range"));
+                    return Err(ArapError::VertexOutOfRange(t));
                 }
                 let p = tri.map(|v| positions[v as usize]);
                 let e1 = sub(p[1], p[0]);
@@ -54,10 +58,10 @@ impl TriangleFrames {
                 let area = 0.5 * cr;
                 let scale = dot(e1, e1).max(dot(e2, e2));
                 if !(area.is_finite() && l1 > 0.0 && cr > 1e-14 * scale) {
-                    return Err(format!(
-                        "triangle {t} (vertices {}, {}, {}) has zero area; ARAP needs non-degenerate triangles",
-                        tri[0], tri[1], tri[2]
-                    ));
+                    return Err(ArapError::DegenerateTriangle {
+                        triangle: t,
+                        vertices: *tri,
+                    });
                 }
                 let x = [[0.0, 0.0], [l1, 0.0], [dot(e1, e2) / l1, cr / l1]];
                 // inverse of [[l1, x2x], [0, x2y]]

@@ -153,7 +153,7 @@ impl<'a> Solver<'a> {
         let start = Instant::now();
         let n = positions.len();
         validate(n, triangles, init_uv, opts)?;
-        let frames = TriangleFrames::new(positions, triangles).map_err(ArapError::Mesh)?;
+        let frames = TriangleFrames::new(positions, triangles)?;
         let m = frames.len();
         let lambda = opts.lambda;
 
@@ -346,7 +346,7 @@ impl<'a> Solver<'a> {
                 &self.uv,
                 &self.d,
                 &self.targets,
-                Some(&self.fold.touched),
+                Some(&self.fold.scratch.touched),
             );
             local = true;
             self.fold.local_solves += 1;

@@ -68,5 +68,5 @@ fn chart_from_csv(a: &ChartArgs) -> Result<(), String> {
     for s in &mut chart.series {
         s.points.sort_by(|p, q| p.0.total_cmp(&q.0));
     }
-    draw(&chart, &a.plot)
+    draw(&chart, &a.plot).map_err(|e| e.to_string())
 }

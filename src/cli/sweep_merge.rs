@@ -25,7 +25,7 @@ fn merge(a: &SweepMergeArgs) -> Result<(), String> {
                 .map_err(|e| format!("{}: {e}", p.display()))
         })
         .collect::<Result<Vec<_>, _>>()?;
-    let (mut spec, rows) = crate::sweep_merge::merge(&parts)?;
+    let (mut spec, rows) = crate::sweep_merge::merge(&parts).map_err(|e| e.to_string())?;
     let file = match &a.sweep {
         Some(p) => {
             let text = std::fs::read_to_string(p).map_err(|e| format!("{}: {e}", p.display()))?;
@@ -44,7 +44,8 @@ fn merge(a: &SweepMergeArgs) -> Result<(), String> {
         None => print!("{text}"),
     }
     if let Some(plot) = &a.plot {
-        crate::chart::draw(&to_chart(&spec, &rows)?, plot)?;
+        let chart = to_chart(&spec, &rows).map_err(|e| e.to_string())?;
+        crate::chart::draw(&chart, plot).map_err(|e| e.to_string())?;
     }
     let failed = rows.iter().filter(|r| !r.ok).count();
     eprintln!(

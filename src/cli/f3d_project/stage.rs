@@ -2,6 +2,7 @@
 //! graph's layers (lights, merged layers), a default light when there is none, and the camera
 //! (the composition's, else the default framing of the geometry over the whole frame range).
 
+use super::ProjectError;
 use crate::nodes::render::stage::scene::{camera_prim, default_camera};
 use crate::nodes::render::stage::stage_nodes::{framework_light, StageLightType};
 use crate::nodes::render::stage::{read_stage, Stage};
@@ -11,11 +12,14 @@ use std::path::Path;
 pub(super) const DEFAULT_CAMERA_PATH: &str = "/Reference/DefaultCamera";
 
 /// The stage of one frame's geometry layers (the `.usda` files Write USD wrote).
-pub(super) fn geometry_stage(files: &[std::path::PathBuf]) -> Result<Stage, String> {
+pub(super) fn geometry_stage(files: &[std::path::PathBuf]) -> Result<Stage, ProjectError> {
+    let invalid = |f: &Path, e: &dyn std::fmt::Display| {
+        ProjectError::Invalid(format!("{}: {e}", f.display()))
+    };
     let mut s = Stage::default();
     for f in files {
-        let text = std::fs::read_to_string(f).map_err(|e| format!("{}: {e}", f.display()))?;
-        let mut layer = read_stage(&text).map_err(|e| format!("{}: {e}", f.display()))?;
+        let text = std::fs::read_to_string(f).map_err(|e| invalid(f, &e))?;
+        let mut layer = read_stage(&text).map_err(|e| invalid(f, &e))?;
         // hw9 writes the particles twice (points, and Points to Mesh, whose OpenVDB surface
         // cgnodes does not build): a cloud equal to one already there is drawn once.
         layer
@@ -65,10 +69,10 @@ pub(super) fn frame_stage(
 }
 
 /// Writes the stage as `path` (atomically).
-pub(super) fn write(stage: &Stage, path: &Path) -> Result<(), String> {
+pub(super) fn write(stage: &Stage, path: &Path) -> Result<(), ProjectError> {
     let text = crate::nodes::render::stage::write_stage(stage);
     crate::io::write_atomic(path, |w| w.write_all(text.as_bytes()))
-        .map_err(|e| format!("{}: {e}", path.display()))
+        .map_err(|e| ProjectError::Failed(format!("{}: {e}", path.display())))
 }
 
 /// The union of two optional boxes.

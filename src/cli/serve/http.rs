@@ -314,7 +314,7 @@ fn mesh(url: &str, session: &Session) -> Resp {
     };
     match cgnodes_formats::mesh_file::load_mesh(&f, &Default::default()) {
         Ok(m) => cached(200, "application/octet-stream", viewer_mesh(&m), KEEP),
-        Err(e) => error(422, &e),
+        Err(e) => error(422, &e.to_string()),
     }
 }
 

@@ -80,7 +80,7 @@ impl<'r> Session<'r> {
         Ok(Session {
             registry,
             setup,
-            exec: Executor::new(threads, None)?,
+            exec: Executor::new(threads, None).map_err(|e| e.to_string())?,
             state: Mutex::default(),
             subscribers: Subscribers::default(),
         })

@@ -62,8 +62,9 @@ pub enum MeshFileError {
     Format {
         /// The file.
         path: String,
-        /// The reader's error (with its line where the format has lines).
-        error: MeshFormatError,
+        /// The reader's error (with its line where the format has lines), boxed so that the
+        /// common `Ok` path does not carry the largest reader error's size.
+        error: Box<MeshFormatError>,
     },
 }
 
@@ -85,7 +86,7 @@ pub fn load_mesh(path: &Path, opts: &LoadOptions) -> Result<Mesh, MeshFileError>
     };
     let format = |error: MeshFormatError| MeshFileError::Format {
         path: name.clone(),
-        error,
+        error: Box::new(error),
     };
     let r: Result<Mesh, MeshFormatError> = match ext.as_str() {
         "obj" => super::obj::load_obj(path, &opts.group).map_err(Into::into),

@@ -393,11 +393,15 @@ pub fn train(
     train_classifier(net, &mut rng, (xs, ys), test, p, &score)
 }
 
+/// Mean loss of a batch of inputs and labels, its gradient written into the per-layer
+/// (weights, biases).
+pub type LossAndGradient = fn(&Mlp, &[&[f64]], &[usize], &mut [(Vec<f64>, Vec<f64>)]) -> f64;
+
 /// How a classifier stored as an `Mlp` scores a batch and a whole set: the multilayer
 /// perceptron and the Elman network (`rnn`) differ only in these two functions.
 pub struct Classifier {
     /// Mean loss of a batch, its gradient written into the per-layer (weights, biases).
-    pub loss_and_gradient: fn(&Mlp, &[&[f64]], &[usize], &mut [(Vec<f64>, Vec<f64>)]) -> f64,
+    pub loss_and_gradient: LossAndGradient,
     /// The fraction of a set classified correctly.
     pub accuracy: fn(&Mlp, &[Vec<f64>], &[usize]) -> f64,
 }

@@ -17,7 +17,7 @@
 //! grid, and their camera rays take the BVH.
 
 use super::bvh::{tri_test, Hit, RayPre};
-use super::camera::PinholeCamera;
+use super::camera::{Frame, PinholeCamera};
 use super::sampling::V3;
 use rayon::prelude::*;
 
@@ -171,14 +171,7 @@ impl CameraGrid {
         // extent from the eye), while the film positions behind it stay within about
         // 1e7 focal lengths, where f64 places a polygon's edges to far better than the
         // pixel margin.
-        let mut ext = 0.0f64;
-        for t in tris {
-            for p in t {
-                for (x, e) in p.iter().zip(fr.eye) {
-                    ext = ext.max((*x as f64 - e).abs());
-                }
-            }
-        }
+        let ext = eye_extent(tris, fr.eye);
         if !ext.is_finite() {
             return None;
         }
@@ -190,45 +183,7 @@ impl CameraGrid {
         ];
         // Per triangle, in parallel: whether it reaches into the pyramid in front of z0,
         // and the film polygon of its part behind z0 when that lies on the film.
-        let project = |t: &[V3; 3]| -> (bool, Option<Poly>) {
-            let v = t.map(|p| fr.view(p));
-            let lo = |k: usize| v[0][k].min(v[1][k]).min(v[2][k]);
-            let hi = |k: usize| v[0][k].max(v[1][k]).max(v[2][k]);
-            let near = lo(2) < z0
-                && hi(2) >= 0.0
-                && lo(0) <= half[0]
-                && hi(0) >= -half[0]
-                && lo(1) <= half[1]
-                && hi(1) >= -half[1];
-            if hi(2) < z0 {
-                return (near, None);
-            }
-            let (c, n) = clip_near(v, z0);
-            let mut poly = Poly {
-                p: [[0.0; 2]; 4],
-                n,
-            };
-            for (q, c) in poly.p.iter_mut().zip(&c[..n]) {
-                *q = fr.film(*c);
-            }
-            if n < 3 {
-                return (near, None);
-            }
-            // Film positions too far out to place the edges precisely (or not finite):
-            // the triangle goes on the list every ray tests.
-            if poly.p[..n]
-                .iter()
-                .flatten()
-                .any(|x| x.is_nan() || x.abs() > FILM_LIMIT)
-            {
-                return (true, None);
-            }
-            let on_film = poly.hi(0) >= -1.0
-                && poly.lo(0) <= w as f64 + 1.0
-                && poly.hi(1) >= -1.0
-                && poly.lo(1) <= h as f64 + 1.0;
-            (near, on_film.then_some(poly))
-        };
+        let project = |t: &[V3; 3]| project_triangle(t, &fr, z0, half);
         let projected: Vec<(bool, Option<Poly>)> = tris.par_iter().map(project).collect();
         let near: Vec<u32> = (0..tris.len() as u32)
             .filter(|&i| projected[i as usize].0)
@@ -266,19 +221,7 @@ impl CameraGrid {
             })
             .collect();
         // ...then sorted into compressed rows by pixel, stably (a counting sort).
-        let mut start = vec![0u32; pixels + 1];
-        for &(px, _) in hits.iter().flatten() {
-            start[px as usize + 1] += 1;
-        }
-        for k in 0..pixels {
-            start[k + 1] += start[k];
-        }
-        let mut fill = start.clone();
-        let mut cand = vec![(0.0f32, 0u32); start[pixels] as usize];
-        for &(px, rank) in hits.iter().flatten() {
-            cand[fill[px as usize] as usize] = order[rank as usize];
-            fill[px as usize] += 1;
-        }
+        let (start, cand) = rows_by_pixel(&hits, &order, pixels);
         Some(CameraGrid {
             width: w,
             start,
@@ -340,6 +283,87 @@ impl CameraGrid {
         }
         best
     }
+}
+
+/// The largest coordinate distance of a triangle corner from the eye (infinite or NaN when
+/// a corner is not finite).
+fn eye_extent(tris: &[[V3; 3]], eye: [f64; 3]) -> f64 {
+    let mut ext = 0.0f64;
+    for t in tris {
+        for p in t {
+            for (x, e) in p.iter().zip(eye) {
+                ext = ext.max((*x as f64 - e).abs());
+            }
+        }
+    }
+    ext
+}
+
+/// Whether triangle `t` reaches into the box `|x| <= half[0]`, `|y| <= half[1]`, `0 <= z <
+/// z0` in front of the eye (where camera rays start and the film projection is imprecise),
+/// and the film polygon of its part behind `z0` when that lies on the film.
+fn project_triangle(t: &[V3; 3], fr: &Frame, z0: f64, half: [f64; 2]) -> (bool, Option<Poly>) {
+    let (w, h) = fr.size;
+    let v = t.map(|p| fr.view(p));
+    let lo = |k: usize| v[0][k].min(v[1][k]).min(v[2][k]);
+    let hi = |k: usize| v[0][k].max(v[1][k]).max(v[2][k]);
+    let near = lo(2) < z0
+        && hi(2) >= 0.0
+        && lo(0) <= half[0]
+        && hi(0) >= -half[0]
+        && lo(1) <= half[1]
+        && hi(1) >= -half[1];
+    if hi(2) < z0 {
+        return (near, None);
+    }
+    let (c, n) = clip_near(v, z0);
+    let mut poly = Poly {
+        p: [[0.0; 2]; 4],
+        n,
+    };
+    for (q, c) in poly.p.iter_mut().zip(&c[..n]) {
+        *q = fr.film(*c);
+    }
+    if n < 3 {
+        return (near, None);
+    }
+    // Film positions too far out to place the edges precisely (or not finite):
+    // the triangle goes on the list every ray tests.
+    if poly.p[..n]
+        .iter()
+        .flatten()
+        .any(|x| x.is_nan() || x.abs() > FILM_LIMIT)
+    {
+        return (true, None);
+    }
+    let on_film = poly.hi(0) >= -1.0
+        && poly.lo(0) <= w as f64 + 1.0
+        && poly.hi(1) >= -1.0
+        && poly.lo(1) <= h as f64 + 1.0;
+    (near, on_film.then_some(poly))
+}
+
+/// The (pixel, rank) pairs sorted into compressed rows by pixel, stably (a counting sort):
+/// row starts and, per entry, the `order` entry of its rank.
+fn rows_by_pixel(
+    hits: &[Vec<(u32, u32)>],
+    order: &[(f32, u32)],
+    pixels: usize,
+) -> (Vec<u32>, Vec<(f32, u32)>) {
+    let mut start = vec![0u32; pixels + 1];
+    for &(px, _) in hits.iter().flatten() {
+        start[px as usize + 1] += 1;
+    }
+    for k in 0..pixels {
+        start[k + 1] += start[k];
+    }
+    let mut fill = start.clone();
+    let mut cand = vec![(0.0f32, 0u32); start[pixels] as usize];
+    for &(px, rank) in hits.iter().flatten() {
+        cand[fill[px as usize] as usize] = order[rank as usize];
+        fill[px as usize] += 1;
+    }
+    (start, cand)
 }
 
 #[cfg(test)]

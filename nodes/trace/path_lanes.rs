@@ -23,7 +23,7 @@ use super::camera_sample::{camera_sample, Job};
 use super::direct::{delta_lights, environment_nee, Vertex};
 use super::lane_math::{
     add3, bits, cosine_hemisphere4, dot3, f4, f43, get, max3, mul3, offset4, power4, put, scale3,
-    sel3, splat, store3, sub3, F, L,
+    sel3, splat, store3, sub3, F, F3, L,
 };
 use super::render_path::{add_direct, found_weight, PathSettings, Strategy};
 use super::render_scene::{PinholeCamera, RenderScene, SHADOW_END};
@@ -469,39 +469,16 @@ fn shade(
     let n = sel3(dot3(n, wo).simd_le(splat(1e-4)), gside, n);
 
     // Next-event estimation (`radiance`'s emitter sample, MIS-weighted).
-    let ls_p = f43(&g.ls_p);
-    let ls_n = f43(&g.ls_n);
-    let has_ls = F::new(g.has_ls.map(|b| if b { f32::from_bits(!0) } else { 0.0 }));
-    let two = F::new(g.ls_two.map(|b| if b { f32::from_bits(!0) } else { 0.0 }));
-    let dv = sub3(ls_p, p);
-    let dist2 = dot3(dv, dv);
-    let dist = dist2.sqrt();
-    let wi = scale3(dv, splat(1.0) / dist);
-    let front = two | dot3(ls_n, scale3(wi, neg)).simd_gt(zero);
-    let le = sel3(front, f43(&g.ls_le), [zero; 3]);
-    let cos_l = dot3(ls_n, wi).abs();
-    // `Bsdf::eval_pdf` for the diffuse lobe.
-    let ci = dot3(n, wi);
-    let lit = sides_ok & !(ci.simd_le(zero) | dot3(gside, wi).simd_le(zero));
-    let cpi = ci * splat(FRAC_1_PI);
-    let f = sel3(lit, scale3(albedo, cpi), [zero; 3]);
-    let bsdf_pdf = lit.select(cpi, zero);
-    let nee_ok = has_ls
-        & dist.simd_gt(zero)
-        & max3(le).simd_gt(zero)
-        & cos_l.simd_gt(zero)
-        & max3(f).simd_gt(zero);
-    let side = sel3(dot3(ng, wi).simd_gt(zero), ng, scale3(ng, neg));
-    let o = offset4(sc.eps, p, side);
-    let p_light = f4(&g.ls_pdf) * dist2 / cos_l;
-    let w = if s.strategy == Strategy::Mis {
-        power4(p_light, bsdf_pdf)
-    } else {
-        splat(1.0)
+    let v = LaneVertex {
+        p,
+        thr,
+        ng,
+        n,
+        gside,
+        albedo,
+        sides_ok,
     };
-    let c = scale3(mul3(thr, mul3(f, le)), w / p_light);
-    let seg_d = sub3(ls_p, o);
-    let nee_bits = bits(nee_ok);
+    let (o, seg_d, c, nee_bits) = emitter_nee4(sc, s.strategy == Strategy::Mis, g, &v);
 
     // BSDF sampling (`Bsdf::sample`, diffuse): a cosine-weighted direction about n.
     let uv = [f4(&g.bsdf_uv[0]), f4(&g.bsdf_uv[1])];
@@ -556,4 +533,59 @@ fn shade(
         }
         ln.tmax[i] = f32::INFINITY;
     }
+}
+
+/// A diffuse path vertex in four lanes: the point, the path throughput, the geometric
+/// normal, the normals flipped to the viewer's side (shading `n`, geometric `gside`), the
+/// albedo, and which lanes have a valid side (`bsdf::sides`).
+struct LaneVertex {
+    p: F3,
+    thr: F3,
+    ng: F3,
+    n: F3,
+    gside: F3,
+    albedo: F3,
+    sides_ok: F,
+}
+
+/// `render_path`'s `area_emitter_nee` in four lanes, for the emitter samples gathered in
+/// `g`: the shadow rays' origins and directions, their contributions when unblocked, and
+/// the lanes (bits) whose sample contributes.
+#[inline(always)]
+fn emitter_nee4(sc: &RenderScene, mis: bool, g: &Gather, v: &LaneVertex) -> (F3, F3, F3, u32) {
+    let zero = splat(0.0);
+    let neg = splat(-1.0);
+    let (p, ng, n) = (v.p, v.ng, v.n);
+    let ls_p = f43(&g.ls_p);
+    let ls_n = f43(&g.ls_n);
+    let has_ls = F::new(g.has_ls.map(|b| if b { f32::from_bits(!0) } else { 0.0 }));
+    let two = F::new(g.ls_two.map(|b| if b { f32::from_bits(!0) } else { 0.0 }));
+    let dv = sub3(ls_p, p);
+    let dist2 = dot3(dv, dv);
+    let dist = dist2.sqrt();
+    let wi = scale3(dv, splat(1.0) / dist);
+    let front = two | dot3(ls_n, scale3(wi, neg)).simd_gt(zero);
+    let le = sel3(front, f43(&g.ls_le), [zero; 3]);
+    let cos_l = dot3(ls_n, wi).abs();
+    // `Bsdf::eval_pdf` for the diffuse lobe.
+    let ci = dot3(n, wi);
+    let lit = v.sides_ok & !(ci.simd_le(zero) | dot3(v.gside, wi).simd_le(zero));
+    let cpi = ci * splat(FRAC_1_PI);
+    let f = sel3(lit, scale3(v.albedo, cpi), [zero; 3]);
+    let bsdf_pdf = lit.select(cpi, zero);
+    let nee_ok = has_ls
+        & dist.simd_gt(zero)
+        & max3(le).simd_gt(zero)
+        & cos_l.simd_gt(zero)
+        & max3(f).simd_gt(zero);
+    let side = sel3(dot3(ng, wi).simd_gt(zero), ng, scale3(ng, neg));
+    let o = offset4(sc.eps, p, side);
+    let p_light = f4(&g.ls_pdf) * dist2 / cos_l;
+    let w = if mis {
+        power4(p_light, bsdf_pdf)
+    } else {
+        splat(1.0)
+    };
+    let c = scale3(mul3(v.thr, mul3(f, le)), w / p_light);
+    (o, sub3(ls_p, o), c, bits(nee_ok))
 }

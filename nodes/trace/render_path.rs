@@ -105,6 +105,23 @@ struct Deferred {
 }
 
 impl Deferred {
+    /// Traces the next segment's ray together with this estimate's shadow ray (two
+    /// traversals interleaved): the segment's hit, and `l` with the estimates added.
+    #[inline(always)]
+    fn trace_with(
+        &self,
+        sc: &RenderScene,
+        stacks: &mut TraceStacks,
+        ray: Segment,
+        l: V3,
+    ) -> (Option<Hit>, V3) {
+        let (hit, blocked) = match self.nee {
+            Some((shadow, _)) => sc.bvh.intersect_occluded_in(stacks, ray, shadow),
+            None => (sc.intersect(ray.0, ray.1, ray.2), false),
+        };
+        (hit, self.add_to(l, blocked))
+    }
+
     /// Adds the estimates to `l`, the emitter sample's only when `blocked` is false.
     #[inline]
     fn add_to(&self, l: V3, blocked: bool) -> V3 {
@@ -190,14 +207,8 @@ pub fn radiance(
                 None => sc.intersect(org, dir, tmax),
             },
             Some(d) => {
-                let (hit, blocked) = match d.nee {
-                    Some((shadow, _)) => {
-                        sc.bvh
-                            .intersect_occluded_in(stacks, (org, dir, tmax), shadow)
-                    }
-                    None => (sc.intersect(org, dir, tmax), false),
-                };
-                l = d.add_to(l, blocked);
+                let (hit, lit) = d.trace_with(sc, stacks, (org, dir, tmax), l);
+                l = lit;
                 hit
             }
         };
@@ -218,13 +229,8 @@ pub fn radiance(
 
         // Emission found by the ray just traced (Veach 1997, eq. 9.13 for the weight).
         if mat.is_emitter() {
-            let le = sc.emitted(tri, wo);
-            if max_comp(le) > 0.0 {
-                let first = depth == 0 || prev_delta;
-                let w = found_weight(s.strategy, first, prev_pdf, || {
-                    let cos_l = dot(ng, wo).abs();
-                    sc.light_pdf_area[tri as usize] * hit.t * hit.t / cos_l
-                });
+            let first = depth == 0 || prev_delta;
+            if let Some((le, w)) = emission_found(sc, s.strategy, &hit, wo, first, prev_pdf) {
                 l = add(l, scale(mul(thr, le), w));
             }
         }
@@ -235,62 +241,13 @@ pub fn radiance(
         let sp = sc.surface(&hit);
         let (ns, albedo) = (sp.ns, sp.albedo);
         if !bsdf.is_delta() {
-            let mut d = Deferred {
-                nee: None,
-                delta: [0.0; 3],
-                env: None,
-            };
-            // Next-event estimation on the area emitters.
-            if s.strategy != Strategy::Bsdf {
-                let u = rng.next_f32();
-                let uv = rng.next_2d();
-                if let Some(ls) = sc.sample_emitter(u, uv) {
-                    let dv = sub(ls.p, p);
-                    let dist2 = dot(dv, dv);
-                    let dist = dist2.sqrt();
-                    if dist > 0.0 {
-                        let wi = scale(dv, 1.0 / dist);
-                        let le = ls.emitted(scale(wi, -1.0));
-                        let cos_l = dot(ls.n, wi).abs();
-                        if max_comp(le) > 0.0 && cos_l > 0.0 {
-                            let (f, bsdf_pdf) = bsdf.eval_pdf(albedo, ng, ns, wo, wi);
-                            if max_comp(f) > 0.0 {
-                                let side = if dot(ng, wi) > 0.0 {
-                                    ng
-                                } else {
-                                    scale(ng, -1.0)
-                                };
-                                let o = sc.offset(p, side);
-                                let p_light = ls.pdf_area * dist2 / cos_l;
-                                let w = if s.strategy == Strategy::Mis {
-                                    power_heuristic(p_light, bsdf_pdf)
-                                } else {
-                                    1.0
-                                };
-                                let c = scale(mul(thr, mul(f, le)), w / p_light);
-                                d.nee = Some(((o, sub(ls.p, o), SHADOW_END), c));
-                            }
-                        }
-                    }
-                }
-            }
-            // Point and directional lights (delta lights: only shadow rays reach them),
-            // and one environment sample.
             let v = Vertex {
                 p,
                 wo,
                 sp: &sp,
                 bsdf,
             };
-            if !sc.lights.is_empty() {
-                d.delta = mul(thr, delta_lights(sc, &v));
-            }
-            if sc.env.is_some() && s.strategy != Strategy::Bsdf {
-                let u = rng.next_2d();
-                let le = environment_nee(sc, &v, u, s.strategy == Strategy::Mis);
-                d.env = Some(mul(thr, le));
-            }
-            pending = Some(d);
+            pending = Some(direct_light(sc, s.strategy, &v, thr, rng));
         }
         // BSDF sampling for the next segment.
         let u = rng.next_f32();
@@ -303,18 +260,10 @@ pub fn radiance(
         prev_pdf = bs.pdf;
         prev_delta = bs.delta;
         depth += 1;
-        // Russian roulette (Arvo & Kirk 1990), as Mitsuba 3 does it.
-        let tmaxc = max_comp(thr);
-        if depth >= s.rr_depth {
-            let q = (tmaxc * eta * eta).min(0.95);
-            if rng.next_f32() >= q {
-                break;
-            }
-            thr = scale(thr, 1.0 / q);
-        }
-        if tmaxc <= 0.0 || !tmaxc.is_finite() {
+        let Some(survived) = russian_roulette(thr, eta, depth >= s.rr_depth, rng) else {
             break;
-        }
+        };
+        thr = survived;
         let side = if dot(ng, bs.wi) > 0.0 {
             ng
         } else {
@@ -329,6 +278,129 @@ pub fn radiance(
         l = d.finish(sc, l);
     }
     l
+}
+
+/// The radiance `Le` a triangle emits toward `wo` where the path's ray `hit` it, with its
+/// MIS weight against the emitter sampling of the previous vertex (`found_weight`); `None`
+/// when it emits nothing that way.
+#[inline(always)]
+fn emission_found(
+    sc: &RenderScene,
+    strategy: Strategy,
+    hit: &Hit,
+    wo: V3,
+    first: bool,
+    prev_pdf: f32,
+) -> Option<(V3, f32)> {
+    let tri = hit.prim as usize;
+    let le = sc.emitted(hit.prim, wo);
+    if max_comp(le) > 0.0 {
+        let w = found_weight(strategy, first, prev_pdf, || {
+            let cos_l = dot(sc.normals[tri], wo).abs();
+            sc.light_pdf_area[tri] * hit.t * hit.t / cos_l
+        });
+        return Some((le, w));
+    }
+    None
+}
+
+/// Russian roulette (Arvo & Kirk 1990) as Mitsuba 3 does it: once `active`, the path goes
+/// on with probability `min(max(thr) eta², 0.95)` and its throughput divided by it. `None`
+/// when the path ends here, also when its throughput is zero or not finite.
+#[inline(always)]
+fn russian_roulette(thr: V3, eta: f32, active: bool, rng: &mut Pcg32) -> Option<V3> {
+    let tmaxc = max_comp(thr);
+    let mut thr = thr;
+    if active {
+        let q = (tmaxc * eta * eta).min(0.95);
+        if rng.next_f32() >= q {
+            return None;
+        }
+        thr = scale(thr, 1.0 / q);
+    }
+    if tmaxc <= 0.0 || !tmaxc.is_finite() {
+        return None;
+    }
+    Some(thr)
+}
+
+/// The direct light at a non-specular path vertex, estimated now and added once its shadow
+/// rays are traced: one area-emitter sample (next-event estimation), the point and
+/// directional lights, and one environment sample, each times the path throughput `thr`.
+/// The random numbers are drawn in this order: emitter, environment.
+#[inline(always)]
+fn direct_light(
+    sc: &RenderScene,
+    strategy: Strategy,
+    v: &Vertex,
+    thr: V3,
+    rng: &mut Pcg32,
+) -> Deferred {
+    let mut d = Deferred {
+        nee: None,
+        delta: [0.0; 3],
+        env: None,
+    };
+    if strategy != Strategy::Bsdf {
+        let u = rng.next_f32();
+        let uv = rng.next_2d();
+        d.nee = area_emitter_nee(sc, v, thr, u, uv, strategy == Strategy::Mis);
+    }
+    if !sc.lights.is_empty() {
+        d.delta = mul(thr, delta_lights(sc, v));
+    }
+    if sc.env.is_some() && strategy != Strategy::Bsdf {
+        let u = rng.next_2d();
+        let le = environment_nee(sc, v, u, strategy == Strategy::Mis);
+        d.env = Some(mul(thr, le));
+    }
+    d
+}
+
+/// Next-event estimation on the area emitters (Veach 1997, §9.2.2; MIS weight eq. 9.13 with
+/// the power heuristic when `mis`): the emitter point chosen by `u`, `uv`, its shadow ray
+/// (origin, unnormalized direction, end) and the contribution `thr f Le w / p_light` it
+/// carries when unblocked; `None` when the sample cannot contribute.
+#[inline(always)]
+fn area_emitter_nee(
+    sc: &RenderScene,
+    v: &Vertex,
+    thr: V3,
+    u: f32,
+    uv: [f32; 2],
+    mis: bool,
+) -> Option<(Segment, V3)> {
+    let ls = sc.sample_emitter(u, uv)?;
+    let (p, ng) = (v.p, v.sp.ng);
+    let dv = sub(ls.p, p);
+    let dist2 = dot(dv, dv);
+    let dist = dist2.sqrt();
+    // Written as positive tests so that a NaN anywhere drops the sample.
+    if dist > 0.0 {
+        let wi = scale(dv, 1.0 / dist);
+        let le = ls.emitted(scale(wi, -1.0));
+        let cos_l = dot(ls.n, wi).abs();
+        if max_comp(le) > 0.0 && cos_l > 0.0 {
+            let (f, bsdf_pdf) = v.bsdf.eval_pdf(v.sp.albedo, ng, v.sp.ns, v.wo, wi);
+            if max_comp(f) > 0.0 {
+                let side = if dot(ng, wi) > 0.0 {
+                    ng
+                } else {
+                    scale(ng, -1.0)
+                };
+                let o = sc.offset(p, side);
+                let p_light = ls.pdf_area * dist2 / cos_l;
+                let w = if mis {
+                    power_heuristic(p_light, bsdf_pdf)
+                } else {
+                    1.0
+                };
+                let c = scale(mul(thr, mul(f, le)), w / p_light);
+                return Some(((o, sub(ls.p, o), SHADOW_END), c));
+            }
+        }
+    }
+    None
 }
 
 /// Flattens `scene` and renders it from `camera` (or the scene's own camera).
@@ -348,19 +420,22 @@ fn declare(b: &mut NodeBuilder) {
     b.add_input::<Camera>("camera")
         .optional()
         .doc("Overrides the scene's camera.");
+    let d = PathSettings::default();
     b.add_input::<i64>("spp")
-        .default(16i64)
+        .default(d.spp as i64)
         .range(1.0, 1e6)
         .doc("Samples per pixel.");
     b.add_input::<i64>("max_depth")
-        .default(8i64)
+        .default(d.max_depth as i64)
         .range(-1.0, 1e4)
         .doc("Longest path in segments, as in Mitsuba: 1 = emitters only, 2 = direct light, 8 = at most 7 bounces; -1 = unbounded.");
     b.add_input::<i64>("rr_depth")
-        .default(5i64)
+        .default(d.rr_depth as i64)
         .range(1.0, 1e4)
         .doc("Bounces before Russian roulette starts.");
-    b.add_input::<i64>("seed").default(0i64).doc("Random seed.");
+    b.add_input::<i64>("seed")
+        .default(d.seed as i64)
+        .doc("Random seed.");
     b.add_choice::<Filter>("filter")
         .doc("Reconstruction filter: Mitsuba's gaussian (stddev 0.5 px, radius 2 px) or a one-pixel box.");
     b.add_choice::<Strategy>("strategy")
@@ -381,22 +456,12 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let filter = ctx.choice::<Filter>("filter")?;
     let strategy = ctx.choice::<Strategy>("strategy")?;
     let crease_deg = crease_input(ctx)?;
-    if !(1..=1_000_000).contains(&spp) {
-        return Err(NodeError::invalid(
-            "spp",
-            format!("spp {spp} must be in 1..=1000000"),
-        ));
-    }
-    if max_depth == 0 || max_depth < -1 {
+    // The declared ranges are checked by the runtime on literal and linked values alike;
+    // only max_depth's hole at 0 is left to check here.
+    if max_depth == 0 {
         return Err(NodeError::invalid(
             "max_depth",
             format!("max_depth {max_depth} must be -1 (unbounded) or at least 1"),
-        ));
-    }
-    if rr_depth < 1 {
-        return Err(NodeError::invalid(
-            "rr_depth",
-            "rr_depth must be at least 1",
         ));
     }
     let s = PathSettings {

@@ -235,26 +235,7 @@ impl RenderScene {
     /// (`scene_geometry_creased`): the mesh's own normals, else normals smoothed across
     /// edges whose dihedral angle is below `crease_deg` (0 = flat shading).
     pub fn with_crease(scene: &Scene, crease_deg: f64) -> Result<RenderScene, String> {
-        for (oi, obj) in scene.objects.iter().enumerate() {
-            let mesh = &obj.mesh;
-            for (vi, p) in mesh.positions.iter().enumerate() {
-                if !p.iter().all(|x| x.is_finite()) {
-                    return Err(format!("object {oi}: vertex {vi} is not finite"));
-                }
-            }
-            let n = mesh.positions.len() as u32;
-            if mesh
-                .faces()
-                .any(|f| f.len() < 3 || f.iter().any(|&i| i >= n))
-            {
-                return Err(format!("object {oi}: a face has a bad vertex index"));
-            }
-        }
-        if !(0.0..=180.0).contains(&crease_deg) {
-            return Err(format!(
-                "crease angle {crease_deg} must be in 0..=180 degrees"
-            ));
-        }
+        check_scene(scene, crease_deg)?;
         let g = scene_geometry_creased(scene, crease_deg)?;
         let tris: Vec<[V3; 3]> = g.pos.iter().map(|t| t.map(v3)).collect();
         let tri_mat = g.mat;
@@ -263,33 +244,10 @@ impl RenderScene {
             .iter()
             .map(|m| RMaterial::from_material(m))
             .collect();
-        let textures: Vec<Textures> = g
-            .materials
-            .iter()
-            .map(|m| Textures {
-                base: m
-                    .base_color_texture
-                    .as_deref()
-                    .map(|i| MipTexture::new(i, false)),
-                normal: m.normal_map.as_deref().map(|i| MipTexture::new(i, false)),
-            })
-            .collect();
+        let textures = textures(&g.materials);
         let any_nmap = textures.iter().any(|t| t.normal.is_some());
         let corner_normals: Vec<[V3; 3]> = g.nrm.iter().map(|t| t.map(v3)).collect();
-        let corner_uvs: Vec<[[f32; 2]; 3]> =
-            g.uv.iter()
-                .zip(&g.has_uv)
-                .map(|(t, &h)| {
-                    // NaN marks a triangle without UVs.
-                    t.map(|w| {
-                        if h {
-                            [w[0] as f32, w[1] as f32]
-                        } else {
-                            [f32::NAN; 2]
-                        }
-                    })
-                })
-                .collect();
+        let corner_uvs = corner_uvs(&g.uv, &g.has_uv);
         let corner_tangents = if any_nmap { g.tan } else { Vec::new() };
         let bvh = Bvh::build(&tris);
         let normals: Vec<V3> = tris.iter().map(|t| normalize(triangle_normal(t))).collect();
@@ -308,70 +266,14 @@ impl RenderScene {
             .iter()
             .map(|t| 0.5 * length(triangle_normal(t)))
             .collect();
-        let mut emitters = Vec::new();
-        let mut weights = Vec::new();
-        for (i, &m) in tri_mat.iter().enumerate() {
-            let mat = &materials[m as usize];
-            if mat.is_emitter() && areas[i] > 0.0 {
-                emitters.push(i as u32);
-                let sides = if mat.two_sided_emission { 2.0 } else { 1.0 };
-                weights.push(areas[i] as f64 * sides * (luminance(mat.emission) as f64).max(1e-6));
-            }
-        }
-        let emitter_table = AliasTable::new(&weights);
-        let total: f64 = weights.iter().sum();
-        let mut light_pdf_area = vec![0.0f32; tris.len()];
-        let mut emitter_recs = Vec::with_capacity(emitters.len());
-        for (k, &e) in emitters.iter().enumerate() {
-            let e = e as usize;
-            light_pdf_area[e] = (weights[k] / total) as f32 / areas[e];
-            let m = &materials[tri_mat[e] as usize];
-            emitter_recs.push(EmitterRecord {
-                corners: tris[e],
-                n: normals[e],
-                tri: e as u32,
-                pdf_area: light_pdf_area[e],
-                le: m.emission,
-                two_sided: m.two_sided_emission,
-            });
-        }
+        let em = EmitterTables::new(&tris, &normals, &areas, &tri_mat, &materials);
         let b = bvh.bounds();
         let diag = if tris.is_empty() {
             1.0
         } else {
             length(sub(b.max, b.min))
         };
-        let mut lights = Vec::new();
-        for l in &scene.lights {
-            match l {
-                Light::Point {
-                    position,
-                    color,
-                    intensity,
-                } => {
-                    if !position.iter().chain(color).all(|x| x.is_finite())
-                        || !intensity.is_finite()
-                    {
-                        return Err("a point light has a non-finite parameter".into());
-                    }
-                }
-                Light::Directional {
-                    direction,
-                    color,
-                    intensity,
-                } => {
-                    if !direction.iter().chain(color).all(|x| x.is_finite())
-                        || !intensity.is_finite()
-                        || direction.iter().all(|x| *x == 0.0)
-                    {
-                        return Err("a directional light needs a finite non-zero direction".into());
-                    }
-                }
-                // Sampled through `env`, not with the delta lights.
-                Light::Environment { .. } => continue,
-            }
-            lights.push(l.clone());
-        }
+        let lights = delta_lights(&scene.lights)?;
         let env = Environment::from_lights(&scene.lights);
         Ok(RenderScene {
             bvh,
@@ -384,10 +286,10 @@ impl RenderScene {
             textures,
             tri_mat,
             materials,
-            emitters,
-            emitter_table,
-            emitter_recs,
-            light_pdf_area,
+            emitters: em.emitters,
+            emitter_table: em.table,
+            emitter_recs: em.records,
+            light_pdf_area: em.light_pdf_area,
             lights,
             env,
             eps: 1e-5 * diag.max(1e-3),
@@ -546,4 +448,147 @@ pub fn prepare(
     let cam = PinholeCamera::new(cam).map_err(TraceError::Camera)?;
     let sc = RenderScene::with_crease(scene, crease_deg).map_err(TraceError::Scene)?;
     Ok((sc, cam))
+}
+/// Refuses a scene the tracers cannot build: non-finite vertices, faces with a bad vertex
+/// index, a crease angle outside 0..=180 degrees.
+fn check_scene(scene: &Scene, crease_deg: f64) -> Result<(), String> {
+    for (oi, obj) in scene.objects.iter().enumerate() {
+        let mesh = &obj.mesh;
+        for (vi, p) in mesh.positions.iter().enumerate() {
+            if !p.iter().all(|x| x.is_finite()) {
+                return Err(format!("object {oi}: vertex {vi} is not finite"));
+            }
+        }
+        let n = mesh.positions.len() as u32;
+        if mesh
+            .faces()
+            .any(|f| f.len() < 3 || f.iter().any(|&i| i >= n))
+        {
+            return Err(format!("object {oi}: a face has a bad vertex index"));
+        }
+    }
+    if !(0.0..=180.0).contains(&crease_deg) {
+        return Err(format!(
+            "crease angle {crease_deg} must be in 0..=180 degrees"
+        ));
+    }
+    Ok(())
+}
+
+/// Each material's textures, sampled without mipmaps.
+fn textures(materials: &[std::sync::Arc<Material>]) -> Vec<Textures> {
+    materials
+        .iter()
+        .map(|m| Textures {
+            base: m
+                .base_color_texture
+                .as_deref()
+                .map(|i| MipTexture::new(i, false)),
+            normal: m.normal_map.as_deref().map(|i| MipTexture::new(i, false)),
+        })
+        .collect()
+}
+
+/// Per-triangle corner UVs in `f32`; NaN marks a triangle without UVs.
+fn corner_uvs(uv: &[[[f64; 2]; 3]], has_uv: &[bool]) -> Vec<[[f32; 2]; 3]> {
+    uv.iter()
+        .zip(has_uv)
+        .map(|(t, &h)| {
+            t.map(|w| {
+                if h {
+                    [w[0] as f32, w[1] as f32]
+                } else {
+                    [f32::NAN; 2]
+                }
+            })
+        })
+        .collect()
+}
+
+/// The emissive triangles and how next-event estimation picks them: in proportion to area
+/// times luminance (times two when both sides emit), through an alias table.
+struct EmitterTables {
+    emitters: Vec<u32>,
+    table: AliasTable,
+    records: Vec<EmitterRecord>,
+    /// Per triangle: the area density of picking a point on it (0 for non-emitters).
+    light_pdf_area: Vec<f32>,
+}
+
+impl EmitterTables {
+    fn new(
+        tris: &[[V3; 3]],
+        normals: &[V3],
+        areas: &[f32],
+        tri_mat: &[u32],
+        materials: &[RMaterial],
+    ) -> EmitterTables {
+        let mut emitters = Vec::new();
+        let mut weights = Vec::new();
+        for (i, &m) in tri_mat.iter().enumerate() {
+            let mat = &materials[m as usize];
+            if mat.is_emitter() && areas[i] > 0.0 {
+                emitters.push(i as u32);
+                let sides = if mat.two_sided_emission { 2.0 } else { 1.0 };
+                weights.push(areas[i] as f64 * sides * (luminance(mat.emission) as f64).max(1e-6));
+            }
+        }
+        let table = AliasTable::new(&weights);
+        let total: f64 = weights.iter().sum();
+        let mut light_pdf_area = vec![0.0f32; tris.len()];
+        let mut records = Vec::with_capacity(emitters.len());
+        for (k, &e) in emitters.iter().enumerate() {
+            let e = e as usize;
+            light_pdf_area[e] = (weights[k] / total) as f32 / areas[e];
+            let m = &materials[tri_mat[e] as usize];
+            records.push(EmitterRecord {
+                corners: tris[e],
+                n: normals[e],
+                tri: e as u32,
+                pdf_area: light_pdf_area[e],
+                le: m.emission,
+                two_sided: m.two_sided_emission,
+            });
+        }
+        EmitterTables {
+            emitters,
+            table,
+            records,
+            light_pdf_area,
+        }
+    }
+}
+
+/// The scene's point and directional lights, checked finite (environment lights are
+/// sampled through `Environment`, not with the delta lights).
+fn delta_lights(lights: &[Light]) -> Result<Vec<Light>, String> {
+    let mut out = Vec::new();
+    for l in lights {
+        match l {
+            Light::Point {
+                position,
+                color,
+                intensity,
+            } => {
+                if !position.iter().chain(color).all(|x| x.is_finite()) || !intensity.is_finite() {
+                    return Err("a point light has a non-finite parameter".into());
+                }
+            }
+            Light::Directional {
+                direction,
+                color,
+                intensity,
+            } => {
+                if !direction.iter().chain(color).all(|x| x.is_finite())
+                    || !intensity.is_finite()
+                    || direction.iter().all(|x| *x == 0.0)
+                {
+                    return Err("a directional light needs a finite non-zero direction".into());
+                }
+            }
+            Light::Environment { .. } => continue,
+        }
+        out.push(l.clone());
+    }
+    Ok(out)
 }

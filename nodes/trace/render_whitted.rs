@@ -115,121 +115,38 @@ pub fn trace(
         }
         Bsdf::Dielectric { eta } => {
             if recurse {
-                let eta_rel = if dot(ng, wo) > 0.0 { eta } else { 1.0 / eta };
-                let ok = |m: V3| {
-                    let (_, cos_t) = fresnel_dielectric(dot(m, wo), eta_rel);
-                    let wt = add(
-                        scale(wo, -1.0 / eta_rel),
-                        scale(m, dot(m, wo) / eta_rel - cos_t),
-                    );
-                    dot(reflect(wo, m), n) > 0.0 && (cos_t == 0.0 || dot(wt, n) < 0.0)
-                };
-                let m = if ok(ns) { ns } else { n };
-                let cos_i = dot(m, wo);
-                let (f, cos_t) = fresnel_dielectric(cos_i, eta_rel);
-                let wr = reflect(wo, m);
-                let lr = trace(sc, pts, sc.offset(p, n), wr, depth + 1, s);
-                l = add(l, scale(lr, f));
-                if f < 1.0 {
-                    let wt = normalize(add(
-                        scale(wo, -1.0 / eta_rel),
-                        scale(m, cos_i / eta_rel - cos_t),
-                    ));
-                    let lt = trace(sc, pts, sc.offset(p, scale(n, -1.0)), wt, depth + 1, s);
-                    // Radiance scales by 1/eta^2 across the interface (Veach 1997, 5.2).
-                    l = add(l, scale(lt, (1.0 - f) / (eta_rel * eta_rel)));
-                }
+                let hp = HitPoint { p, wo, ng, n, ns };
+                l = add(l, dielectric(sc, pts, &hp, eta, depth, s));
             }
             return l;
         }
         _ => {}
     }
     // Local shading.
-    let kd = if matches!(mat.bsdf, Bsdf::Conductor { .. }) {
-        [0.0; 3]
-    } else {
-        sp.albedo
-    };
-    let ks = if matches!(mat.bsdf, Bsdf::Conductor { .. }) {
-        sp.albedo
-    } else {
-        [mat.specular; 3]
-    };
+    let conductor = matches!(mat.bsdf, Bsdf::Conductor { .. });
     let sh = mat.shininess;
-    let norm = (sh + 8.0) / (8.0 * std::f32::consts::PI);
-    let o = sc.offset(p, n);
-    let shade = |wi: V3, e: V3| -> V3 {
-        let c = dot(ns, wi);
-        if c <= 0.0 || dot(n, wi) <= 0.0 {
-            return [0.0; 3];
-        }
-        let h = normalize(add(wi, wo));
-        let spec = norm * dot(ns, h).max(0.0).powf(sh);
-        let f = add(scale(kd, FRAC_1_PI), scale(ks, spec));
-        scale(mul(f, e), c)
+    let local = Phong {
+        p,
+        o: sc.offset(p, n),
+        wo,
+        n,
+        ns,
+        kd: if conductor { [0.0; 3] } else { sp.albedo },
+        ks: if conductor {
+            sp.albedo
+        } else {
+            [mat.specular; 3]
+        },
+        sh,
+        norm: (sh + 8.0) / (8.0 * std::f32::consts::PI),
     };
     // Ambient: the constant term plus the environment's mean radiance (what a Lambertian
     // surface open to the whole sky reflects, unshadowed).
     let amb = sc.env.as_ref().map_or([0.0; 3], |e| e.mean());
-    l = add(l, mul(kd, add([s.ambient; 3], amb)));
-    for light in &sc.lights {
-        match light {
-            Light::Point {
-                position,
-                color,
-                intensity,
-            } => {
-                let lp = v3(*position);
-                let d = sub(lp, p);
-                let r2 = dot(d, d);
-                if r2 > 0.0 && !sc.bvh.occluded(o, sub(lp, o), SHADOW_END) {
-                    let e = scale(v3(*color), *intensity as f32 / r2);
-                    l = add(l, shade(scale(d, 1.0 / r2.sqrt()), e));
-                }
-            }
-            Light::Directional {
-                direction,
-                color,
-                intensity,
-            } => {
-                let wi = scale(normalize(v3(*direction)), -1.0);
-                if !sc.bvh.occluded(o, wi, f32::INFINITY) {
-                    l = add(l, shade(wi, scale(v3(*color), *intensity as f32)));
-                }
-            }
-            Light::Environment { .. } => {}
-        }
-    }
-    // Area emitters: fixed quadrature over each emissive triangle.
-    for &e in &sc.emitters {
-        if e == tri {
-            continue;
-        }
-        let t = &sc.tris[e as usize];
-        let ln = sc.normals[e as usize];
-        let area = 0.5 * super::sampling::length(super::bvh::triangle_normal(t));
-        let w = area / pts.len() as f32;
-        for &(b1, b2) in pts {
-            let q = add(
-                add(scale(t[0], 1.0 - b1 - b2), scale(t[1], b1)),
-                scale(t[2], b2),
-            );
-            let d = sub(q, p);
-            let r2 = dot(d, d);
-            if r2 <= 0.0 {
-                continue;
-            }
-            let wi = scale(d, 1.0 / r2.sqrt());
-            let le = sc.emitted(e, scale(wi, -1.0));
-            let cl = dot(ln, wi).abs();
-            if max_comp(le) <= 0.0 || dot(n, wi) <= 0.0 || dot(ns, wi) <= 0.0 {
-                continue;
-            }
-            if !sc.bvh.occluded(o, sub(q, o), SHADOW_END) {
-                l = add(l, shade(wi, scale(le, w * cl / r2)));
-            }
-        }
-    }
+    l = add(l, mul(local.kd, add([s.ambient; 3], amb)));
+    l = local.add_lights(sc, l);
+    l = local.add_area_emitters(sc, pts, tri, l);
+    let o = local.o;
     if recurse {
         if let Bsdf::Conductor { alpha } = mat.bsdf {
             // The smooth part of a conductor: a mirror bounce fading with roughness.
@@ -245,6 +162,153 @@ pub fn trace(
         }
     }
     l
+}
+
+/// A surface point a ray hit: position, direction to the viewer, geometric normal, the
+/// geometric normal on the viewer's side `n`, and the shading normal `ns` on that side.
+struct HitPoint {
+    p: V3,
+    wo: V3,
+    ng: V3,
+    n: V3,
+    ns: V3,
+}
+
+/// The radiance a smooth dielectric sends toward the viewer: Fresnel-weighted reflection
+/// plus refraction (Snell's law), each traced one level deeper. The shading normal is used
+/// when both directions stay on their sides of the geometric surface, else the geometric one.
+fn dielectric(
+    sc: &RenderScene,
+    pts: &[(f32, f32)],
+    h: &HitPoint,
+    eta: f32,
+    depth: u32,
+    s: &WhittedSettings,
+) -> V3 {
+    let (p, wo, n) = (h.p, h.wo, h.n);
+    let eta_rel = if dot(h.ng, wo) > 0.0 { eta } else { 1.0 / eta };
+    let ok = |m: V3| {
+        let (_, cos_t) = fresnel_dielectric(dot(m, wo), eta_rel);
+        let wt = add(
+            scale(wo, -1.0 / eta_rel),
+            scale(m, dot(m, wo) / eta_rel - cos_t),
+        );
+        dot(reflect(wo, m), n) > 0.0 && (cos_t == 0.0 || dot(wt, n) < 0.0)
+    };
+    let m = if ok(h.ns) { h.ns } else { n };
+    let cos_i = dot(m, wo);
+    let (f, cos_t) = fresnel_dielectric(cos_i, eta_rel);
+    let wr = reflect(wo, m);
+    let lr = trace(sc, pts, sc.offset(p, n), wr, depth + 1, s);
+    let mut l = scale(lr, f);
+    if f < 1.0 {
+        let wt = normalize(add(
+            scale(wo, -1.0 / eta_rel),
+            scale(m, cos_i / eta_rel - cos_t),
+        ));
+        let lt = trace(sc, pts, sc.offset(p, scale(n, -1.0)), wt, depth + 1, s);
+        // Radiance scales by 1/eta^2 across the interface (Veach 1997, 5.2).
+        l = add(l, scale(lt, (1.0 - f) / (eta_rel * eta_rel)));
+    }
+    l
+}
+
+/// Normalized Blinn-Phong shading at a hit point (`kd / pi + ks (sh + 8) / (8 pi)
+/// cos^sh`), with shadow rays from `o`, the point offset to the viewer's side.
+struct Phong {
+    p: V3,
+    o: V3,
+    wo: V3,
+    n: V3,
+    ns: V3,
+    kd: V3,
+    ks: V3,
+    sh: f32,
+    norm: f32,
+}
+
+impl Phong {
+    /// Radiance reflected toward the viewer from irradiance `e` arriving along `wi`.
+    fn shade(&self, wi: V3, e: V3) -> V3 {
+        let c = dot(self.ns, wi);
+        if c <= 0.0 || dot(self.n, wi) <= 0.0 {
+            return [0.0; 3];
+        }
+        let h = normalize(add(wi, self.wo));
+        let spec = self.norm * dot(self.ns, h).max(0.0).powf(self.sh);
+        let f = add(scale(self.kd, FRAC_1_PI), scale(self.ks, spec));
+        scale(mul(f, e), c)
+    }
+
+    /// `l` plus the light of the unshadowed point and directional lights.
+    fn add_lights(&self, sc: &RenderScene, mut l: V3) -> V3 {
+        let (p, o) = (self.p, self.o);
+        for light in &sc.lights {
+            match light {
+                Light::Point {
+                    position,
+                    color,
+                    intensity,
+                } => {
+                    let lp = v3(*position);
+                    let d = sub(lp, p);
+                    let r2 = dot(d, d);
+                    if r2 > 0.0 && !sc.bvh.occluded(o, sub(lp, o), SHADOW_END) {
+                        let e = scale(v3(*color), *intensity as f32 / r2);
+                        l = add(l, self.shade(scale(d, 1.0 / r2.sqrt()), e));
+                    }
+                }
+                Light::Directional {
+                    direction,
+                    color,
+                    intensity,
+                } => {
+                    let wi = scale(normalize(v3(*direction)), -1.0);
+                    if !sc.bvh.occluded(o, wi, f32::INFINITY) {
+                        l = add(l, self.shade(wi, scale(v3(*color), *intensity as f32)));
+                    }
+                }
+                Light::Environment { .. } => {}
+            }
+        }
+        l
+    }
+
+    /// `l` plus the light of the area emitters other than triangle `tri`, by a fixed
+    /// quadrature over each emissive triangle at the barycentric points `pts`.
+    fn add_area_emitters(&self, sc: &RenderScene, pts: &[(f32, f32)], tri: u32, mut l: V3) -> V3 {
+        let (p, o, n, ns) = (self.p, self.o, self.n, self.ns);
+        for &e in &sc.emitters {
+            if e == tri {
+                continue;
+            }
+            let t = &sc.tris[e as usize];
+            let ln = sc.normals[e as usize];
+            let area = 0.5 * super::sampling::length(super::bvh::triangle_normal(t));
+            let w = area / pts.len() as f32;
+            for &(b1, b2) in pts {
+                let q = add(
+                    add(scale(t[0], 1.0 - b1 - b2), scale(t[1], b1)),
+                    scale(t[2], b2),
+                );
+                let d = sub(q, p);
+                let r2 = dot(d, d);
+                if r2 <= 0.0 {
+                    continue;
+                }
+                let wi = scale(d, 1.0 / r2.sqrt());
+                let le = sc.emitted(e, scale(wi, -1.0));
+                let cl = dot(ln, wi).abs();
+                if max_comp(le) <= 0.0 || dot(n, wi) <= 0.0 || dot(ns, wi) <= 0.0 {
+                    continue;
+                }
+                if !sc.bvh.occluded(o, sub(q, o), SHADOW_END) {
+                    l = add(l, self.shade(wi, scale(le, w * cl / r2)));
+                }
+            }
+        }
+        l
+    }
 }
 
 /// Renders `cam`'s view of `sc` (linear radiance).
@@ -308,20 +372,21 @@ fn declare(b: &mut NodeBuilder) {
     b.add_input::<Camera>("camera")
         .optional()
         .doc("Overrides the scene's camera.");
+    let d = WhittedSettings::default();
     b.add_input::<i64>("max_depth")
-        .default(8i64)
+        .default(d.max_depth as i64)
         .range(1.0, 64.0)
         .doc("Longest ray tree branch in segments (camera ray = 1).");
     b.add_input::<i64>("light_samples")
-        .default(16i64)
+        .default(d.light_samples as i64)
         .range(1.0, 4096.0)
         .doc("Stratified points per emissive triangle (rounded down to a square).");
     b.add_input::<f64>("ambient")
-        .default(0.0)
+        .default(d.ambient as f64)
         .range(0.0, 1e3)
         .doc("Ambient radiance, added as ambient * albedo.");
     b.add_input::<i64>("aa")
-        .default(2i64)
+        .default(d.aa as i64)
         .range(1.0, 16.0)
         .doc("Antialiasing: aa x aa rays per pixel.");
     declare_crease(b);
@@ -336,27 +401,8 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let ambient: f64 = ctx.input("ambient")?;
     let aa: i64 = ctx.input("aa")?;
     let crease_deg = crease_input(ctx)?;
-    if !(1..=64).contains(&max_depth) {
-        return Err(NodeError::invalid(
-            "max_depth",
-            "max_depth must be in 1..=64",
-        ));
-    }
-    if !(1..=4096).contains(&light_samples) {
-        return Err(NodeError::invalid(
-            "light_samples",
-            "light_samples must be in 1..=4096",
-        ));
-    }
-    if !(1..=16).contains(&aa) {
-        return Err(NodeError::invalid("aa", "aa must be in 1..=16"));
-    }
-    if !(ambient.is_finite() && ambient >= 0.0) {
-        return Err(NodeError::invalid(
-            "ambient",
-            "ambient must be finite and >= 0",
-        ));
-    }
+    // The declared ranges (NaN refused) are checked by the runtime on literal and linked
+    // values alike.
     let s = WhittedSettings {
         max_depth: max_depth as u32,
         light_samples: light_samples as u32,

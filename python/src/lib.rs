@@ -96,7 +96,7 @@ fn run_job(job: &Job) -> Result<Outputs, Failure> {
                     .collect(),
             )
         })?;
-    let exec = Executor::new(None, None).map_err(graph_problem)?;
+    let exec = Executor::new(None, None).map_err(|e| graph_problem(e.to_string()))?;
     let read: Vec<String> = match &job.targets {
         Some(t) => t.clone(),
         None => valid

@@ -393,7 +393,7 @@ enum Invalid {
     Set(String),
     /// The first validation error.
     #[error(transparent)]
-    Graph(crate::validate::GraphError),
+    Graph(Box<crate::validate::GraphError>),
 }
 
 /// What every run of a sweep shares.
@@ -457,7 +457,8 @@ impl Sweep<'_> {
             sets.push(format!("{}={}", v.param, value_text(x)));
         }
         apply_sets(&mut g, &sets).map_err(Invalid::Set)?;
-        crate::validate::validate(&g, self.registry).map_err(|mut e| Invalid::Graph(e.remove(0)))
+        crate::validate::validate(&g, self.registry)
+            .map_err(|mut e| Invalid::Graph(Box::new(e.remove(0))))
     }
 
     /// Run options of repeat `rep`: the measured outputs are read after the run, so their

@@ -48,9 +48,9 @@ pub enum MergeError {
     )]
     Columns {
         part: String,
-        columns: Columns,
+        columns: Box<Columns>,
         first: String,
-        first_columns: Columns,
+        first_columns: Box<Columns>,
     },
     /// Two parts belong to sweeps of different sizes.
     #[error("{part} belongs to a sweep of {total} combinations, {first} to one of {first_total}")]
@@ -165,9 +165,9 @@ fn check_alike(read: &[Part], names: &[&str]) -> Result<(usize, usize), MergeErr
         if p.columns != first.columns {
             return Err(MergeError::Columns {
                 part: name.to_string(),
-                columns: p.columns.clone(),
+                columns: Box::new(p.columns.clone()),
                 first: names[0].to_string(),
-                first_columns: first.columns.clone(),
+                first_columns: Box::new(first.columns.clone()),
             });
         }
         if p.total != first.total && p.shard.is_some() && first.shard.is_some() {

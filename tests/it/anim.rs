@@ -206,7 +206,9 @@ fn arm_with(replace: &str, by: &str) -> String {
 #[test]
 fn weights_and_indices_of_different_lengths_are_an_error_naming_the_mesh() {
     let text = arm_with("1,1,1,1, 1,1,1,1, 1,1,1,1", "1,1,1,1, 1,1,1,1, 1,1,1");
-    let e = read_usda(&text, "/Model/Mesh", true).unwrap_err().to_string();
+    let e = read_usda(&text, "/Model/Mesh", true)
+        .unwrap_err()
+        .to_string();
     assert!(
         e.contains("'/Model/Mesh'") && e.contains("11 jointWeights but 12 jointIndices"),
         "{e}"
@@ -216,7 +218,9 @@ fn weights_and_indices_of_different_lengths_are_an_error_naming_the_mesh() {
 #[test]
 fn a_joint_index_out_of_range_is_an_error_naming_the_skeleton() {
     let text = arm_with("2,2,2,2, 0,0,0,0", "2,2,2,7, 0,0,0,0");
-    let e = read_usda(&text, "/Model/Mesh", true).unwrap_err().to_string();
+    let e = read_usda(&text, "/Model/Mesh", true)
+        .unwrap_err()
+        .to_string();
     assert!(
         e.contains("= 7 is out of range") && e.contains("'/Model/Skel'"),
         "{e}"

@@ -88,7 +88,9 @@ fn usda_uvs_normals_and_transform() {
         prim: "/_materials".into(),
         ..opts()
     };
-    let e = load_mesh(&asset("assets/course/Balls.usda"), &o).unwrap_err().to_string();
+    let e = load_mesh(&asset("assets/course/Balls.usda"), &o)
+        .unwrap_err()
+        .to_string();
     assert!(
         e.contains("not a Mesh") && e.contains("/Balls/Balls"),
         "{e}"

@@ -32,6 +32,8 @@ pub(super) struct FoldFree {
     pub local_solves: usize,
     /// The triangles of each vertex, in compressed rows (`vertex_triangles`).
     adjacency: (Vec<usize>, Vec<u32>),
+    /// Rings of vertices a local re-solve adds around its seeds (`ArapOptions::local_rings`).
+    rings: usize,
     /// Scratch of `local_resolve`; its `touched` lists the triangles whose direction the last
     /// local re-solve changed.
     pub scratch: LocalScratch,
@@ -122,6 +124,7 @@ impl FoldFree {
             } else {
                 (Vec::new(), Vec::new())
             },
+            rings: opts.local_rings,
         }
     }
 
@@ -152,7 +155,6 @@ impl FoldFree {
         frames: &TriangleFrames,
         limits: &[f64],
         best_step: f64,
-        rings: usize,
         row_of: &[u32],
         gradient: &Mat<f64>,
         d: &mut [[f64; 2]],
@@ -162,7 +164,7 @@ impl FoldFree {
             weights: &self.weights,
             limits,
             best_step,
-            rings,
+            rings: self.rings,
             max_region: (LOCAL_MAX_FRACTION * gradient.nrows() as f64) as usize,
             row_of,
             gradient,

@@ -333,7 +333,6 @@ impl<'a> Solver<'a> {
                 &self.frames,
                 &self.step_limits.limits,
                 dir.best_step,
-                self.opts.local_rings,
                 &self.row_of,
                 &self.gradient,
                 &mut self.d,

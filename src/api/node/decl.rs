@@ -69,6 +69,10 @@ impl SocketDecl {
             _ => None,
         };
         if let Some(x) = num {
+            // A NaN compares false against both bounds, so it is refused explicitly.
+            if x.is_nan() && (self.min.is_some() || self.max.is_some()) {
+                return Err("NaN is outside every range".to_string());
+            }
             if let Some(lo) = self.min {
                 if x < lo {
                     return Err(format!("{x} is below the minimum {lo}"));
@@ -160,3 +164,41 @@ impl NodeDecl {
 /// Lists the other files a node reads because it reads `path` (for example an OBJ's MTL
 /// libraries and textures), so that the cache key covers them; named in `companions`.
 pub type CompanionFn = fn(&std::path::Path) -> Vec<std::path::PathBuf>;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ranged(min: Option<f64>, max: Option<f64>) -> SocketDecl {
+        SocketDecl {
+            name: "ambient".into(),
+            ty: SocketType::Float,
+            doc: String::new(),
+            default: None,
+            min,
+            max,
+            choices: None,
+            optional: false,
+            file: FileRole::None,
+        }
+    }
+
+    /// A NaN (a linked value computed as 0/0, say) is refused by any range, as an infinity
+    /// beyond it is, and an unranged socket still takes it.
+    #[test]
+    fn nan_is_outside_every_range() {
+        let s = ranged(Some(0.0), Some(1e3));
+        assert!(s
+            .check_literal(&Value::Float(f64::NAN))
+            .unwrap_err()
+            .contains("NaN"));
+        assert!(s.check_literal(&Value::Float(f64::INFINITY)).is_err());
+        assert!(s.check_literal(&Value::Float(0.5)).is_ok());
+        assert!(ranged(None, Some(1.0))
+            .check_literal(&Value::Float(f64::NAN))
+            .is_err());
+        assert!(ranged(None, None)
+            .check_literal(&Value::Float(f64::NAN))
+            .is_ok());
+    }
+}

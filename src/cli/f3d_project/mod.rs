@@ -347,7 +347,7 @@ impl Project<'_> {
         Some(spec)
     }
 
-    /// 3. and 4. The camera's framing covers the geometry of every frame; then per frame the
+    /// Steps 3 and 4: the camera's framing covers the geometry of every frame; then per frame the
     /// stage, and the render graph reading it.
     fn frames(
         &mut self,

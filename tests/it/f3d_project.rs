@@ -300,7 +300,9 @@ fn two_meshes_both_ways(folder: &str, pass: &str) -> (Image, Image, String) {
     );
     assert_eq!((a.width, a.height), (b.width, b.height));
     if std::env::var("F3D_TEST_KEEP").is_ok() {
-        let keep = Path::new("/tmp/f3d_keep").join(folder);
+        let keep = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("target/f3d_keep")
+            .join(folder);
         std::fs::create_dir_all(&keep).unwrap();
         std::fs::copy(out.join("frame_0000.png"), keep.join("project.png")).unwrap();
         std::fs::copy(native_out.join("native.png"), keep.join("native.png")).unwrap();

@@ -12,6 +12,7 @@ mod cache_semantics;
 mod cli_help;
 mod course_graphs;
 mod curve;
+mod defaults;
 mod f3d;
 mod f3d_map;
 mod f3d_project;

@@ -40,37 +40,46 @@ impl Vertex<'_> {
     }
 }
 
+/// A point or directional light as seen from `p`: the unit direction to it, its irradiance
+/// at `p` before the cosine, and where a shadow ray ends (`None`: infinitely far). `None` for
+/// an environment, which is sampled instead (`environment_nee`), and for a point light at `p`.
+pub fn delta_incidence(light: &Light, p: V3) -> Option<(V3, V3, Option<V3>)> {
+    match light {
+        Light::Point {
+            position,
+            color,
+            intensity,
+        } => {
+            let lp = v3(*position);
+            let d = sub(lp, p);
+            let r2 = dot(d, d);
+            if r2 <= 0.0 {
+                return None;
+            }
+            // inverse-square falloff of a point light's intensity
+            let e = scale(v3(*color), *intensity as f32 / r2);
+            Some((scale(d, 1.0 / r2.sqrt()), e, Some(lp)))
+        }
+        Light::Directional {
+            direction,
+            color,
+            intensity,
+        } => {
+            let d = v3(*direction);
+            let wi = scale(d, -1.0 / length(d));
+            Some((wi, scale(v3(*color), *intensity as f32), None))
+        }
+        Light::Environment { .. } => None,
+    }
+}
+
 /// Radiance reflected toward the viewer from the point and directional lights (f cos E,
 /// unshadowed ones only).
 pub fn delta_lights(sc: &RenderScene, v: &Vertex) -> V3 {
     let mut l = [0.0f32; 3];
     for light in &sc.lights {
-        // Direction to the light, irradiance, shadow ray target (None = infinitely far).
-        let (wi, e, target) = match light {
-            Light::Point {
-                position,
-                color,
-                intensity,
-            } => {
-                let lp = v3(*position);
-                let d = sub(lp, v.p);
-                let r2 = dot(d, d);
-                if r2 <= 0.0 {
-                    continue;
-                }
-                let i = scale(v3(*color), *intensity as f32 / r2);
-                (scale(d, 1.0 / r2.sqrt()), i, Some(lp))
-            }
-            Light::Directional {
-                direction,
-                color,
-                intensity,
-            } => {
-                let d = v3(*direction);
-                let wi = scale(d, -1.0 / length(d));
-                (wi, scale(v3(*color), *intensity as f32), None)
-            }
-            Light::Environment { .. } => continue,
+        let Some((wi, e, target)) = delta_incidence(light, v.p) else {
+            continue;
         };
         let f = v.f(wi);
         if max_comp(f) <= 0.0 {

@@ -17,8 +17,9 @@
 //! reflection or refraction.
 
 use super::bsdf::{fresnel_dielectric, reflect, Bsdf};
+use super::direct::delta_incidence;
 use super::render_scene::{prepare, PinholeCamera, RenderScene, TraceError, SHADOW_END};
-use super::sampling::{add, dot, max_comp, mul, normalize, scale, sub, uniform_triangle, v3, V3};
+use super::sampling::{add, dot, max_comp, mul, normalize, scale, sub, uniform_triangle, V3};
 use super::tracer_node::{crease_input, declare_crease, reserve_image, trace_error};
 use cgnodes_api::prelude::*;
 use rayon::prelude::*;
@@ -244,31 +245,15 @@ impl Phong {
     fn add_lights(&self, sc: &RenderScene, mut l: V3) -> V3 {
         let (p, o) = (self.p, self.o);
         for light in &sc.lights {
-            match light {
-                Light::Point {
-                    position,
-                    color,
-                    intensity,
-                } => {
-                    let lp = v3(*position);
-                    let d = sub(lp, p);
-                    let r2 = dot(d, d);
-                    if r2 > 0.0 && !sc.bvh.occluded(o, sub(lp, o), SHADOW_END) {
-                        let e = scale(v3(*color), *intensity as f32 / r2);
-                        l = add(l, self.shade(scale(d, 1.0 / r2.sqrt()), e));
-                    }
-                }
-                Light::Directional {
-                    direction,
-                    color,
-                    intensity,
-                } => {
-                    let wi = scale(normalize(v3(*direction)), -1.0);
-                    if !sc.bvh.occluded(o, wi, f32::INFINITY) {
-                        l = add(l, self.shade(wi, scale(v3(*color), *intensity as f32)));
-                    }
-                }
-                Light::Environment { .. } => {}
+            let Some((wi, e, target)) = delta_incidence(light, p) else {
+                continue;
+            };
+            let blocked = match target {
+                Some(lp) => sc.bvh.occluded(o, sub(lp, o), SHADOW_END),
+                None => sc.bvh.occluded(o, wi, f32::INFINITY),
+            };
+            if !blocked {
+                l = add(l, self.shade(wi, e));
             }
         }
         l

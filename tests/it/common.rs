@@ -101,3 +101,44 @@ pub fn run_node(
     let logs = ctx.logs().to_vec();
     Ok((ctx.take_outputs(), logs))
 }
+
+/// Small upstream nodes standing in for the inputs of a node under test (`stand_in`): a
+/// 2x2 grid, its info table, an 8x8 camera, a material, a light, a UV image, a 2-D fluid and
+/// constants.
+pub fn stand_in_nodes() -> serde_json::Value {
+    serde_json::json!({
+        "grid": {"type": "mesh_grid", "params": {"cells_u": 2, "cells_v": 2}},
+        "plane": {"type": "mesh_plane"},
+        "info": {"type": "mesh_info", "inputs": {"mesh": "grid.mesh"}},
+        "cam": {"type": "camera", "params": {"width": 8, "height": 8}},
+        "mat": {"type": "material"},
+        "light": {"type": "light_point"},
+        "uvimg": {"type": "render_uv", "inputs": {"mesh": "plane.mesh"}, "params": {"size": 16}},
+        "fluid": {"type": "sph_fluid", "params": {"dimension": 2}},
+        "name": {"type": "value_string", "params": {"value": "x.ply"}},
+        "one": {"type": "value_int", "params": {"value": 1}},
+        "onef": {"type": "value_float", "params": {"value": 1.0}}
+    })
+}
+
+/// The output of `stand_in_nodes` that feeds an input of type `ty` (its value does not
+/// matter to the test), if one does.
+pub fn stand_in(ty: &cgnodes::types::SocketType) -> Option<&'static str> {
+    use cgnodes::types::SocketType as T;
+    Some(match ty {
+        T::Mesh | T::Scene => "grid.mesh",
+        T::List(t) if **t == T::Mesh => "grid.mesh",
+        T::Table => "info.table",
+        T::Camera => "cam.camera",
+        T::Material => "mat.material",
+        T::List(t) if **t == T::Material => "mat.material",
+        T::Light => "light.light",
+        T::List(t) if **t == T::Light => "light.light",
+        T::Image => "uvimg.image",
+        T::Points => "fluid.points",
+        T::String => "name.value",
+        T::Int | T::Any => "one.value",
+        T::Float => "onef.value",
+        _ => return None,
+    })
+}

@@ -4,49 +4,10 @@
 //! no default linked to a small upstream node. A node that refused one of its own defaults
 //! (a default repeated, and drifted, in the node's code) fails this test, naming the socket.
 
-use cgnodes::exec::{Executor, NodeStatus, RunOptions, RunReport};
-use cgnodes::node::{ErrorKind, FileEnv, FileRole};
-use cgnodes::types::SocketType;
+use crate::common::{run_graph, stand_in, stand_in_nodes};
+use cgnodes::exec::NodeStatus;
+use cgnodes::node::{ErrorKind, FileRole};
 use std::collections::BTreeMap;
-use std::path::Path;
-
-/// Runs graph `text` (as a file in `dir`) for frame 0.
-fn run(text: &str, dir: &Path) -> RunReport {
-    let r = cgnodes::nodes::builtin_registry();
-    let g = cgnodes::graph::parse(text, &dir.join("test.json"), dir).unwrap();
-    let valid = cgnodes::validate::validate(&g, &r).unwrap_or_else(|e| panic!("{}", e[0]));
-    let exec = Executor::new(Some(2), None).unwrap();
-    let opts = RunOptions {
-        files: FileEnv {
-            graph_dir: dir.to_path_buf(),
-            out_dir: dir.join("out"),
-            ..Default::default()
-        },
-        ..Default::default()
-    };
-    exec.run(&valid, &opts, 0)
-}
-
-/// A node upstream producing a value of type `ty` for a required input without a default.
-fn provider(ty: &SocketType) -> Option<&'static str> {
-    use SocketType as T;
-    Some(match ty {
-        T::Mesh | T::Scene => "grid.mesh",
-        T::List(t) if **t == T::Mesh => "grid.mesh",
-        T::Table => "info.table",
-        T::Camera => "cam.camera",
-        T::Material => "mat.material",
-        T::List(t) if **t == T::Material => "mat.material",
-        T::Light => "light.light",
-        T::List(t) if **t == T::Light => "light.light",
-        T::Image => "uvimg.image",
-        T::Points => "fluid.points",
-        T::Int | T::Any => "one.value",
-        T::Float => "onef.value",
-        T::String => "name.value",
-        _ => return None,
-    })
-}
 
 /// Each default parses as its socket's type and passes the check the runtime applies to a
 /// literal (range and choices).
@@ -78,19 +39,7 @@ fn every_declared_default_is_in_its_own_range_and_choices() {
 #[test]
 fn every_node_runs_on_its_declared_defaults() {
     let registry = cgnodes::nodes::builtin_registry();
-    let mut nodes = serde_json::json!({
-        "grid": {"type": "mesh_grid", "params": {"cells_u": 4, "cells_v": 4}},
-        "plane": {"type": "mesh_plane"},
-        "info": {"type": "mesh_info", "inputs": {"mesh": "grid.mesh"}},
-        "cam": {"type": "camera", "params": {"width": 16, "height": 16}},
-        "mat": {"type": "material"},
-        "light": {"type": "light_point"},
-        "uvimg": {"type": "render_uv", "inputs": {"mesh": "plane.mesh"}, "params": {"size": 16}},
-        "fluid": {"type": "sph_fluid", "params": {"dimension": 2}},
-        "one": {"type": "value_int", "params": {"value": 1}},
-        "onef": {"type": "value_float", "params": {"value": 1.0}},
-        "name": {"type": "value_string", "params": {"value": "x.txt"}}
-    });
+    let mut nodes = stand_in_nodes();
     // Node id -> (type, the sockets the test linked).
     let mut tested: BTreeMap<String, (String, Vec<String>)> = BTreeMap::new();
     let mut skipped = Vec::new();
@@ -102,7 +51,7 @@ fn every_node_runs_on_its_declared_defaults() {
             if s.optional || s.default.is_some() {
                 continue;
             }
-            match provider(&s.ty) {
+            match stand_in(&s.ty) {
                 Some(p) => {
                     inputs.insert(s.name.clone(), p.into());
                     linked.push(s.name.clone());
@@ -129,7 +78,15 @@ fn every_node_runs_on_its_declared_defaults() {
         "nodes": nodes, "outputs": outputs})
     .to_string();
     let dir = tempfile::tempdir().unwrap();
-    let rep = run(&text, dir.path());
+    let rep = run_graph(
+        &text,
+        &registry,
+        dir.path(),
+        &dir.path().join("out"),
+        2,
+        0..=0,
+    )
+    .remove(0);
     // Defaults that stand for "the input decides": the node's target width is the image's
     // own unless a remove mask is given (seam_carve refuses a no-op), and set_vert_color's
     // attribute is named by the mesh a user links, which the stand-in grid does not carry.

@@ -3,9 +3,9 @@
 //! parameters are checked against the memory limit (`--max-memory`) with the size stated; and
 //! `compare_series` does not quote files outside the run's folders.
 
+use crate::common::{stand_in, stand_in_nodes};
 use cgnodes::exec::{Executor, NodeStatus, RunOptions, RunReport};
 use cgnodes::node::{ErrorKind, FileEnv, NodeError};
-use cgnodes::types::SocketType;
 use std::collections::BTreeMap;
 use std::path::Path;
 use std::process::Command;
@@ -45,28 +45,6 @@ fn error_line(rep: &RunReport, id: &str) -> String {
         .unwrap_or_else(|| panic!("no error for {id}: {:?}", rep.errors()))
 }
 
-/// A node upstream that produces a value of type `ty`, for the required inputs of the node
-/// under test (their values do not matter: the choice is checked before the node runs).
-fn provider(ty: &SocketType) -> Option<&'static str> {
-    use SocketType as T;
-    Some(match ty {
-        T::Mesh | T::Scene => "grid.mesh",
-        T::List(t) if **t == T::Mesh => "grid.mesh",
-        T::Table => "info.table",
-        T::Camera => "cam.camera",
-        T::Material => "mat.material",
-        T::List(t) if **t == T::Material => "mat.material",
-        T::Light => "light.light",
-        T::List(t) if **t == T::Light => "light.light",
-        T::Image => "uvimg.image",
-        T::Points => "fluid.points",
-        T::String => "name.value",
-        T::Int => "one.value",
-        T::Float => "onef.value",
-        _ => return None,
-    })
-}
-
 /// Every choice socket of every built-in node that can be fed here gets a misspelt linked
 /// string: each run fails before the node executes, with the literal's message, and the
 /// report line names node, type and socket. The sockets the issue found falling back to a
@@ -74,20 +52,8 @@ fn provider(ty: &SocketType) -> Option<&'static str> {
 #[test]
 fn misspelt_linked_strings_are_refused_on_every_choice_socket() {
     let registry = cgnodes::nodes::builtin_registry();
-    let mut nodes = serde_json::json!({
-        "bad": {"type": "value_string", "params": {"value": "bogus"}},
-        "grid": {"type": "mesh_grid", "params": {"cells_u": 2, "cells_v": 2}},
-        "plane": {"type": "mesh_plane"},
-        "info": {"type": "mesh_info", "inputs": {"mesh": "grid.mesh"}},
-        "cam": {"type": "camera", "params": {"width": 8, "height": 8}},
-        "mat": {"type": "material"},
-        "light": {"type": "light_point"},
-        "uvimg": {"type": "render_uv", "inputs": {"mesh": "plane.mesh"}, "params": {"size": 16}},
-        "fluid": {"type": "sph_fluid", "params": {"dimension": 2}},
-        "name": {"type": "value_string", "params": {"value": "x.ply"}},
-        "one": {"type": "value_int", "params": {"value": 1}},
-        "onef": {"type": "value_float", "params": {"value": 1.0}}
-    });
+    let mut nodes = stand_in_nodes();
+    nodes["bad"] = serde_json::json!({"type": "value_string", "params": {"value": "bogus"}});
     let mut tested = BTreeMap::new();
     let mut skipped = Vec::new();
     for decl in registry.iter() {
@@ -99,7 +65,7 @@ fn misspelt_linked_strings_are_refused_on_every_choice_socket() {
                 if o.name == s.name || o.optional || o.default.is_some() {
                     continue;
                 }
-                match provider(&o.ty) {
+                match stand_in(&o.ty) {
                     Some(p) => {
                         inputs.insert(o.name.clone(), p.into());
                     }

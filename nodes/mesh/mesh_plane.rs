@@ -32,9 +32,6 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     if !(size > 0.0 && size.is_finite()) {
         return Err(NodeError::invalid("size", "must be positive"));
     }
-    if !(1..=1024).contains(&n) {
-        return Err(NodeError::invalid("subdivisions", "must lie in 1..=1024"));
-    }
     if !uv_scale.is_finite() || center.iter().any(|c| !c.is_finite()) {
         return Err(NodeError::invalid("center", "values must be finite"));
     }

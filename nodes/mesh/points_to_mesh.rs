@@ -95,13 +95,8 @@ fn declare(b: &mut NodeBuilder) {
 }
 
 fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
+    // In its declared range 0..1e6 (checked by the runtime).
     let r: f64 = ctx.input("radius")?;
-    if !(r.is_finite() && r >= 0.0) {
-        return Err(NodeError::invalid(
-            "radius",
-            "must be finite and not negative",
-        ));
-    }
     let radius = (r > 0.0).then_some(r);
     let points = ctx.input_opt::<Arc<Points>>("points")?;
     let mesh = ctx.input_opt::<Arc<Mesh>>("mesh")?;

@@ -32,17 +32,9 @@ fn declare(b: &mut NodeBuilder) {
 }
 
 fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
+    // count and width lie in their declared ranges (checked by the runtime).
     let count: i64 = ctx.input("count")?;
-    if !(1..=10_000_000).contains(&count) {
-        return Err(NodeError::invalid("count", "must be between 1 and 10^7"));
-    }
     let width: f64 = ctx.input("width")?;
-    if !(width.is_finite() && width >= 0.0) {
-        return Err(NodeError::invalid(
-            "width",
-            "must be finite and not negative",
-        ));
-    }
     let p = random_uv_points(count as usize, ctx.input("seed")?);
     let n = p.len();
     let mut m = Mesh::new(p, Vec::new(), Vec::new())

@@ -43,6 +43,7 @@ pub(crate) fn run_node(
     let mut r = cgnodes_api::registry::Registry::new();
     register(&mut r);
     let decl = r.get(name).unwrap();
+    decl.check_inputs(&inputs)?;
     let mut state = None;
     let files = cgnodes_api::node::FileEnv::default();
     let mut ctx = cgnodes_api::node::ExecContext::standalone(decl, inputs, &mut state, &files, 0);

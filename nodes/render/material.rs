@@ -63,14 +63,7 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let metallic: f64 = ctx.input("metallic")?;
     let roughness: f64 = ctx.input("roughness")?;
     let ior: f64 = ctx.input("ior")?;
-    for (name, v) in [("metallic", metallic), ("roughness", roughness)] {
-        if !(0.0..=1.0).contains(&v) {
-            return Err(NodeError::invalid(name, format!("{v} is outside 0..1")));
-        }
-    }
-    if !(ior >= 1.0 && ior.is_finite()) {
-        return Err(NodeError::invalid("ior", format!("{ior} must be >= 1")));
-    }
+    // metallic, roughness and ior lie in their declared ranges (checked by the runtime).
     for (name, c) in [("base_color", base.0), ("emission", emission.0)] {
         if c.iter().any(|x| !x.is_finite() || *x < 0.0) {
             return Err(NodeError::invalid(name, "must be finite and not negative"));

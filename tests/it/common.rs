@@ -92,10 +92,11 @@ pub fn run_node(
     let r = cgnodes::nodes::builtin_registry();
     let decl = r.get(name).unwrap();
     let mut state = None;
-    let ins = inputs
+    let ins: BTreeMap<String, Value> = inputs
         .into_iter()
         .map(|(k, v)| (k.to_string(), v))
         .collect();
+    decl.check_inputs(&ins).map_err(|e| e.to_string())?;
     let mut ctx = ExecContext::standalone(decl, ins, &mut state, files, 0);
     (decl.exec.as_ref().unwrap())(&mut ctx).map_err(|e| e.to_string())?;
     let logs = ctx.logs().to_vec();

@@ -41,16 +41,17 @@ fn declare_common(b: &mut NodeBuilder) {
     b.add_input::<Vec<[f64; 2]>>("init_uv").optional().doc(
         "Or the initial UVs as a list, one per vertex (a Framework3D Float2Buffer such as a student's InitialTexCoords); not together with init.",
     );
+    let d = ArapOptions::default();
     b.add_input::<i64>("iterations")
-        .default(100i64)
+        .default(d.iterations as i64)
         .range(0.0, 100000.0)
         .doc("Maximum number of local/global iterations.");
     b.add_input::<f64>("tolerance")
-        .default(1e-6)
+        .default(d.tolerance)
         .range(0.0, 1.0)
         .doc("Stop when an iteration lowers the energy by less than this fraction.");
     b.add_input::<bool>("injective")
-        .default(true)
+        .default(d.injective)
         .doc("Fold-free: never accept a step that flips a triangle.");
     b.add_input::<i64>("pin")
         .default(-1i64)

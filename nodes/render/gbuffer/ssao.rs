@@ -277,20 +277,21 @@ fn declare(b: &mut NodeBuilder) {
     b.add_input::<Camera>("camera")
         .optional()
         .doc("The camera the G-buffer was rendered with (else recovered from position and depth).");
+    let d = SsaoParams::default();
     b.add_input::<f64>("radius")
-        .default(0.5)
+        .default(d.radius)
         .range(1e-6, 1e6)
         .doc("Hemisphere radius in world units.");
     b.add_input::<i64>("samples")
-        .default(16i64)
+        .default(d.samples as i64)
         .range(1.0, 256.0)
         .doc("Kernel points per pixel.");
     b.add_input::<f64>("bias")
-        .default(0.025)
+        .default(d.bias)
         .range(0.0, 1e6)
         .doc("Depth bias in world units (against self-occlusion).");
     b.add_input::<bool>("blur")
-        .default(true)
+        .default(d.blur)
         .doc("Average the AO over 4x4 pixels (hides the kernel rotation pattern).");
     b.add_output::<Image>("color")
         .doc("The colour times the AO.");
@@ -329,21 +330,10 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
             ))
         }
     };
+    // Ranges (NaN refused) are checked by the runtime from the declaration.
     let radius: f64 = ctx.input("radius")?;
-    if !(radius.is_finite() && radius > 0.0) {
-        return Err(NodeError::invalid("radius", "must be finite and positive"));
-    }
     let bias: f64 = ctx.input("bias")?;
-    if !(bias.is_finite() && bias >= 0.0) {
-        return Err(NodeError::invalid(
-            "bias",
-            "must be finite and not negative",
-        ));
-    }
     let samples: i64 = ctx.input("samples")?;
-    if !(1..=256).contains(&samples) {
-        return Err(NodeError::invalid("samples", "must lie in 1..=256"));
-    }
     let par = SsaoParams {
         radius,
         samples: samples as u32,

@@ -17,37 +17,30 @@ impl Choice for AntiAliasing {
 /// The shadow lookup's sockets (`pcf_radius`, `shadow_bias`, `shadow_slope_bias`), shared by
 /// `render_raster` and the G-buffer's `deferred_lighting`.
 pub(crate) fn declare_shadow_params(b: &mut NodeBuilder) {
+    let d = RasterOptions::default().shadow;
     b.add_input::<i64>("pcf_radius")
-        .default(1i64)
+        .default(d.pcf_radius as i64)
         .range(0.0, 4.0)
         .doc("Percentage-closer filtering radius r: (2r+1)^2 taps.");
     b.add_input::<f64>("shadow_bias")
-        .default(1.0)
+        .default(d.bias)
         .range(0.0, 100.0)
         .doc("Constant depth bias, in shadow-map texels.");
     b.add_input::<f64>("shadow_slope_bias")
-        .default(1.5)
+        .default(d.slope_bias)
         .range(0.0, 100.0)
         .doc("Slope-scaled depth bias, in texels per unit tan(angle) and PCF ring.");
 }
 
-/// Reads and checks the sockets of `declare_shadow_params`.
+/// Reads the sockets of `declare_shadow_params` (their ranges, NaN refused, are checked by
+/// the runtime before the node runs).
 pub(crate) fn read_shadow_params(ctx: &mut ExecContext) -> Result<ShadowParams, NodeError> {
     let pcf: i64 = ctx.input("pcf_radius")?;
-    if !(0..=4).contains(&pcf) {
-        return Err(NodeError::invalid("pcf_radius", "must lie in 0..=4"));
-    }
-    let p = ShadowParams {
+    Ok(ShadowParams {
         pcf_radius: pcf as u32,
         bias: ctx.input("shadow_bias")?,
         slope_bias: ctx.input("shadow_slope_bias")?,
-    };
-    for (n, v) in [("shadow_bias", p.bias), ("shadow_slope_bias", p.slope_bias)] {
-        if !(v.is_finite() && v >= 0.0) {
-            return Err(NodeError::invalid(n, "must be finite and not negative"));
-        }
-    }
-    Ok(p)
+    })
 }
 
 fn declare(b: &mut NodeBuilder) {
@@ -59,32 +52,33 @@ fn declare(b: &mut NodeBuilder) {
         .doc("Camera; overrides the scene's camera.");
     b.add_choice::<AntiAliasing>("antialiasing")
         .doc("msaa shades each triangle once per pixel; ssaa shades every sample.");
+    let d = RasterOptions::default();
     b.add_input::<i64>("samples")
-        .default(4i64)
+        .default((d.samples_per_axis * d.samples_per_axis) as i64)
         .range(1.0, 64.0)
         .doc("Samples per pixel: a square, 1, 4, 9, 16, ...");
     b.add_input::<bool>("cull_backfaces")
-        .default(false)
+        .default(d.cull_backfaces)
         .doc("Skip triangles seen from behind (clockwise on screen).");
     b.add_input::<bool>("shadows")
-        .default(true)
+        .default(d.shadows)
         .doc("Render shadow maps.");
     b.add_input::<i64>("shadow_resolution")
-        .default(2048i64)
+        .default(d.shadow_resolution as i64)
         .range(256.0, 8192.0)
         .doc("Shadow map size; point-light cube faces use half of it.");
     declare_shadow_params(b);
     b.add_input::<f64>("ambient")
-        .default(0.2)
+        .default(d.ambient)
         .range(0.0, 10.0)
         .doc("Ambient term ka*Ia, times the base colour.");
     b.add_choice::<Wrap>("texture_wrap")
         .doc("What textures do outside UV 0..1.");
     b.add_input::<bool>("mipmaps")
-        .default(true)
+        .default(d.mipmaps)
         .doc("Trilinear filtering through a mipmap pyramid (else bilinear).");
     b.add_input::<Color>("background")
-        .default(Color([0.05, 0.05, 0.05]))
+        .default(Color(d.background))
         .doc("Colour where nothing is hit.");
     b.add_output::<Image>("color").doc("Shaded linear colour.");
     b.add_output::<Image>("depth")
@@ -121,21 +115,10 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
         ));
     }
     let aa = ctx.choice::<AntiAliasing>("antialiasing")?;
+    // Ranges (NaN refused) are checked by the runtime from the declaration.
     let res: i64 = ctx.input("shadow_resolution")?;
-    if !(256..=8192).contains(&res) {
-        return Err(NodeError::invalid(
-            "shadow_resolution",
-            "must lie in 256..=8192",
-        ));
-    }
     let shadow = read_shadow_params(ctx)?;
     let ambient: f64 = ctx.input("ambient")?;
-    if !(ambient.is_finite() && ambient >= 0.0) {
-        return Err(NodeError::invalid(
-            "ambient",
-            "must be finite and not negative",
-        ));
-    }
     let wrap = ctx.choice::<Wrap>("texture_wrap")?;
     let bgc: Color = ctx.input("background")?;
     let opts = RasterOptions {

@@ -130,19 +130,20 @@ fn declare(b: &mut NodeBuilder) {
     b.add_input::<String>("sphere_keyframes")
         .default("")
         .doc("Moving sphere: \"frame:x,y,z; frame:x,y,z\" (overrides sphere_center).");
+    let d = SolverOptions::default();
     b.add_input::<i64>("newton_iters")
-        .default(20i64)
+        .default(d.newton.max_iters as i64)
         .range(1.0, 1000.0);
     b.add_input::<f64>("newton_tol")
-        .default(1e-7)
+        .default(d.newton.tol)
         .range(0.0, 1.0)
         .doc("Newton stops when no vertex moves more than this.");
     b.add_input::<i64>("pd_iters")
-        .default(10i64)
+        .default(d.pd_iterations as i64)
         .range(1.0, 10000.0)
         .doc("Local/global iterations per step (projective).");
     b.add_input::<f64>("blowup_factor")
-        .default(100.0)
+        .default(d.blowup_factor)
         .range(1.0, 1e12)
         .doc("Energy growth (times the model's energy scale) reported as unstable.");
     b.add_output::<Mesh>("mesh");

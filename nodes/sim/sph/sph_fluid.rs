@@ -135,17 +135,16 @@ impl Choice for Boundary {
 fn declare(b: &mut NodeBuilder) {
     b.doc("SPH fluid (WCSPH or DFSPH) in a box; advances one frame per execution.");
     b.stateful();
+    let d = SphParams::default();
     b.add_input::<i64>("dimension")
-        .default(3i64)
+        .default(d.dim as i64)
         .range(2.0, 3.0);
     b.add_choice::<Solver>("solver")
         .doc("wcsph: the course's weakly compressible SPH; dfsph: divergence-free SPH (Bender & Koschier 2017), incompressible to max_density_error.");
     b.add_choice::<Boundary>("boundary")
         .doc("particles: Akinci 2012 boundary particles sampling the box; walls: clamp with restitution only.");
-    b.add_input::<[f64; 3]>("sim_box_min")
-        .default([0.0, 0.0, 0.0]);
-    b.add_input::<[f64; 3]>("sim_box_max")
-        .default([1.0, 1.0, 1.0]);
+    b.add_input::<[f64; 3]>("sim_box_min").default(d.box_min);
+    b.add_input::<[f64; 3]>("sim_box_max").default(d.box_max);
     b.add_input::<[f64; 3]>("particle_box_min")
         .default([0.1, 0.1, 0.1])
         .doc("Initial fluid block (the fluid starts at rest).");
@@ -155,27 +154,29 @@ fn declare(b: &mut NodeBuilder) {
         .default([0.0, 0.0, 0.0])
         .doc("Particles per axis in the block; 0 fills it with spacing 2r.");
     b.add_input::<f64>("particle_radius")
-        .default(0.025)
+        .default(d.particle_radius)
         .range(1e-5, 10.0)
         .doc("Particle radius r; the support radius is 4r.");
     b.add_input::<f64>("rest_density")
-        .default(1000.0)
+        .default(d.rest_density)
         .range(1e-3, 1e6);
     b.add_input::<f64>("stiffness")
-        .default(500.0)
+        .default(d.stiffness)
         .range(0.0, 1e9)
         .doc("WCSPH k in p = k((rho/rho0)^gamma - 1).");
-    b.add_input::<f64>("exponent").default(7.0).range(1.0, 20.0);
+    b.add_input::<f64>("exponent")
+        .default(d.exponent)
+        .range(1.0, 20.0);
     b.add_input::<f64>("viscosity")
-        .default(0.03)
+        .default(d.viscosity)
         .range(0.0, 100.0)
         .doc("Kinematic viscosity of the course's SPH Laplacian (m^2/s).");
     b.add_input::<f64>("gravity")
-        .default(-9.8)
+        .default(d.gravity)
         .range(-1e3, 1e3)
         .doc("Along the up axis: y in 2-D, z in 3-D.");
     b.add_input::<f64>("dt")
-        .default(0.01)
+        .default(d.dt)
         .range(1e-7, 1.0)
         .doc("Time step; the largest step when cfl > 0.");
     b.add_input::<f64>("frame_dt")
@@ -183,22 +184,22 @@ fn declare(b: &mut NodeBuilder) {
         .range(1e-6, 10.0)
         .doc("Simulated time per frame.");
     b.add_input::<f64>("cfl")
-        .default(0.4)
+        .default(d.cfl)
         .range(0.0, 2.0)
         .doc("Adaptive step dt <= cfl * 2r / v_max; 0 keeps dt fixed.");
     b.add_input::<f64>("restitution")
-        .default(0.0)
+        .default(d.restitution)
         .range(0.0, 1.0);
     b.add_input::<i64>("max_iterations")
-        .default(1000i64)
+        .default(d.max_iterations as i64)
         .range(1.0, 100000.0)
         .doc("DFSPH: Jacobi iteration cap per solve; a solve stopped by the cap leaves compression that blows fine resolutions apart.");
     b.add_input::<f64>("max_density_error")
-        .default(0.001)
+        .default(d.max_density_error)
         .range(1e-7, 0.5)
         .doc("DFSPH: target average compression (fraction).");
     b.add_input::<bool>("divergence")
-        .default(true)
+        .default(d.divergence)
         .doc("DFSPH: run the divergence-free solver.");
     b.add_input::<i64>("image_width")
         .default(256i64)

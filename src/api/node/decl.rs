@@ -159,6 +159,23 @@ impl NodeDecl {
     pub fn output(&self, name: &str) -> Option<&SocketDecl> {
         self.outputs.iter().find(|s| s.name == name)
     }
+
+    /// Checks values given to this node's inputs against their declared ranges and choices,
+    /// as the runtime does before a node runs, so that a node's `execute` never re-checks
+    /// them; for callers that run a node outside a graph (`ExecContext::standalone`).
+    pub fn check_inputs<'v>(
+        &self,
+        inputs: impl IntoIterator<Item = (&'v String, &'v Value)>,
+    ) -> Result<(), NodeError> {
+        for (name, v) in inputs {
+            if let Some(s) = self.input(name) {
+                let v = v.convert_to(&s.ty).unwrap_or_else(|| v.clone());
+                s.check_literal(&v)
+                    .map_err(|msg| NodeError::invalid(name, msg))?;
+            }
+        }
+        Ok(())
+    }
 }
 
 /// Lists the other files a node reads because it reads `path` (for example an OBJ's MTL

@@ -2,15 +2,42 @@
 //! its bound `SkelAnimation` from a `.usda` file.
 
 use cgnodes_api::prelude::*;
-use cgnodes_formats::usda::{parse_usda, read_skeleton};
-use std::path::Path;
+use cgnodes_formats::usda::{parse_usda, read_skeleton, UsdaError};
+use std::path::{Path, PathBuf};
+
+/// Why a skeleton could not be loaded, with the file's path.
+#[derive(Debug, thiserror::Error)]
+pub enum SkeletonFileError {
+    /// The file could not be read.
+    #[error("{}: cannot read: {source}", path.display())]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// The I/O error.
+        source: std::io::Error,
+    },
+    /// The file is not valid USDA, or holds no such Skeleton.
+    #[error("{}: {source}", path.display())]
+    Usda {
+        /// The file.
+        path: PathBuf,
+        /// The reader's error (boxed: it is large).
+        source: Box<UsdaError>,
+    },
+}
 
 /// Reads the Skeleton at `prim` (the first one when empty) from the `.usda` file at `path`.
-pub fn load_skeleton(path: &Path, prim: &str) -> Result<Skeleton, String> {
-    let name = path.display();
-    let text = std::fs::read_to_string(path).map_err(|e| format!("{name}: cannot read: {e}"))?;
-    let layer = parse_usda(&text).map_err(|e| format!("{name}: {e}"))?;
-    read_skeleton(&layer, prim).map_err(|e| format!("{name}: {e}"))
+pub fn load_skeleton(path: &Path, prim: &str) -> Result<Skeleton, SkeletonFileError> {
+    let usda = |source: UsdaError| SkeletonFileError::Usda {
+        path: path.to_path_buf(),
+        source: Box::new(source),
+    };
+    let text = std::fs::read_to_string(path).map_err(|source| SkeletonFileError::Read {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let layer = parse_usda(&text).map_err(usda)?;
+    read_skeleton(&layer, prim).map_err(usda)
 }
 
 fn declare(b: &mut NodeBuilder) {
@@ -34,7 +61,8 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
         );
     }
     let socket = if prim.is_empty() { "path" } else { "prim" };
-    let skel = load_skeleton(&path, &prim).map_err(|e| NodeError::invalid(socket, e))?;
+    let skel =
+        load_skeleton(&path, &prim).map_err(|e| NodeError::invalid(socket, e.to_string()))?;
     ctx.log(format!(
         "{} joints, {}",
         skel.joints.len(),

@@ -5,6 +5,7 @@
 use super::dqs::dqs;
 use super::lbs::{
     check_influences, joint_matrices, lbs_normals, lbs_points, normalize_weights, Influences,
+    SkinError,
 };
 use super::pose::skinning_transforms;
 use cgnodes_api::prelude::*;
@@ -33,6 +34,64 @@ pub struct Skinned {
     pub warnings: Vec<String>,
 }
 
+/// The skeleton that poses the mesh (`skeleton`, else the bound one) and the socket its
+/// errors name; `Err` when its joint count differs from the bound skeleton's.
+fn posing_skeleton<'a>(
+    bind: &'a SkinBinding,
+    skeleton: Option<&'a Skeleton>,
+) -> Result<(&'a Skeleton, &'static str), NodeError> {
+    let (skel, socket) = match skeleton {
+        Some(s) => (s, "skeleton"),
+        None => (&*bind.skeleton, "mesh"),
+    };
+    if skel.joints.len() != bind.skeleton.joints.len() {
+        return Err(NodeError::invalid(
+            "skeleton",
+            format!(
+                "Skeleton '{}' has {} joints but Mesh '{}' is bound to '{}' with {}",
+                skel.prim,
+                skel.joints.len(),
+                bind.prim,
+                bind.skeleton.prim,
+                bind.skeleton.joints.len()
+            ),
+        ));
+    }
+    Ok((skel, socket))
+}
+
+/// The binding's joint weights normalized to sum 1 per vertex, with a warning when any did
+/// not (`Err`: a vertex whose weights add up to zero).
+fn normalized_weights(
+    bind: &SkinBinding,
+    nv: usize,
+    warnings: &mut Vec<String>,
+) -> Result<Vec<f64>, SkinError> {
+    let (weights, changed) = normalize_weights(bind.influences, &bind.joint_weights)?;
+    if changed > 0 {
+        warnings.push(format!(
+            "warning: the joint weights of {changed} of {nv} vertices of '{}' did not add up to 1 and were normalized",
+            bind.prim
+        ));
+    }
+    Ok(weights)
+}
+
+/// `Err` naming the first skinned vertex that is not finite.
+fn check_finite(out: &Mesh, socket: &str) -> Result<(), NodeError> {
+    match out
+        .positions
+        .iter()
+        .position(|p| p.iter().any(|x| !x.is_finite()))
+    {
+        Some(i) => Err(NodeError::invalid(
+            socket,
+            format!("the skinned vertex {i} is not finite"),
+        )),
+        None => Ok(()),
+    }
+}
+
 /// Skins `mesh` (which must carry a `SkinBinding`) at `time` with `method`, posed by
 /// `skeleton` when given (it must have as many joints as the bound one), else by the bound
 /// skeleton. Errors name the socket at fault (`mesh` or `skeleton`) and the prim.
@@ -55,23 +114,7 @@ pub fn skin_mesh(
             format!("time {time} is not finite"),
         ));
     }
-    let (skel, socket) = match skeleton {
-        Some(s) => (s, "skeleton"),
-        None => (&*bind.skeleton, "mesh"),
-    };
-    if skel.joints.len() != bind.skeleton.joints.len() {
-        return Err(NodeError::invalid(
-            "skeleton",
-            format!(
-                "Skeleton '{}' has {} joints but Mesh '{}' is bound to '{}' with {}",
-                skel.prim,
-                skel.joints.len(),
-                bind.prim,
-                bind.skeleton.prim,
-                bind.skeleton.joints.len()
-            ),
-        ));
-    }
+    let (skel, socket) = posing_skeleton(bind, skeleton)?;
     let nv = mesh.num_vertices();
     let inf = Influences {
         count: bind.influences,
@@ -80,14 +123,8 @@ pub fn skin_mesh(
     };
     check_influences(&inf, nv, skel.joints.len()).map_err(|e| mesh_err(e.to_string()))?;
     let mut warnings = Vec::new();
-    let (weights, changed) =
-        normalize_weights(inf.count, inf.weights).map_err(|e| mesh_err(e.to_string()))?;
-    if changed > 0 {
-        warnings.push(format!(
-            "warning: the joint weights of {changed} of {nv} vertices of '{}' did not add up to 1 and were normalized",
-            bind.prim
-        ));
-    }
+    let weights =
+        normalized_weights(bind, nv, &mut warnings).map_err(|e| mesh_err(e.to_string()))?;
     let inf = Influences {
         weights: &weights,
         ..inf
@@ -135,16 +172,7 @@ pub fn skin_mesh(
             }
         }
     }
-    if let Some(i) = out
-        .positions
-        .iter()
-        .position(|p| p.iter().any(|x| !x.is_finite()))
-    {
-        return Err(NodeError::invalid(
-            socket,
-            format!("the skinned vertex {i} is not finite"),
-        ));
-    }
+    check_finite(&out, socket)?;
     Ok(Skinned {
         mesh: out,
         warnings,

@@ -43,15 +43,33 @@ impl MathOp {
     }
 }
 
+/// Why `apply` has no result.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum MathError {
+    /// `a / 0`.
+    #[error("division of {0} by zero")]
+    DivisionByZero(f64),
+    /// The result is NaN or infinite.
+    #[error("{op}({a}, {b}) is not a finite number")]
+    NotFinite {
+        /// The operation's name.
+        op: &'static str,
+        /// First operand.
+        a: f64,
+        /// Second operand.
+        b: f64,
+    },
+}
+
 /// Applies `op` to `a` and `b`. Division by zero and non-finite results are errors.
-pub fn apply(op: MathOp, a: f64, b: f64) -> Result<f64, String> {
+pub fn apply(op: MathOp, a: f64, b: f64) -> Result<f64, MathError> {
     let r = match op {
         MathOp::Add => a + b,
         MathOp::Sub => a - b,
         MathOp::Mul => a * b,
         MathOp::Div => {
             if b == 0.0 {
-                return Err(format!("division of {a} by zero"));
+                return Err(MathError::DivisionByZero(a));
             }
             a / b
         }
@@ -62,7 +80,11 @@ pub fn apply(op: MathOp, a: f64, b: f64) -> Result<f64, String> {
     if r.is_finite() {
         Ok(r)
     } else {
-        Err(format!("{}({a}, {b}) is not a finite number", op.name()))
+        Err(MathError::NotFinite {
+            op: op.name(),
+            a,
+            b,
+        })
     }
 }
 
@@ -78,7 +100,7 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let a: f64 = ctx.input("a")?;
     let b: f64 = ctx.input("b")?;
     let op = ctx.choice::<MathOp>("op")?;
-    let v = apply(op, a, b).map_err(|e| NodeError::invalid("b", e))?;
+    let v = apply(op, a, b).map_err(|e| NodeError::invalid("b", e.to_string()))?;
     ctx.set_output("value", v);
     Ok(())
 }
@@ -98,7 +120,7 @@ mod tests {
         assert_eq!(apply(MathOp::Pow, 2.0, 10.0), Ok(1024.0));
         assert_eq!(apply(MathOp::Max, -1.0, 3.0), Ok(3.0));
         assert!(apply(MathOp::Div, 1.0, 0.0).is_err());
-        let e = apply(MathOp::Pow, -1.0, 0.5).unwrap_err();
+        let e = apply(MathOp::Pow, -1.0, 0.5).unwrap_err().to_string();
         assert!(e.starts_with("pow(-1, 0.5)"), "{e}");
     }
 }

@@ -4,8 +4,39 @@
 use super::table_load::{load_table_file, Header};
 use cgnodes_api::prelude::*;
 
+/// Why a column cannot be used.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ColumnError {
+    /// The index is past the last column.
+    #[error("no column {index}: the table has {count} columns ({names})")]
+    NoIndex {
+        /// The 0-based index asked for.
+        index: usize,
+        /// Number of columns.
+        count: usize,
+        /// The column names, comma-separated.
+        names: String,
+    },
+    /// No column has this name.
+    #[error("no column '{key}' (columns: {names})")]
+    NoName {
+        /// The name asked for.
+        key: String,
+        /// The column names, comma-separated.
+        names: String,
+    },
+    /// A label is not an integer (row 0-based).
+    #[error("row {row}: label {value} is not an integer")]
+    NotInteger {
+        /// The row.
+        row: usize,
+        /// Its value.
+        value: f64,
+    },
+}
+
 /// Finds a column by header name, else by 0-based index (`"2"`).
-pub fn find_column<'t>(t: &'t Table, key: &str) -> Result<&'t [f64], String> {
+pub fn find_column<'t>(t: &'t Table, key: &str) -> Result<&'t [f64], ColumnError> {
     if let Some(c) = t.column(key) {
         return Ok(c);
     }
@@ -17,27 +48,32 @@ pub fn find_column<'t>(t: &'t Table, key: &str) -> Result<&'t [f64], String> {
             .join(", ")
     };
     match key.trim().parse::<usize>() {
-        Ok(i) => t.columns.get(i).map(|(_, c)| c.as_slice()).ok_or_else(|| {
-            format!(
-                "no column {i}: the table has {} columns ({})",
-                t.columns.len(),
-                names()
-            )
+        Ok(i) => t
+            .columns
+            .get(i)
+            .map(|(_, c)| c.as_slice())
+            .ok_or_else(|| ColumnError::NoIndex {
+                index: i,
+                count: t.columns.len(),
+                names: names(),
+            }),
+        Err(_) => Err(ColumnError::NoName {
+            key: key.to_string(),
+            names: names(),
         }),
-        Err(_) => Err(format!("no column '{key}' (columns: {})", names())),
     }
 }
 
 /// Values of a label column as integers; a non-integer value is an error naming its row
 /// (0-based).
-pub fn integer_labels(col: &[f64]) -> Result<Vec<i64>, String> {
+pub fn integer_labels(col: &[f64]) -> Result<Vec<i64>, ColumnError> {
     col.iter()
         .enumerate()
         .map(|(i, &v)| {
             if v.fract() == 0.0 && v.abs() < 9e15 {
                 Ok(v as i64)
             } else {
-                Err(format!("row {i}: label {v} is not an integer"))
+                Err(ColumnError::NotInteger { row: i, value: v })
             }
         })
         .collect()
@@ -45,8 +81,8 @@ pub fn integer_labels(col: &[f64]) -> Result<Vec<i64>, String> {
 
 /// Points from columns `x` and `y` of `t`, with labels from column `label` when given.
 pub fn table_points(t: &Table, x: &str, y: &str) -> Result<Vec<[f64; 2]>, (&'static str, String)> {
-    let xs = find_column(t, x).map_err(|e| ("x_column", e))?;
-    let ys = find_column(t, y).map_err(|e| ("y_column", e))?;
+    let xs = find_column(t, x).map_err(|e| ("x_column", e.to_string()))?;
+    let ys = find_column(t, y).map_err(|e| ("y_column", e.to_string()))?;
     if xs.len() != ys.len() {
         return Err(("y_column", "the x and y columns differ in length".into()));
     }
@@ -111,9 +147,9 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
         "auto" if table.columns.len() < 3 => Vec::new(),
         key => {
             let key = if key == "auto" { "2" } else { key };
-            let col =
-                find_column(&table, key).map_err(|e| NodeError::invalid("label_column", e))?;
-            integer_labels(col).map_err(|e| NodeError::invalid("label_column", e))?
+            let col = find_column(&table, key)
+                .map_err(|e| NodeError::invalid("label_column", e.to_string()))?;
+            integer_labels(col).map_err(|e| NodeError::invalid("label_column", e.to_string()))?
         }
     };
     ctx.set_output("points", points);
@@ -145,6 +181,9 @@ mod tests {
         let e = table_points(&t, "0", "7").unwrap_err();
         assert_eq!(e.0, "y_column");
         assert!(e.1.contains("no column 7"), "{}", e.1);
-        assert!(integer_labels(&[1.0, 2.5]).unwrap_err().contains("row 1"));
+        assert!(integer_labels(&[1.0, 2.5])
+            .unwrap_err()
+            .to_string()
+            .contains("row 1"));
     }
 }

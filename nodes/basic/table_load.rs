@@ -23,6 +23,41 @@ impl Choice for Header {
     ];
 }
 
+/// Why text is not a table of numbers.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum TableError {
+    /// The CSV reader's own error.
+    #[error("{0}")]
+    Csv(String),
+    /// No data or header row.
+    #[error("the file has no rows")]
+    NoRows,
+    /// The first row is empty.
+    #[error("the first row has no fields")]
+    NoFields,
+    /// A row's field count differs from the first row's (rows counted from 1 over
+    /// non-blank, non-comment lines, header included).
+    #[error("row {line} has {fields} fields, the first row {expected}")]
+    RowLength {
+        /// The row.
+        line: usize,
+        /// Its field count.
+        fields: usize,
+        /// The first row's field count.
+        expected: usize,
+    },
+    /// A field is not a finite number.
+    #[error("row {line}, column {column}: '{field}' is not a finite number")]
+    NotANumber {
+        /// The row.
+        line: usize,
+        /// The column index.
+        column: usize,
+        /// The field's text.
+        field: String,
+    },
+}
+
 /// The name given to column `i` of a file without a header: `c0`, `c1`, ...
 pub fn default_column_name(i: usize) -> String {
     format!("c{i}")
@@ -31,7 +66,7 @@ pub fn default_column_name(i: usize) -> String {
 /// Splits `text` into rows of fields: CSV (through `cgnodes_api::io::csv`) when the first data line
 /// has a comma, else fields separated by spaces or tabs. Blank lines and `#` comments are
 /// skipped, fields trimmed.
-fn split_rows(text: &str) -> Result<Vec<Vec<String>>, String> {
+fn split_rows(text: &str) -> Result<Vec<Vec<String>>, TableError> {
     let first = text
         .lines()
         .map(str::trim)
@@ -40,7 +75,7 @@ fn split_rows(text: &str) -> Result<Vec<Vec<String>>, String> {
         return Ok(Vec::new());
     };
     if first.contains(',') {
-        let rows = cgnodes_api::io::csv::read(text, true, true)?;
+        let rows = cgnodes_api::io::csv::read(text, true, true).map_err(TableError::Csv)?;
         Ok(rows
             .map(|r| std::iter::once(r.header).chain(r.rows).collect())
             .unwrap_or_default())
@@ -57,10 +92,10 @@ fn split_rows(text: &str) -> Result<Vec<Vec<String>>, String> {
 /// Parses a table of numbers. Every data row must have as many fields as the first row (or
 /// the header), every field must be a finite number. Without a header the columns are named
 /// `c0`, `c1`, ... (`default_column_name`).
-pub fn parse_table(text: &str, header: Header) -> Result<Table, String> {
+pub fn parse_table(text: &str, header: Header) -> Result<Table, TableError> {
     let rows = split_rows(text)?;
     let Some(first) = rows.first() else {
-        return Err("the file has no rows".into());
+        return Err(TableError::NoRows);
     };
     let numeric = |s: &str| s.parse::<f64>().is_ok();
     let has_header = match header {
@@ -74,7 +109,7 @@ pub fn parse_table(text: &str, header: Header) -> Result<Table, String> {
         (0..first.len()).map(default_column_name).collect()
     };
     if names.is_empty() {
-        return Err("the first row has no fields".into());
+        return Err(TableError::NoFields);
     }
     let mut cols: Vec<Vec<f64>> = vec![Vec::new(); names.len()];
     let data = &rows[usize::from(has_header)..];
@@ -82,18 +117,22 @@ pub fn parse_table(text: &str, header: Header) -> Result<Table, String> {
         // Rows are counted from 1 over non-blank, non-comment lines, header included.
         let line = r + 1 + usize::from(has_header);
         if row.len() != names.len() {
-            return Err(format!(
-                "row {line} has {} fields, the first row {}",
-                row.len(),
-                names.len()
-            ));
+            return Err(TableError::RowLength {
+                line,
+                fields: row.len(),
+                expected: names.len(),
+            });
         }
         for (c, (col, s)) in cols.iter_mut().zip(row).enumerate() {
             let v: f64 = s
                 .parse()
                 .ok()
                 .filter(|v: &f64| v.is_finite())
-                .ok_or_else(|| format!("row {line}, column {c}: '{s}' is not a finite number"))?;
+                .ok_or_else(|| TableError::NotANumber {
+                    line,
+                    column: c,
+                    field: s.clone(),
+                })?;
             col.push(v);
         }
     }
@@ -115,7 +154,7 @@ pub fn load_table_file(
     let text = std::fs::read_to_string(&path).map_err(|e| NodeError::io(&path, e).at(socket))?;
     parse_table(&text, header).map_err(|e| {
         let e = if ctx.files().is_within_run_folders(&path) {
-            e
+            e.to_string()
         } else {
             "not a table of numbers (CSV or whitespace-separated)".into()
         };
@@ -163,9 +202,13 @@ mod tests {
 
     #[test]
     fn bad_rows_are_named() {
-        let e = parse_table("1 2\n3\n", Header::Auto).unwrap_err();
+        let e = parse_table("1 2\n3\n", Header::Auto)
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("row 2 has 1 fields"), "{e}");
-        let e = parse_table("x y\n1 nan\n", Header::Auto).unwrap_err();
+        let e = parse_table("x y\n1 nan\n", Header::Auto)
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("row 2, column 1: 'nan'"), "{e}");
         assert!(parse_table("x y\n1 b\n", Header::No).is_err());
         assert!(parse_table("\n# only\n", Header::Auto).is_err());

@@ -154,7 +154,7 @@ pub fn interpolate(
             if !(scale.is_finite() && scale > 0.0) {
                 return Err(("scale", format!("must be a positive number, got {scale}")));
             }
-            let r = RbfCurve::new(t, p, kernel, scale).map_err(|e| ("points", e))?;
+            let r = RbfCurve::new(t, p, kernel, scale).map_err(|e| ("points", e.to_string()))?;
             Box::new(move |x| r.eval(x))
         }
         Interpolation::Bezier => {
@@ -229,6 +229,75 @@ fn declare(b: &mut NodeBuilder) {
         .doc("Columns t, x, y of the samples; meta residual = max distance of the curve from the points it interpolates.");
 }
 
+/// The end condition of the cubic spline; `Clamped` reads and checks the two tangents.
+fn end_condition(ctx: &ExecContext, end: SplineEnd) -> Result<EndCondition<2>, NodeError> {
+    Ok(match end {
+        SplineEnd::Natural => EndCondition::Natural,
+        SplineEnd::Clamped => {
+            let a: [f64; 2] = ctx.input("start_tangent")?;
+            let b: [f64; 2] = ctx.input("end_tangent")?;
+            for (s, v) in [("start_tangent", a), ("end_tangent", b)] {
+                if !v.iter().all(|x| x.is_finite()) {
+                    return Err(NodeError::invalid(s, "must be finite"));
+                }
+            }
+            EndCondition::Clamped(a, b)
+        }
+        SplineEnd::NotAKnot => EndCondition::NotAKnot,
+        SplineEnd::Periodic => EndCondition::Periodic,
+    })
+}
+
+/// The MLP's hidden layer sizes (1 to 1024 each, at least one layer), epochs and seed.
+fn mlp_settings(ctx: &ExecContext) -> Result<Interpolation, NodeError> {
+    let hidden: Vec<i64> = ctx.input("hidden")?;
+    let hidden = hidden
+        .iter()
+        .map(|&h| usize::try_from(h).ok().filter(|h| (1..=1024).contains(h)))
+        .collect::<Option<Vec<usize>>>()
+        .filter(|h| !h.is_empty())
+        .ok_or_else(|| NodeError::invalid("hidden", "one to many sizes between 1 and 1024"))?;
+    let epochs = usize::try_from(ctx.input::<i64>("epochs")?)
+        .ok()
+        .filter(|e| *e >= 1)
+        .ok_or_else(|| NodeError::invalid("epochs", "must be at least 1"))?;
+    let seed = u64::try_from(ctx.input::<i64>("seed")?)
+        .map_err(|_| NodeError::invalid("seed", "must be >= 0"))?;
+    Ok(Interpolation::Mlp(hidden, epochs, seed))
+}
+
+/// The interpolation `method` with its settings from the sockets.
+fn interpolation(
+    ctx: &ExecContext,
+    method: Method,
+    end: SplineEnd,
+) -> Result<Interpolation, NodeError> {
+    Ok(match method {
+        Method::Polynomial => Interpolation::Polynomial,
+        Method::CubicSpline => Interpolation::CubicSpline(end_condition(ctx, end)?),
+        Method::Rbf => Interpolation::Rbf(ctx.choice("kernel")?, ctx.input("scale")?),
+        Method::Bezier => Interpolation::Bezier,
+        Method::BezierSpline => Interpolation::BezierSpline,
+        Method::Mlp => mlp_settings(ctx)?,
+    })
+}
+
+/// The interpolation residual: the largest distance between the curve and a point at its
+/// parameter (only the two ends for a Bézier curve, which interpolates only those).
+fn residual(f: &Interpolant, method: Method, p: &[[f64; 2]], t: &[f64]) -> f64 {
+    let checked: Vec<(f64, [f64; 2])> = match method {
+        Method::Bezier => vec![(0.0, p[0]), (1.0, p[p.len() - 1])],
+        _ => t.iter().copied().zip(p.iter().copied()).collect(),
+    };
+    checked
+        .iter()
+        .map(|(x, q)| {
+            let v = f.eval(*x);
+            (v[0] - q[0]).hypot(v[1] - q[1])
+        })
+        .fold(0.0, f64::max)
+}
+
 fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let mut p: Vec<[f64; 2]> = ctx.input("points")?;
     let t: Option<Vec<f64>> = ctx.input_opt("t")?;
@@ -259,58 +328,9 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
                 .map_err(|e| NodeError::invalid("points", e.to_string()))?
         }
     };
-    let how = match method {
-        Method::Polynomial => Interpolation::Polynomial,
-        Method::CubicSpline => Interpolation::CubicSpline(match end {
-            SplineEnd::Natural => EndCondition::Natural,
-            SplineEnd::Clamped => {
-                let a: [f64; 2] = ctx.input("start_tangent")?;
-                let b: [f64; 2] = ctx.input("end_tangent")?;
-                for (s, v) in [("start_tangent", a), ("end_tangent", b)] {
-                    if !v.iter().all(|x| x.is_finite()) {
-                        return Err(NodeError::invalid(s, "must be finite"));
-                    }
-                }
-                EndCondition::Clamped(a, b)
-            }
-            SplineEnd::NotAKnot => EndCondition::NotAKnot,
-            SplineEnd::Periodic => EndCondition::Periodic,
-        }),
-        Method::Rbf => Interpolation::Rbf(ctx.choice("kernel")?, ctx.input("scale")?),
-        Method::Bezier => Interpolation::Bezier,
-        Method::BezierSpline => Interpolation::BezierSpline,
-        Method::Mlp => {
-            let hidden: Vec<i64> = ctx.input("hidden")?;
-            let hidden = hidden
-                .iter()
-                .map(|&h| usize::try_from(h).ok().filter(|h| (1..=1024).contains(h)))
-                .collect::<Option<Vec<usize>>>()
-                .filter(|h| !h.is_empty())
-                .ok_or_else(|| {
-                    NodeError::invalid("hidden", "one to many sizes between 1 and 1024")
-                })?;
-            let epochs = usize::try_from(ctx.input::<i64>("epochs")?)
-                .ok()
-                .filter(|e| *e >= 1)
-                .ok_or_else(|| NodeError::invalid("epochs", "must be at least 1"))?;
-            let seed = u64::try_from(ctx.input::<i64>("seed")?)
-                .map_err(|_| NodeError::invalid("seed", "must be >= 0"))?;
-            Interpolation::Mlp(hidden, epochs, seed)
-        }
-    };
+    let how = interpolation(ctx, method, end)?;
     let f = interpolate(&p, &t, how).map_err(|(s, e)| NodeError::invalid(s, e))?;
-    // The interpolation residual: at every point (only the ends for a Bézier curve).
-    let checked: Vec<(f64, [f64; 2])> = match method {
-        Method::Bezier => vec![(0.0, p[0]), (1.0, p[p.len() - 1])],
-        _ => t.iter().copied().zip(p.iter().copied()).collect(),
-    };
-    let residual = checked
-        .iter()
-        .map(|(x, q)| {
-            let v = f.eval(*x);
-            (v[0] - q[0]).hypot(v[1] - q[1])
-        })
-        .fold(0.0, f64::max);
+    let residual = residual(&f, method, &p, &t);
     let s = f.sample(samples);
     let mut table = Table::with_columns(&["t", "x", "y"]);
     for (x, v) in &s {

@@ -100,6 +100,106 @@ fn distinct_count(x: &[f64]) -> usize {
     s.len()
 }
 
+/// The least-squares problem of a model: the design matrix (one column per basis function),
+/// the Gaussians' centres and width (none for polynomials) and the ridge lambda.
+struct Design {
+    a: Mat<f64>,
+    centres: Vec<f64>,
+    sigma: f64,
+    lambda: f64,
+}
+
+/// The Vandermonde matrix of 1, x, ..., x^d at `x`.
+fn monomials(x: &[f64], d: usize) -> Mat<f64> {
+    Mat::from_fn(x.len(), d + 1, |i, j| x[i].powi(j as i32))
+}
+
+/// The design of a (ridge) polynomial of degree `d`: `lambda` must be >= 0, and without it
+/// the points need `d + 1` distinct x values.
+fn polynomial_design(
+    x: &[f64],
+    d: usize,
+    lambda: f64,
+    distinct: usize,
+) -> Result<Design, FitError> {
+    if !(lambda.is_finite() && lambda >= 0.0) {
+        return Err(("lambda", format!("must be >= 0, got {lambda}")));
+    }
+    if lambda == 0.0 && distinct <= d {
+        return Err((
+            "degree",
+            format!(
+                "degree {d} needs at least {} distinct x values, got {distinct}",
+                d + 1
+            ),
+        ));
+    }
+    Ok(Design {
+        a: monomials(x, d),
+        centres: Vec::new(),
+        sigma: 0.0,
+        lambda,
+    })
+}
+
+/// The design of a constant plus `count` Gaussians centred evenly over [min x, max x], of
+/// width `sigma` (0: the spacing of the centres, or the x range for one Gaussian).
+fn gaussian_design(
+    x: &[f64],
+    count: usize,
+    sigma: f64,
+    distinct: usize,
+) -> Result<Design, FitError> {
+    if count == 0 {
+        return Err(("basis_count", "must be at least 1".into()));
+    }
+    if distinct <= count {
+        return Err((
+            "basis_count",
+            format!("{count} Gaussians and a constant need at least {} distinct x values, got {distinct}", count + 1),
+        ));
+    }
+    let (lo, hi) = x
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
+    let centres: Vec<f64> = (0..count)
+        .map(|k| {
+            if count == 1 {
+                0.5 * (lo + hi)
+            } else {
+                lo + (hi - lo) * k as f64 / (count - 1) as f64
+            }
+        })
+        .collect();
+    let sigma = if sigma > 0.0 {
+        sigma
+    } else if count > 1 {
+        (hi - lo) / (count - 1) as f64
+    } else {
+        hi - lo
+    };
+    if !(sigma.is_finite() && sigma > 0.0) {
+        return Err(("sigma", format!("must be a positive number, got {sigma}")));
+    }
+    let s2 = 2.0 * sigma * sigma;
+    let a = Mat::from_fn(x.len(), count + 1, |i, j| {
+        if j == 0 {
+            1.0
+        } else {
+            let d = x[i] - centres[j - 1];
+            (-d * d / s2).exp()
+        }
+    });
+    Ok(Design {
+        a,
+        centres,
+        sigma,
+        lambda: 0.0,
+    })
+}
+
 /// Fits `model` to the points (x_i, y_i) (finite, at least one).
 pub fn fit(points: &[[f64; 2]], model: Model) -> Result<Fit, FitError> {
     let n = points.len();
@@ -115,93 +215,31 @@ pub fn fit(points: &[[f64; 2]], model: Model) -> Result<Fit, FitError> {
     let x: Vec<f64> = points.iter().map(|p| p[0]).collect();
     let y: Vec<f64> = points.iter().map(|p| p[1]).collect();
     let distinct = distinct_count(&x);
-    let monomials = |d: usize| Mat::from_fn(n, d + 1, |i, j| x[i].powi(j as i32));
-    let (a, centres, sigma, lambda) = match model {
-        Model::Polynomial(d) | Model::Ridge(d, _) => {
-            let lambda = match model {
-                Model::Ridge(_, l) => l,
-                _ => 0.0,
-            };
-            if !(lambda.is_finite() && lambda >= 0.0) {
-                return Err(("lambda", format!("must be >= 0, got {lambda}")));
-            }
-            if lambda == 0.0 && distinct <= d {
-                return Err((
-                    "degree",
-                    format!(
-                        "degree {d} needs at least {} distinct x values, got {distinct}",
-                        d + 1
-                    ),
-                ));
-            }
-            (monomials(d), Vec::new(), 0.0, lambda)
-        }
+    let design = match model {
+        Model::Polynomial(d) => polynomial_design(&x, d, 0.0, distinct)?,
+        Model::Ridge(d, lambda) => polynomial_design(&x, d, lambda, distinct)?,
         Model::Interpolate => {
             if distinct < n {
                 return Err(("points", "interpolation needs distinct x values".into()));
             }
-            (monomials(n - 1), Vec::new(), 0.0, 0.0)
+            polynomial_design(&x, n - 1, 0.0, distinct)?
         }
-        Model::GaussianBasis { count, sigma } => {
-            if count == 0 {
-                return Err(("basis_count", "must be at least 1".into()));
-            }
-            if distinct <= count {
-                return Err((
-                    "basis_count",
-                    format!("{count} Gaussians and a constant need at least {} distinct x values, got {distinct}", count + 1),
-                ));
-            }
-            let (lo, hi) = x
-                .iter()
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
-                    (a.min(v), b.max(v))
-                });
-            let centres: Vec<f64> = (0..count)
-                .map(|k| {
-                    if count == 1 {
-                        0.5 * (lo + hi)
-                    } else {
-                        lo + (hi - lo) * k as f64 / (count - 1) as f64
-                    }
-                })
-                .collect();
-            let sigma = if sigma > 0.0 {
-                sigma
-            } else if count > 1 {
-                (hi - lo) / (count - 1) as f64
-            } else {
-                hi - lo
-            };
-            if !(sigma.is_finite() && sigma > 0.0) {
-                return Err(("sigma", format!("must be a positive number, got {sigma}")));
-            }
-            let s2 = 2.0 * sigma * sigma;
-            let a = Mat::from_fn(n, count + 1, |i, j| {
-                if j == 0 {
-                    1.0
-                } else {
-                    let d = x[i] - centres[j - 1];
-                    (-d * d / s2).exp()
-                }
-            });
-            (a, centres, sigma, 0.0)
-        }
+        Model::GaussianBasis { count, sigma } => gaussian_design(&x, count, sigma, distinct)?,
     };
     let socket = match model {
         Model::GaussianBasis { .. } => "sigma",
         Model::Interpolate => "points",
         _ => "degree",
     };
-    let sol = lstsq(&a, &y, lambda).map_err(|e| (socket, e))?;
+    let sol = lstsq(&design.a, &y, design.lambda).map_err(|e| (socket, e.to_string()))?;
     let interp = matches!(model, Model::Interpolate).then(|| {
         let f: Vec<[f64; 1]> = y.iter().map(|v| [*v]).collect();
         Barycentric::new(&x, &f)
     });
     let mut f = Fit {
         coefficients: sol.c,
-        centres,
-        sigma,
+        centres: design.centres,
+        sigma: design.sigma,
         condition: sol.condition,
         rms: 0.0,
         interp,

@@ -18,21 +18,47 @@ pub struct LstsqSolution {
     pub condition: f64,
 }
 
+/// Why a least-squares problem has no usable solution.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum LstsqError {
+    /// A column of A is zero (or not finite) at every row.
+    #[error("basis function {0} is zero (or not finite) at every x")]
+    ZeroColumn(usize),
+    /// Fewer rows than unknowns (without ridge).
+    #[error("{unknowns} coefficients from {values} values: too few values")]
+    TooFewValues {
+        /// Number of coefficients.
+        unknowns: usize,
+        /// Number of values.
+        values: usize,
+    },
+    /// faer's SVD failed (its error, as `Debug`).
+    #[error("SVD failed: {0}")]
+    Svd(String),
+    /// The matrix is rank deficient.
+    #[error("the least-squares matrix is singular (rank deficient)")]
+    Singular,
+    /// The solution has a NaN or infinite entry.
+    #[error("the least-squares solution is not finite")]
+    NotFinite,
+}
+
 /// Solves min |A c - y|^2 + lambda |c|^2 for the m x n matrix `a` (m >= n without ridge).
 /// Errors when a column is zero or the solution is not finite (a singular problem).
-pub fn lstsq(a: &Mat<f64>, y: &[f64], lambda: f64) -> Result<LstsqSolution, String> {
+pub fn lstsq(a: &Mat<f64>, y: &[f64], lambda: f64) -> Result<LstsqSolution, LstsqError> {
     let (m, n) = (a.nrows(), a.ncols());
     let scale: Vec<f64> = (0..n)
         .map(|j| (0..m).map(|i| a[(i, j)] * a[(i, j)]).sum::<f64>().sqrt())
         .collect();
     if let Some(j) = scale.iter().position(|s| !(*s > 0.0 && s.is_finite())) {
-        return Err(format!(
-            "basis function {j} is zero (or not finite) at every x"
-        ));
+        return Err(LstsqError::ZeroColumn(j));
     }
     let rows = if lambda > 0.0 { m + n } else { m };
     if rows < n {
-        return Err(format!("{n} coefficients from {m} values: too few values"));
+        return Err(LstsqError::TooFewValues {
+            unknowns: n,
+            values: m,
+        });
     }
     let mut s = Mat::<f64>::zeros(rows, n);
     let mut rhs = Mat::<f64>::zeros(rows, 1);
@@ -50,18 +76,18 @@ pub fn lstsq(a: &Mat<f64>, y: &[f64], lambda: f64) -> Result<LstsqSolution, Stri
     }
     let sv = s
         .singular_values()
-        .map_err(|e| format!("SVD failed: {e:?}"))?;
+        .map_err(|e| LstsqError::Svd(format!("{e:?}")))?;
     let condition = match (sv.first(), sv.last()) {
         (Some(&hi), Some(&lo)) if lo > 0.0 => hi / lo,
         _ => f64::INFINITY,
     };
     if !condition.is_finite() {
-        return Err("the least-squares matrix is singular (rank deficient)".into());
+        return Err(LstsqError::Singular);
     }
     let x = s.qr().solve_lstsq(&rhs);
     let c: Vec<f64> = (0..n).map(|j| x[(j, 0)] / scale[j]).collect();
     if c.iter().any(|v| !v.is_finite()) {
-        return Err("the least-squares solution is not finite".into());
+        return Err(LstsqError::NotFinite);
     }
     Ok(LstsqSolution { c, condition })
 }

@@ -52,6 +52,20 @@ impl RbfKernel {
     }
 }
 
+/// Why an RBF interpolant cannot be built.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum RbfError {
+    /// Fewer than two nodes, or not one value per node.
+    #[error("needs at least 2 nodes and one value each, got {0}")]
+    TooFewNodes(usize),
+    /// The kernel scale is not a positive number.
+    #[error("scale must be a positive number, got {0}")]
+    Scale(f64),
+    /// The interpolation system cannot be solved.
+    #[error("the RBF system is singular for these nodes and this scale")]
+    Singular,
+}
+
 /// An RBF interpolant with values in R^D.
 #[derive(Clone, Debug)]
 pub struct RbfCurve<const D: usize> {
@@ -64,15 +78,13 @@ pub struct RbfCurve<const D: usize> {
 
 impl<const D: usize> RbfCurve<D> {
     /// Solves for the interpolant of `f` at the distinct nodes `t` (at least two).
-    pub fn new(t: &[f64], f: &[[f64; D]], kernel: RbfKernel, scale: f64) -> Result<Self, String> {
+    pub fn new(t: &[f64], f: &[[f64; D]], kernel: RbfKernel, scale: f64) -> Result<Self, RbfError> {
         let n = t.len();
         if n < 2 || f.len() != n {
-            return Err(format!(
-                "needs at least 2 nodes and one value each, got {n}"
-            ));
+            return Err(RbfError::TooFewNodes(n));
         }
         if !(scale.is_finite() && scale > 0.0) {
-            return Err(format!("scale must be a positive number, got {scale}"));
+            return Err(RbfError::Scale(scale));
         }
         let m = n + 2;
         let mut a = Mat::<f64>::zeros(m, m);
@@ -91,7 +103,7 @@ impl<const D: usize> RbfCurve<D> {
         }
         let x = a.partial_piv_lu().solve(&rhs);
         if (0..m).any(|i| (0..D).any(|k| !x[(i, k)].is_finite())) {
-            return Err("the RBF system is singular for these nodes and this scale".into());
+            return Err(RbfError::Singular);
         }
         Ok(RbfCurve {
             t: t.to_vec(),

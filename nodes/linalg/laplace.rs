@@ -101,6 +101,98 @@ enum Factor {
     Two(TwoDomainFactor),
 }
 
+/// Numbers the free vertices in elimination order when there is one (so the matrix is
+/// assembled already permuted), by vertex otherwise: the row of each vertex (`u32::MAX` when
+/// fixed), the free vertices by row, and how many free vertices fall in each of the order's
+/// two top-level halves.
+fn number_free(
+    is_fixed: &[bool],
+    order: Option<&[usize]>,
+    halves: Option<[usize; 2]>,
+) -> (Vec<u32>, Vec<u32>, [usize; 2]) {
+    let n = is_fixed.len();
+    let mut index = vec![u32::MAX; n];
+    let mut free = Vec::new();
+    let by_vertex = 0..n;
+    let sequence: &mut dyn Iterator<Item = usize> = match order {
+        Some(o) => &mut o.iter().copied(),
+        None => &mut by_vertex.into_iter(),
+    };
+    // free vertices in each top-level half of the order
+    let mut free_halves = [0usize; 2];
+    for (k, v) in sequence.enumerate() {
+        if !is_fixed[v] {
+            index[v] = free.len() as u32;
+            free.push(v as u32);
+            if let Some([h0, h1]) = halves {
+                if k < h0 + h1 {
+                    free_halves[usize::from(k >= h0)] += 1;
+                }
+            }
+        }
+    }
+    (index, free, free_halves)
+}
+
+/// `L_II` over the free vertices as one triangle by columns. By vertex (`upper` false): the
+/// lower one, column c (free vertex v) holding the diagonal, then the free neighbours with a
+/// larger row index, already sorted because rows are sorted by vertex. In elimination order
+/// (`upper`): the upper one, column c holding the neighbours eliminated earlier (sorted
+/// here), then the diagonal. `Err` for a free vertex without usable edge weights.
+fn assemble_free_block(
+    rows: LaplaceRows<'_>,
+    index: &[u32],
+    free: &[u32],
+    upper: bool,
+) -> Result<SparseColMat<usize, f64>, NodeError> {
+    let nfree = free.len();
+    let mut col_ptr = Vec::with_capacity(nfree + 1);
+    let mut row_idx = Vec::with_capacity(rows.col.len() / 2 + nfree);
+    let mut values = Vec::with_capacity(rows.col.len() / 2 + nfree);
+    col_ptr.push(0usize);
+    for (c, &v) in free.iter().enumerate() {
+        let r = rows.start[v as usize]..rows.start[v as usize + 1];
+        let first = values.len();
+        if !upper {
+            row_idx.push(c);
+            values.push(0.0);
+        }
+        let mut diag = 0.0;
+        for (&j, &w) in rows.col[r.clone()].iter().zip(&rows.weight[r]) {
+            diag += w;
+            let rj = index[j as usize];
+            if rj != u32::MAX && ((rj as usize) < c) == upper && rj as usize != c {
+                row_idx.push(rj as usize);
+                values.push(-w);
+            }
+        }
+        if diag.abs() <= 1e-300 || !diag.is_finite() {
+            return Err(NodeError::singular(format!(
+                "free vertex {v} has no usable edge weights (isolated or degenerate neighbourhood)"
+            )));
+        }
+        if upper {
+            // insertion sort of the few entries, values kept aligned; diagonal last
+            for a in first + 1..row_idx.len() {
+                let mut b = a;
+                while b > first && row_idx[b - 1] > row_idx[b] {
+                    row_idx.swap(b - 1, b);
+                    values.swap(b - 1, b);
+                    b -= 1;
+                }
+            }
+            row_idx.push(c);
+            values.push(diag);
+        } else {
+            values[first] = diag;
+        }
+        col_ptr.push(row_idx.len());
+    }
+    let symbolic =
+        faer::sparse::SymbolicSparseColMat::new_checked(nfree, nfree, col_ptr, None, row_idx);
+    Ok(SparseColMat::new(symbolic, values))
+}
+
 impl DirichletFactor {
     /// Assembles and factors `L_II` for the vertices where `is_fixed` is false, in `order`
     /// when given (faer's AMD otherwise); when both of the order's top-level halves keep at
@@ -120,32 +212,11 @@ impl DirichletFactor {
                 ),
             ));
         }
-        // Free vertices numbered in elimination order when there is one (the matrix is then
-        // assembled already permuted), by vertex otherwise.
         let halves = order.and_then(|d| d.halves);
         let order = order
             .map(|d| d.order.as_slice())
             .filter(|o| is_permutation(o, n));
-        let mut index = vec![u32::MAX; n];
-        let mut free = Vec::new();
-        let by_vertex = 0..n;
-        let sequence: &mut dyn Iterator<Item = usize> = match order {
-            Some(o) => &mut o.iter().copied(),
-            None => &mut by_vertex.into_iter(),
-        };
-        // free vertices in each top-level half of the order
-        let mut free_halves = [0usize; 2];
-        for (k, v) in sequence.enumerate() {
-            if !is_fixed[v] {
-                index[v] = free.len() as u32;
-                free.push(v as u32);
-                if let Some([h0, h1]) = halves {
-                    if k < h0 + h1 {
-                        free_halves[usize::from(k >= h0)] += 1;
-                    }
-                }
-            }
-        }
+        let (index, free, free_halves) = number_free(is_fixed, order, halves);
         let nfree = free.len();
         if nfree == 0 {
             return Ok(DirichletFactor {
@@ -154,56 +225,7 @@ impl DirichletFactor {
                 factor: None,
             });
         }
-        // One triangle by columns. By vertex: the lower one, column c (free vertex v) holding
-        // the diagonal, then the free neighbours with a larger row index, already sorted
-        // because rows are sorted by vertex. In elimination order: the upper one, column c
-        // holding the neighbours eliminated earlier (sorted here), then the diagonal.
-        let upper = order.is_some();
-        let mut col_ptr = Vec::with_capacity(nfree + 1);
-        let mut row_idx = Vec::with_capacity(rows.col.len() / 2 + nfree);
-        let mut values = Vec::with_capacity(rows.col.len() / 2 + nfree);
-        col_ptr.push(0usize);
-        for (c, &v) in free.iter().enumerate() {
-            let r = rows.start[v as usize]..rows.start[v as usize + 1];
-            let first = values.len();
-            if !upper {
-                row_idx.push(c);
-                values.push(0.0);
-            }
-            let mut diag = 0.0;
-            for (&j, &w) in rows.col[r.clone()].iter().zip(&rows.weight[r]) {
-                diag += w;
-                let rj = index[j as usize];
-                if rj != u32::MAX && ((rj as usize) < c) == upper && rj as usize != c {
-                    row_idx.push(rj as usize);
-                    values.push(-w);
-                }
-            }
-            if diag.abs() <= 1e-300 || !diag.is_finite() {
-                return Err(NodeError::singular(format!(
-                    "free vertex {v} has no usable edge weights (isolated or degenerate neighbourhood)"
-                )));
-            }
-            if upper {
-                // insertion sort of the few entries, values kept aligned; diagonal last
-                for a in first + 1..row_idx.len() {
-                    let mut b = a;
-                    while b > first && row_idx[b - 1] > row_idx[b] {
-                        row_idx.swap(b - 1, b);
-                        values.swap(b - 1, b);
-                        b -= 1;
-                    }
-                }
-                row_idx.push(c);
-                values.push(diag);
-            } else {
-                values[first] = diag;
-            }
-            col_ptr.push(row_idx.len());
-        }
-        let symbolic =
-            faer::sparse::SymbolicSparseColMat::new_checked(nfree, nfree, col_ptr, None, row_idx);
-        let matrix = SparseColMat::new(symbolic, values);
+        let matrix = assemble_free_block(rows, &index, &free, order.is_some())?;
         let [f0, f1] = free_halves;
         let factor = match order {
             Some(_) if f0.min(f1) >= TWO_DOMAIN_MIN_ROWS && f0 + f1 < nfree => {

@@ -6,22 +6,58 @@
 use cgnodes_api::prelude::*;
 use std::path::Path;
 
+/// Why a series could not be read or compared.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SeriesError {
+    /// The CSV reader's own error.
+    #[error("{0}")]
+    Csv(String),
+    /// The text holds no rows at all.
+    #[error("empty CSV")]
+    EmptyCsv,
+    /// The header has no column of this name.
+    #[error("no column '{name}' (columns: {columns})")]
+    NoColumn {
+        /// The column asked for.
+        name: String,
+        /// The header's columns, comma-separated.
+        columns: String,
+    },
+    /// A field of a row (numbered from 1 with the header) is missing, not a number or not
+    /// finite.
+    #[error("row {0}: bad number")]
+    BadNumber(usize),
+    /// Fewer than two finite simulated points.
+    #[error("the simulated series has fewer than two points")]
+    TooFewPoints,
+    /// The simulation never reaches the anchor's y.
+    #[error("the simulated series never reaches the anchor y = {0}")]
+    AnchorNotReached(f64),
+    /// No counted reference point lies within the simulated range.
+    #[error("no reference point falls inside the simulated series")]
+    NoOverlap,
+}
+
 /// Reads two named numeric columns from CSV text with a header row (blank lines and lines
 /// starting with `#` are skipped, fields trimmed).
-pub fn read_csv_columns(text: &str, x: &str, y: &str) -> Result<Vec<(f64, f64)>, String> {
-    let csv = cgnodes_api::io::csv::read(text, true, true)?.ok_or("empty CSV")?;
+pub fn read_csv_columns(text: &str, x: &str, y: &str) -> Result<Vec<(f64, f64)>, SeriesError> {
+    let csv = cgnodes_api::io::csv::read(text, true, true)
+        .map_err(SeriesError::Csv)?
+        .ok_or(SeriesError::EmptyCsv)?;
     let col = |name: &str| {
-        csv.column(name)
-            .ok_or_else(|| format!("no column '{name}' (columns: {})", csv.header.join(", ")))
+        csv.column(name).ok_or_else(|| SeriesError::NoColumn {
+            name: name.to_string(),
+            columns: csv.header.join(", "),
+        })
     };
     let (ix, iy) = (col(x)?, col(y)?);
     let mut out = Vec::new();
     for (k, f) in csv.rows.iter().enumerate() {
-        let num = |i: usize| -> Result<f64, String> {
+        let num = |i: usize| {
             f.get(i)
                 .and_then(|s| s.parse::<f64>().ok())
                 .filter(|v| v.is_finite())
-                .ok_or_else(|| format!("row {}: bad number", k + 2))
+                .ok_or(SeriesError::BadNumber(k + 2))
         };
         out.push((num(ix)?, num(iy)?));
     }
@@ -64,7 +100,7 @@ pub fn compare_series(
     error_in_x: bool,
     anchor: Option<(f64, f64)>,
     min_y: f64,
-) -> Result<(f64, Comparison), String> {
+) -> Result<(f64, Comparison), SeriesError> {
     let mut s: Vec<(f64, f64)> = sim
         .iter()
         .copied()
@@ -72,11 +108,10 @@ pub fn compare_series(
         .collect();
     s.sort_by(|a, b| a.0.total_cmp(&b.0));
     if s.len() < 2 {
-        return Err("the simulated series has fewer than two points".into());
+        return Err(SeriesError::TooFewPoints);
     }
     if let Some((ax, ay)) = anchor {
-        let sx = first_x_reaching(&s, ay)
-            .ok_or_else(|| format!("the simulated series never reaches the anchor y = {ay}"))?;
+        let sx = first_x_reaching(&s, ay).ok_or(SeriesError::AnchorNotReached(ay))?;
         let dx = ax - sx;
         for p in &mut s {
             p.0 += dx;
@@ -100,7 +135,7 @@ pub fn compare_series(
         }
     }
     if rows.is_empty() {
-        return Err("no reference point falls inside the simulated series".into());
+        return Err(SeriesError::NoOverlap);
     }
     let rms = (rows.iter().map(|r| r.3 * r.3).sum::<f64>() / rows.len() as f64).sqrt();
     Ok((rms, rows))
@@ -152,7 +187,7 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
         // The error may quote the header row: only files of the run's own folders are
         // quoted, so a graph cannot read the first line of any file through it (issue 23).
         let e = if ctx.files().is_within_run_folders(&path) {
-            e
+            e.to_string()
         } else {
             format!(
                 "not a CSV with numeric columns '{xc}' and '{yc}' under a recognised header \
@@ -187,7 +222,7 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let error_in_x = ctx.choice::<ErrorIn>("error_in")? == ErrorIn::X;
     let min_y: f64 = ctx.input("min_y")?;
     let (rms, rows) = compare_series(&sim, &reference, error_in_x, anchor, min_y)
-        .map_err(|e| NodeError::invalid("series", e))?;
+        .map_err(|e| NodeError::invalid("series", e.to_string()))?;
     let mut table = Table::with_columns(&["x_ref", "y_ref", "sim", "rel_error"]);
     for r in rows {
         table.push_row(&[r.0, r.1, r.2, r.3]);
@@ -236,9 +271,11 @@ mod tests {
         assert_eq!(pts, vec![(0.5, 1.1), (1.0, 1.4)]);
         assert!(read_csv_columns("T,Z\n0.5,x\n", "T", "Z")
             .unwrap_err()
+            .to_string()
             .contains("row 2"));
         assert!(read_csv_columns("T,Q\n", "T", "Z")
             .unwrap_err()
+            .to_string()
             .contains("no column 'Z'"));
     }
 }

@@ -9,6 +9,33 @@
 //! interpolated linearly across the sub-steps (the course steps once per frame, where
 //! interpolation and no interpolation agree).
 
+/// Why control pairs cannot be made.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum PairError {
+    /// There are fixed cloth vertices but no selected body vertex.
+    #[error("no body vertex is selected to pair the fixed cloth vertices with")]
+    NoBodyVertex,
+    /// The flat pair list has an odd length.
+    #[error("{0} numbers; pairs need an even count (cloth, body, cloth, body, ...)")]
+    OddCount(usize),
+    /// A cloth vertex index is out of range.
+    #[error("cloth vertex {vertex} is outside 0..{count}")]
+    ClothVertex {
+        /// The index given.
+        vertex: i64,
+        /// Number of cloth vertices.
+        count: usize,
+    },
+    /// A body vertex index is out of range.
+    #[error("body vertex {vertex} is outside 0..{count}")]
+    BodyVertex {
+        /// The index given.
+        vertex: i64,
+        /// Number of body vertices.
+        count: usize,
+    },
+}
+
 /// Pairs (cloth vertex, body vertex): each of `fixed` with the nearest of `selected` body
 /// vertices. `Err` when there are fixed vertices but no selected body vertex.
 pub fn pair_nearest(
@@ -16,12 +43,12 @@ pub fn pair_nearest(
     fixed: &[usize],
     body: &[[f64; 3]],
     selected: &[usize],
-) -> Result<Vec<(usize, usize)>, String> {
+) -> Result<Vec<(usize, usize)>, PairError> {
     if fixed.is_empty() {
         return Ok(Vec::new());
     }
     if selected.is_empty() {
-        return Err("no body vertex is selected to pair the fixed cloth vertices with".into());
+        return Err(PairError::NoBodyVertex);
     }
     let d2 = |a: [f64; 3], b: [f64; 3]| (0..3).map(|c| (a[c] - b[c]).powi(2)).sum::<f64>();
     Ok(fixed
@@ -45,21 +72,24 @@ pub fn pairs_from_list(
     list: &[i64],
     n_cloth: usize,
     n_body: usize,
-) -> Result<Vec<(usize, usize)>, String> {
+) -> Result<Vec<(usize, usize)>, PairError> {
     if !list.len().is_multiple_of(2) {
-        return Err(format!(
-            "{} numbers; pairs need an even count (cloth, body, cloth, body, ...)",
-            list.len()
-        ));
+        return Err(PairError::OddCount(list.len()));
     }
     list.chunks(2)
         .map(|p| {
             let (c, b) = (p[0], p[1]);
             if c < 0 || c as usize >= n_cloth {
-                return Err(format!("cloth vertex {c} is outside 0..{n_cloth}"));
+                return Err(PairError::ClothVertex {
+                    vertex: c,
+                    count: n_cloth,
+                });
             }
             if b < 0 || b as usize >= n_body {
-                return Err(format!("body vertex {b} is outside 0..{n_body}"));
+                return Err(PairError::BodyVertex {
+                    vertex: b,
+                    count: n_body,
+                });
             }
             Ok((c as usize, b as usize))
         })
@@ -113,9 +143,11 @@ mod tests {
         assert!(pairs_from_list(&[2, 0, 0], 3, 2).is_err());
         assert!(pairs_from_list(&[3, 0], 3, 2)
             .unwrap_err()
+            .to_string()
             .contains("cloth vertex 3"));
         assert!(pairs_from_list(&[0, -1], 3, 2)
             .unwrap_err()
+            .to_string()
             .contains("body vertex -1"));
         let prev = [[0.0, 0.0, 0.0], [1.0, 1.0, 1.0]];
         let cur = [[2.0, 0.0, -4.0], [1.0, 1.0, 1.0]];

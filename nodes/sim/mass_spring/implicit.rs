@@ -220,7 +220,9 @@ impl Implicit {
         self.profile.assemble += t.elapsed().as_secs_f64();
         let t = Instant::now();
         let first_factor = direct.symbolic_count == 0;
-        direct.factor().map_err(NewtonError::NotPositiveDefinite)?;
+        direct
+            .factor()
+            .map_err(|e| NewtonError::NotPositiveDefinite(e.to_string()))?;
         let dt = t.elapsed().as_secs_f64();
         if first_factor {
             self.profile.first_factor += dt;
@@ -232,7 +234,7 @@ impl Implicit {
         dx.copy_from(rhs);
         direct
             .solve(dx.as_mut())
-            .map_err(NewtonError::NotPositiveDefinite)?;
+            .map_err(|e| NewtonError::NotPositiveDefinite(e.to_string()))?;
         self.profile.solve += t.elapsed().as_secs_f64();
         Ok(())
     }

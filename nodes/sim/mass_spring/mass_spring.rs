@@ -3,11 +3,11 @@
 //! may move along keyframes, stepped frame by frame. The simulator is kept in the node's
 //! state between frames and restarts when the mesh or any parameter changes.
 
-use super::control::{control_targets, pair_nearest, pairs_from_list};
+use super::control::{control_targets, pair_nearest, pairs_from_list, PairError};
 use super::implicit::NewtonOptions;
 use super::keyframes::{keyframed_center, parse_keyframes};
 use super::simulator::{Method, SetupError, SimError, Simulator, SolverOptions};
-use super::springs::{springs_from_mesh, Model, Sphere, SpringKinds};
+use super::springs::{springs_from_mesh, Energy, Model, Sphere, SpringKinds, State};
 use cgnodes_api::prelude::*;
 use cgnodes_geometry::vertex_select::select_vertices;
 use std::hash::{Hash, Hasher};
@@ -150,6 +150,7 @@ fn declare(b: &mut NodeBuilder) {
     b.add_output::<Table>("log");
 }
 
+/// What the stepping loop needs beyond the simulator.
 struct Params {
     method: Method,
     h: f64,
@@ -160,56 +161,75 @@ struct Params {
     pairs: Vec<(usize, usize)>,
 }
 
-/// Reads the parameters; builds the simulator (springs, factorizations) only when `with_sim`.
-fn build(
-    ctx: &ExecContext,
-    mesh: &Mesh,
-    control: Option<&Mesh>,
-    with_sim: bool,
-) -> Result<(Option<Simulator>, Params), NodeError> {
-    let method = ctx.choice::<Method>("integrator")?;
-    let k: f64 = ctx.input("stiffness")?;
-    let h: f64 = ctx.input("h")?;
-    let substeps: i64 = ctx.input("substeps")?;
-    let damping: f64 = ctx.input("damping")?;
-    let g: f64 = ctx.input("gravity")?;
-    let GravityAxis(axis) = ctx.choice::<GravityAxis>("gravity_axis")?;
-    let mass: f64 = ctx.input("mass")?;
-    for (name, v) in [
-        ("stiffness", k),
-        ("h", h),
-        ("damping", damping),
-        ("gravity", g),
-        ("mass", mass),
-    ] {
-        if !v.is_finite() {
-            return Err(NodeError::invalid(name, "must be finite"));
+/// The scalar parameters of the dynamics, checked.
+struct Dynamics {
+    method: Method,
+    k: f64,
+    h: f64,
+    substeps: i64,
+    damping: f64,
+    g: f64,
+    axis: usize,
+    mass: f64,
+}
+
+impl Dynamics {
+    /// Reads and checks the scalar sockets (finite, positive step and mass, damping in (0, 1]).
+    fn read(ctx: &ExecContext) -> Result<Dynamics, NodeError> {
+        let method = ctx.choice::<Method>("integrator")?;
+        let k: f64 = ctx.input("stiffness")?;
+        let h: f64 = ctx.input("h")?;
+        let substeps: i64 = ctx.input("substeps")?;
+        let damping: f64 = ctx.input("damping")?;
+        let g: f64 = ctx.input("gravity")?;
+        let GravityAxis(axis) = ctx.choice::<GravityAxis>("gravity_axis")?;
+        let mass: f64 = ctx.input("mass")?;
+        for (name, v) in [
+            ("stiffness", k),
+            ("h", h),
+            ("damping", damping),
+            ("gravity", g),
+            ("mass", mass),
+        ] {
+            if !v.is_finite() {
+                return Err(NodeError::invalid(name, "must be finite"));
+            }
         }
+        if h <= 0.0 {
+            return Err(NodeError::invalid("h", "must be positive"));
+        }
+        if mass <= 0.0 {
+            return Err(NodeError::invalid("mass", "must be positive"));
+        }
+        if !(damping > 0.0 && damping <= 1.0) {
+            return Err(NodeError::invalid("damping", "must be in (0, 1]"));
+        }
+        Ok(Dynamics {
+            method,
+            k,
+            h,
+            substeps,
+            damping,
+            g,
+            axis,
+            mass,
+        })
     }
-    if h <= 0.0 {
-        return Err(NodeError::invalid("h", "must be positive"));
+
+    /// The unit vector along gravity ("top" selections are against it; gravity 0 counts as
+    /// down).
+    fn down(&self) -> [f64; 3] {
+        let mut down = [0.0; 3];
+        down[self.axis] = if self.g > 0.0 { 1.0 } else { -1.0 };
+        down
     }
-    if mass <= 0.0 {
-        return Err(NodeError::invalid("mass", "must be positive"));
-    }
-    if !(damping > 0.0 && damping <= 1.0) {
-        return Err(NodeError::invalid("damping", "must be in (0, 1]"));
-    }
+}
+
+/// The fixed flags from the `fixed` selection and the `fixed_indices` list.
+fn fixed_vertices(ctx: &ExecContext, mesh: &Mesh, down: [f64; 3]) -> Result<Vec<bool>, NodeError> {
     let n = mesh.num_vertices();
-    if n == 0 {
-        return Err(NodeError::topology("mesh", "the mesh has no vertices"));
-    }
-    let kinds = SpringKinds {
-        shear: ctx.input("shear")?,
-        bending: ctx.input("bending")?,
-        bending_scale: 1.0,
-    };
-    let springs = springs_from_mesh(mesh, k, kinds);
     let mut fixed = vec![false; n];
     let sel: String = ctx.input("fixed")?;
-    // "Top" is against gravity, so the selection needs its sign (gravity 0 counts as down).
-    let mut down = [0.0; 3];
-    down[axis] = if g > 0.0 { 1.0 } else { -1.0 };
     for i in select_vertices(mesh, &sel, down).map_err(|e| NodeError::invalid("fixed", e))? {
         fixed[i] = true;
     }
@@ -224,24 +244,36 @@ fn build(
             fixed[i as usize] = true;
         }
     }
-    // Control points: pairs with the body, whose cloth vertices are fixed and start on it.
-    let mut x0 = mesh.positions.clone();
+    Ok(fixed)
+}
+
+/// Control points: (cloth vertex, body vertex) pairs with the body, from `control_pairs`
+/// (whose cloth vertices become fixed) or each fixed vertex with its nearest selected body
+/// vertex.
+fn control_pairs(
+    ctx: &ExecContext,
+    mesh: &Mesh,
+    control: Option<&Mesh>,
+    fixed: &mut [bool],
+    down: [f64; 3],
+) -> Result<Vec<(usize, usize)>, NodeError> {
+    let n = mesh.num_vertices();
     let list = ctx.input_opt::<Vec<i64>>("control_pairs")?;
-    let pairs = match (control, list) {
-        (None, Some(_)) => {
-            return Err(NodeError::invalid(
-                "control_pairs",
-                "pairs need a control_mesh to follow",
-            ))
-        }
-        (None, None) => Vec::new(),
+    let invalid =
+        |socket: &'static str| move |e: PairError| NodeError::invalid(socket, e.to_string());
+    match (control, list) {
+        (None, Some(_)) => Err(NodeError::invalid(
+            "control_pairs",
+            "pairs need a control_mesh to follow",
+        )),
+        (None, None) => Ok(Vec::new()),
         (Some(body), Some(list)) => {
-            let p = pairs_from_list(&list, n, body.num_vertices())
-                .map_err(|e| NodeError::invalid("control_pairs", e))?;
+            let p =
+                pairs_from_list(&list, n, body.num_vertices()).map_err(invalid("control_pairs"))?;
             for &(i, _) in &p {
                 fixed[i] = true;
             }
-            p
+            Ok(p)
         }
         (Some(body), None) => {
             let csel: String = ctx.input("control_select")?;
@@ -253,52 +285,37 @@ fn build(
             };
             let fixed_list: Vec<usize> = (0..n).filter(|&i| fixed[i]).collect();
             pair_nearest(&mesh.positions, &fixed_list, &body.positions, &selected)
-                .map_err(|e| NodeError::invalid("control_select", e))?
-        }
-    };
-    if let Some(body) = control {
-        for &(i, j) in &pairs {
-            x0[i] = body.positions[j];
+                .map_err(invalid("control_select"))
         }
     }
-    let mut gravity = [0.0; 3];
-    gravity[axis] = g;
-    let model = Model {
-        springs,
-        mass: vec![mass / n as f64; n],
-        fixed,
-        gravity,
-        // The course applies `damping` once per step of h = 0.01; scaling it to the step keeps
-        // the same decay per second whatever h and substeps are.
-        damping: if ctx.input::<bool>("damped")? {
-            damping.powf(h / 0.01)
-        } else {
-            1.0
-        },
-    };
-    let sphere = if ctx.input::<bool>("sphere")? {
-        let r: f64 = ctx.input("sphere_radius")?;
-        let kp: f64 = ctx.input("penalty_k")?;
-        let s: f64 = ctx.input("collision_scale")?;
-        let c: [f64; 3] = ctx.input("sphere_center")?;
-        if !(r.is_finite() && kp.is_finite() && s.is_finite() && c.iter().all(|x| x.is_finite())) {
-            return Err(NodeError::invalid(
-                "sphere_radius",
-                "sphere parameters must be finite",
-            ));
-        }
-        Some(Sphere {
-            center: c,
-            radius: r,
-            k: kp,
-            scale: s,
-        })
-    } else {
-        None
-    };
-    let keys = parse_keyframes(&ctx.input::<String>("sphere_keyframes")?)
-        .map_err(|e| NodeError::invalid("sphere_keyframes", e))?;
-    let opts = SolverOptions {
+}
+
+/// The sphere collider when `sphere` is on (its parameters checked finite).
+fn sphere_collider(ctx: &ExecContext) -> Result<Option<Sphere>, NodeError> {
+    if !ctx.input::<bool>("sphere")? {
+        return Ok(None);
+    }
+    let r: f64 = ctx.input("sphere_radius")?;
+    let kp: f64 = ctx.input("penalty_k")?;
+    let s: f64 = ctx.input("collision_scale")?;
+    let c: [f64; 3] = ctx.input("sphere_center")?;
+    if !(r.is_finite() && kp.is_finite() && s.is_finite() && c.iter().all(|x| x.is_finite())) {
+        return Err(NodeError::invalid(
+            "sphere_radius",
+            "sphere parameters must be finite",
+        ));
+    }
+    Ok(Some(Sphere {
+        center: c,
+        radius: r,
+        k: kp,
+        scale: s,
+    }))
+}
+
+/// Newton and projective iteration settings and the blow-up threshold.
+fn solver_options(ctx: &ExecContext) -> Result<SolverOptions, NodeError> {
+    Ok(SolverOptions {
         newton: NewtonOptions {
             max_iters: ctx.input::<i64>("newton_iters")?.max(1) as usize,
             tol: ctx.input("newton_tol")?,
@@ -306,12 +323,62 @@ fn build(
         },
         pd_iterations: ctx.input::<i64>("pd_iters")?.max(1) as usize,
         blowup_factor: ctx.input("blowup_factor")?,
+    })
+}
+
+/// Reads the parameters; builds the simulator (springs, factorizations) only when `with_sim`.
+fn build(
+    ctx: &ExecContext,
+    mesh: &Mesh,
+    control: Option<&Mesh>,
+    with_sim: bool,
+) -> Result<(Option<Simulator>, Params), NodeError> {
+    let dy = Dynamics::read(ctx)?;
+    let n = mesh.num_vertices();
+    if n == 0 {
+        return Err(NodeError::topology("mesh", "the mesh has no vertices"));
+    }
+    let kinds = SpringKinds {
+        shear: ctx.input("shear")?,
+        bending: ctx.input("bending")?,
+        bending_scale: 1.0,
     };
+    let springs = springs_from_mesh(mesh, dy.k, kinds);
+    let down = dy.down();
+    let mut fixed = fixed_vertices(ctx, mesh, down)?;
+    // Control points: pairs with the body, whose cloth vertices are fixed and start on it.
+    let pairs = control_pairs(ctx, mesh, control, &mut fixed, down)?;
+    let mut x0 = mesh.positions.clone();
+    if let Some(body) = control {
+        for &(i, j) in &pairs {
+            x0[i] = body.positions[j];
+        }
+    }
+    let mut gravity = [0.0; 3];
+    gravity[dy.axis] = dy.g;
+    let model = Model {
+        springs,
+        mass: vec![dy.mass / n as f64; n],
+        fixed,
+        gravity,
+        // The course applies `damping` once per step of h = 0.01; scaling it to the step keeps
+        // the same decay per second whatever h and substeps are.
+        damping: if ctx.input::<bool>("damped")? {
+            dy.damping.powf(dy.h / 0.01)
+        } else {
+            1.0
+        },
+    };
+    let sphere = sphere_collider(ctx)?;
+    let keys = parse_keyframes(&ctx.input::<String>("sphere_keyframes")?)
+        .map_err(|e| NodeError::invalid("sphere_keyframes", e))?;
+    let opts = solver_options(ctx)?;
     let sim = if with_sim {
         Some(
-            Simulator::new(model, x0, None, method, h, opts).map_err(|e| match e {
+            Simulator::new(model, x0, None, dy.method, dy.h, opts).map_err(|e| match e {
                 SetupError::NotPositiveDefinite(m) => NodeError::singular(m),
                 SetupError::Invalid(m) => NodeError::invalid("mesh", m),
+                SetupError::Model(e) => NodeError::invalid("mesh", e.to_string()),
             })?,
         )
     } else {
@@ -320,9 +387,9 @@ fn build(
     Ok((
         sim,
         Params {
-            method,
-            h,
-            substeps: substeps.max(1) as usize,
+            method: dy.method,
+            h: dy.h,
+            substeps: dy.substeps.max(1) as usize,
             sphere,
             keys,
             pairs,
@@ -352,6 +419,142 @@ fn input_key(ctx: &ExecContext, mesh: &Mesh) -> u64 {
     h.finish()
 }
 
+/// One row of the `log` table (`LOG_COLUMNS`).
+fn log_row(frame: i64, step: f64, time: f64, e: &Energy, iterations: f64) -> [f64; 8] {
+    [
+        frame as f64,
+        step,
+        time,
+        e.kinetic,
+        e.potential,
+        e.total(),
+        e.max_strain,
+        iterations,
+    ]
+}
+
+/// The body's positions this frame (empty without a control mesh); `Err` when its vertex
+/// count changed since the simulation started.
+fn control_pose(control: Option<&Mesh>, started_with: usize) -> Result<Vec<[f64; 3]>, NodeError> {
+    match control {
+        Some(c) => {
+            if c.num_vertices() != started_with {
+                return Err(NodeError::invalid(
+                    "control_mesh",
+                    format!(
+                        "{} vertices; it had {} when the simulation started",
+                        c.num_vertices(),
+                        started_with
+                    ),
+                ));
+            }
+            Ok(c.positions.clone())
+        }
+        None => Ok(Vec::new()),
+    }
+}
+
+/// The node error for a failed step of frame `f + 1`, sub-step `s + 1`.
+fn step_error(e: SimError, params: &Params, f: i64, s: usize) -> NodeError {
+    match e {
+        SimError::Unstable { reason, .. } => NodeError::unstable(format!(
+            "{:?} integrator blew up at frame {} step {} (h = {}): {reason}; use a smaller h, more substeps, or the implicit integrator",
+            params.method, f + 1, s + 1, params.h
+        )),
+        SimError::Solver(m) => NodeError::singular(format!("frame {} step {}: {m}", f + 1, s + 1)),
+    }
+}
+
+/// The frames one execution advances: from `last` by `frames`, the body moving from
+/// `control_prev` to `control_cur` across all their sub-steps.
+struct FrameRun<'a> {
+    params: &'a Params,
+    /// The frame the simulation started at (keyframe times count from it).
+    start: i64,
+    /// The frame the state is at.
+    last: i64,
+    frames: usize,
+    control_prev: &'a [[f64; 3]],
+    control_cur: &'a [[f64; 3]],
+}
+
+impl FrameRun<'_> {
+    /// Steps `sim` through every sub-step of every frame, moving the control points and the
+    /// keyframed sphere before each step and logging each step's energies.
+    fn advance(
+        &self,
+        sim: &mut Simulator,
+        log: &mut Table,
+        progress: &dyn Fn(f64),
+    ) -> Result<(), NodeError> {
+        let params = self.params;
+        let total = (self.frames * params.substeps).max(1) as f64;
+        for df in 0..self.frames {
+            let f = self.last + df as i64; // frame being advanced from
+            for s in 0..params.substeps {
+                if !params.pairs.is_empty() {
+                    // The body's pose at the end of this step, between the frames' poses.
+                    let k = (df * params.substeps + s + 1) as f64 / total;
+                    let targets =
+                        control_targets(&params.pairs, self.control_prev, self.control_cur, k);
+                    sim.move_fixed(&targets)
+                        .map_err(|e| NodeError::invalid("control_mesh", e.to_string()))?;
+                }
+                let frac = (f - self.start) as f64 + (s + 1) as f64 / params.substeps as f64;
+                let sphere = params.sphere.map(|mut sp| {
+                    if let Some(c) = keyframed_center(&params.keys, self.start as f64 + frac) {
+                        sp.center = c;
+                    }
+                    sp
+                });
+                progress((df * params.substeps + s) as f64 / total);
+                let l = sim
+                    .step(sphere.as_ref())
+                    .map_err(|e| step_error(e, params, f, s))?;
+                log.push_row(&log_row(
+                    f + 1,
+                    sim.steps as f64,
+                    sim.steps as f64 * params.h,
+                    &l.energy,
+                    l.iterations as f64,
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The output mesh: the input with the simulated positions and a `velocity` attribute.
+fn simulated_mesh(mesh: &Mesh, state: State) -> Mesh {
+    let mut out = mesh.clone();
+    out.positions = state.x;
+    out.attributes.insert(
+        "velocity".into(),
+        AttributeData::Vec3(Attribute {
+            domain: Domain::Vertex,
+            values: state.v,
+        }),
+    );
+    out
+}
+
+/// The `debug` log line: the last logged row's energies and iterations.
+fn debug_line(log: &Table, frame: i64) -> String {
+    let row = log.num_rows().saturating_sub(1);
+    let col = |c: &str| {
+        log.column(c)
+            .and_then(|v| v.get(row).copied())
+            .unwrap_or(0.0)
+    };
+    format!(
+        "frame {frame}: kinetic {:.4e}, potential {:.4e}, max strain {:.3e}, iterations {}",
+        col("kinetic"),
+        col("potential"),
+        col("max_strain"),
+        col("iterations")
+    )
+}
+
 fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let started = std::time::Instant::now();
     let mesh: Arc<Mesh> = ctx.input("mesh")?;
@@ -370,138 +573,42 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     if let Some(sim0) = sim0 {
         // First frame (or new input): the rest state, no steps.
         let e = sim0.energy(params.sphere.as_ref());
-        log.push_row(&[
-            frame as f64,
-            0.0,
-            0.0,
-            e.kinetic,
-            e.potential,
-            e.total(),
-            e.max_strain,
-            0.0,
-        ]);
-        st.sim = Some(sim0);
-        st.key = key;
-        st.frame = frame;
-        st.start_frame = frame;
-        st.control_prev = control
-            .as_ref()
-            .map(|c| c.positions.clone())
-            .unwrap_or_default();
+        log.push_row(&log_row(frame, 0.0, 0.0, &e, 0.0));
+        *st = NodeState {
+            sim: Some(sim0),
+            key,
+            frame,
+            start_frame: frame,
+            control_prev: control
+                .as_ref()
+                .map(|c| c.positions.clone())
+                .unwrap_or_default(),
+        };
     }
-    let cur: Vec<[f64; 3]> = match &control {
-        Some(c) => {
-            if c.num_vertices() != st.control_prev.len() {
-                return Err(NodeError::invalid(
-                    "control_mesh",
-                    format!(
-                        "{} vertices; it had {} when the simulation started",
-                        c.num_vertices(),
-                        st.control_prev.len()
-                    ),
-                ));
-            }
-            c.positions.clone()
-        }
-        None => Vec::new(),
+    let cur = control_pose(control.as_deref(), st.control_prev.len())?;
+    let run = FrameRun {
+        params: &params,
+        start: st.start_frame,
+        last: st.frame,
+        frames: (frame - st.frame).max(0) as usize,
+        control_prev: &st.control_prev,
+        control_cur: &cur,
     };
-    let start = st.start_frame;
-    let frames = (frame - st.frame).max(0) as usize;
-    let last = st.frame;
-    let result = {
-        let sim = st.sim.as_mut().expect("set above");
-        let mut err = None;
-        let total = (frames * params.substeps).max(1) as f64;
-        'outer: for df in 0..frames {
-            let f = last + df as i64; // frame being advanced from
-            for s in 0..params.substeps {
-                if !params.pairs.is_empty() {
-                    // The body's pose at the end of this step, between the frames' poses.
-                    let k = (df * params.substeps + s + 1) as f64 / total;
-                    let targets = control_targets(&params.pairs, &st.control_prev, &cur, k);
-                    if let Err(e) = sim.move_fixed(&targets) {
-                        err = Some(NodeError::invalid("control_mesh", e));
-                        break 'outer;
-                    }
-                }
-                let frac = (f - start) as f64 + (s + 1) as f64 / params.substeps as f64;
-                let sphere = params.sphere.map(|mut sp| {
-                    if let Some(c) = keyframed_center(&params.keys, start as f64 + frac) {
-                        sp.center = c;
-                    }
-                    sp
-                });
-                progress((df * params.substeps + s) as f64 / total);
-                match sim.step(sphere.as_ref()) {
-                    Ok(l) => log.push_row(&[
-                        (f + 1) as f64,
-                        sim.steps as f64,
-                        sim.steps as f64 * params.h,
-                        l.energy.kinetic,
-                        l.energy.potential,
-                        l.energy.total(),
-                        l.energy.max_strain,
-                        l.iterations as f64,
-                    ]),
-                    Err(e) => {
-                        err = Some(match e {
-                            SimError::Unstable { reason, .. } => NodeError::unstable(format!(
-                                "{:?} integrator blew up at frame {} step {} (h = {}): {reason}; use a smaller h, more substeps, or the implicit integrator",
-                                params.method, f + 1, s + 1, params.h
-                            )),
-                            SimError::Solver(m) => NodeError::singular(format!(
-                                "frame {} step {}: {m}",
-                                f + 1,
-                                s + 1
-                            )),
-                        });
-                        break 'outer;
-                    }
-                }
-            }
-        }
-        match err {
-            Some(e) => Err(e),
-            None => Ok(sim.state.clone()),
-        }
-    };
-    let state = match result {
-        Ok(s) => s,
-        Err(e) => {
-            ctx.reset_state();
-            return Err(e);
-        }
-    };
+    let sim = st.sim.as_mut().expect("set above");
+    if let Err(e) = run.advance(sim, &mut log, &progress) {
+        ctx.reset_state();
+        return Err(e);
+    }
+    let state = sim.state.clone();
     st.frame = frame;
     if control.is_some() {
         st.control_prev = cur;
     }
-    let mut out = (*mesh).clone();
-    out.positions = state.x;
-    out.attributes.insert(
-        "velocity".into(),
-        AttributeData::Vec3(Attribute {
-            domain: Domain::Vertex,
-            values: state.v,
-        }),
-    );
+    let out = simulated_mesh(&mesh, state);
     log.meta
         .insert("integrator".into(), format!("{:?}", params.method));
     if debug {
-        let row = log.num_rows().saturating_sub(1);
-        let col = |c: &str| {
-            log.column(c)
-                .and_then(|v| v.get(row).copied())
-                .unwrap_or(0.0)
-        };
-        let line = format!(
-            "frame {frame}: kinetic {:.4e}, potential {:.4e}, max strain {:.3e}, iterations {}",
-            col("kinetic"),
-            col("potential"),
-            col("max_strain"),
-            col("iterations")
-        );
-        ctx.log(line);
+        ctx.log(debug_line(&log, frame));
     }
     if profile {
         ctx.log(format!(

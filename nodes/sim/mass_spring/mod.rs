@@ -25,6 +25,7 @@ pub mod semi_implicit;
 pub mod simulator;
 pub mod springs;
 
+pub use control::PairError;
 pub use implicit::{Implicit, LinearSolver, NewtonError, NewtonOptions, NewtonProfile};
 pub use keyframes::{keyframed_center, parse_keyframes};
 pub use mass_spring::LOG_COLUMNS;
@@ -32,9 +33,11 @@ pub use newton_pcg::Preconditioner;
 pub use projective::Projective;
 pub use semi_implicit::SemiImplicit;
 pub use simulator::{
-    energy_scale, Method, SetupError, SimError, Simulator, SolverOptions, StepLog,
+    energy_scale, Method, MoveError, SetupError, SimError, Simulator, SolverOptions, StepLog,
 };
-pub use springs::{energy, springs_from_mesh, Energy, Model, Sphere, SpringKinds, Springs, State};
+pub use springs::{
+    energy, springs_from_mesh, Energy, Model, ModelError, Sphere, SpringKinds, Springs, State,
+};
 
 use cgnodes_api::registry::Registry;
 

@@ -133,16 +133,21 @@ impl HessianCholesky {
 
     /// Factors the assembled values (the symbolic analysis at the first call only).
     /// `Err` with faer's reason when the matrix is not positive definite.
-    pub fn factor(&mut self) -> Result<(), String> {
+    pub fn factor(&mut self) -> Result<(), DirectError> {
         let vals = &self.vals;
         match &mut self.factor {
-            Some(f) => f.refactor_with(vals.len(), |k| vals[k], self.par)?,
+            Some(f) => f
+                .refactor_with(vals.len(), |k| vals[k], self.par)
+                .map_err(DirectError::NotPositiveDefinite)?,
             None => {
                 let lower: Vec<Triplet<usize, usize, f64>> = (self.pattern.iter())
                     .zip(vals)
                     .map(|(&(r, c), &v)| Triplet::new(r, c, v))
                     .collect();
-                self.factor = Some(SpdFactor::new(3 * self.n_free, &lower, self.par)?);
+                self.factor = Some(
+                    SpdFactor::new(3 * self.n_free, &lower, self.par)
+                        .map_err(DirectError::NotPositiveDefinite)?,
+                );
                 self.symbolic_count += 1;
             }
         }
@@ -152,11 +157,8 @@ impl HessianCholesky {
 
     /// Solves with the last factor: `rhs` has three entries per vertex (fixed vertices
     /// ignored), the solution is written over it (zero at fixed vertices).
-    pub fn solve(&self, mut rhs: MatMut<'_, f64>) -> Result<(), String> {
-        let f = self
-            .factor
-            .as_ref()
-            .ok_or("solve before the first factorization")?;
+    pub fn solve(&self, mut rhs: MatMut<'_, f64>) -> Result<(), DirectError> {
+        let f = self.factor.as_ref().ok_or(DirectError::NotFactored)?;
         let mut reduced = faer::Mat::<f64>::zeros(3 * self.n_free, 1);
         for (v, p) in self.free.iter().enumerate() {
             if let Some(p) = p {
@@ -176,6 +178,17 @@ impl HessianCholesky {
         }
         Ok(())
     }
+}
+
+/// Why the sparse Cholesky of the Hessian failed.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum DirectError {
+    /// The factorization failed (`SpdFactor`'s reason: not positive definite).
+    #[error("{0}")]
+    NotPositiveDefinite(String),
+    /// `solve` was called before `factor`.
+    #[error("solve before the first factorization")]
+    NotFactored,
 }
 
 /// Adds `s * k` to a diagonal block stored as its lower triangle row by row

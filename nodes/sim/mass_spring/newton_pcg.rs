@@ -76,6 +76,17 @@ pub enum Preconditioner {
 /// `Preconditioner::Auto` leaves block Jacobi after a CG solve longer than this.
 pub const STIFF_CG_ITERS: usize = 100;
 
+/// Why a CG solve of a Newton system failed (the caller falls back to the sparse Cholesky).
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum PcgError {
+    /// faer's conjugate gradient stopped without converging (its error, as `Debug`).
+    #[error("conjugate gradient: {0}")]
+    Cg(String),
+    /// An axis-Laplacian preconditioner factor failed (`SpdFactor`'s reason).
+    #[error("{0}")]
+    Preconditioner(String),
+}
+
 /// What a CG solve did.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CgOutcome {
@@ -192,7 +203,7 @@ impl HessianPcg {
         first: bool,
         rel_tol: f64,
         max_iters: usize,
-    ) -> Result<CgOutcome, String> {
+    ) -> Result<CgOutcome, PcgError> {
         match (&self.warm, first) {
             (Some(w), true) if w.nrows() == dx.nrows() => dx.copy_from(w.as_ref()),
             _ => dx.fill(0.0),
@@ -236,7 +247,7 @@ impl HessianPcg {
             par,
             MemStack::new(mem),
         )
-        .map_err(|e| format!("conjugate gradient: {e:?}"))?;
+        .map_err(|e| PcgError::Cg(format!("{e:?}")))?;
         match (self.preconditioner, self.axes.as_mut()) {
             (Preconditioner::AxisLaplacians, Some(axes)) => axes.record(info.iter_count),
             (Preconditioner::Auto, _) if info.iter_count > STIFF_CG_ITERS => {
@@ -463,7 +474,7 @@ impl AxisLaplacians {
         adj: &[(u32, u32)],
         blocks: &[Sym3],
         diag: &[Sym3],
-    ) -> Result<(), String> {
+    ) -> Result<(), PcgError> {
         if !self.stale && !self.factors.is_empty() {
             return Ok(());
         }
@@ -490,9 +501,12 @@ impl AxisLaplacians {
                     }))
                     .collect();
             match self.factors.get_mut(a) {
-                Some(f) => f.refactor(&trip, Par::Seq)?,
+                Some(f) => f
+                    .refactor(&trip, Par::Seq)
+                    .map_err(PcgError::Preconditioner)?,
                 None => {
-                    let mut f = linalg::spd::SpdFactor::new(n, &trip, Par::Seq)?;
+                    let mut f = linalg::spd::SpdFactor::new(n, &trip, Par::Seq)
+                        .map_err(PcgError::Preconditioner)?;
                     f.prepare_many_solves();
                     self.factors.push(f);
                 }

@@ -13,6 +13,7 @@
 //! vertices inside the contact radius are projected onto it and lose their inward normal
 //! velocity, so the prefactored matrix stays valid.
 
+use super::simulator::SetupError;
 use super::springs::{axpy, dot, norm, scale, sub, Model, Sphere, State};
 use cgnodes_linalg::SpdFactor;
 use faer::sparse::Triplet;
@@ -32,7 +33,7 @@ pub struct Projective {
 
 impl Projective {
     /// Factors `M/h^2 + L` over the free vertices.
-    pub fn new(m: &Model, h: f64, iterations: usize) -> Result<Projective, String> {
+    pub fn new(m: &Model, h: f64, iterations: usize) -> Result<Projective, SetupError> {
         let n = m.num_vertices();
         let (free, n_free) = m.free_indices();
         let mut t = Vec::new();
@@ -58,8 +59,11 @@ impl Projective {
         } else {
             Par::Seq
         };
-        let mut factor = SpdFactor::new(n_free, &t, par)
-            .map_err(|e| format!("the global matrix is not positive definite: {e}"))?;
+        let mut factor = SpdFactor::new(n_free, &t, par).map_err(|e| {
+            SetupError::NotPositiveDefinite(format!(
+                "the global matrix is not positive definite: {e}"
+            ))
+        })?;
         factor.prepare_many_solves();
         Ok(Projective {
             free,

@@ -6,7 +6,7 @@
 use super::implicit::{Implicit, NewtonError, NewtonOptions, NewtonProfile};
 use super::projective::Projective;
 use super::semi_implicit::SemiImplicit;
-use super::springs::{self, energy, Energy, Model, Sphere, State};
+use super::springs::{self, energy, Energy, Model, ModelError, Sphere, State};
 
 /// Which time integrator advances the system.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -59,12 +59,26 @@ pub struct StepLog {
 /// Why a simulator could not be built.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum SetupError {
-    /// The model, the initial state or the time step is invalid.
+    /// The model is inconsistent (`Model::check`).
+    #[error(transparent)]
+    Model(#[from] ModelError),
+    /// The initial state or the time step is invalid.
     #[error("{0}")]
     Invalid(String),
     /// The projective integrator's global matrix could not be factored.
     #[error("{0}")]
     NotPositiveDefinite(String),
+}
+
+/// Why `Simulator::move_fixed` refused a target.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum MoveError {
+    /// The vertex is out of range or not fixed.
+    #[error("vertex {0} is not a fixed vertex of the model")]
+    NotFixed(usize),
+    /// The vertex's target has a NaN or infinite coordinate.
+    #[error("target of vertex {0} is not finite")]
+    NonFiniteTarget(usize),
 }
 
 /// Why a step failed.
@@ -139,7 +153,7 @@ impl Simulator {
         h: f64,
         opts: SolverOptions,
     ) -> Result<Simulator, SetupError> {
-        model.check().map_err(SetupError::Invalid)?;
+        model.check()?;
         let n = model.num_vertices();
         if x0.len() != n {
             return Err(SetupError::Invalid(format!(
@@ -162,10 +176,9 @@ impl Simulator {
         let solver = match method {
             Method::SemiImplicit => Solver::Semi(SemiImplicit::new(&model)),
             Method::Implicit => Solver::Implicit(Box::new(Implicit::new(&model, opts.newton))),
-            Method::Projective => Solver::Projective(Box::new(
-                Projective::new(&model, h, opts.pd_iterations)
-                    .map_err(SetupError::NotPositiveDefinite)?,
-            )),
+            Method::Projective => {
+                Solver::Projective(Box::new(Projective::new(&model, h, opts.pd_iterations)?))
+            }
         };
         let state = State { x: x0.clone(), v };
         let e = energy(&model, &state, &x0, None);
@@ -186,13 +199,13 @@ impl Simulator {
     /// Moves fixed vertices to new positions (control points following a body) before the
     /// next step; their velocity stays zero, as the integrators keep it for fixed vertices.
     /// `Err` names a vertex that is out of range or not fixed.
-    pub fn move_fixed(&mut self, targets: &[(usize, [f64; 3])]) -> Result<(), String> {
+    pub fn move_fixed(&mut self, targets: &[(usize, [f64; 3])]) -> Result<(), MoveError> {
         for &(i, p) in targets {
             if !self.model.fixed.get(i).copied().unwrap_or(false) {
-                return Err(format!("vertex {i} is not a fixed vertex of the model"));
+                return Err(MoveError::NotFixed(i));
             }
             if p.iter().any(|c| !c.is_finite()) {
-                return Err(format!("target of vertex {i} is not finite"));
+                return Err(MoveError::NonFiniteTarget(i));
             }
             self.state.x[i] = p;
             self.state.v[i] = [0.0; 3];

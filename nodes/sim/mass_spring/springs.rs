@@ -194,39 +194,102 @@ impl Model {
     }
 
     /// Checks sizes and values; `Err` says what is wrong.
-    pub fn check(&self) -> Result<(), String> {
+    pub fn check(&self) -> Result<(), ModelError> {
         let n = self.mass.len();
         if self.fixed.len() != n {
-            return Err(format!("{} fixed flags for {n} vertices", self.fixed.len()));
+            return Err(ModelError::FixedFlags {
+                flags: self.fixed.len(),
+                vertices: n,
+            });
         }
         if let Some(i) = self.mass.iter().position(|m| !(m.is_finite() && *m > 0.0)) {
-            return Err(format!(
-                "vertex {i} has mass {} (must be > 0)",
-                self.mass[i]
-            ));
+            return Err(ModelError::Mass {
+                vertex: i,
+                mass: self.mass[i],
+            });
         }
         for (s, e) in self.springs.ends.iter().enumerate() {
             if e[0] as usize >= n || e[1] as usize >= n {
-                return Err(format!("spring {s} refers to a vertex beyond {n}"));
+                return Err(ModelError::SpringEnd {
+                    spring: s,
+                    vertices: n,
+                });
             }
             if !(self.springs.rest[s] > 0.0 && self.springs.rest[s].is_finite()) {
-                return Err(format!(
-                    "spring {s} ({}, {}) has rest length {} (coincident vertices?)",
-                    e[0], e[1], self.springs.rest[s]
-                ));
+                return Err(ModelError::RestLength {
+                    spring: s,
+                    ends: *e,
+                    rest: self.springs.rest[s],
+                });
             }
             if !(self.springs.k[s] >= 0.0 && self.springs.k[s].is_finite()) {
-                return Err(format!("spring {s} has stiffness {}", self.springs.k[s]));
+                return Err(ModelError::Stiffness {
+                    spring: s,
+                    k: self.springs.k[s],
+                });
             }
         }
         if !(self.damping.is_finite() && self.damping > 0.0 && self.damping <= 1.0) {
-            return Err(format!("damping {} is not in (0, 1]", self.damping));
+            return Err(ModelError::Damping(self.damping));
         }
         if self.gravity.iter().any(|g| !g.is_finite()) {
-            return Err("gravity is not finite".into());
+            return Err(ModelError::Gravity);
         }
         Ok(())
     }
+}
+
+/// What `Model::check` found wrong with a model.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum ModelError {
+    /// The fixed flags and the masses differ in count.
+    #[error("{flags} fixed flags for {vertices} vertices")]
+    FixedFlags {
+        /// Number of fixed flags.
+        flags: usize,
+        /// Number of vertices (masses).
+        vertices: usize,
+    },
+    /// A vertex mass is not positive and finite.
+    #[error("vertex {vertex} has mass {mass} (must be > 0)")]
+    Mass {
+        /// The vertex.
+        vertex: usize,
+        /// Its mass.
+        mass: f64,
+    },
+    /// A spring refers to a vertex index past the end.
+    #[error("spring {spring} refers to a vertex beyond {vertices}")]
+    SpringEnd {
+        /// The spring.
+        spring: usize,
+        /// Number of vertices.
+        vertices: usize,
+    },
+    /// A spring's rest length is not positive and finite.
+    #[error("spring {spring} ({}, {}) has rest length {rest} (coincident vertices?)", ends[0], ends[1])]
+    RestLength {
+        /// The spring.
+        spring: usize,
+        /// Its two vertices.
+        ends: [u32; 2],
+        /// Its rest length.
+        rest: f64,
+    },
+    /// A spring's stiffness is negative or not finite.
+    #[error("spring {spring} has stiffness {k}")]
+    Stiffness {
+        /// The spring.
+        spring: usize,
+        /// Its stiffness.
+        k: f64,
+    },
+    /// The damping factor is outside (0, 1].
+    #[error("damping {0} is not in (0, 1]")]
+    Damping(f64),
+    /// Gravity has a non-finite component.
+    #[error("gravity is not finite")]
+    Gravity,
 }
 
 /// Positions and velocities.

@@ -1,6 +1,7 @@
 //! SPH density summation with boundary particles (Akinci et al. 2012 eq. 6), at the
 //! positions of the last neighbour search.
 
+use super::neighbour_grid::GridError;
 use super::state::Fluid;
 use rayon::prelude::*;
 
@@ -25,7 +26,7 @@ impl Fluid {
     }
 
     /// Recomputes neighbours and densities at the current positions (for output).
-    pub fn refresh(&mut self) -> Result<(), String> {
+    pub fn refresh(&mut self) -> Result<(), GridError> {
         self.find_neighbours()?;
         self.compute_densities();
         Ok(())

@@ -14,6 +14,7 @@
 //! `1/alpha_i = g'_i . g_i + V^2 sum_j |grad W_ij|^2`,
 //! `g_i = sum_j V grad W_ij + sum_b V_b grad W_ib`, `g'_i = sum_j V grad W_ij + 2 sum_b V_b grad W_ib`.
 
+use super::neighbour_grid::GridError;
 use super::pressure_solver::PressureSolver;
 use super::state::{Fluid, StepStats};
 use cgnodes_api::types::vec3::{axpy, dot, sub};
@@ -181,7 +182,7 @@ impl PressureSolver for Dfsph {
     /// One DFSPH step of size `dt` (Bender & Koschier 2017 Alg. 1, in the order
     /// SPlisHSPlasH uses: neighbours, densities and factors at the current positions, the
     /// divergence solve, non-pressure forces, the density solve, then positions).
-    fn step(&self, f: &mut Fluid, dt: f64) -> Result<StepStats, String> {
+    fn step(&self, f: &mut Fluid, dt: f64) -> Result<StepStats, GridError> {
         f.find_neighbours()?;
         f.compute_densities();
         let vol = f.mass / f.params.rest_density;

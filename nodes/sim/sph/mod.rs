@@ -24,8 +24,10 @@ pub mod time_step;
 pub mod wcsph;
 
 pub use dfsph::Dfsph;
+pub use neighbour_grid::GridError;
 pub use pressure_solver::PressureSolver;
-pub use state::{Boundary, Fluid, Neighbour, Solver, SphParams, StepStats};
+pub use state::{BlockError, Boundary, Fluid, Neighbour, Solver, SphParams, StepStats};
+pub use time_step::{AdvanceError, StepError};
 pub use wcsph::Wcsph;
 
 use cgnodes_api::registry::Registry;

@@ -8,6 +8,21 @@ use rayon::prelude::*;
 /// Largest number of cells a grid may have (guards against a huge, sparse domain).
 pub const MAX_CELLS: usize = 1 << 27;
 
+/// Why a neighbour grid cannot be built.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum GridError {
+    /// The points spread over more than `MAX_CELLS` cells (a huge, sparse domain, or a
+    /// non-finite coordinate).
+    #[error(
+        "the particles spread over {cells:.3e} grid cells (more than {MAX_CELLS}); \
+         use a smaller box or larger particles"
+    )]
+    TooManyCells {
+        /// The number of cells the points' bounding box needs (NaN for non-finite points).
+        cells: f64,
+    },
+}
+
 /// Particle indices bucketed by uniform grid cell.
 #[derive(Clone, Debug, Default)]
 pub struct NeighbourGrid {
@@ -24,7 +39,7 @@ pub struct NeighbourGrid {
 impl NeighbourGrid {
     /// Buckets `points` (all finite) into cells of edge `cell`. `Err` if the points spread
     /// over more than `MAX_CELLS` cells.
-    pub fn build(points: &[[f64; 3]], cell: f64) -> Result<NeighbourGrid, String> {
+    pub fn build(points: &[[f64; 3]], cell: f64) -> Result<NeighbourGrid, GridError> {
         if points.is_empty() {
             return Ok(NeighbourGrid {
                 cell,
@@ -60,10 +75,7 @@ impl NeighbourGrid {
             dims[a] = n as usize;
         }
         if total.is_nan() || total > MAX_CELLS as f64 {
-            return Err(format!(
-                "the particles spread over {total:.3e} grid cells (more than {MAX_CELLS}); \
-                 use a smaller box or larger particles"
-            ));
+            return Err(GridError::TooManyCells { cells: total });
         }
         let mut g = NeighbourGrid {
             cell,

@@ -4,7 +4,7 @@
 //! solver iteration reuses them.
 
 use super::kernel::CubicSpline;
-use super::neighbour_grid::NeighbourGrid;
+use super::neighbour_grid::{GridError, NeighbourGrid};
 use super::state::{Fluid, Neighbour};
 use cgnodes_api::types::vec3::{dot, sub};
 use rayon::prelude::*;
@@ -25,7 +25,7 @@ fn neighbour(kern: &CubicSpline, xi: [f64; 3], xj: [f64; 3], j: usize) -> Option
 impl Fluid {
     /// Rebuilds the neighbour lists (uniform grid, cell = support radius) with the kernel
     /// values and gradients at the current positions.
-    pub fn find_neighbours(&mut self) -> Result<(), String> {
+    pub fn find_neighbours(&mut self) -> Result<(), GridError> {
         let h = self.kernel.h;
         let grid = NeighbourGrid::build(&self.positions, h)?;
         let kern = self.kernel;

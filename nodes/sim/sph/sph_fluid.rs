@@ -4,7 +4,9 @@
 //! history in Martin & Moyce's dimensionless units. The state restarts on the first frame,
 //! when the frame goes backwards, or when any parameter changes.
 
+use super::neighbour_grid::GridError;
 use super::state::{Boundary, Fluid, Solver, SphParams};
+use super::time_step::AdvanceError;
 use cgnodes_api::prelude::*;
 use cgnodes_api::types::vec3::dot;
 
@@ -332,14 +334,15 @@ fn read_params(ctx: &ExecContext) -> Result<Setup, NodeError> {
     Ok((prm, pmin, pmax, counts))
 }
 
-fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
-    let (prm, pmin, pmax, counts) = read_params(ctx)?;
-    let frame_dt: f64 = ctx.input("frame_dt")?;
-    let width = ctx.input::<i64>("image_width")? as u32;
-    let key = format!("{prm:?} {pmin:?} {pmax:?} {counts:?} {frame_dt}");
-    let frame = ctx.frame();
-    // The buffers are checked every frame (cheap), before a restart allocates them.
-    let (bytes, nf, nb) = estimated_bytes(&prm, pmin, pmax, counts);
+/// Checks the memory the fluid's buffers and the image will take against the budget, every
+/// frame (cheap) and before a restart allocates them.
+fn reserve_buffers(
+    ctx: &ExecContext,
+    prm: &SphParams,
+    (pmin, pmax, counts): ([f64; 3], [f64; 3], Option<[usize; 3]>),
+    width: u32,
+) -> Result<(), NodeError> {
+    let (bytes, nf, nb) = estimated_bytes(prm, pmin, pmax, counts);
     let what = format!("{nf:.3e} fluid and {nb:.3e} boundary particles");
     ctx.reserve_bytes("particle_radius", &what, bytes)?;
     // The image is as wide as asked and as high as the box's aspect (at most 8192).
@@ -352,16 +355,19 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let what = format!("a {width}x{height} image");
     let bytes = cgnodes_api::node::bytes_of(&[width as u64, height, 16]);
     ctx.reserve_bytes("image_width", &what, bytes)?;
-    let started = std::time::Instant::now();
-    let (profile, debug): (bool, bool) = (ctx.input("profile")?, ctx.input("debug")?);
-    let progress = ctx.progress_fn();
-    let st = ctx.state::<SphState>()?;
-    if st.fluid.is_none() || st.key != key || frame <= st.last_frame {
-        let mut f = Fluid::block(prm.clone(), pmin, pmax, counts)
-            .map_err(|e| NodeError::invalid("particle_box_min", e))?;
+    Ok(())
+}
+
+impl SphState {
+    /// A fresh run: the block of fluid at rest (neighbours and densities computed), empty
+    /// log and front tables, and the initial column's width `a` and height ratio `n`.
+    fn start(setup: Setup, key: String, frame: i64) -> Result<SphState, NodeError> {
+        let (prm, pmin, pmax, counts) = setup;
+        let mut f = Fluid::block(prm, pmin, pmax, counts)
+            .map_err(|e| NodeError::invalid("particle_box_min", e.to_string()))?;
         f.refresh()
-            .map_err(|e| NodeError::invalid("particle_radius", e))?;
-        *st = SphState {
+            .map_err(|e| NodeError::invalid("particle_radius", e.to_string()))?;
+        Ok(SphState {
             key,
             a: f.front().max(1e-12),
             n: (f.height() / f.front().max(1e-12)).sqrt(),
@@ -380,14 +386,73 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
                 "capped_solves",
             ]),
             front: Table::with_columns(&["T", "Z"]),
-        };
+        })
+    }
+}
+
+/// The frame's log lines: time, steps and particles; a warning when DFSPH solves stopped
+/// at the iteration cap; with `debug` the density errors and kinetic energy.
+fn frame_report(f: &Fluid, max_iterations: usize, debug: bool) -> Vec<String> {
+    let capped = f.capped_solves;
+    let debug_line = debug.then(|| {
+        let (emax, eavg) = f.density_error();
+        format!(
+            "density error max {emax:.3e} avg {eavg:.3e}, kinetic energy {:.4e}",
+            f.kinetic_energy()
+        )
+    });
+    let mut lines = vec![format!(
+        "t = {:.4} s, {} steps, {} particles",
+        f.time,
+        f.steps,
+        f.len()
+    )];
+    if capped > 0 {
+        lines.push(format!(
+            "warning: {} DFSPH solves stopped at max_iterations = {} before reaching \
+             max_density_error; raise max_iterations or shorten dt",
+            capped, max_iterations
+        ));
+    }
+    lines.extend(debug_line);
+    lines
+}
+
+/// Why a frame could not be simulated.
+#[derive(Debug, thiserror::Error)]
+enum FrameError {
+    /// A step blew up or its neighbour search failed.
+    #[error(transparent)]
+    Advance(#[from] AdvanceError),
+    /// The neighbour search at the frame's end failed.
+    #[error(transparent)]
+    Refresh(#[from] GridError),
+}
+
+/// Advances `f` by `frame_dt` and refreshes its neighbours and densities for the outputs.
+fn advance_frame(f: &mut Fluid, frame_dt: f64, progress: &dyn Fn(f64)) -> Result<(), FrameError> {
+    f.advance_progress(frame_dt, progress)?;
+    f.refresh()?;
+    Ok(())
+}
+
+fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
+    let (prm, pmin, pmax, counts) = read_params(ctx)?;
+    let frame_dt: f64 = ctx.input("frame_dt")?;
+    let width = ctx.input::<i64>("image_width")? as u32;
+    let key = format!("{prm:?} {pmin:?} {pmax:?} {counts:?} {frame_dt}");
+    let frame = ctx.frame();
+    reserve_buffers(ctx, &prm, (pmin, pmax, counts), width)?;
+    let started = std::time::Instant::now();
+    let (profile, debug): (bool, bool) = (ctx.input("profile")?, ctx.input("debug")?);
+    let progress = ctx.progress_fn();
+    let st = ctx.state::<SphState>()?;
+    if st.fluid.is_none() || st.key != key || frame <= st.last_frame {
+        *st = SphState::start((prm.clone(), pmin, pmax, counts), key, frame)?;
         st.record(frame - 1);
     }
     let f = st.fluid.as_mut().expect("initialised above");
-    let res = f
-        .advance_progress(frame_dt, &progress)
-        .and_then(|_| f.refresh());
-    if let Err(e) = res {
+    if let Err(e) = advance_frame(f, frame_dt, &progress) {
         st.fluid = None;
         return Err(NodeError::unstable(format!(
             "SPH blew up in frame {frame} at {e}"
@@ -401,29 +466,7 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let pts = to_points(f, vref);
     let img = splat(f, width, vref);
     let (log, front) = (st.log.clone(), st.front.clone());
-    let capped = f.capped_solves;
-    let debug_line = debug.then(|| {
-        let (emax, eavg) = f.density_error();
-        format!(
-            "density error max {emax:.3e} avg {eavg:.3e}, kinetic energy {:.4e}",
-            f.kinetic_energy()
-        )
-    });
-    let msg = format!(
-        "t = {:.4} s, {} steps, {} particles",
-        f.time,
-        f.steps,
-        f.len()
-    );
-    ctx.log(msg);
-    if capped > 0 {
-        ctx.log(format!(
-            "warning: {} DFSPH solves stopped at max_iterations = {} before reaching \
-             max_density_error; raise max_iterations or shorten dt",
-            capped, prm.max_iterations
-        ));
-    }
-    if let Some(line) = debug_line {
+    for line in frame_report(f, prm.max_iterations, debug) {
         ctx.log(line);
     }
     if profile {

@@ -6,7 +6,7 @@
 
 use super::boundary;
 use super::kernel::CubicSpline;
-use super::neighbour_grid::NeighbourGrid;
+use super::neighbour_grid::{GridError, NeighbourGrid};
 use cgnodes_api::types::vec3::{axpy, dot};
 use rayon::prelude::*;
 
@@ -158,6 +158,163 @@ pub struct Fluid {
     pub capped_solves: usize,
 }
 
+/// Why `Fluid::block` cannot build a fluid.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum BlockError {
+    /// `SphParams::dim` is neither 2 nor 3.
+    #[error("dimension must be 2 or 3, not {0}")]
+    Dimension(usize),
+    /// The particle radius is not a positive finite number.
+    #[error("particle radius must be positive, not {0}")]
+    ParticleRadius(f64),
+    /// The simulation box has no extent along this axis.
+    #[error("the simulation box is empty along axis {0}")]
+    EmptySimulationBox(usize),
+    /// The fluid block reaches outside the simulation box.
+    #[error("the particle box must lie inside the simulation box")]
+    ParticleBoxOutside,
+    /// The fluid block has no extent along this axis.
+    #[error("the particle box is empty along axis {0}")]
+    EmptyParticleBox(usize),
+    /// The lattice would hold more than 20 million fluid particles.
+    #[error("{0} particles is too many (limit 20 million)")]
+    TooManyParticles(f64),
+    /// Sampling the box walls would take more than 20 million boundary particles.
+    #[error(
+        "the box walls need {0:.3e} boundary particles (limit 20 million); use a \
+         smaller box, larger particles or boundary = walls"
+    )]
+    TooManyBoundaryParticles(f64),
+    /// The boundary particles do not fit a neighbour grid.
+    #[error(transparent)]
+    Grid(#[from] GridError),
+}
+
+/// Particles per axis and lattice spacing per axis of the initial block `[pmin, pmax]`:
+/// `counts` per axis (spacing `len / n`), or as many as fit at spacing `2r`. Checks the
+/// parameters and boxes first.
+fn block_lattice(
+    params: &SphParams,
+    pmin: [f64; 3],
+    pmax: [f64; 3],
+    counts: Option<[usize; 3]>,
+) -> Result<([usize; 3], [f64; 3]), BlockError> {
+    let dim = params.dim;
+    if dim != 2 && dim != 3 {
+        return Err(BlockError::Dimension(dim));
+    }
+    let r = params.particle_radius;
+    if !(r > 0.0 && r.is_finite()) {
+        return Err(BlockError::ParticleRadius(r));
+    }
+    let mut n = [1usize; 3];
+    let mut s = [2.0 * r; 3];
+    for a in 0..dim {
+        if params.box_max[a] <= params.box_min[a] {
+            return Err(BlockError::EmptySimulationBox(a));
+        }
+        if pmin[a] < params.box_min[a] - 1e-9 || pmax[a] > params.box_max[a] + 1e-9 {
+            return Err(BlockError::ParticleBoxOutside);
+        }
+        let len = pmax[a] - pmin[a];
+        if len.is_nan() || len <= 0.0 {
+            return Err(BlockError::EmptyParticleBox(a));
+        }
+        match counts {
+            Some(c) => {
+                n[a] = c[a].max(1);
+                s[a] = len / n[a] as f64;
+            }
+            None => {
+                n[a] = ((len / s[a]) + 1e-9).floor().max(1.0) as usize;
+            }
+        }
+    }
+    Ok((n, s))
+}
+
+/// The cell centres of an `n` lattice of spacing `s` from `pmin` (x fastest, then y, z).
+fn lattice_points(pmin: [f64; 3], n: [usize; 3], s: [f64; 3], dim: usize) -> Vec<[f64; 3]> {
+    let total: f64 = n.iter().map(|&k| k as f64).product();
+    let mut x = Vec::with_capacity(total as usize);
+    for k in 0..n[2] {
+        for j in 0..n[1] {
+            for i in 0..n[0] {
+                let idx = [i, j, k];
+                let mut p = [0.0; 3];
+                for a in 0..dim {
+                    p[a] = pmin[a] + (idx[a] as f64 + 0.5) * s[a];
+                }
+                x.push(p);
+            }
+        }
+    }
+    x
+}
+
+/// The sum of `W` over an infinite lattice of spacing `s` around one of its particles
+/// (including itself): an interior particle's summed density per unit mass.
+fn lattice_kernel_sum(kernel: &CubicSpline, s: [f64; 3], dim: usize) -> f64 {
+    let h = kernel.h;
+    let mut wsum = 0.0;
+    let m = [
+        (h / s[0]).ceil() as i64,
+        (h / s[1]).ceil() as i64,
+        if dim == 3 {
+            (h / s[2]).ceil() as i64
+        } else {
+            0
+        },
+    ];
+    for k in -m[2]..=m[2] {
+        for j in -m[1]..=m[1] {
+            for i in -m[0]..=m[0] {
+                let d = [i as f64 * s[0], j as f64 * s[1], k as f64 * s[2]];
+                wsum += kernel.w(dot(d, d).sqrt());
+            }
+        }
+    }
+    wsum
+}
+
+/// Boundary particles of the box walls (Akinci 2012): positions, volumes and their grid;
+/// none with `Boundary::Walls`.
+type BoundarySampling = (Vec<[f64; 3]>, Vec<f64>, NeighbourGrid);
+
+/// Samples the box walls with `ceil(h / 2r)` layers of boundary particles at spacing `2r`
+/// (Akinci 2012), with each particle's lattice volume, when the boundary is `Particles`.
+fn wall_particles(
+    params: &SphParams,
+    kernel: &CubicSpline,
+) -> Result<BoundarySampling, BlockError> {
+    if params.boundary != Boundary::Particles {
+        return Ok((Vec::new(), Vec::new(), NeighbourGrid::default()));
+    }
+    let (dim, h) = (params.dim, kernel.h);
+    let bs = 2.0 * params.particle_radius;
+    let layers = (h / bs).ceil() as usize;
+    let (mut outer, mut inner) = (1.0f64, 1.0f64);
+    for a in 0..dim {
+        let n = ((params.box_max[a] - params.box_min[a]) / bs)
+            .round()
+            .max(1.0);
+        outer *= n + 2.0 * layers as f64;
+        inner *= n;
+    }
+    if outer - inner > 20e6 {
+        return Err(BlockError::TooManyBoundaryParticles(outer - inner));
+    }
+    let bx = boundary::box_particles(params.box_min, params.box_max, bs, layers, dim);
+    let bgrid = NeighbourGrid::build(&bx, h)?;
+    let mut bsp = [bs; 3];
+    for (a, sp) in bsp.iter_mut().enumerate().take(dim) {
+        let len = params.box_max[a] - params.box_min[a];
+        *sp = len / (len / bs).round().max(1.0);
+    }
+    let bvol = vec![boundary::lattice_volume(bsp, kernel, dim); bx.len()];
+    Ok((bx, bvol, bgrid))
+}
+
 impl Fluid {
     /// A block of fluid at rest filling `[pmin, pmax]`: `counts` particles per axis (cell
     /// centres of a regular lattice), or spacing `2r` when `counts` is `None`. The particle
@@ -168,107 +325,18 @@ impl Fluid {
         pmin: [f64; 3],
         pmax: [f64; 3],
         counts: Option<[usize; 3]>,
-    ) -> Result<Fluid, String> {
-        let dim = params.dim;
-        if dim != 2 && dim != 3 {
-            return Err(format!("dimension must be 2 or 3, not {dim}"));
-        }
-        let r = params.particle_radius;
-        if !(r > 0.0 && r.is_finite()) {
-            return Err(format!("particle radius must be positive, not {r}"));
-        }
-        let mut n = [1usize; 3];
-        let mut s = [2.0 * r; 3];
-        for a in 0..dim {
-            if params.box_max[a] <= params.box_min[a] {
-                return Err(format!("the simulation box is empty along axis {a}"));
-            }
-            if pmin[a] < params.box_min[a] - 1e-9 || pmax[a] > params.box_max[a] + 1e-9 {
-                return Err("the particle box must lie inside the simulation box".into());
-            }
-            let len = pmax[a] - pmin[a];
-            if len.is_nan() || len <= 0.0 {
-                return Err(format!("the particle box is empty along axis {a}"));
-            }
-            match counts {
-                Some(c) => {
-                    n[a] = c[a].max(1);
-                    s[a] = len / n[a] as f64;
-                }
-                None => {
-                    n[a] = ((len / s[a]) + 1e-9).floor().max(1.0) as usize;
-                }
-            }
-        }
+    ) -> Result<Fluid, BlockError> {
+        let (n, s) = block_lattice(&params, pmin, pmax, counts)?;
         let total: f64 = n.iter().map(|&k| k as f64).product();
         if total > 20e6 {
-            return Err(format!("{total} particles is too many (limit 20 million)"));
+            return Err(BlockError::TooManyParticles(total));
         }
-        let h = params.support_factor * r;
+        let dim = params.dim;
+        let h = params.support_factor * params.particle_radius;
         let kernel = CubicSpline::new(h, dim);
-        let mut x = Vec::with_capacity(total as usize);
-        for k in 0..n[2] {
-            for j in 0..n[1] {
-                for i in 0..n[0] {
-                    let idx = [i, j, k];
-                    let mut p = [0.0; 3];
-                    for a in 0..dim {
-                        p[a] = pmin[a] + (idx[a] as f64 + 0.5) * s[a];
-                    }
-                    x.push(p);
-                }
-            }
-        }
-        // Lattice sum of W over an infinite lattice of this spacing (incl. the particle).
-        let mut wsum = 0.0;
-        let m = [
-            (h / s[0]).ceil() as i64,
-            (h / s[1]).ceil() as i64,
-            if dim == 3 {
-                (h / s[2]).ceil() as i64
-            } else {
-                0
-            },
-        ];
-        for k in -m[2]..=m[2] {
-            for j in -m[1]..=m[1] {
-                for i in -m[0]..=m[0] {
-                    let d = [i as f64 * s[0], j as f64 * s[1], k as f64 * s[2]];
-                    wsum += kernel.w(dot(d, d).sqrt());
-                }
-            }
-        }
-        let mass = params.rest_density / wsum;
-        let (bx, bvol, bgrid) = if params.boundary == Boundary::Particles {
-            let bs = 2.0 * r;
-            let layers = (h / bs).ceil() as usize;
-            let (mut outer, mut inner) = (1.0f64, 1.0f64);
-            for a in 0..dim {
-                let n = ((params.box_max[a] - params.box_min[a]) / bs)
-                    .round()
-                    .max(1.0);
-                outer *= n + 2.0 * layers as f64;
-                inner *= n;
-            }
-            if outer - inner > 20e6 {
-                return Err(format!(
-                    "the box walls need {:.3e} boundary particles (limit 20 million); use a \
-                     smaller box, larger particles or boundary = walls",
-                    outer - inner
-                ));
-            }
-            let bx = boundary::box_particles(params.box_min, params.box_max, bs, layers, dim);
-            let bgrid = NeighbourGrid::build(&bx, h)?;
-            let mut bsp = [bs; 3];
-            for (a, sp) in bsp.iter_mut().enumerate().take(dim) {
-                let len = params.box_max[a] - params.box_min[a];
-                *sp = len / (len / bs).round().max(1.0);
-            }
-            let bvol = vec![boundary::lattice_volume(bsp, &kernel, dim); bx.len()];
-            (bx, bvol, bgrid)
-        } else {
-            (Vec::new(), Vec::new(), NeighbourGrid::default())
-        };
+        let x = lattice_points(pmin, n, s, dim);
+        let mass = params.rest_density / lattice_kernel_sum(&kernel, s, dim);
+        let (bx, bvol, bgrid) = wall_particles(&params, &kernel)?;
         let np = x.len();
         Ok(Fluid {
             kernel,

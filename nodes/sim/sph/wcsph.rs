@@ -4,6 +4,7 @@
 //! pressure force `a_i = -sum_j m (p_i/rho_i^2 + p_j/rho_j^2) grad W_ij`, viscosity and
 //! gravity, integrated with operator splitting and symplectic Euler.
 
+use super::neighbour_grid::GridError;
 use super::pressure_solver::PressureSolver;
 use super::state::{Fluid, StepStats};
 use cgnodes_api::types::vec3::axpy;
@@ -21,7 +22,7 @@ pub struct Wcsph;
 
 impl PressureSolver for Wcsph {
     /// One WCSPH step of size `dt`.
-    fn step(&self, f: &mut Fluid, dt: f64) -> Result<StepStats, String> {
+    fn step(&self, f: &mut Fluid, dt: f64) -> Result<StepStats, GridError> {
         f.find_neighbours()?;
         f.compute_densities();
         let prm = &f.params;

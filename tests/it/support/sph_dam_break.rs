@@ -37,7 +37,7 @@ pub fn setup(solver: Solver, a: f64, r: f64, viscosity: f64) -> Result<Fluid, St
         stiffness: 1000.0 * 100.0 * 2.0 * g * 2.0 * a / 7.0,
         ..Default::default()
     };
-    Fluid::block(prm, [0.0; 3], [a, 2.0 * a, 0.0], None)
+    Fluid::block(prm, [0.0; 3], [a, 2.0 * a, 0.0], None).map_err(|e| e.to_string())
 }
 
 /// Runs `f` (from `setup`) up to `T = t_end`, sampling the front every `sample` seconds;
@@ -48,7 +48,7 @@ pub fn run(f: &mut Fluid, t_end: f64, sample: f64) -> Result<Vec<(f64, f64)>, St
     let ts = n * (f.params.gravity.abs() / a0).sqrt();
     let mut hist = vec![(0.0, 1.0)];
     while f.time * ts < t_end {
-        f.advance(sample)?;
+        f.advance(sample).map_err(|e| e.to_string())?;
         hist.push((f.time * ts, f.front() / a0));
     }
     Ok(hist)

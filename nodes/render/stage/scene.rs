@@ -6,6 +6,7 @@
 use super::model::{
     axis, translation, LightKind, Stage, StageCamera, StageLight, StageMesh, StagePoints, UpAxis,
 };
+use crate::BoxedError;
 use cgnodes_api::types::vec3::{cross, sub, unit as norm};
 use cgnodes_api::types::{
     Attribute, Camera, Domain, Image, Light, Material, Mesh, Scene, SceneObject,
@@ -157,10 +158,6 @@ pub fn splat_points(p: &StagePoints) -> (Mesh, Material) {
     };
     (mesh, material)
 }
-
-/// A boxed error from another crate (the camera check, the mesh transform, an image
-/// decoder), kept with its own message.
-pub type BoxedError = Box<dyn std::error::Error + Send + Sync>;
 
 /// Why a dome light's texture file could not be loaded.
 #[derive(Debug, thiserror::Error)]

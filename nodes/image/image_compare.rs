@@ -2,6 +2,26 @@
 
 use cgnodes_api::prelude::*;
 
+/// Why two images cannot be compared.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum CompareError {
+    /// The image and the reference differ in size (width, height of each).
+    #[error("image is {}x{} but the reference is {}x{}", image.0, image.1, reference.0, reference.1)]
+    SizeMismatch {
+        image: (u32, u32),
+        reference: (u32, u32),
+    },
+    /// The mask differs in size from the image.
+    #[error("mask is {}x{} but the image is {}x{}", mask.0, mask.1, image.0, image.1)]
+    MaskSize { mask: (u32, u32), image: (u32, u32) },
+    /// The difference at pixel `index` (row-major) is NaN or infinite.
+    #[error("pixel {index} is not finite")]
+    NonFinite { index: usize },
+    /// No pixel of the mask has luminance above one half.
+    #[error("the mask selects no pixel")]
+    EmptyMask,
+}
+
 /// Root-mean-square error over the RGB channels of the pixels where `mask` (if any) has
 /// luminance above one half, and the PSNR for a signal peak of `peak`. Returns
 /// (rmse, psnr, pixels compared).
@@ -10,19 +30,20 @@ pub fn image_rmse(
     reference: &Image,
     mask: Option<&Image>,
     peak: f64,
-) -> Result<(f64, f64, usize), String> {
-    if (image.width, image.height) != (reference.width, reference.height) {
-        return Err(format!(
-            "image is {}x{} but the reference is {}x{}",
-            image.width, image.height, reference.width, reference.height
-        ));
+) -> Result<(f64, f64, usize), CompareError> {
+    let size = |i: &Image| (i.width, i.height);
+    if size(image) != size(reference) {
+        return Err(CompareError::SizeMismatch {
+            image: size(image),
+            reference: size(reference),
+        });
     }
     if let Some(m) = mask {
-        if (m.width, m.height) != (image.width, image.height) {
-            return Err(format!(
-                "mask is {}x{} but the image is {}x{}",
-                m.width, m.height, image.width, image.height
-            ));
+        if size(m) != size(image) {
+            return Err(CompareError::MaskSize {
+                mask: size(m),
+                image: size(image),
+            });
         }
     }
     let mut sum = 0.0f64;
@@ -37,14 +58,14 @@ pub fn image_rmse(
         for c in 0..3 {
             let d = a[c] as f64 - b[c] as f64;
             if !d.is_finite() {
-                return Err(format!("pixel {i} is not finite"));
+                return Err(CompareError::NonFinite { index: i });
             }
             sum += d * d;
         }
         n += 1;
     }
     if n == 0 {
-        return Err("the mask selects no pixel".into());
+        return Err(CompareError::EmptyMask);
     }
     let rmse = (sum / (3 * n) as f64).sqrt();
     // PSNR = 20 log10(peak / RMSE); infinite for identical images.
@@ -78,7 +99,7 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let mask: Option<Arc<Image>> = ctx.input_opt("mask")?;
     let peak: f64 = ctx.input("peak")?;
     let (rmse, psnr, n) = image_rmse(&img, &reference, mask.as_deref(), peak)
-        .map_err(|e| NodeError::invalid("reference", e))?;
+        .map_err(|e| NodeError::invalid("reference", e.to_string()))?;
     ctx.set_output("rmse", rmse);
     ctx.set_output("psnr", psnr);
     ctx.set_output(

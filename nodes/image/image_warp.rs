@@ -8,24 +8,44 @@ use std::path::Path;
 /// Source and target control points.
 pub type PointPairs = (Vec<[f64; 2]>, Vec<[f64; 2]>);
 
+/// Why CSV text is not a list of control points (`read_points_csv`).
+#[derive(Debug, thiserror::Error)]
+pub enum PointsCsvError {
+    /// The CSV reader refused the text.
+    #[error("{0}")]
+    Csv(crate::BoxedError),
+    /// No header line.
+    #[error("the file is empty")]
+    Empty,
+    /// The header lacks one of `sx`, `sy`, `tx`, `ty`.
+    #[error("no column '{name}' (the header needs sx,sy,tx,ty)")]
+    MissingColumn { name: &'static str },
+    /// A cell of row `row` (the header is row 1) does not parse as a number.
+    #[error("row {row}: '{text}' is not a number")]
+    NotANumber { row: usize, text: String },
+}
+
 /// Control points from CSV text with a header naming columns `sx,sy,tx,ty` (any order,
 /// other columns ignored, `#` comments allowed): (source points, target points).
-pub fn read_points_csv(text: &str) -> Result<PointPairs, String> {
-    let rows = cgnodes_api::io::csv::read(text, true, true)?.ok_or("the file is empty")?;
+pub fn read_points_csv(text: &str) -> Result<PointPairs, PointsCsvError> {
+    let rows = cgnodes_api::io::csv::read(text, true, true)
+        .map_err(|e| PointsCsvError::Csv(e.into()))?
+        .ok_or(PointsCsvError::Empty)?;
     let mut cols = [0usize; 4];
     for (c, name) in cols.iter_mut().zip(["sx", "sy", "tx", "ty"]) {
         *c = rows
             .column(name)
-            .ok_or_else(|| format!("no column '{name}' (the header needs sx,sy,tx,ty)"))?;
+            .ok_or(PointsCsvError::MissingColumn { name })?;
     }
     let (mut p, mut q) = (Vec::new(), Vec::new());
     for (r, row) in rows.rows.iter().enumerate() {
         let mut v = [0.0; 4];
         for (x, &c) in v.iter_mut().zip(&cols) {
             let s = row.get(c).map(String::as_str).unwrap_or("");
-            *x = s
-                .parse()
-                .map_err(|_| format!("row {}: '{s}' is not a number", r + 2))?;
+            *x = s.parse().map_err(|_| PointsCsvError::NotANumber {
+                row: r + 2,
+                text: s.to_string(),
+            })?;
         }
         p.push([v[0], v[1]]);
         q.push([v[2], v[3]]);
@@ -105,7 +125,7 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
                 read_points_csv(&text).map_err(|e| {
                     // Only files of the run's own folders are quoted (issue 23).
                     let e = if ctx.files().is_within_run_folders(&path) {
-                        e
+                        e.to_string()
                     } else {
                         "not a CSV with numeric columns sx,sy,tx,ty".into()
                     };
@@ -211,9 +231,11 @@ mod tests {
         assert_eq!(p, vec![[4.0, 3.0]]);
         assert!(read_points_csv("sx,sy,tx\n1,2,3\n")
             .unwrap_err()
+            .to_string()
             .contains("'ty'"));
         assert!(read_points_csv("sx,sy,tx,ty\n1,2,x,4\n")
             .unwrap_err()
+            .to_string()
             .contains("row 2"));
         assert!(read_points_csv("").is_err());
     }

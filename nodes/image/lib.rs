@@ -19,6 +19,10 @@ pub use cgnodes_formats::{animation, file_check, srgb};
 
 use cgnodes_api::registry::Registry;
 
+/// An error from another crate (the sparse Cholesky factorization of cgnodes-linalg),
+/// boxed with its own message so this family's typed errors can carry it whatever its type.
+pub type BoxedError = Box<dyn std::error::Error + Send + Sync>;
+
 /// Registers this family's nodes, in the `image` category.
 pub fn register(r: &mut Registry) {
     r.with_category("image", |r| {

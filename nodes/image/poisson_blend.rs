@@ -21,9 +21,19 @@ fn any_non_finite(pixels: &[[f32; 4]]) -> bool {
         .fold(false, |acc, v| acc | (v.to_bits() & EXP == EXP))
 }
 
+/// A NaN or infinite pixel in an image that must be finite (the first in row-major order).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+#[error("pixel ({x}, {y}) is not finite")]
+pub struct NonFinitePixel {
+    /// Column.
+    pub x: usize,
+    /// Row.
+    pub y: usize,
+}
+
 /// The first non-finite pixel of `img` in row-major order within `[x0, y0, x1, y1]`
-/// (inclusive, clipped to the image), as an error message.
-fn check_finite_in(img: &Image, [x0, y0, x1, y1]: [i64; 4]) -> Result<(), String> {
+/// (inclusive, clipped to the image).
+fn check_finite_in(img: &Image, [x0, y0, x1, y1]: [i64; 4]) -> Result<(), NonFinitePixel> {
     let (w, h) = (i64::from(img.width), i64::from(img.height));
     let (x0, x1) = (x0.clamp(0, w) as usize, (x1 + 1).clamp(0, w) as usize);
     let (y0, y1) = (y0.clamp(0, h) as usize, (y1 + 1).clamp(0, h) as usize);
@@ -42,14 +52,14 @@ fn check_finite_in(img: &Image, [x0, y0, x1, y1]: [i64; 4]) -> Result<(), String
     }
     for y in y0..y1 {
         if let Some(i) = row(y).iter().position(|p| p.iter().any(|v| !v.is_finite())) {
-            return Err(format!("pixel ({}, {y}) is not finite", x0 + i));
+            return Err(NonFinitePixel { x: x0 + i, y });
         }
     }
     Ok(())
 }
 
-/// The first non-finite pixel of `img`, as an error message.
-fn check_finite(img: &Image) -> Result<(), String> {
+/// The first non-finite pixel of `img`.
+fn check_finite(img: &Image) -> Result<(), NonFinitePixel> {
     check_finite_in(
         img,
         [0, 0, i64::from(img.width) - 1, i64::from(img.height) - 1],
@@ -96,7 +106,7 @@ impl Region {
     pub fn new(source: &Image, mask: Option<&Image>) -> Result<Region, NodeError> {
         let shape = match mask {
             Some(m) => {
-                check_finite(m).map_err(|e| NodeError::invalid("mask", e))?;
+                check_finite(m).map_err(|e| NodeError::invalid("mask", e.to_string()))?;
                 MaskShape::from_image(m)
             }
             None => {
@@ -137,7 +147,7 @@ pub fn blend_region(
         ));
     }
     if shape.is_empty() {
-        check_finite(target).map_err(|e| NodeError::invalid("target", e))?;
+        check_finite(target).map_err(|e| NodeError::invalid("target", e.to_string()))?;
         return Ok(Blend {
             image: target.clone(),
             solution: None,
@@ -174,16 +184,19 @@ pub fn blend_region(
     // rest of the target is checked as `copy_target` copies it)
     let [x0, y0, x1, y1] = shape.bbox().map_or([0; 4], |b| b.map(i64::from));
     let around = [x0 - 1, y0 - 1, x1 + 1, y1 + 1];
-    check_finite_in(source, around).map_err(|e| NodeError::invalid("source", e))?;
+    check_finite_in(source, around).map_err(|e| NodeError::invalid("source", e.to_string()))?;
     let moved = [
         around[0] + off[0],
         around[1] + off[1],
         around[2] + off[0],
         around[3] + off[1],
     ];
-    check_finite_in(target, moved).map_err(|e| NodeError::invalid("target", e))?;
+    check_finite_in(target, moved).map_err(|e| NodeError::invalid("target", e.to_string()))?;
     if solver == Solver::SineTransform && shape.rectangle().is_none() {
-        return Err(NodeError::invalid("solver", poisson::not_a_rectangle()));
+        return Err(NodeError::invalid(
+            "solver",
+            poisson::PoissonError::NotARectangle.to_string(),
+        ));
     }
     // the target's copy (fresh pages: on the course's target as long as the reused solve) on
     // the other core while this one solves
@@ -192,7 +205,7 @@ pub fn blend_region(
         || poisson::copy_target(target),
     );
     let sol = sol.map_err(|e| NodeError::singular(format!("Poisson system: {e}")))?;
-    let mut image = copy.map_err(|e| NodeError::invalid("target", e))?;
+    let mut image = copy.map_err(|e| NodeError::invalid("target", e.to_string()))?;
     poisson::write_solution(&mut image, shape, off, &sol.values);
     Ok(Blend {
         image,

@@ -11,31 +11,67 @@ use admm::{Decomposition, Params};
 use cgnodes_api::prelude::*;
 use faer::Mat;
 
+/// Why CSV text is not a matrix (`parse_matrix_csv`); rows and columns count from 1.
+#[derive(Debug, thiserror::Error)]
+pub enum MatrixCsvError {
+    /// The CSV reader refused the text.
+    #[error("{0}")]
+    Csv(crate::BoxedError),
+    /// Nothing but blank lines and comments.
+    #[error("the file has no rows")]
+    NoRows,
+    /// A row is longer or shorter than the first.
+    #[error("row {row} has {len} numbers but row 1 has {first} (rows must be equally long)")]
+    Ragged {
+        row: usize,
+        len: usize,
+        first: usize,
+    },
+    /// A cell does not parse as a number.
+    #[error("row {row}, column {column}: '{text}' is not a number")]
+    NotANumber {
+        row: usize,
+        column: usize,
+        text: String,
+    },
+    /// A cell is NaN or infinite.
+    #[error("row {row}, column {column}: '{text}' is not finite")]
+    NotFinite {
+        row: usize,
+        column: usize,
+        text: String,
+    },
+}
+
 /// A matrix from CSV text: every row a list of numbers (no header; blank lines and `#`
 /// comments skipped). Errors say which row and column.
-pub fn parse_matrix_csv(text: &str) -> Result<Mat<f64>, String> {
-    let rows = cgnodes_api::io::csv::read(text, true, true)?.ok_or("the file has no rows")?;
+pub fn parse_matrix_csv(text: &str) -> Result<Mat<f64>, MatrixCsvError> {
+    let rows = cgnodes_api::io::csv::read(text, true, true)
+        .map_err(|e| MatrixCsvError::Csv(e.into()))?
+        .ok_or(MatrixCsvError::NoRows)?;
     let all: Vec<&Vec<String>> = std::iter::once(&rows.header).chain(&rows.rows).collect();
     let n = all[0].len();
     let mut values = Vec::with_capacity(all.len() * n);
     for (r, row) in all.iter().enumerate() {
         if row.len() != n {
-            return Err(format!(
-                "row {} has {} numbers but row 1 has {n} (rows must be equally long)",
-                r + 1,
-                row.len()
-            ));
+            return Err(MatrixCsvError::Ragged {
+                row: r + 1,
+                len: row.len(),
+                first: n,
+            });
         }
         for (c, s) in row.iter().enumerate() {
-            let v: f64 = s
-                .parse()
-                .map_err(|_| format!("row {}, column {}: '{s}' is not a number", r + 1, c + 1))?;
+            let v: f64 = s.parse().map_err(|_| MatrixCsvError::NotANumber {
+                row: r + 1,
+                column: c + 1,
+                text: s.clone(),
+            })?;
             if !v.is_finite() {
-                return Err(format!(
-                    "row {}, column {}: '{s}' is not finite",
-                    r + 1,
-                    c + 1
-                ));
+                return Err(MatrixCsvError::NotFinite {
+                    row: r + 1,
+                    column: c + 1,
+                    text: s.clone(),
+                });
             }
             values.push(v);
         }
@@ -102,7 +138,7 @@ pub fn to_table(m: &Mat<f64>) -> Table {
 /// Decomposes each matrix; errors name no socket (an SVD failure).
 pub fn decompose_all(mats: &[Mat<f64>], p: Params) -> Result<Vec<Decomposition>, NodeError> {
     mats.iter()
-        .map(|m| admm::rpca(m.as_ref(), p).map_err(NodeError::singular))
+        .map(|m| admm::rpca(m.as_ref(), p).map_err(|e| NodeError::singular(e.to_string())))
         .collect()
 }
 
@@ -174,7 +210,8 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
             let path = ctx.input_path(&f);
             let text =
                 std::fs::read_to_string(&path).map_err(|e| NodeError::io(&path, e).at("matrix"))?;
-            let m = parse_matrix_csv(&text).map_err(|e| NodeError::invalid("matrix", e))?;
+            let m =
+                parse_matrix_csv(&text).map_err(|e| NodeError::invalid("matrix", e.to_string()))?;
             (vec![m], true)
         }
     };
@@ -346,14 +383,14 @@ mod tests {
         let m = parse_matrix_csv("# a 2x3 matrix\n1, 2, 3\n\n4,5,6.5\n").unwrap();
         assert_eq!(m.shape(), (2, 3));
         assert_eq!(m[(1, 2)], 6.5);
-        let e = parse_matrix_csv("1,2,3\n4,5\n").unwrap_err();
+        let e = parse_matrix_csv("1,2,3\n4,5\n").unwrap_err().to_string();
         assert!(e.contains("row 2 has 2 numbers but row 1 has 3"), "{e}");
-        let e = parse_matrix_csv("1,2\nNaN,5\n").unwrap_err();
+        let e = parse_matrix_csv("1,2\nNaN,5\n").unwrap_err().to_string();
         assert!(
             e.contains("row 2, column 1") && e.contains("not finite"),
             "{e}"
         );
-        let e = parse_matrix_csv("1,x\n").unwrap_err();
+        let e = parse_matrix_csv("1,x\n").unwrap_err().to_string();
         assert!(e.contains("'x' is not a number"), "{e}");
         assert!(parse_matrix_csv("\n").is_err());
     }

@@ -15,6 +15,11 @@ pub mod stage;
 
 use cgnodes_api::registry::Registry;
 
+/// An error from another crate (the camera check, scene flattening, mesh transforms, image
+/// decoding, linear solves), boxed with its own message so this family's typed errors can
+/// carry it whatever its type.
+pub type BoxedError = Box<dyn std::error::Error + Send + Sync>;
+
 /// Registers this family's nodes, in the `render` category.
 pub fn register(r: &mut Registry) {
     r.with_category("render", |r| {

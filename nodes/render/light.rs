@@ -8,8 +8,26 @@
 
 use cgnodes_api::prelude::*;
 
+/// Why a point or directional light's values are refused.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum LightError {
+    /// A position, direction, colour or intensity component is NaN or infinite.
+    #[error("values must be finite")]
+    NotFinite,
+    /// A colour component or the intensity is below zero.
+    #[error("color and intensity must not be negative")]
+    Negative,
+    /// A directional light's direction has no length.
+    #[error("direction must not be zero")]
+    ZeroDirection,
+}
+
 /// A point light; fails on non-finite or negative values.
-pub fn point_light(position: [f64; 3], color: [f64; 3], intensity: f64) -> Result<Light, String> {
+pub fn point_light(
+    position: [f64; 3],
+    color: [f64; 3],
+    intensity: f64,
+) -> Result<Light, LightError> {
     check(&position, &color, intensity)?;
     Ok(Light::Point {
         position,
@@ -24,11 +42,11 @@ pub fn directional_light(
     direction: [f64; 3],
     color: [f64; 3],
     intensity: f64,
-) -> Result<Light, String> {
+) -> Result<Light, LightError> {
     check(&direction, &color, intensity)?;
     let n = cgnodes_api::types::vec3::norm(direction);
     if n.is_nan() || n <= 1e-12 {
-        return Err("direction must not be zero".into());
+        return Err(LightError::ZeroDirection);
     }
     Ok(Light::Directional {
         direction: cgnodes_api::types::vec3::scale(direction, 1.0 / n),
@@ -37,12 +55,13 @@ pub fn directional_light(
     })
 }
 
-fn check(p: &[f64; 3], color: &[f64; 3], intensity: f64) -> Result<(), String> {
+/// The checks both lights share: finite values, non-negative colour and intensity.
+fn check(p: &[f64; 3], color: &[f64; 3], intensity: f64) -> Result<(), LightError> {
     if p.iter().chain(color).any(|x| !x.is_finite()) || !intensity.is_finite() {
-        return Err("values must be finite".into());
+        return Err(LightError::NotFinite);
     }
     if color.iter().any(|&c| c < 0.0) || intensity < 0.0 {
-        return Err("color and intensity must not be negative".into());
+        return Err(LightError::Negative);
     }
     Ok(())
 }
@@ -84,7 +103,7 @@ fn declare_point(b: &mut NodeBuilder) {
 fn execute_point(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let c: Color = ctx.input("color")?;
     let l = point_light(ctx.input("position")?, c.0, ctx.input("intensity")?)
-        .map_err(|e| NodeError::invalid("intensity", e))?;
+        .map_err(|e| NodeError::invalid("intensity", e.to_string()))?;
     ctx.set_output("light", l);
     Ok(())
 }
@@ -105,7 +124,7 @@ fn declare_directional(b: &mut NodeBuilder) {
 fn execute_directional(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let c: Color = ctx.input("color")?;
     let l = directional_light(ctx.input("direction")?, c.0, ctx.input("intensity")?)
-        .map_err(|e| NodeError::invalid("direction", e))?;
+        .map_err(|e| NodeError::invalid("direction", e.to_string()))?;
     ctx.set_output("light", l);
     Ok(())
 }
@@ -118,7 +137,8 @@ pub fn environment_light(
     intensity: f64,
     rotation_deg: f64,
 ) -> Result<Light, NodeError> {
-    check(&[0.0; 3], &color, intensity).map_err(|e| NodeError::invalid("intensity", e))?;
+    check(&[0.0; 3], &color, intensity)
+        .map_err(|e| NodeError::invalid("intensity", e.to_string()))?;
     if !rotation_deg.is_finite() {
         return Err(NodeError::invalid("rotation", "rotation must be finite"));
     }

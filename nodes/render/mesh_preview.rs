@@ -71,8 +71,20 @@ pub fn preview_framed_on(
     width: u32,
     height: u32,
 ) -> Result<Image, String> {
+    // The string error is `MeshHooks::preview`'s (the API's hook type).
     let framing = Framing::of(framing_of).ok_or("no finite vertices")?;
-    render_preview(mesh, Some(framing), width, height)
+    render_preview(mesh, Some(framing), width, height).map_err(|e| e.to_string())
+}
+
+/// Why a mesh preview cannot be drawn.
+#[derive(Debug, thiserror::Error)]
+pub enum PreviewError {
+    /// The mesh has no vertex with finite coordinates to frame.
+    #[error("the mesh has no (finite) vertices")]
+    NoVertices,
+    /// The rasterizer refused the preview scene.
+    #[error(transparent)]
+    Raster(#[from] raster::RasterError),
 }
 
 /// Renders `mesh` as a preview with `framing` (the mesh's own when `None`): light grey
@@ -84,10 +96,10 @@ pub fn render_preview(
     framing: Option<Framing>,
     width: u32,
     height: u32,
-) -> Result<Image, String> {
+) -> Result<Image, PreviewError> {
     let f = match framing {
         Some(f) => f,
-        None => Framing::of(mesh).ok_or("the mesh has no (finite) vertices")?,
+        None => Framing::of(mesh).ok_or(PreviewError::NoVertices)?,
     };
     let cam = preview_camera(&f, width, height);
     // The checkerboard is made once per process: previews run on every report.

@@ -84,8 +84,8 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
             f
         }
     };
-    let img =
-        render_preview(&mesh, Some(framing), w, h).map_err(|e| NodeError::invalid("mesh", e))?;
+    let img = render_preview(&mesh, Some(framing), w, h)
+        .map_err(|e| NodeError::invalid("mesh", e.to_string()))?;
     let rgba = to_rgba8(&img);
     let png = cgnodes_formats::png::encode_png(w, h, 4, rgba.as_raw().clone())
         .map_err(|e| NodeError::new(ErrorKind::Internal, e))?;

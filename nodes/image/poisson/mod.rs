@@ -21,6 +21,7 @@ mod timing;
 pub use guidance::Mode;
 pub use mask::{MaskShape, ShapeKey};
 
+use super::NonFinitePixel;
 use cgnodes_api::types::Image;
 use faer::reborrow::ReborrowMut;
 use faer::Mat;
@@ -113,13 +114,13 @@ pub enum Factor {
 
 impl Factor {
     /// Factors the Poisson matrix of `shape`: the fast solver for a rectangle, else Cholesky.
-    pub fn new(shape: &MaskShape) -> Result<Factor, String> {
+    pub fn new(shape: &MaskShape) -> Result<Factor, PoissonError> {
         Factor::with(shape, Solver::Auto)
     }
 
     /// Factors the Poisson matrix of `shape` for `solver` (`Auto` resolved by `auto_solver`);
     /// `SineTransform` for an Ω that is not a rectangle is an error.
-    pub fn with(shape: &MaskShape, solver: Solver) -> Result<Factor, String> {
+    pub fn with(shape: &MaskShape, solver: Solver) -> Result<Factor, PoissonError> {
         let solver = match solver {
             Solver::Auto => auto_solver(shape),
             s => s,
@@ -127,7 +128,7 @@ impl Factor {
         Ok(match solver {
             Solver::SineTransform => match shape.rectangle() {
                 Some([w, h]) => Factor::Rect(RectSolver::new(w as usize, h as usize)),
-                None => return Err(not_a_rectangle()),
+                None => return Err(PoissonError::NotARectangle),
             },
             Solver::Multigrid => Factor::Multigrid(Box::new(multigrid::Multigrid::new(shape)?)),
             _ => Factor::Cholesky(Box::new(system::factor(shape)?)),
@@ -137,7 +138,7 @@ impl Factor {
     /// Solves `A X = B` in place, every column of `x` (one per channel); the multigrid
     /// iterations (0 for a direct solver). The multigrid starts from the previous solution
     /// of the same shape when that is closer than zero.
-    pub fn solve_in_place(&self, mut x: faer::MatMut<'_, f64>) -> Result<usize, String> {
+    pub fn solve_in_place(&self, mut x: faer::MatMut<'_, f64>) -> Result<usize, PoissonError> {
         match self {
             Factor::Cholesky(f) => f.solve_in_place(x),
             Factor::Multigrid(m) => return Ok(m.solve_in_place(x, true)?.iterations),
@@ -169,11 +170,43 @@ impl Factor {
     }
 }
 
-/// The error for `solver: sine_transform` on an Ω that is not a rectangle.
-pub fn not_a_rectangle() -> String {
-    "solver 'sine_transform' needs a rectangular mask (every pixel of its bounding box \
-     inside); this mask is not one: use auto, cholesky or multigrid"
-        .into()
+/// Why a Poisson paste cannot be factored or solved.
+#[derive(Debug, thiserror::Error)]
+pub enum PoissonError {
+    /// The mask has no pixel inside (multigrid).
+    #[error("the mask is empty")]
+    EmptyMask,
+    /// `solver: sine_transform` for an Ω that is not a rectangle.
+    #[error(
+        "solver 'sine_transform' needs a rectangular mask (every pixel of its bounding box \
+         inside); this mask is not one: use auto, cholesky or multigrid"
+    )]
+    NotARectangle,
+    /// The sparse Cholesky factorization failed (cgnodes-linalg's error).
+    #[error("{0}")]
+    Factor(crate::BoxedError),
+    /// Multigrid-preconditioned CG reached its iteration limit above the tolerance.
+    #[error(
+        "multigrid-preconditioned CG stopped after {iterations} iterations at a relative \
+         residual of {residual:.1e}"
+    )]
+    NoConvergence { iterations: usize, residual: f64 },
+    /// Ω's bounding box (with its border) does not fit inside the target.
+    #[error("the mask region does not fit inside the target")]
+    DoesNotFit,
+    /// The offset puts Ω's border outside the target.
+    #[error("offset {offset:?} outside {x_range:?} x {y_range:?}")]
+    OffsetOutside {
+        offset: [i64; 2],
+        x_range: [i64; 2],
+        y_range: [i64; 2],
+    },
+    /// The source image and the mask have different sizes.
+    #[error("source and mask sizes differ")]
+    SizeMismatch,
+    /// A pixel of the target is not finite (`copy_target`).
+    #[error(transparent)]
+    NonFinite(#[from] NonFinitePixel),
 }
 
 /// Cache entries: (shape, solver), the factorization, and how many pastes asked for it.
@@ -182,7 +215,7 @@ static CACHE: Mutex<Cache> = Mutex::new(Vec::new());
 
 /// The factorization of `shape`'s Poisson matrix, from the cache when a mask of the same
 /// shape was factored recently; the flag says whether it was reused.
-pub fn cached_factor(shape: &MaskShape) -> Result<(Arc<Factor>, bool), String> {
+pub fn cached_factor(shape: &MaskShape) -> Result<(Arc<Factor>, bool), PoissonError> {
     cached_factor_keyed(shape, &shape.key(), Solver::Auto)
 }
 
@@ -192,7 +225,7 @@ pub fn cached_factor_keyed(
     shape: &MaskShape,
     key: &ShapeKey,
     solver: Solver,
-) -> Result<(Arc<Factor>, bool), String> {
+) -> Result<(Arc<Factor>, bool), PoissonError> {
     let auto = solver == Solver::Auto;
     let mut solver = match solver {
         Solver::Auto => auto_solver(shape),
@@ -299,7 +332,7 @@ pub fn solve(
     source: &Image,
     offset: [i64; 2],
     mode: Mode,
-) -> Result<Solution, String> {
+) -> Result<Solution, PoissonError> {
     solve_keyed(
         shape,
         &shape.key(),
@@ -320,16 +353,20 @@ pub fn solve_keyed(
     offset: [i64; 2],
     mode: Mode,
     solver: Solver,
-) -> Result<Solution, String> {
+) -> Result<Solution, PoissonError> {
     let t0 = Instant::now();
     let Some([xr, yr]) = shape.offset_range(target.width, target.height) else {
-        return Err("the mask region does not fit inside the target".into());
+        return Err(PoissonError::DoesNotFit);
     };
     if !(xr[0]..=xr[1]).contains(&offset[0]) || !(yr[0]..=yr[1]).contains(&offset[1]) {
-        return Err(format!("offset {offset:?} outside {xr:?} x {yr:?}"));
+        return Err(PoissonError::OffsetOutside {
+            offset,
+            x_range: xr,
+            y_range: yr,
+        });
     }
     if (source.width, source.height) != (shape.width, shape.height) {
-        return Err("source and mask sizes differ".into());
+        return Err(PoissonError::SizeMismatch);
     }
     // the right-hand side in the last paste's buffer when it is free (see `RHS_BUFFER`)
     let mut b = RHS_BUFFER.take();
@@ -368,7 +405,7 @@ pub fn solve_keyed(
 /// A copy of `target`, checked as it is copied (its first non-finite pixel is an error):
 /// a paste runs it on the other core while it solves (the copy's fresh pages cost about as
 /// much as the course mask's solve), then `write_solution` puts the solved values over Ω.
-pub fn copy_target(target: &Image) -> Result<Image, String> {
+pub fn copy_target(target: &Image) -> Result<Image, NonFinitePixel> {
     let mut out = Image::new(target.width, target.height, [0.0; 4]);
     let tw = (target.width as usize).max(1);
     let bad = std::sync::atomic::AtomicBool::new(false);

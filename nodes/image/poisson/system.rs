@@ -10,6 +10,7 @@
 //! and joined through the dense Schur complement of the top separator (`TwoDomainFactor`).
 
 use super::mask::MaskShape;
+use super::PoissonError;
 use cgnodes_linalg::nested_dissection::Dissection;
 use cgnodes_linalg::{SpdFactor, TwoDomainFactor};
 use faer::sparse::{SparseColMat, SymbolicSparseColMat};
@@ -56,9 +57,10 @@ const TWO_DOMAIN_MIN: usize = 4096;
 /// Factors the Poisson matrix of `shape` (sparse Cholesky): faer's AMD ordering below
 /// `ND_MIN_UNKNOWNS` unknowns, else the grid's nested dissection (`nested_order`), whose two
 /// top-level halves are factored on two cores (`TwoDomainFactor`).
-pub fn factor(shape: &MaskShape) -> Result<PoissonFactor, String> {
+pub fn factor(shape: &MaskShape) -> Result<PoissonFactor, PoissonError> {
     if shape.len() < ND_MIN_UNKNOWNS {
-        let f = SpdFactor::from_lower(poisson_matrix(shape), None, Par::Seq)?;
+        let f = SpdFactor::from_lower(poisson_matrix(shape), None, Par::Seq)
+            .map_err(|e| PoissonError::Factor(e.into()))?;
         return Ok(PoissonFactor {
             kind: Kind::Amd(f),
             order: Vec::new(),
@@ -71,15 +73,23 @@ pub fn factor(shape: &MaskShape) -> Result<PoissonFactor, String> {
 
 /// `factor` in the grid's nested-dissection order, the top-level halves as two domains when
 /// both have at least `two_min` unknowns.
-fn factor_nested(shape: &MaskShape, leaf: usize, two_min: usize) -> Result<PoissonFactor, String> {
+fn factor_nested(
+    shape: &MaskShape,
+    leaf: usize,
+    two_min: usize,
+) -> Result<PoissonFactor, PoissonError> {
     let n = shape.len();
     let Dissection { order, halves } = nested_order(shape, leaf);
     let a = upper_in_order(shape, &order);
     let kind = match halves {
-        Some([h0, h1]) if h0.min(h1) >= two_min && h0 + h1 < n => {
-            Kind::Two(TwoDomainFactor::from_upper_in_order(a.as_ref(), h0, h1)?)
-        }
-        _ => Kind::One(SpdFactor::from_upper_in_order(a, Par::Seq)?),
+        Some([h0, h1]) if h0.min(h1) >= two_min && h0 + h1 < n => Kind::Two(
+            TwoDomainFactor::from_upper_in_order(a.as_ref(), h0, h1)
+                .map_err(|e| PoissonError::Factor(e.into()))?,
+        ),
+        _ => Kind::One(
+            SpdFactor::from_upper_in_order(a, Par::Seq)
+                .map_err(|e| PoissonError::Factor(e.into()))?,
+        ),
     };
     Ok(PoissonFactor {
         kind,

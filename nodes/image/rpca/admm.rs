@@ -13,6 +13,7 @@
 
 use super::svt::Thresholder;
 pub use super::svt::{singular_value_threshold, svt_by_svd};
+use crate::image_svd::svd::SvdError;
 use faer::{Mat, MatRef};
 use rayon::prelude::*;
 
@@ -76,7 +77,7 @@ pub fn shrink(x: f64, tau: f64) -> f64 {
 
 /// Splits `m` into low-rank plus sparse parts by ADMM. `m` must be finite and non-empty (the
 /// node checks); a zero matrix returns zeros at once. Errors are the SVD's.
-pub fn rpca(m: MatRef<'_, f64>, p: Params) -> Result<Decomposition, String> {
+pub fn rpca(m: MatRef<'_, f64>, p: Params) -> Result<Decomposition, SvdError> {
     let (rows, cols) = m.shape();
     let lambda = if p.lambda > 0.0 {
         p.lambda

@@ -21,6 +21,7 @@
 //! ||R||_F / (θ_k - τ²), which must be below 1e-10; otherwise the full eigendecomposition runs.
 
 use crate::image_svd::svd::randomized::gaussian_matrix;
+use crate::image_svd::svd::SvdError;
 use faer::diag::Diag;
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::evd::{
@@ -94,13 +95,20 @@ impl Default for Thresholder {
 }
 
 /// D_τ(X) and the number of singular values above τ, without a warm start.
-pub fn singular_value_threshold(x: MatRef<'_, f64>, tau: f64) -> Result<(Mat<f64>, usize), String> {
+pub fn singular_value_threshold(
+    x: MatRef<'_, f64>,
+    tau: f64,
+) -> Result<(Mat<f64>, usize), SvdError> {
     Thresholder::default().threshold(x, tau)
 }
 
 impl Thresholder {
     /// D_τ(X) and the rank kept (singular values above τ).
-    pub fn threshold(&mut self, x: MatRef<'_, f64>, tau: f64) -> Result<(Mat<f64>, usize), String> {
+    pub fn threshold(
+        &mut self,
+        x: MatRef<'_, f64>,
+        tau: f64,
+    ) -> Result<(Mat<f64>, usize), SvdError> {
         let mut out = Mat::zeros(x.nrows(), x.ncols());
         let k = self.threshold_into(x, tau, &mut out)?;
         Ok((out, k))
@@ -112,7 +120,7 @@ impl Thresholder {
         x: MatRef<'_, f64>,
         tau: f64,
         out: &mut Mat<f64>,
-    ) -> Result<usize, String> {
+    ) -> Result<usize, SvdError> {
         let (m, n) = x.shape();
         if out.shape() != (m, n) {
             *out = Mat::zeros(m, n);
@@ -532,10 +540,8 @@ impl Inertia {
 }
 
 /// `singular_value_threshold` through faer's thin SVD.
-pub fn svt_by_svd(x: MatRef<'_, f64>, tau: f64) -> Result<(Mat<f64>, usize), String> {
-    let svd = x
-        .thin_svd()
-        .map_err(|e| format!("the SVD did not converge: {e:?}"))?;
+pub fn svt_by_svd(x: MatRef<'_, f64>, tau: f64) -> Result<(Mat<f64>, usize), SvdError> {
+    let svd = x.thin_svd().map_err(SvdError::NoConvergence)?;
     let s = svd.S().column_vector();
     let k = (0..s.nrows()).take_while(|&i| s[i] > tau).count();
     if k == 0 {

@@ -11,6 +11,17 @@ pub mod truncated;
 use cgnodes_api::node::Choice;
 use faer::{Mat, MatRef};
 
+/// Why a singular value decomposition failed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+pub enum SvdError {
+    /// The matrix has no rows or no columns.
+    #[error("the matrix is empty")]
+    Empty,
+    /// faer's SVD reached its iteration limit.
+    #[error("the SVD did not converge: {0:?}")]
+    NoConvergence(faer::linalg::svd::SvdError),
+}
+
 /// How the factors are computed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Method {
@@ -111,7 +122,7 @@ pub fn low_rank(
     trunc: Truncation,
     method: Method,
     params: RandomizedParams,
-) -> Result<Approximation, String> {
+) -> Result<Approximation, SvdError> {
     let size = a.nrows().min(a.ncols());
     let total = frobenius_sq(a);
     let (factors, rank) = match (method, trunc) {

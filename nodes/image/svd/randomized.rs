@@ -4,7 +4,7 @@
 //! with A or A^T so the columns do not all collapse onto the dominant singular vector; then
 //! Alg. 5.1 takes the SVD of the small matrix B = Q^T A (l x n) and lifts U = Q Ũ.
 
-use super::{truncated, Factors, RandomizedParams};
+use super::{truncated, Factors, RandomizedParams, SvdError};
 use faer::{Mat, MatRef};
 
 /// SplitMix64 (Steele, Lea & Flood 2014): a small, seedable generator for the test matrix.
@@ -70,9 +70,9 @@ pub fn randomized_svd(
     a: MatRef<'_, f64>,
     k: usize,
     p: RandomizedParams,
-) -> Result<Factors, String> {
+) -> Result<Factors, SvdError> {
     if a.nrows() == 0 || a.ncols() == 0 {
-        return Err("the matrix is empty".into());
+        return Err(SvdError::Empty);
     }
     let q = range_finder(a, k, p);
     let b = q.transpose() * a; // l x n

@@ -199,7 +199,8 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
                 ),
             ));
         }
-        let bounds = scene_bounds(&scene).map_err(|e| NodeError::invalid("scene", e))?;
+        let bounds =
+            scene_bounds(&scene).map_err(|e| NodeError::invalid("scene", e.to_string()))?;
         for (i, (img, light)) in maps.iter().zip(&scene.lights).enumerate() {
             let m = map_from_image(img, light, bounds)
                 .map_err(|e| NodeError::invalid("shadows", format!("map {i}: {e}")))?;

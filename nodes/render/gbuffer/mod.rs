@@ -80,6 +80,23 @@ pub fn pass_camera(
     Ok(cam)
 }
 
+/// Why `camera_from_gbuffer` cannot recover a camera.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum CameraFitError {
+    /// Fewer than three pixels are surfaces in both passes.
+    #[error("fewer than three surface pixels to recover the camera from")]
+    TooFewSurfaces,
+    /// The least-squares solve failed (nalgebra's SVD message).
+    #[error("{0}")]
+    Solve(&'static str),
+    /// The fitted image-plane axes are degenerate.
+    #[error("the pixels do not span the image plane")]
+    NotSpanning,
+    /// The positions are off the best pinhole camera by more than 1e-3 of the extent.
+    #[error("the passes do not fit one pinhole camera (residual {residual:.3e} against extent {extent:.3e})")]
+    NotPinhole { residual: f64, extent: f64 },
+}
+
 /// The pinhole camera a position and depth pass were rendered with, recovered by linear
 /// least squares, for passes whose camera is not linked (Framework3D's `render_ssao` has no
 /// camera socket). A surface pixel at `(x', y')` from the image centre (x right, y up) with
@@ -90,7 +107,7 @@ pub fn pass_camera(
 /// disturbing `a` and `b`), then takes `c = b x a` normalized and `e` as the mean of
 /// `P - z (x' a + y' b + c)`. Fails when fewer than three pixels are surfaces or the
 /// positions do not fit one pinhole camera (residual above 1e-3 of the scene's extent).
-pub fn camera_from_gbuffer(position: &Image, depth: &Image) -> Result<Camera, String> {
+pub fn camera_from_gbuffer(position: &Image, depth: &Image) -> Result<Camera, CameraFitError> {
     use nalgebra::{Matrix4, Vector4};
     let (w, h) = (position.width, position.height);
     let mut samples = Vec::new();
@@ -105,7 +122,7 @@ pub fn camera_from_gbuffer(position: &Image, depth: &Image) -> Result<Camera, St
         }
     }
     if samples.len() < 3 {
-        return Err("fewer than three surface pixels to recover the camera from".into());
+        return Err(CameraFitError::TooFewSurfaces);
     }
     let mut ata = Matrix4::<f64>::zeros();
     let mut atp = [Vector4::<f64>::zeros(); 3];
@@ -121,14 +138,14 @@ pub fn camera_from_gbuffer(position: &Image, depth: &Image) -> Result<Camera, St
     let mut a = [0.0; 3];
     let mut b = [0.0; 3];
     for k in 0..3 {
-        let t = svd.solve(&atp[k], eps)?;
+        let t = svd.solve(&atp[k], eps).map_err(CameraFitError::Solve)?;
         a[k] = t[1];
         b[k] = t[2];
     }
     let (fa, fb) = (dot(a, a).sqrt(), dot(b, b).sqrt());
     let c = cgnodes_api::types::vec3::cross(b, a);
     let Some(c) = normalize(c).filter(|_| fa > 0.0 && fb > 0.0) else {
-        return Err("the pixels do not span the image plane".into());
+        return Err(CameraFitError::NotSpanning);
     };
     let point = |xs: f64, ys: f64, z: f64| -> [f64; 3] {
         std::array::from_fn(|k| z * (xs * a[k] + ys * b[k] + c[k]))
@@ -153,9 +170,10 @@ pub fn camera_from_gbuffer(position: &Image, depth: &Image) -> Result<Camera, St
         zmax = zmax.max(*z);
     }
     if worst.is_nan() || worst > 1e-3 * extent {
-        return Err(format!(
-            "the passes do not fit one pinhole camera (residual {worst:.3e} against extent {extent:.3e})"
-        ));
+        return Err(CameraFitError::NotPinhole {
+            residual: worst,
+            extent,
+        });
     }
     let f = 2.0 / (fa + fb);
     let up = b.map(|v| v / fb);

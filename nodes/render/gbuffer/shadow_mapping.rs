@@ -26,21 +26,41 @@ type Bounds = ([f64; 3], [f64; 3]);
 /// World-space triangles.
 type Tris = Vec<[[f64; 3]; 3]>;
 
+/// Why shadow maps cannot be made from a scene or rebuilt from their images.
+#[derive(Debug, thiserror::Error)]
+pub enum ShadowMapError {
+    /// The scene cannot be flattened to triangles (non-finite geometry).
+    #[error("{0}")]
+    Geometry(crate::BoxedError),
+    /// The image's pixel buffer does not hold width x height pixels.
+    #[error("pixel count differs from width x height")]
+    PixelCount,
+    /// A directional light's map image is not square.
+    #[error("a directional light's map is square, not {width}x{height}")]
+    NotSquare { width: u32, height: u32 },
+    /// A point light's map image is not six square faces stacked.
+    #[error("a point light's map is six square faces ({width}x{}), not {width}x{height}", 6 * width)]
+    NotCube { width: u32, height: u32 },
+    /// A map image was given for an environment light.
+    #[error("an environment light has no shadow map")]
+    Environment,
+}
+
 /// The scene's triangles and bounding box, flattened as the rasterizer does.
-fn tris_and_bounds(scene: &Scene) -> Result<(Tris, Bounds), String> {
-    let g = scene_geometry(scene)?;
+fn tris_and_bounds(scene: &Scene) -> Result<(Tris, Bounds), ShadowMapError> {
+    let g = scene_geometry(scene).map_err(|e| ShadowMapError::Geometry(e.into()))?;
     Ok((g.pos, g.bounds))
 }
 
 /// The bounding box `render_raster` fits directional shadow maps to.
-pub fn scene_bounds(scene: &Scene) -> Result<([f64; 3], [f64; 3]), String> {
+pub fn scene_bounds(scene: &Scene) -> Result<Bounds, ShadowMapError> {
     Ok(tris_and_bounds(scene)?.1)
 }
 
 /// One depth image per light of `scene` (see the module doc): `res` x `res` for a
 /// directional light, six `res/2` faces for a point light, 0 x 0 for an environment light
 /// or an empty scene. Fails on non-finite geometry.
-pub fn shadow_maps(scene: &Scene, res: u32) -> Result<Vec<Image>, String> {
+pub fn shadow_maps(scene: &Scene, res: u32) -> Result<Vec<Image>, ShadowMapError> {
     use rayon::prelude::*;
     let (tris, bounds) = tris_and_bounds(scene)?;
     let d = sub(bounds.1, bounds.0);
@@ -95,13 +115,13 @@ pub fn map_from_image(
     img: &Image,
     light: &Light,
     bounds: ([f64; 3], [f64; 3]),
-) -> Result<Option<ShadowMap>, String> {
+) -> Result<Option<ShadowMap>, ShadowMapError> {
     if img.width == 0 || img.height == 0 {
         return Ok(None);
     }
     let (w, h) = (img.width, img.height);
     if img.pixels.len() != w as usize * h as usize {
-        return Err("pixel count differs from width x height".into());
+        return Err(ShadowMapError::PixelCount);
     }
     let depth = |rows: std::ops::Range<usize>| -> Vec<f32> {
         img.pixels[rows.start * w as usize..rows.end * w as usize]
@@ -112,7 +132,10 @@ pub fn map_from_image(
     match light {
         Light::Directional { direction, .. } => {
             if w != h {
-                return Err(format!("a directional light's map is square, not {w}x{h}"));
+                return Err(ShadowMapError::NotSquare {
+                    width: w,
+                    height: h,
+                });
             }
             let (axes, x0, y1, k) = directional_frame(*direction, bounds, w);
             Ok(Some(ShadowMap::Directional {
@@ -129,10 +152,10 @@ pub fn map_from_image(
         }
         Light::Point { position, .. } => {
             if h != 6 * w {
-                return Err(format!(
-                    "a point light's map is six square faces ({w}x{}), not {w}x{h}",
-                    6 * w
-                ));
+                return Err(ShadowMapError::NotCube {
+                    width: w,
+                    height: h,
+                });
             }
             let axes = cube_axes();
             let faces: [Face; 6] = std::array::from_fn(|i| Face {
@@ -145,7 +168,7 @@ pub fn map_from_image(
                 res: w,
             }))
         }
-        Light::Environment { .. } => Err("an environment light has no shadow map".into()),
+        Light::Environment { .. } => Err(ShadowMapError::Environment),
     }
 }
 
@@ -171,7 +194,8 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let bytes =
         cgnodes_api::node::bytes_of(&[scene.lights.len() as u64, res as u64, res as u64, 24]);
     ctx.reserve_bytes("resolution", &what, bytes)?;
-    let maps = shadow_maps(&scene, res as u32).map_err(|e| NodeError::invalid("scene", e))?;
+    let maps =
+        shadow_maps(&scene, res as u32).map_err(|e| NodeError::invalid("scene", e.to_string()))?;
     let maps: Vec<Arc<Image>> = maps.into_iter().map(Arc::new).collect();
     ctx.set_output("shadows", maps);
     Ok(())

@@ -138,7 +138,6 @@ pub fn ssao(
 ) -> Image {
     let (w, h) = (position.width, position.height);
     let look = cam.look_at::<f64>();
-    let f = cam.focal_length_px();
     let own_normals;
     let normal = match normal {
         Some(n) => n,
@@ -147,8 +146,29 @@ pub fn ssao(
             &own_normals
         }
     };
-    // The depth buffer: the depth pass, or view depths of the positions (0 = nothing).
-    let zbuf: Vec<f64> = match depth {
+    let (pts, tile) = kernel(par.samples.max(1));
+    let pass = SsaoPass {
+        position,
+        normal,
+        zbuf: depth_buffer(position, depth, &look),
+        look,
+        f: cam.focal_length_px(),
+        cam,
+        par,
+        pts,
+        tile,
+    };
+    let raw = super::image_from_fn(w, h, |x, y| pass.pixel(x, y));
+    if !par.blur {
+        return raw.with_opaque();
+    }
+    tile_blur(&raw)
+}
+
+/// The depth buffer SSAO compares against: the depth pass, or view depths of the positions
+/// (0 = nothing).
+fn depth_buffer(position: &Image, depth: Option<&Image>, look: &LookAt<f64>) -> Vec<f64> {
+    match depth {
         Some(d) => d
             .pixels
             .iter()
@@ -165,67 +185,108 @@ pub fn ssao(
                 }
             })
             .collect(),
-    };
-    let (pts, tile) = kernel(par.samples.max(1));
-    let r = par.radius;
-    let raw = super::image_from_fn(w, h, |x, y| {
-        let pp = position.get(x, y);
-        let nn = normal.get(x, y);
+    }
+}
+
+/// The tangent `t` of the kernel frame at normal `n`: the tile's random direction `tv` (in
+/// the camera's right and up axes) made orthogonal to `n` (Gram-Schmidt), or any
+/// perpendicular when it is parallel to `n`.
+fn kernel_tangent(n: [f64; 3], tv: [f64; 2], look: &LookAt<f64>) -> [f64; 3] {
+    let rv = axpy(look.right.map(|c| c * tv[0]), tv[1], look.up);
+    normalize(axpy(rv, -dot(rv, n), n))
+        .or_else(|| {
+            let a = if n[0].abs() < 0.9 {
+                [1.0, 0.0, 0.0]
+            } else {
+                [0.0, 1.0, 0.0]
+            };
+            normalize(cross(a, n))
+        })
+        .unwrap_or([1.0, 0.0, 0.0])
+}
+
+/// One SSAO evaluation over a G-buffer: the passes, the camera, the kernel and its tile.
+struct SsaoPass<'a> {
+    position: &'a Image,
+    normal: &'a Image,
+    /// View depth per pixel, 0 where nothing was hit.
+    zbuf: Vec<f64>,
+    look: LookAt<f64>,
+    /// Focal length in pixels.
+    f: f64,
+    cam: &'a Camera,
+    par: &'a SsaoParams,
+    /// The hemisphere kernel (+z up).
+    pts: Vec<[f64; 3]>,
+    /// The 4 x 4 tile of tangent directions.
+    tile: [[f64; 2]; 16],
+}
+
+impl SsaoPass<'_> {
+    /// The unblurred AO of pixel `(x, y)` as grey, with alpha 0 on non-surface pixels (so
+    /// the blur skips them).
+    fn pixel(&self, x: u32, y: u32) -> [f32; 4] {
+        let pp = self.position.get(x, y);
+        let nn = self.normal.get(x, y);
         let Some(n) = normalize(px3(nn)).filter(|_| is_surface(pp)) else {
             return [1.0, 1.0, 1.0, 0.0];
         };
         let p = px3(pp);
-        let zp = look.to_view(p)[2];
-        let tv = tile[(y as usize % 4) * 4 + x as usize % 4];
-        let rv = axpy(look.right.map(|c| c * tv[0]), tv[1], look.up);
-        let t = normalize(axpy(rv, -dot(rv, n), n))
-            .or_else(|| {
-                let a = if n[0].abs() < 0.9 {
-                    [1.0, 0.0, 0.0]
-                } else {
-                    [0.0, 1.0, 0.0]
-                };
-                normalize(cross(a, n))
-            })
-            .unwrap_or([1.0, 0.0, 0.0]);
+        let zp = self.look.to_view(p)[2];
+        let tv = self.tile[(y as usize % 4) * 4 + x as usize % 4];
+        let t = kernel_tangent(n, tv, &self.look);
         let b = cross(n, t);
+        let r = self.par.radius;
         let mut occ = 0.0;
-        for s in &pts {
+        for s in &self.pts {
             let off = axpy(axpy(t.map(|c| c * s[0]), s[1], b), s[2], n);
             let q = axpy(p, r, off);
-            let v = look.to_view(q);
-            if v[2] <= cam.near {
-                continue;
-            }
-            let sx = 0.5 * w as f64 + f * v[0] / v[2];
-            let sy = 0.5 * h as f64 - f * v[1] / v[2];
-            if !(sx >= 0.0 && sy >= 0.0 && sx < w as f64 && sy < h as f64) {
-                continue;
-            }
-            let (ix, iy) = (sx as u32, sy as u32);
-            let mut zb = zbuf[iy as usize * w as usize + ix as usize];
-            if zb <= 0.0 {
-                continue;
-            }
-            // Read the buffer through the tangent plane of the pixel q lands in.
-            if let Some(m) = normalize(px3(normal.get(ix, iy))) {
-                let dq = sub(q, cam.eye);
-                let den = dot(dq, m);
-                let tq = dot(sub(px3(position.get(ix, iy)), cam.eye), m) / den;
-                if den.abs() > 1e-12 && tq > 0.0 && tq.is_finite() {
-                    zb = tq * v[2];
-                }
-            }
-            if zb <= v[2] - par.bias {
-                occ += smoothstep(r / (zp - zb).abs().max(1e-12));
+            if let Some(o) = self.occlusion(q, zp) {
+                occ += o;
             }
         }
-        let ao = (1.0 - occ / pts.len() as f64) as f32;
+        let ao = (1.0 - occ / self.pts.len() as f64) as f32;
         [ao, ao, ao, 1.0]
-    });
-    if !par.blur {
-        return raw.with_opaque();
     }
+
+    /// The occlusion weight of kernel point `q` for a pixel at view depth `zp`: `None` when
+    /// `q` is behind the near plane, leaves the image, lands on background or is not
+    /// occluded; else the range check's weight.
+    fn occlusion(&self, q: [f64; 3], zp: f64) -> Option<f64> {
+        let (w, h) = (self.position.width, self.position.height);
+        let (cam, f) = (self.cam, self.f);
+        let v = self.look.to_view(q);
+        if v[2] <= cam.near {
+            return None;
+        }
+        let sx = 0.5 * w as f64 + f * v[0] / v[2];
+        let sy = 0.5 * h as f64 - f * v[1] / v[2];
+        if !(sx >= 0.0 && sy >= 0.0 && sx < w as f64 && sy < h as f64) {
+            return None;
+        }
+        let (ix, iy) = (sx as u32, sy as u32);
+        let mut zb = self.zbuf[iy as usize * w as usize + ix as usize];
+        if zb <= 0.0 {
+            return None;
+        }
+        // Read the buffer through the tangent plane of the pixel q lands in.
+        if let Some(m) = normalize(px3(self.normal.get(ix, iy))) {
+            let dq = sub(q, cam.eye);
+            let den = dot(dq, m);
+            let tq = dot(sub(px3(self.position.get(ix, iy)), cam.eye), m) / den;
+            if den.abs() > 1e-12 && tq > 0.0 && tq.is_finite() {
+                zb = tq * v[2];
+            }
+        }
+        (zb <= v[2] - self.par.bias)
+            .then(|| smoothstep(self.par.radius / (zp - zb).abs().max(1e-12)))
+    }
+}
+
+/// The 4 x 4 box average of the surface pixels of `raw` (alpha > 0), the tile's size, which
+/// removes the tile's pattern; non-surface pixels get 1.
+fn tile_blur(raw: &Image) -> Image {
+    let (w, h) = (raw.width, raw.height);
     super::image_from_fn(w, h, |x, y| {
         if raw.get(x, y)[3] == 0.0 {
             return [1.0; 4];

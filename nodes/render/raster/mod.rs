@@ -40,9 +40,24 @@ pub use options::{AntiAliasing, Passes, RasterOptions, RenderOutput};
 use rayon::prelude::*;
 pub use scratch::release_scratch;
 
+/// Why the rasterizer cannot render a scene.
+#[derive(Debug, thiserror::Error)]
+pub enum RasterError {
+    /// The camera is unusable (degenerate frame, field of view or clipping planes).
+    #[error("{0}")]
+    Camera(crate::BoxedError),
+    /// The scene cannot be flattened to triangles (non-finite geometry).
+    #[error("{0}")]
+    Geometry(crate::BoxedError),
+}
+
 /// Renders a scene through a camera (see the module doc). Fails on an unusable camera or
 /// non-finite geometry. Only the passes in `opts.passes` are produced.
-pub fn render(scene: &Scene, cam: &Camera, opts: &RasterOptions) -> Result<RenderOutput, String> {
+pub fn render(
+    scene: &Scene,
+    cam: &Camera,
+    opts: &RasterOptions,
+) -> Result<RenderOutput, RasterError> {
     render_progress(scene, cam, opts, &|_| {})
 }
 
@@ -52,11 +67,12 @@ pub fn render_progress(
     cam: &Camera,
     opts: &RasterOptions,
     progress: &(dyn Fn(f64) + Sync),
-) -> Result<RenderOutput, String> {
-    cam.check()?;
+) -> Result<RenderOutput, RasterError> {
+    cam.check().map_err(|e| RasterError::Camera(e.into()))?;
     let s = opts.samples_per_axis.clamp(1, 8);
     let lit = opts.passes.color;
-    let g = geometry::scene_geometry_in(scene, 180.0, scratch::take_geometry())?;
+    let g = geometry::scene_geometry_in(scene, 180.0, scratch::take_geometry())
+        .map_err(|e| RasterError::Geometry(e.into()))?;
     let band_rows = resolve::BAND_PX as u32 * s;
     // The camera's triangle setup and the shadow maps (one light per task) are
     // independent: build them side by side.
@@ -83,7 +99,7 @@ pub fn render_progress(
         mats: setup::prepare_materials(&g, opts.mipmaps),
         lights,
         eye: cam.eye,
-        forward: cam.frame()?[2],
+        forward: cam.frame().map_err(|e| RasterError::Camera(e.into()))?[2],
         opts,
         progress,
     };

@@ -152,7 +152,7 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
         raster_bytes(&cam, &opts, scene.lights.len()),
     )?;
     let out = render_progress(&scene, &cam, &opts, &ctx.progress_fn())
-        .map_err(|e| NodeError::invalid("scene", e))?;
+        .map_err(|e| NodeError::invalid("scene", e.to_string()))?;
     ctx.log(format!(
         "{}x{} with {} samples: {} triangles, {} shading evaluations",
         cam.width, cam.height, samples, out.triangles, out.shaded

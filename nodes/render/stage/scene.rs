@@ -3,13 +3,17 @@
 //! from a palette texture, UsdLux lights as cgnodes lights, and the camera: the stage's, else
 //! `default_camera`'s framing of the geometry.
 
-use super::model::{axis, translation, LightKind, Stage, StageCamera, StagePoints, UpAxis};
+use super::model::{
+    axis, translation, LightKind, Stage, StageCamera, StageLight, StageMesh, StagePoints, UpAxis,
+};
+use crate::BoxedError;
 use cgnodes_api::types::vec3::{cross, sub, unit as norm};
 use cgnodes_api::types::{
     Attribute, Camera, Domain, Image, Light, Material, Mesh, Scene, SceneObject,
 };
 use cgnodes_formats::usda::transform::Mat4;
 use cgnodes_geometry::octahedron;
+use std::path::PathBuf;
 use std::sync::Arc;
 
 /// Vertical field of view of the default framing, degrees.
@@ -155,8 +159,36 @@ pub fn splat_points(p: &StagePoints) -> (Mesh, Material) {
     (mesh, material)
 }
 
+/// Why a dome light's texture file could not be loaded.
+#[derive(Debug, thiserror::Error)]
+pub enum TextureError {
+    /// The file exists but could not be read.
+    #[error("{}: {source}", path.display())]
+    Read {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    /// The file's bytes are not an image the decoder reads.
+    #[error("{}: {source}", path.display())]
+    Decode { path: PathBuf, source: BoxedError },
+}
+
+/// Why a stage could not become a scene (`stage_to_scene`).
+#[derive(Debug, thiserror::Error)]
+pub enum StageSceneError {
+    /// A dome light's texture could not be loaded.
+    #[error(transparent)]
+    Texture(#[from] TextureError),
+    /// The stage's camera, or the default framing, is not a valid camera.
+    #[error("camera: {0}")]
+    Camera(BoxedError),
+    /// A mesh could not be turned from Z-up to Y-up.
+    #[error("{0}")]
+    YUp(BoxedError),
+}
+
 /// Loads a dome light's texture by file name: `Ok(None)` when no file is found.
-pub type ImageLoader<'a> = dyn FnMut(&str) -> Result<Option<Arc<Image>>, String> + 'a;
+pub type ImageLoader<'a> = dyn FnMut(&str) -> Result<Option<Arc<Image>>, TextureError> + 'a;
 
 /// Turns a stage into a scene and a camera of `width` x `height` pixels. `load_image`
 /// loads a dome light's texture file (`Ok(None)`: not found, the dome keeps its constant
@@ -168,33 +200,9 @@ pub fn stage_to_scene(
     height: u32,
     load_image: &mut ImageLoader<'_>,
     warnings: &mut Vec<String>,
-) -> Result<(Scene, Camera), String> {
+) -> Result<(Scene, Camera), StageSceneError> {
     let mut scene = Scene::default();
-    for m in &stage.meshes {
-        let material = m
-            .mesh
-            .colors
-            .as_ref()
-            .filter(|c| !c.values.is_empty())
-            .map(|c| {
-                let mut s = [0.0; 3];
-                for v in &c.values {
-                    for k in 0..3 {
-                        s[k] += v[k];
-                    }
-                }
-                let n = c.values.len() as f64;
-                Arc::new(Material {
-                    name: m.path.trim_start_matches('/').to_string(),
-                    base_color: [s[0] / n, s[1] / n, s[2] / n],
-                    ..Default::default()
-                })
-            });
-        scene.objects.push(SceneObject {
-            mesh: Arc::new(m.mesh.clone()),
-            material,
-        });
-    }
+    scene.objects.extend(stage.meshes.iter().map(mesh_object));
     for p in &stage.points {
         if p.points.is_empty() {
             continue;
@@ -206,57 +214,7 @@ pub fn stage_to_scene(
         });
     }
     for l in &stage.lights {
-        let pos = translation(&l.transform);
-        let z = axis(&l.transform, 2);
-        let light = match &l.kind {
-            LightKind::Sphere { .. } => Light::Point {
-                position: pos,
-                color: l.color,
-                intensity: l.intensity,
-            },
-            LightKind::Distant { .. } => Light::Directional {
-                direction: [-z[0], -z[1], -z[2]],
-                color: l.color,
-                intensity: l.intensity,
-            },
-            LightKind::Rect { width, height } => {
-                warnings.push(format!(
-                    "{}: a rect light is drawn as a point light at its centre",
-                    l.path
-                ));
-                Light::Point {
-                    position: pos,
-                    color: l.color,
-                    intensity: l.intensity * width * height,
-                }
-            }
-            LightKind::Dome { file } => {
-                let image = if file.is_empty() {
-                    None
-                } else {
-                    let img = load_image(file)?;
-                    if img.is_none() {
-                        warnings.push(format!(
-                            "{}: texture '{file}' not found (next to the stage, in the project or --assets folders); the dome light keeps its constant colour",
-                            l.path
-                        ));
-                    }
-                    img
-                };
-                // The turn about the up axis, from where the local x axis went.
-                let x = axis(&l.transform, 0);
-                let rot = match stage.up_axis {
-                    UpAxis::Y => (-x[2]).atan2(x[0]),
-                    UpAxis::Z => x[1].atan2(x[0]),
-                };
-                Light::Environment {
-                    image,
-                    color: l.color,
-                    intensity: l.intensity,
-                    rotation_deg: rot.to_degrees(),
-                }
-            }
-        };
+        let light = scene_light(l, stage.up_axis, load_image, warnings)?;
         scene.lights.push(light);
     }
     let camera = match &stage.camera {
@@ -266,13 +224,115 @@ pub fn stage_to_scene(
             default_camera(lo, hi, stage.up_axis, width, height)
         }
     };
-    camera.check().map_err(|e| format!("camera: {e}"))?;
+    camera
+        .check()
+        .map_err(|e| StageSceneError::Camera(e.into()))?;
     let mut camera = camera;
     if stage.up_axis == UpAxis::Z {
-        y_up(&mut scene, &mut camera)?;
+        y_up(&mut scene, &mut camera).map_err(StageSceneError::YUp)?;
     }
     scene.camera = Some(camera.clone());
     Ok((scene, camera))
+}
+
+/// A stage mesh as a scene object, with a material of its mean display colour when it has
+/// display colours.
+fn mesh_object(m: &StageMesh) -> SceneObject {
+    let material = m
+        .mesh
+        .colors
+        .as_ref()
+        .filter(|c| !c.values.is_empty())
+        .map(|c| {
+            let mut s = [0.0; 3];
+            for v in &c.values {
+                for k in 0..3 {
+                    s[k] += v[k];
+                }
+            }
+            let n = c.values.len() as f64;
+            Arc::new(Material {
+                name: m.path.trim_start_matches('/').to_string(),
+                base_color: [s[0] / n, s[1] / n, s[2] / n],
+                ..Default::default()
+            })
+        });
+    SceneObject {
+        mesh: Arc::new(m.mesh.clone()),
+        material,
+    }
+}
+
+/// A UsdLux light as a cgnodes light: sphere lights as point lights, distant lights along
+/// their -z axis, rect lights as point lights of the same power (with a warning), dome
+/// lights as environment lights (`dome_light`).
+fn scene_light(
+    l: &StageLight,
+    up: UpAxis,
+    load_image: &mut ImageLoader<'_>,
+    warnings: &mut Vec<String>,
+) -> Result<Light, TextureError> {
+    let pos = translation(&l.transform);
+    let z = axis(&l.transform, 2);
+    Ok(match &l.kind {
+        LightKind::Sphere { .. } => Light::Point {
+            position: pos,
+            color: l.color,
+            intensity: l.intensity,
+        },
+        LightKind::Distant { .. } => Light::Directional {
+            direction: [-z[0], -z[1], -z[2]],
+            color: l.color,
+            intensity: l.intensity,
+        },
+        LightKind::Rect { width, height } => {
+            warnings.push(format!(
+                "{}: a rect light is drawn as a point light at its centre",
+                l.path
+            ));
+            Light::Point {
+                position: pos,
+                color: l.color,
+                intensity: l.intensity * width * height,
+            }
+        }
+        LightKind::Dome { file } => dome_light(l, file, up, load_image, warnings)?,
+    })
+}
+
+/// A dome light as an environment light: its texture `file` loaded through `load_image`
+/// (a warning when not found: the dome keeps its constant colour) and its turn about the
+/// `up` axis, from where the local x axis went.
+fn dome_light(
+    l: &StageLight,
+    file: &str,
+    up: UpAxis,
+    load_image: &mut ImageLoader<'_>,
+    warnings: &mut Vec<String>,
+) -> Result<Light, TextureError> {
+    let image = if file.is_empty() {
+        None
+    } else {
+        let img = load_image(file)?;
+        if img.is_none() {
+            warnings.push(format!(
+                "{}: texture '{file}' not found (next to the stage, in the project or --assets folders); the dome light keeps its constant colour",
+                l.path
+            ));
+        }
+        img
+    };
+    let x = axis(&l.transform, 0);
+    let rot = match up {
+        UpAxis::Y => (-x[2]).atan2(x[0]),
+        UpAxis::Z => x[1].atan2(x[0]),
+    };
+    Ok(Light::Environment {
+        image,
+        color: l.color,
+        intensity: l.intensity,
+        rotation_deg: rot.to_degrees(),
+    })
 }
 
 /// Turns a Z-up stage's scene and camera into cgnodes' Y-up convention, (x, y, z) ->
@@ -280,7 +340,7 @@ pub fn stage_to_scene(
 /// image has its poles on +-y (`nodes/trace/environment.rs`), so a Framework3D dome light is
 /// seen with its horizon level. Images are unchanged; only world coordinates turn (the
 /// dome's turn about the up axis keeps its angle).
-fn y_up(scene: &mut Scene, camera: &mut Camera) -> Result<(), String> {
+fn y_up(scene: &mut Scene, camera: &mut Camera) -> Result<(), BoxedError> {
     let r = |p: [f64; 3]| [p[0], p[2], -p[1]];
     let m = nalgebra::Matrix4::new(
         1.0, 0.0, 0.0, 0.0, //

@@ -5,7 +5,7 @@
 //! folders; when it is missing the dome keeps its constant colour, with a warning.
 
 use super::read::read_stage;
-use super::scene::stage_to_scene;
+use super::scene::{stage_to_scene, TextureError};
 use cgnodes_api::prelude::*;
 use cgnodes_formats::image_file::{decode_image, ColorSpace};
 
@@ -46,7 +46,7 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     ctx.reserve_bytes("path", &what, cgnodes_api::node::bytes_of(&[points, 300]))?;
     let dir = path.parent().map(|d| d.to_path_buf()).unwrap_or_default();
     let files = ctx.files().clone();
-    let mut load = |file: &str| -> Result<Option<Arc<Image>>, String> {
+    let mut load = |file: &str| -> Result<Option<Arc<Image>>, TextureError> {
         let near = dir.join(file);
         let found = if near.exists() {
             near
@@ -56,9 +56,14 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
         if !found.exists() {
             return Ok(None);
         }
-        let bytes = std::fs::read(&found).map_err(|e| format!("{}: {e}", found.display()))?;
-        let img = decode_image(&bytes, ColorSpace::Raw)
-            .map_err(|e| format!("{}: {e}", found.display()))?;
+        let bytes = std::fs::read(&found).map_err(|source| TextureError::Read {
+            path: found.clone(),
+            source,
+        })?;
+        let img = decode_image(&bytes, ColorSpace::Raw).map_err(|e| TextureError::Decode {
+            path: found.clone(),
+            source: e.into(),
+        })?;
         Ok(Some(Arc::new(img)))
     };
     let mut warnings = Vec::new();

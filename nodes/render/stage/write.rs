@@ -4,7 +4,7 @@
 //! and `xformOp:transform`, and a `Camera` with focal length and apertures. Numbers use
 //! Rust's shortest round-trip formatting, so reading the layer back gives the same values.
 
-use super::model::{LightKind, Stage};
+use super::model::{LightKind, Stage, StageCamera, StageLight, StageMesh, StagePoints};
 use cgnodes_api::types::{Attribute, Domain};
 use cgnodes_formats::usda::transform::Mat4;
 use cgnodes_formats::usda::usd_identifier;
@@ -124,94 +124,17 @@ fn split(path: &str) -> Vec<String> {
 pub fn write_stage(stage: &Stage) -> String {
     let mut roots: Vec<Prim> = Vec::new();
     for m in &stage.meshes {
-        let g = &m.mesh;
-        let mut body = vec![
-            format!("int[] faceVertexCounts = {}", list(g.face_counts())),
-            format!("int[] faceVertexIndices = {}", list(g.face_indices())),
-            format!("point3f[] points = {}", tuples(&g.positions)),
-        ];
-        if let Some(n) = &g.normals {
-            body.push(primvar("normal3f[] normals", n));
-        }
-        if let Some(uv) = &g.uvs {
-            body.push(primvar("texCoord2f[] primvars:UVMap", uv));
-        }
-        if let Some(c) = &g.colors {
-            body.push(primvar("color3f[] primvars:displayColor", c));
-        }
-        body.push("uniform token subdivisionScheme = \"none\"".into());
-        insert(&mut roots, &split(&m.path), "Mesh", body);
+        insert(&mut roots, &split(&m.path), "Mesh", mesh_body(m));
     }
     for p in &stage.points {
-        let mut body = vec![
-            format!("point3f[] points = {}", tuples(&p.points)),
-            format!(
-                "float[] widths = {} (interpolation = \"{}\")",
-                list(&p.widths),
-                if p.widths.len() == 1 {
-                    "constant"
-                } else {
-                    "vertex"
-                }
-            ),
-        ];
-        if let Some(c) = &p.colors {
-            body.push(format!(
-                "color3f[] primvars:displayColor = {} (interpolation = \"{}\")",
-                tuples(c),
-                if c.len() == 1 { "constant" } else { "vertex" }
-            ));
-        }
-        insert(&mut roots, &split(&p.path), "Points", body);
+        insert(&mut roots, &split(&p.path), "Points", points_body(p));
     }
     for l in &stage.lights {
-        let mut body = vec![
-            format!(
-                "color3f inputs:color = ({}, {}, {})",
-                l.color[0], l.color[1], l.color[2]
-            ),
-            "float inputs:diffuse = 1".into(),
-            format!("float inputs:intensity = {}", l.intensity),
-        ];
-        let ty = match &l.kind {
-            LightKind::Sphere { radius } => {
-                body.push(format!("float inputs:radius = {radius}"));
-                "SphereLight"
-            }
-            LightKind::Distant { angle } => {
-                body.push(format!("float inputs:angle = {angle}"));
-                "DistantLight"
-            }
-            LightKind::Dome { file } => {
-                if !file.is_empty() {
-                    body.push(format!(
-                        "asset inputs:texture:file = @{}@",
-                        file.replace('@', "")
-                    ));
-                }
-                "DomeLight"
-            }
-            LightKind::Rect { width, height } => {
-                body.push(format!("float inputs:width = {width}"));
-                body.push(format!("float inputs:height = {height}"));
-                "RectLight"
-            }
-        };
-        body.extend(matrix(&l.transform));
+        let (ty, body) = light_prim(l);
         insert(&mut roots, &split(&l.path), ty, body);
     }
     if let Some(c) = &stage.camera {
-        let focal = VERTICAL_APERTURE / (2.0 * (0.5 * c.fov_deg.to_radians()).tan());
-        let mut body = vec![
-            format!("float focalLength = {focal}"),
-            format!("float verticalAperture = {VERTICAL_APERTURE}"),
-            format!(
-                "float2 clippingRange = ({}, {})",
-                c.clipping.0, c.clipping.1
-            ),
-        ];
-        body.extend(matrix(&c.transform));
-        insert(&mut roots, &split(&c.path), "Camera", body);
+        insert(&mut roots, &split(&c.path), "Camera", camera_body(c));
     }
     let up = match stage.up_axis {
         super::model::UpAxis::Y => "Y",
@@ -224,4 +147,106 @@ pub fn write_stage(stage: &Stage) -> String {
         emit(&mut out, r, 0);
     }
     out
+}
+
+/// The attributes of a `Mesh` prim: faces, points, and the normals, UVs and display colours
+/// the mesh has, as primvars of their domain.
+fn mesh_body(m: &StageMesh) -> Vec<String> {
+    let g = &m.mesh;
+    let mut body = vec![
+        format!("int[] faceVertexCounts = {}", list(g.face_counts())),
+        format!("int[] faceVertexIndices = {}", list(g.face_indices())),
+        format!("point3f[] points = {}", tuples(&g.positions)),
+    ];
+    if let Some(n) = &g.normals {
+        body.push(primvar("normal3f[] normals", n));
+    }
+    if let Some(uv) = &g.uvs {
+        body.push(primvar("texCoord2f[] primvars:UVMap", uv));
+    }
+    if let Some(c) = &g.colors {
+        body.push(primvar("color3f[] primvars:displayColor", c));
+    }
+    body.push("uniform token subdivisionScheme = \"none\"".into());
+    body
+}
+
+/// The attributes of a `Points` prim: points, widths and display colours (constant when
+/// one value is given for all points).
+fn points_body(p: &StagePoints) -> Vec<String> {
+    let mut body = vec![
+        format!("point3f[] points = {}", tuples(&p.points)),
+        format!(
+            "float[] widths = {} (interpolation = \"{}\")",
+            list(&p.widths),
+            if p.widths.len() == 1 {
+                "constant"
+            } else {
+                "vertex"
+            }
+        ),
+    ];
+    if let Some(c) = &p.colors {
+        body.push(format!(
+            "color3f[] primvars:displayColor = {} (interpolation = \"{}\")",
+            tuples(c),
+            if c.len() == 1 { "constant" } else { "vertex" }
+        ));
+    }
+    body
+}
+
+/// The UsdLux prim type of a light and its attributes: colour, intensity, the kind's
+/// `inputs:*` and the transform.
+fn light_prim(l: &StageLight) -> (&'static str, Vec<String>) {
+    let mut body = vec![
+        format!(
+            "color3f inputs:color = ({}, {}, {})",
+            l.color[0], l.color[1], l.color[2]
+        ),
+        "float inputs:diffuse = 1".into(),
+        format!("float inputs:intensity = {}", l.intensity),
+    ];
+    let ty = match &l.kind {
+        LightKind::Sphere { radius } => {
+            body.push(format!("float inputs:radius = {radius}"));
+            "SphereLight"
+        }
+        LightKind::Distant { angle } => {
+            body.push(format!("float inputs:angle = {angle}"));
+            "DistantLight"
+        }
+        LightKind::Dome { file } => {
+            if !file.is_empty() {
+                body.push(format!(
+                    "asset inputs:texture:file = @{}@",
+                    file.replace('@', "")
+                ));
+            }
+            "DomeLight"
+        }
+        LightKind::Rect { width, height } => {
+            body.push(format!("float inputs:width = {width}"));
+            body.push(format!("float inputs:height = {height}"));
+            "RectLight"
+        }
+    };
+    body.extend(matrix(&l.transform));
+    (ty, body)
+}
+
+/// The attributes of a `Camera` prim: the focal length giving the field of view against
+/// `VERTICAL_APERTURE`, the clipping range and the transform.
+fn camera_body(c: &StageCamera) -> Vec<String> {
+    let focal = VERTICAL_APERTURE / (2.0 * (0.5 * c.fov_deg.to_radians()).tan());
+    let mut body = vec![
+        format!("float focalLength = {focal}"),
+        format!("float verticalAperture = {VERTICAL_APERTURE}"),
+        format!(
+            "float2 clippingRange = ({}, {})",
+            c.clipping.0, c.clipping.1
+        ),
+    ];
+    body.extend(matrix(&c.transform));
+    body
 }

@@ -253,7 +253,7 @@ pub(super) struct Coarsest {
 }
 
 impl Coarsest {
-    pub(super) fn new(level: &Level) -> Result<Coarsest, String> {
+    pub(super) fn new(level: &Level) -> Result<Coarsest, PoissonError> {
         let w = level.w;
         let mut number = vec![usize::MAX; w * level.h];
         let mut cells = Vec::new();
@@ -283,7 +283,8 @@ impl Coarsest {
             col_ptr.push(row_idx.len());
         }
         let symbolic = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
-        let factor = SpdFactor::from_lower(SparseColMat::new(symbolic, values), None, Par::Seq)?;
+        let factor = SpdFactor::from_lower(SparseColMat::new(symbolic, values), None, Par::Seq)
+            .map_err(|e| PoissonError::Factor(e.into()))?;
         Ok(Coarsest { cells, factor })
     }
 

@@ -28,6 +28,7 @@
 //! parity's rows are read, without `unsafe`.
 
 use super::mask::MaskShape;
+use super::PoissonError;
 use cgnodes_linalg::SpdFactor;
 use faer::sparse::{SparseColMat, SymbolicSparseColMat};
 use faer::{Mat, MatMut, Par};
@@ -117,9 +118,9 @@ pub struct Stats {
 impl Multigrid {
     /// The hierarchy of `shape`'s Poisson matrix: coarse levels by Galerkin products until a
     /// level has at most `COARSEST_MAX` unknowns or cannot be coarsened, which is factored.
-    pub fn new(shape: &MaskShape) -> Result<Multigrid, String> {
+    pub fn new(shape: &MaskShape) -> Result<Multigrid, PoissonError> {
         let Some([x0, y0, x1, y1]) = shape.bbox() else {
-            return Err("the mask is empty".into());
+            return Err(PoissonError::EmptyMask);
         };
         let (bw, bh) = ((x1 - x0 + 1) as usize, (y1 - y0 + 1) as usize);
         let (w, h) = ((bw + 2) | 1, (bh + 2) | 1);
@@ -269,7 +270,7 @@ impl Multigrid {
     /// gradients preconditioned with one V-cycle per iteration, to a relative residual of
     /// `TOLERANCE`. With `warm`, the previous solution starts the iteration when its residual
     /// is below `||b||` (a repeated paste of the same shape).
-    pub fn solve_in_place(&self, x: MatMut<'_, f64>, warm: bool) -> Result<Stats, String> {
+    pub fn solve_in_place(&self, x: MatMut<'_, f64>, warm: bool) -> Result<Stats, PoissonError> {
         let mut work = self.take_work();
         let stats = self.solve_with(&mut work, x, warm)?;
         if let Ok(mut spare) = SPARE.try_lock() {
@@ -284,7 +285,7 @@ impl Multigrid {
         wk: &mut Work,
         mut x: MatMut<'_, f64>,
         warm: bool,
-    ) -> Result<Stats, String> {
+    ) -> Result<Stats, PoissonError> {
         let mut stats = Stats::default();
         let ncols = x.ncols();
         for g in (0..ncols).step_by(3) {
@@ -327,7 +328,7 @@ impl Multigrid {
 
     /// Preconditioned conjugate gradients, one per channel in lockstep, on `wk.res` = b;
     /// the solution in `wk.x`.
-    fn pcg(&self, wk: &mut Work, warm: bool) -> Result<Stats, String> {
+    fn pcg(&self, wk: &mut Work, warm: bool) -> Result<Stats, PoissonError> {
         let fine = &self.levels[0];
         let bn = norms(&wk.res);
         let flat = |p: P3| p.iter().sum::<f64>();
@@ -364,11 +365,10 @@ impl Multigrid {
         let mut rz = z_dots(fine, &wk.u[0], &wk.res, None).0;
         while rn > goal {
             if stats.iterations >= MAX_ITERATIONS {
-                return Err(format!(
-                    "multigrid-preconditioned CG stopped after {MAX_ITERATIONS} iterations at a \
-                     relative residual of {:.1e}",
-                    rn / bnorm
-                ));
+                return Err(PoissonError::NoConvergence {
+                    iterations: MAX_ITERATIONS,
+                    residual: rn / bnorm,
+                });
             }
             stats.iterations += 1;
             let pq = p_ap(fine, &wk.p);

@@ -42,20 +42,7 @@ pub fn select_vertices(
         return Ok(out);
     }
     if let Some(name) = sel.strip_prefix("attr:") {
-        let a = mesh
-            .attributes
-            .get(name)
-            .ok_or_else(|| SelectionError::NoAttribute(name.to_string()))?;
-        let vals: Vec<f64> = match a {
-            AttributeData::Float(a) if a.domain == Domain::Vertex => a.values.clone(),
-            AttributeData::Int(a) if a.domain == Domain::Vertex => {
-                a.values.iter().map(|&v| v as f64).collect()
-            }
-            _ => return Err(SelectionError::NotPerVertex(name.to_string())),
-        };
-        return Ok((0..n)
-            .filter(|&i| vals.get(i).is_some_and(|v| *v != 0.0))
-            .collect());
+        return attribute_selection(mesh, name);
     }
     if n == 0 {
         return Ok(Vec::new());
@@ -116,6 +103,25 @@ pub fn select_vertices(
         }
         other => Err(SelectionError::Unknown(other.to_string())),
     }
+}
+
+/// `attr:NAME`: the vertices where the per-vertex float or integer attribute `name` is non-zero.
+fn attribute_selection(mesh: &Mesh, name: &str) -> Result<Vec<usize>, SelectionError> {
+    let n = mesh.num_vertices();
+    let a = mesh
+        .attributes
+        .get(name)
+        .ok_or_else(|| SelectionError::NoAttribute(name.to_string()))?;
+    let vals: Vec<f64> = match a {
+        AttributeData::Float(a) if a.domain == Domain::Vertex => a.values.clone(),
+        AttributeData::Int(a) if a.domain == Domain::Vertex => {
+            a.values.iter().map(|&v| v as f64).collect()
+        }
+        _ => return Err(SelectionError::NotPerVertex(name.to_string())),
+    };
+    Ok((0..n)
+        .filter(|&i| vals.get(i).is_some_and(|v| *v != 0.0))
+        .collect())
 }
 
 /// Why a vertex selection cannot be made.

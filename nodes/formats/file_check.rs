@@ -6,9 +6,90 @@
 //! (GIF89a, section 27), and a BMP's pixel array against the size its header declares.
 //! EXR and HDR decoders already fail on a short read; they are checked by decoding.
 
+/// Why an image file is cut short or damaged: the format, and the byte at fault where known.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum IncompleteImage {
+    /// The PNG ends before its `IEND` chunk, between chunks.
+    #[error("truncated PNG: the file ends at byte {len} before its IEND chunk")]
+    PngEnds {
+        /// The file's length.
+        len: usize,
+    },
+    /// A PNG chunk runs past the end of the file.
+    #[error("truncated PNG: chunk '{kind}' at byte {at} needs {need} bytes, {remain} remain")]
+    PngChunk {
+        /// The chunk type.
+        kind: String,
+        /// Its offset.
+        at: usize,
+        /// Its length with header and CRC.
+        need: usize,
+        /// The bytes left from `at`.
+        remain: usize,
+    },
+    /// A PNG chunk's CRC-32 does not match.
+    #[error("corrupted PNG: chunk '{kind}' at byte {at} fails its CRC check")]
+    PngCrc {
+        /// The chunk type.
+        kind: String,
+        /// Its offset.
+        at: usize,
+    },
+    /// The JPEG ends before its `EOI` marker.
+    #[error("truncated JPEG: the file ends before its end-of-image marker")]
+    JpegEnds,
+    /// No JPEG marker where one must be.
+    #[error("corrupted JPEG: no marker at byte {at}")]
+    JpegNoMarker {
+        /// The offset.
+        at: usize,
+    },
+    /// A JPEG segment length under 2.
+    #[error("corrupted JPEG: segment length {len} at byte {at}")]
+    JpegSegmentLength {
+        /// The length read.
+        len: usize,
+        /// Its offset.
+        at: usize,
+    },
+    /// The GIF ends before its trailer.
+    #[error("truncated GIF: the file ends before its trailer")]
+    GifEnds,
+    /// A GIF block of unknown type.
+    #[error("corrupted GIF: unknown block 0x{block:02X} at byte {at}")]
+    GifBlock {
+        /// The block's introducer byte.
+        block: u8,
+        /// Its offset.
+        at: usize,
+    },
+    /// The BMP ends inside its header.
+    #[error("truncated BMP: the file ends inside its header")]
+    BmpHeader,
+    /// The BMP's pixel array does not fit in the file.
+    #[error("truncated BMP: its {width}x{height} pixels need {need} bytes, the file has {len}")]
+    BmpPixels {
+        /// Width in pixels.
+        width: i64,
+        /// Height in pixels.
+        height: i64,
+        /// Bytes the header implies.
+        need: i64,
+        /// The file's length.
+        len: usize,
+    },
+}
+
+/// The decoders report errors as text: the message unchanged.
+impl From<IncompleteImage> for String {
+    fn from(e: IncompleteImage) -> String {
+        e.to_string()
+    }
+}
+
 /// Checks that `bytes` holds a complete, undamaged image container of the format its magic
 /// number names; other formats pass unchecked.
-pub fn check_complete(bytes: &[u8]) -> Result<(), String> {
+pub fn check_complete(bytes: &[u8]) -> Result<(), IncompleteImage> {
     if bytes.starts_with(b"\x89PNG\r\n\x1a\n") {
         check_png(bytes)
     } else if bytes.starts_with(&[0xFF, 0xD8]) {
@@ -31,14 +112,11 @@ fn le32(b: &[u8], at: usize) -> u32 {
 }
 
 /// PNG: every chunk whole, its CRC-32 (over type and data) right, and an `IEND` chunk.
-fn check_png(b: &[u8]) -> Result<(), String> {
+fn check_png(b: &[u8]) -> Result<(), IncompleteImage> {
     let mut at = 8;
     loop {
         if b.len() < at + 8 {
-            return Err(format!(
-                "truncated PNG: the file ends at byte {} before its IEND chunk",
-                b.len()
-            ));
+            return Err(IncompleteImage::PngEnds { len: b.len() });
         }
         let len = be32(b, at) as usize;
         let kind = String::from_utf8_lossy(&b[at + 4..at + 8]).into_owned();
@@ -46,18 +124,15 @@ fn check_png(b: &[u8]) -> Result<(), String> {
             .checked_add(12)
             .and_then(|x| x.checked_add(len))
             .filter(|&e| e <= b.len())
-            .ok_or_else(|| {
-                format!(
-                    "truncated PNG: chunk '{kind}' at byte {at} needs {} bytes, {} remain",
-                    len.saturating_add(12),
-                    b.len() - at
-                )
+            .ok_or_else(|| IncompleteImage::PngChunk {
+                kind: kind.clone(),
+                at,
+                need: len.saturating_add(12),
+                remain: b.len() - at,
             })?;
         let stored = be32(b, end - 4);
         if crc32fast::hash(&b[at + 4..end - 4]) != stored {
-            return Err(format!(
-                "corrupted PNG: chunk '{kind}' at byte {at} fails its CRC check"
-            ));
+            return Err(IncompleteImage::PngCrc { kind, at });
         }
         if kind == "IEND" {
             return Ok(());
@@ -67,8 +142,8 @@ fn check_png(b: &[u8]) -> Result<(), String> {
 }
 
 /// JPEG: marker segments and entropy-coded scans walked up to the `EOI` marker.
-fn check_jpeg(b: &[u8]) -> Result<(), String> {
-    let short = || "truncated JPEG: the file ends before its end-of-image marker".to_string();
+fn check_jpeg(b: &[u8]) -> Result<(), IncompleteImage> {
+    let short = || IncompleteImage::JpegEnds;
     let mut at = 2;
     loop {
         // Fill bytes (0xFF) may precede a marker.
@@ -79,7 +154,7 @@ fn check_jpeg(b: &[u8]) -> Result<(), String> {
             return Err(short());
         }
         if b[at] != 0xFF {
-            return Err(format!("corrupted JPEG: no marker at byte {at}"));
+            return Err(IncompleteImage::JpegNoMarker { at });
         }
         let m = b[at + 1];
         at += 2;
@@ -94,7 +169,7 @@ fn check_jpeg(b: &[u8]) -> Result<(), String> {
         }
         let len = u16::from_be_bytes([b[at], b[at + 1]]) as usize;
         if len < 2 {
-            return Err(format!("corrupted JPEG: segment length {len} at byte {at}"));
+            return Err(IncompleteImage::JpegSegmentLength { len, at });
         }
         at += len;
         if at > b.len() {
@@ -116,8 +191,8 @@ fn check_jpeg(b: &[u8]) -> Result<(), String> {
 }
 
 /// GIF: header, colour tables, extension and image blocks up to the trailer (`;`).
-fn check_gif(b: &[u8]) -> Result<(), String> {
-    let short = || "truncated GIF: the file ends before its trailer".to_string();
+fn check_gif(b: &[u8]) -> Result<(), IncompleteImage> {
+    let short = || IncompleteImage::GifEnds;
     if b.len() < 13 {
         return Err(short());
     }
@@ -149,11 +224,7 @@ fn check_gif(b: &[u8]) -> Result<(), String> {
                 at += 10 + table(flags) + 1; // descriptor, local table, LZW code size
                 at = sub_blocks(at).ok_or_else(short)?;
             }
-            Some(x) => {
-                return Err(format!(
-                    "corrupted GIF: unknown block 0x{x:02X} at byte {at}"
-                ))
-            }
+            Some(x) => return Err(IncompleteImage::GifBlock { block: x, at }),
         }
         if at > b.len() {
             return Err(short());
@@ -162,14 +233,14 @@ fn check_gif(b: &[u8]) -> Result<(), String> {
 }
 
 /// BMP: the uncompressed pixel array the header declares fits in the file.
-fn check_bmp(b: &[u8]) -> Result<(), String> {
+fn check_bmp(b: &[u8]) -> Result<(), IncompleteImage> {
     if b.len() < 30 {
-        return Err("truncated BMP: the file ends inside its header".into());
+        return Err(IncompleteImage::BmpHeader);
     }
     let offset = le32(b, 10) as u64;
     let header = le32(b, 14);
     if (b.len() as u64) < 14 + header as u64 {
-        return Err("truncated BMP: the file ends inside its header".into());
+        return Err(IncompleteImage::BmpHeader);
     }
     if header < 40 {
         return Ok(()); // OS/2 core headers: left to the decoder
@@ -184,12 +255,12 @@ fn check_bmp(b: &[u8]) -> Result<(), String> {
     let stride = (width.abs() * bits + 31) / 32 * 4;
     let need = offset as i64 + stride * height;
     if (b.len() as i64) < need {
-        return Err(format!(
-            "truncated BMP: its {}x{} pixels need {need} bytes, the file has {}",
-            width.abs(),
+        return Err(IncompleteImage::BmpPixels {
+            width: width.abs(),
             height,
-            b.len()
-        ));
+            need,
+            len: b.len(),
+        });
     }
     Ok(())
 }
@@ -246,7 +317,7 @@ mod tests {
         let mut b = encoded(ImageFormat::Png);
         let i = b.len() / 2;
         b[i] ^= 0x40;
-        let e = check_complete(&b).unwrap_err();
+        let e = check_complete(&b).unwrap_err().to_string();
         assert!(e.contains("CRC"), "{e}");
     }
 }

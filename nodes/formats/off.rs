@@ -49,6 +49,36 @@ pub fn read_off(text: &str) -> Result<Mesh, OffError> {
         .enumerate()
         .map(|(i, l)| (i + 1, l.split('#').next().unwrap_or("").trim()))
         .filter(|(_, l)| !l.is_empty());
+    let (nv, nf) = off_header(&mut lines)?;
+    // The header's counts are not trusted for allocation: a vertex line takes at least 5 bytes
+    // ("0 0 0") and a face line at least 7 ("3 0 1 2"), so no file holds more than that.
+    let mut positions = Vec::with_capacity(nv.min(text.len() / 5));
+    for k in 0..nv {
+        let (ln, l) = lines.next().ok_or(OffError::EndsEarly {
+            read: k,
+            declared: nv,
+            what: "vertices",
+        })?;
+        positions.push(off_vertex(ln, l, k)?);
+    }
+    let mut fc = Vec::with_capacity(nf.min(text.len() / 7));
+    let mut fi = Vec::with_capacity(nf.saturating_mul(3).min(text.len() / 2));
+    for k in 0..nf {
+        let (ln, l) = lines.next().ok_or(OffError::EndsEarly {
+            read: k,
+            declared: nf,
+            what: "faces",
+        })?;
+        fc.push(off_face(ln, l, nv, &mut fi)?);
+    }
+    Mesh::new(positions, fc, fi).map_err(|e| OffError::Mesh(e.to_string()))
+}
+
+/// The `OFF` (or `COFF`) keyword and the vertex and face counts after it, on its line or the
+/// next.
+fn off_header<'a>(
+    lines: &mut impl Iterator<Item = (usize, &'a str)>,
+) -> Result<(usize, usize), OffError> {
     let (ln, head) = lines.next().ok_or(OffError::Empty)?;
     let rest_of_head = if let Some(r) = head.strip_prefix("COFF") {
         r
@@ -78,76 +108,66 @@ pub fn read_off(text: &str) -> Result<Mesh, OffError> {
             format!("expected vertex, face and edge counts, found '{counts_line}'"),
         ));
     }
-    let (nv, nf) = (counts[0], counts[1]);
-    // The header's counts are not trusted for allocation: a vertex line takes at least 5 bytes
-    // ("0 0 0") and a face line at least 7 ("3 0 1 2"), so no file holds more than that.
-    let mut positions = Vec::with_capacity(nv.min(text.len() / 5));
-    for k in 0..nv {
-        let (ln, l) = lines.next().ok_or(OffError::EndsEarly {
-            read: k,
-            declared: nv,
-            what: "vertices",
-        })?;
-        let v: Vec<f64> = l
-            .split_whitespace()
-            .map(|s| s.parse::<f64>())
-            .collect::<Result<_, _>>()
-            .map_err(|_| at(ln, format!("malformed vertex '{l}'")))?;
-        if v.len() < 3 {
-            return Err(at(ln, format!("a vertex needs 3 coordinates: '{l}'")));
-        }
-        if v[..3].iter().any(|x| !x.is_finite()) {
-            return Err(at(
-                ln,
-                format!("vertex {k} has a non-finite coordinate: '{l}'"),
-            ));
-        }
-        positions.push([v[0], v[1], v[2]]);
+    Ok((counts[0], counts[1]))
+}
+
+/// Vertex `k` from its line `l` (number `ln`): three finite coordinates, extra columns
+/// (colours) ignored.
+fn off_vertex(ln: usize, l: &str, k: usize) -> Result<[f64; 3], OffError> {
+    let v: Vec<f64> = l
+        .split_whitespace()
+        .map(|s| s.parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| at(ln, format!("malformed vertex '{l}'")))?;
+    if v.len() < 3 {
+        return Err(at(ln, format!("a vertex needs 3 coordinates: '{l}'")));
     }
-    let mut fc = Vec::with_capacity(nf.min(text.len() / 7));
-    let mut fi = Vec::with_capacity(nf.saturating_mul(3).min(text.len() / 2));
-    for k in 0..nf {
-        let (ln, l) = lines.next().ok_or(OffError::EndsEarly {
-            read: k,
-            declared: nf,
-            what: "faces",
-        })?;
-        let mut w = l.split_whitespace();
-        let n: usize = w
+    if v[..3].iter().any(|x| !x.is_finite()) {
+        return Err(at(
+            ln,
+            format!("vertex {k} has a non-finite coordinate: '{l}'"),
+        ));
+    }
+    Ok([v[0], v[1], v[2]])
+}
+
+/// A face line `n i1 ... in`: pushes its corners onto `fi` and returns `n`, refusing faces
+/// under 3 corners, indices past the `nv` vertices and repeated vertices.
+fn off_face(ln: usize, l: &str, nv: usize, fi: &mut Vec<u32>) -> Result<u32, OffError> {
+    let mut w = l.split_whitespace();
+    let n: usize = w
+        .next()
+        .and_then(|s| s.parse().ok())
+        .ok_or_else(|| at(ln, format!("malformed face '{l}'")))?;
+    if n < 3 {
+        return Err(at(ln, format!("degenerate face with {n} corners")));
+    }
+    let start = fi.len();
+    // Repeats: a scan for small faces, a set for large ones (a scan per corner was
+    // quadratic, so one line of a million indices took minutes). Not sized from `n`.
+    let mut seen = std::collections::HashSet::new();
+    for _ in 0..n {
+        let i: usize = w
             .next()
             .and_then(|s| s.parse().ok())
             .ok_or_else(|| at(ln, format!("malformed face '{l}'")))?;
-        if n < 3 {
-            return Err(at(ln, format!("degenerate face with {n} corners")));
+        if i >= nv {
+            return Err(at(
+                ln,
+                format!("vertex index {i} out of range ({nv} vertices)"),
+            ));
         }
-        let start = fi.len();
-        // Repeats: a scan for small faces, a set for large ones (a scan per corner was
-        // quadratic, so one line of a million indices took minutes). Not sized from `n`.
-        let mut seen = std::collections::HashSet::new();
-        for _ in 0..n {
-            let i: usize = w
-                .next()
-                .and_then(|s| s.parse().ok())
-                .ok_or_else(|| at(ln, format!("malformed face '{l}'")))?;
-            if i >= nv {
-                return Err(at(
-                    ln,
-                    format!("vertex index {i} out of range ({nv} vertices)"),
-                ));
-            }
-            let repeated = if n > 32 {
-                !seen.insert(i)
-            } else {
-                fi[start..].contains(&(i as u32))
-            };
-            if repeated {
-                return Err(at(ln, format!("degenerate face, vertex {i} appears twice")));
-            }
-            fi.push(i as u32);
+        let repeated = if n > 32 {
+            !seen.insert(i)
+        } else {
+            fi[start..].contains(&(i as u32))
+        };
+        if repeated {
+            return Err(at(ln, format!("degenerate face, vertex {i} appears twice")));
         }
-        fc.push(n as u32);
+        fi.push(i as u32);
     }
-    Mesh::new(positions, fc, fi).map_err(|e| OffError::Mesh(e.to_string()))
+    Ok(n as u32)
 }
 
 /// Writes OFF text (positions and faces only).

@@ -68,17 +68,19 @@ pub fn jet_colors(values: &[f64], range: Option<(f64, f64)>) -> Vec<[f64; 3]> {
 
 /// The per-vertex numbers of attribute `name`: a float or integer attribute as it is, a
 /// vector attribute by its length (so `velocity` gives speed).
-pub fn vertex_values(mesh: &Mesh, name: &str) -> Result<Vec<f64>, String> {
-    let a = mesh.attributes.get(name).ok_or_else(|| {
-        format!(
-            "the mesh has no attribute '{name}' (it has: {})",
-            mesh.attributes
+pub fn vertex_values(mesh: &Mesh, name: &str) -> Result<Vec<f64>, VertexValuesError> {
+    let a = mesh
+        .attributes
+        .get(name)
+        .ok_or_else(|| VertexValuesError::NoAttribute {
+            name: name.to_string(),
+            names: mesh
+                .attributes
                 .keys()
                 .cloned()
                 .collect::<Vec<_>>()
-                .join(", ")
-        )
-    })?;
+                .join(", "),
+        })?;
     let (d, v): (Domain, Vec<f64>) = match a {
         AttributeData::Float(x) => (x.domain, x.values.clone()),
         AttributeData::Int(x) => (x.domain, x.values.iter().map(|&i| i as f64).collect()),
@@ -95,7 +97,38 @@ pub fn vertex_values(mesh: &Mesh, name: &str) -> Result<Vec<f64>, String> {
         ),
     };
     if d != Domain::Vertex {
-        return Err(format!("attribute '{name}' is not per vertex ({d:?})"));
+        return Err(VertexValuesError::NotPerVertex {
+            name: name.to_string(),
+            domain: d,
+        });
     }
     Ok(v)
+}
+
+/// Why an attribute gives no per-vertex numbers.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum VertexValuesError {
+    /// No attribute of that name.
+    #[error("the mesh has no attribute '{name}' (it has: {names})")]
+    NoAttribute {
+        /// The name asked for.
+        name: String,
+        /// The mesh's attribute names, comma-separated.
+        names: String,
+    },
+    /// The attribute lives on corners or faces.
+    #[error("attribute '{name}' is not per vertex ({domain:?})")]
+    NotPerVertex {
+        /// The attribute's name.
+        name: String,
+        /// Its domain.
+        domain: Domain,
+    },
+}
+
+/// The nodes report errors as text: the message unchanged.
+impl From<VertexValuesError> for String {
+    fn from(e: VertexValuesError) -> String {
+        e.to_string()
+    }
 }

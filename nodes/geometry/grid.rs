@@ -41,9 +41,9 @@ pub fn grid_mesh(
     plane: &str,
     center: [f64; 3],
     triangles: bool,
-) -> Result<Mesh, String> {
-    let p = GridPlane::from_name(plane)
-        .ok_or_else(|| format!("unknown plane '{plane}' (xy, xz or yz)"))?;
+) -> Result<Mesh, GridError> {
+    let p =
+        GridPlane::from_name(plane).ok_or_else(|| GridError::UnknownPlane(plane.to_string()))?;
     grid_mesh_in(cells_u, cells_v, size, p, center, triangles)
 }
 
@@ -57,9 +57,9 @@ pub fn grid_mesh_in(
     plane: GridPlane,
     center: [f64; 3],
     triangles: bool,
-) -> Result<Mesh, String> {
+) -> Result<Mesh, GridError> {
     if cells_u == 0 || cells_v == 0 {
-        return Err("a grid needs at least one cell along each side".into());
+        return Err(GridError::NoCells);
     }
     let (au, av) = plane.axes();
     let (nu, nv) = (cells_u + 1, cells_v + 1);
@@ -85,7 +85,28 @@ pub fn grid_mesh_in(
         }
         (vec![4; cells_u * cells_v], idx)
     };
-    Mesh::new(pos, counts, idx).map_err(|e| e.to_string())
+    Ok(Mesh::new(pos, counts, idx)?)
+}
+
+/// Why a grid cannot be built.
+#[derive(Debug, thiserror::Error)]
+pub enum GridError {
+    /// A plane name other than xy, xz or yz.
+    #[error("unknown plane '{0}' (xy, xz or yz)")]
+    UnknownPlane(String),
+    /// Zero cells along a side.
+    #[error("a grid needs at least one cell along each side")]
+    NoCells,
+    /// The positions do not make a valid mesh (non-finite size or centre).
+    #[error("{0}")]
+    Mesh(#[from] MeshError),
+}
+
+/// The mesh nodes report errors as text: the message unchanged.
+impl From<GridError> for String {
+    fn from(e: GridError) -> String {
+        e.to_string()
+    }
 }
 
 /// The bytes a `cells_u x cells_v` grid takes while it is built: 24 per vertex (position),

@@ -48,7 +48,7 @@ impl SceneGeometry {
 
 /// Flattens a scene's meshes to triangles (polygons fan-triangulated). Normals come from
 /// the mesh when it has them, else area-weighted vertex normals; tangents from the UVs.
-pub fn scene_geometry(scene: &Scene) -> Result<SceneGeometry, String> {
+pub fn scene_geometry(scene: &Scene) -> Result<SceneGeometry, SceneGeometryError> {
     scene_geometry_creased(scene, 180.0)
 }
 
@@ -56,7 +56,10 @@ pub fn scene_geometry(scene: &Scene) -> Result<SceneGeometry, String> {
 /// the faces around a vertex whose normals are within `crease_deg` of the corner's own face
 /// (180 smooths everything, 0 gives flat shading), so the edges of a box stay sharp while a
 /// tessellated sphere shades smooth. The tracers use it with a crease angle.
-pub fn scene_geometry_creased(scene: &Scene, crease_deg: f64) -> Result<SceneGeometry, String> {
+pub fn scene_geometry_creased(
+    scene: &Scene,
+    crease_deg: f64,
+) -> Result<SceneGeometry, SceneGeometryError> {
     scene_geometry_in(scene, crease_deg, SceneGeometry::default())
 }
 
@@ -68,23 +71,9 @@ pub fn scene_geometry_in(
     scene: &Scene,
     crease_deg: f64,
     mut g: SceneGeometry,
-) -> Result<SceneGeometry, String> {
+) -> Result<SceneGeometry, SceneGeometryError> {
     g.clear();
-    // Fan triangulation gives n - 2 triangles per polygon of n corners.
-    let total: usize = scene
-        .objects
-        .iter()
-        .map(|o| {
-            let c = o.mesh.face_counts().iter();
-            c.map(|&n| (n as usize).saturating_sub(2)).sum::<usize>()
-        })
-        .sum();
-    g.pos.reserve_exact(total);
-    g.nrm.reserve_exact(total);
-    g.uv.reserve_exact(total);
-    g.tan.reserve_exact(total);
-    g.mat.reserve_exact(total);
-    g.has_uv.reserve_exact(total);
+    g.reserve_triangles(scene);
     let mut lo = [f64::INFINITY; 3];
     let mut hi = [f64::NEG_INFINITY; 3];
     let default_mat = Arc::new(Material::default());
@@ -95,20 +84,14 @@ pub fn scene_geometry_in(
             continue;
         }
         if mesh.positions.iter().flatten().any(|x| !x.is_finite()) {
-            return Err(format!("mesh {oi} has non-finite positions"));
+            return Err(SceneGeometryError::NonFinitePositions { object: oi });
         }
         let material = obj
             .material
             .clone()
             .or_else(|| mesh.material.clone())
             .unwrap_or_else(|| default_mat.clone());
-        let mi = match g.materials.iter().position(|m| Arc::ptr_eq(m, &material)) {
-            Some(i) => i,
-            None => {
-                g.materials.push(material);
-                g.materials.len() - 1
-            }
-        } as u32;
+        let mi = g.material_index(material);
         let p = &mesh.positions;
         for q in p {
             for k in 0..3 {
@@ -119,109 +102,11 @@ pub fn scene_geometry_in(
         // Every array is filled in place from index `base` (reserved above).
         let base = g.pos.len();
         let nt = tris.len();
-        // Normals per corner.
-        match &mesh.normals {
-            Some(a) if attr_len_ok(a.domain, a.values.len(), p.len(), tris.len()) => {
-                g.nrm.par_extend((0..tris.len()).into_par_iter().map(|t| {
-                    std::array::from_fn(|k| {
-                        let v = match a.domain {
-                            Domain::Vertex => a.values[tris[t][k] as usize],
-                            Domain::Corner => a.values[3 * t + k],
-                            Domain::Face => a.values[t],
-                        };
-                        normalize(v).unwrap_or([0.0, 0.0, 1.0])
-                    })
-                }))
-            }
-            _ if crease_deg < 180.0 => g
-                .nrm
-                .extend_from_slice(&creased_normals(p, &tris, crease_deg)),
-            _ => {
-                let mut vn = vec![[0.0; 3]; p.len()];
-                for t in &tris {
-                    let n = cross(
-                        sub(p[t[1] as usize], p[t[0] as usize]),
-                        sub(p[t[2] as usize], p[t[0] as usize]),
-                    );
-                    for &v in t {
-                        for k in 0..3 {
-                            vn[v as usize][k] += n[k];
-                        }
-                    }
-                }
-                g.nrm.par_extend(tris.par_iter().map(|t| {
-                    let f = normalize(cross(
-                        sub(p[t[1] as usize], p[t[0] as usize]),
-                        sub(p[t[2] as usize], p[t[0] as usize]),
-                    ))
-                    .unwrap_or([0.0, 0.0, 1.0]);
-                    std::array::from_fn(|k| normalize(vn[t[k] as usize]).unwrap_or(f))
-                }))
-            }
-        };
-        let corner_normals = &g.nrm[base..];
-        // UVs per corner.
-        let has_uv = match &mesh.uvs {
-            Some(a) if attr_len_ok(a.domain, a.values.len(), p.len(), tris.len()) => {
-                g.uv.extend((0..tris.len()).map(|t| {
-                    std::array::from_fn(|k| match a.domain {
-                        Domain::Vertex => a.values[tris[t][k] as usize],
-                        Domain::Corner => a.values[3 * t + k],
-                        Domain::Face => a.values[t],
-                    })
-                }));
-                true
-            }
-            // Zeros for a mesh without UVs, written in parallel.
-            _ => {
-                g.uv.par_extend(rayon::iter::repeat_n([[0.0; 2]; 3], nt));
-                false
-            }
-        };
-        let uvs = &g.uv[base..];
-        // Tangents (Lengyel 2001), accumulated per position vertex.
+        g.push_normals(&mesh, &tris, crease_deg);
+        let has_uv = g.push_uvs(&mesh, &tris);
         if has_uv {
-            let mut tv = vec![[0.0; 3]; p.len()];
-            let mut bv = vec![[0.0; 3]; p.len()];
-            for (t, tri) in tris.iter().enumerate() {
-                let [p0, p1, p2] = tri.map(|v| p[v as usize]);
-                let [w0, w1, w2] = uvs[t];
-                let (e1, e2) = (sub(p1, p0), sub(p2, p0));
-                let (du1, dv1) = (w1[0] - w0[0], w1[1] - w0[1]);
-                let (du2, dv2) = (w2[0] - w0[0], w2[1] - w0[1]);
-                let det = du1 * dv2 - du2 * dv1;
-                if det.abs() < 1e-20 {
-                    continue;
-                }
-                let r = 1.0 / det;
-                let tt: [f64; 3] = std::array::from_fn(|k| (e1[k] * dv2 - e2[k] * dv1) * r);
-                let bb: [f64; 3] = std::array::from_fn(|k| (e2[k] * du1 - e1[k] * du2) * r);
-                for &v in tri {
-                    for k in 0..3 {
-                        tv[v as usize][k] += tt[k];
-                        bv[v as usize][k] += bb[k];
-                    }
-                }
-            }
-            g.tan.par_extend((0..tris.len()).into_par_iter().map(|t| {
-                std::array::from_fn(|k| {
-                    let v = tris[t][k] as usize;
-                    let n = corner_normals[t][k];
-                    let tt = tv[v];
-                    let ortho = sub(tt, scale(n, dot(n, tt)));
-                    match normalize(ortho) {
-                        Some(o) => {
-                            let w = if dot(cross(n, o), bv[v]) < 0.0 {
-                                -1.0
-                            } else {
-                                1.0
-                            };
-                            [o[0], o[1], o[2], w]
-                        }
-                        None => [0.0; 4],
-                    }
-                })
-            }));
+            let (tan, nrm, uv) = (&mut g.tan, &g.nrm[base..], &g.uv[base..]);
+            push_tangents(tan, p, &tris, nrm, uv);
         } else {
             g.tan.par_extend(rayon::iter::repeat_n([[0.0; 4]; 3], nt));
         }
@@ -236,6 +121,182 @@ pub fn scene_geometry_in(
     }
     g.bounds = (lo, hi);
     Ok(g)
+}
+
+/// Why a scene cannot be flattened.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum SceneGeometryError {
+    /// An object's mesh has a NaN or infinite position.
+    #[error("mesh {object} has non-finite positions")]
+    NonFinitePositions {
+        /// The object's index in the scene.
+        object: usize,
+    },
+}
+
+/// The renderers report errors as text: the message unchanged.
+impl From<SceneGeometryError> for String {
+    fn from(e: SceneGeometryError) -> String {
+        e.to_string()
+    }
+}
+
+impl SceneGeometry {
+    /// Reserves every array for the scene's triangles: fan triangulation gives n - 2
+    /// triangles per polygon of n corners.
+    fn reserve_triangles(&mut self, scene: &Scene) {
+        let total: usize = scene
+            .objects
+            .iter()
+            .map(|o| {
+                let c = o.mesh.face_counts().iter();
+                c.map(|&n| (n as usize).saturating_sub(2)).sum::<usize>()
+            })
+            .sum();
+        self.pos.reserve_exact(total);
+        self.nrm.reserve_exact(total);
+        self.uv.reserve_exact(total);
+        self.tan.reserve_exact(total);
+        self.mat.reserve_exact(total);
+        self.has_uv.reserve_exact(total);
+    }
+
+    /// The index of `material` in `materials` (by pointer), appending it when new.
+    fn material_index(&mut self, material: Arc<Material>) -> u32 {
+        (match self
+            .materials
+            .iter()
+            .position(|m| Arc::ptr_eq(m, &material))
+        {
+            Some(i) => i,
+            None => {
+                self.materials.push(material);
+                self.materials.len() - 1
+            }
+        }) as u32
+    }
+
+    /// Appends the corner normals of the triangles `tris` of `mesh`: its own normals when
+    /// they fit, else crease-angle normals (`crease_deg` under 180), else area-weighted
+    /// vertex normals.
+    fn push_normals(&mut self, mesh: &Mesh, tris: &[[u32; 3]], crease_deg: f64) {
+        let p = &mesh.positions;
+        match &mesh.normals {
+            Some(a) if attr_len_ok(a.domain, a.values.len(), p.len(), tris.len()) => self
+                .nrm
+                .par_extend((0..tris.len()).into_par_iter().map(|t| {
+                    std::array::from_fn(|k| {
+                        let v = match a.domain {
+                            Domain::Vertex => a.values[tris[t][k] as usize],
+                            Domain::Corner => a.values[3 * t + k],
+                            Domain::Face => a.values[t],
+                        };
+                        normalize(v).unwrap_or([0.0, 0.0, 1.0])
+                    })
+                })),
+            _ if crease_deg < 180.0 => self
+                .nrm
+                .extend_from_slice(&creased_normals(p, tris, crease_deg)),
+            _ => {
+                let mut vn = vec![[0.0; 3]; p.len()];
+                for t in tris {
+                    let n = cross(
+                        sub(p[t[1] as usize], p[t[0] as usize]),
+                        sub(p[t[2] as usize], p[t[0] as usize]),
+                    );
+                    for &v in t {
+                        for k in 0..3 {
+                            vn[v as usize][k] += n[k];
+                        }
+                    }
+                }
+                self.nrm.par_extend(tris.par_iter().map(|t| {
+                    let f = normalize(cross(
+                        sub(p[t[1] as usize], p[t[0] as usize]),
+                        sub(p[t[2] as usize], p[t[0] as usize]),
+                    ))
+                    .unwrap_or([0.0, 0.0, 1.0]);
+                    std::array::from_fn(|k| normalize(vn[t[k] as usize]).unwrap_or(f))
+                }))
+            }
+        };
+    }
+
+    /// Appends the corner UVs of the triangles `tris` of `mesh` (zeros when it has none that
+    /// fit); whether it had them.
+    fn push_uvs(&mut self, mesh: &Mesh, tris: &[[u32; 3]]) -> bool {
+        match &mesh.uvs {
+            Some(a) if attr_len_ok(a.domain, a.values.len(), mesh.positions.len(), tris.len()) => {
+                self.uv.extend((0..tris.len()).map(|t| {
+                    std::array::from_fn(|k| match a.domain {
+                        Domain::Vertex => a.values[tris[t][k] as usize],
+                        Domain::Corner => a.values[3 * t + k],
+                        Domain::Face => a.values[t],
+                    })
+                }));
+                true
+            }
+            // Zeros for a mesh without UVs, written in parallel.
+            _ => {
+                self.uv
+                    .par_extend(rayon::iter::repeat_n([[0.0; 2]; 3], tris.len()));
+                false
+            }
+        }
+    }
+}
+
+/// Appends the corner tangents (Lengyel 2001) of the triangles `tris` over positions `p`,
+/// accumulated per position vertex from the corner UVs `uvs` and made orthogonal to the
+/// corner normals `corner_normals`, with the handedness in w.
+fn push_tangents(
+    tan: &mut Vec<[[f64; 4]; 3]>,
+    p: &[[f64; 3]],
+    tris: &[[u32; 3]],
+    corner_normals: &[[[f64; 3]; 3]],
+    uvs: &[[[f64; 2]; 3]],
+) {
+    let mut tv = vec![[0.0; 3]; p.len()];
+    let mut bv = vec![[0.0; 3]; p.len()];
+    for (t, tri) in tris.iter().enumerate() {
+        let [p0, p1, p2] = tri.map(|v| p[v as usize]);
+        let [w0, w1, w2] = uvs[t];
+        let (e1, e2) = (sub(p1, p0), sub(p2, p0));
+        let (du1, dv1) = (w1[0] - w0[0], w1[1] - w0[1]);
+        let (du2, dv2) = (w2[0] - w0[0], w2[1] - w0[1]);
+        let det = du1 * dv2 - du2 * dv1;
+        if det.abs() < 1e-20 {
+            continue;
+        }
+        let r = 1.0 / det;
+        let tt: [f64; 3] = std::array::from_fn(|k| (e1[k] * dv2 - e2[k] * dv1) * r);
+        let bb: [f64; 3] = std::array::from_fn(|k| (e2[k] * du1 - e1[k] * du2) * r);
+        for &v in tri {
+            for k in 0..3 {
+                tv[v as usize][k] += tt[k];
+                bv[v as usize][k] += bb[k];
+            }
+        }
+    }
+    tan.par_extend((0..tris.len()).into_par_iter().map(|t| {
+        std::array::from_fn(|k| {
+            let v = tris[t][k] as usize;
+            let n = corner_normals[t][k];
+            let tt = tv[v];
+            let ortho = sub(tt, scale(n, dot(n, tt)));
+            match normalize(ortho) {
+                Some(o) => {
+                    let w = if dot(cross(n, o), bv[v]) < 0.0 {
+                        -1.0
+                    } else {
+                        1.0
+                    };
+                    [o[0], o[1], o[2], w]
+                }
+                None => [0.0; 4],
+            }
+        })
+    }));
 }
 
 /// Per-corner normals averaging, area-weighted (the unnormalised cross products), the

@@ -35,10 +35,31 @@ impl Default for Transform {
     }
 }
 
+/// Why a transform cannot be built or applied.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum TransformError {
+    /// A zero (or non-finite) rotation axis with a non-zero angle.
+    #[error("the rotation axis is zero")]
+    ZeroAxis,
+    /// The composed matrix has a NaN or infinite entry.
+    #[error("the transform is not finite")]
+    NonFinite,
+    /// A singular linear part applied to a mesh with normals.
+    #[error("the transform is singular, so normals cannot follow it")]
+    Singular,
+}
+
+/// The transform nodes report errors as text: the message unchanged.
+impl From<TransformError> for String {
+    fn from(e: TransformError) -> String {
+        e.to_string()
+    }
+}
+
 impl Transform {
     /// The 4x4 matrix acting on column vectors `(x, y, z, 1)`; `Err` when the axis is zero
     /// while the angle is not.
-    pub fn matrix(&self) -> Result<Matrix4<f64>, String> {
+    pub fn matrix(&self) -> Result<Matrix4<f64>, TransformError> {
         let rot = |axis: Vector3<f64>, deg: f64| {
             Rotation3::from_axis_angle(&Unit::new_normalize(axis), deg.to_radians())
                 .to_homogeneous()
@@ -51,7 +72,7 @@ impl Transform {
         } else {
             let a = Vector3::from(self.axis);
             if a.norm() == 0.0 || !a.norm().is_finite() {
-                return Err("the rotation axis is zero".into());
+                return Err(TransformError::ZeroAxis);
             }
             rot(a, self.angle)
         };
@@ -64,7 +85,7 @@ impl Transform {
         };
         let out = m * t * s * aa * euler;
         if out.iter().any(|x| !x.is_finite()) {
-            return Err("the transform is not finite".into());
+            return Err(TransformError::NonFinite);
         }
         Ok(out)
     }
@@ -72,13 +93,12 @@ impl Transform {
 
 /// `mesh` with `m` (column-vector convention) applied to its points and normals; faces are
 /// reversed when `m` mirrors. `Err` when `m`'s linear part is singular and the mesh has normals.
-pub fn transform_mesh(mesh: &Mesh, m: &Matrix4<f64>) -> Result<Mesh, String> {
+pub fn transform_mesh(mesh: &Mesh, m: &Matrix4<f64>) -> Result<Mesh, TransformError> {
     let row = m.transpose(); // the usda helpers take USD's row-vector matrices
     let mut out = mesh.clone();
     transform_points(&row, &mut out.positions);
     if let Some(n) = out.normals.as_mut() {
-        transform_normals(&row, &mut n.values)
-            .ok_or("the transform is singular, so normals cannot follow it")?;
+        transform_normals(&row, &mut n.values).ok_or(TransformError::Singular)?;
     }
     let det = m.fixed_view::<3, 3>(0, 0).determinant();
     if det < 0.0 {

@@ -13,7 +13,11 @@ use cgnodes_api::types::{AttributeData, Domain, Mesh};
 /// vector means -z). "Top" is against gravity when the mesh extends along it (the lowest
 /// coordinate when gravity points along +axis), else along the in-plane axis with the largest
 /// extent (y first), so the course's xy grids hang from their y = 1 side.
-pub fn select_vertices(mesh: &Mesh, sel: &str, gravity: [f64; 3]) -> Result<Vec<usize>, String> {
+pub fn select_vertices(
+    mesh: &Mesh,
+    sel: &str,
+    gravity: [f64; 3],
+) -> Result<Vec<usize>, SelectionError> {
     let sel = sel.trim();
     let n = mesh.num_vertices();
     if sel.is_empty() || sel == "none" {
@@ -28,27 +32,17 @@ pub fn select_vertices(mesh: &Mesh, sel: &str, gravity: [f64; 3]) -> Result<Vec<
         for t in tokens {
             let i: i64 = t.parse().unwrap_or(-1);
             if i < 0 || i as usize >= n {
-                return Err(format!("vertex index {i} is outside 0..{n}"));
+                return Err(SelectionError::IndexOutOfRange {
+                    index: i,
+                    vertices: n,
+                });
             }
             out.push(i as usize);
         }
         return Ok(out);
     }
     if let Some(name) = sel.strip_prefix("attr:") {
-        let a = mesh
-            .attributes
-            .get(name)
-            .ok_or_else(|| format!("the mesh has no attribute '{name}'"))?;
-        let vals: Vec<f64> = match a {
-            AttributeData::Float(a) if a.domain == Domain::Vertex => a.values.clone(),
-            AttributeData::Int(a) if a.domain == Domain::Vertex => {
-                a.values.iter().map(|&v| v as f64).collect()
-            }
-            _ => return Err(format!("attribute '{name}' is not a per-vertex number")),
-        };
-        return Ok((0..n)
-            .filter(|&i| vals.get(i).is_some_and(|v| *v != 0.0))
-            .collect());
+        return attribute_selection(mesh, name);
     }
     if n == 0 {
         return Ok(Vec::new());
@@ -107,9 +101,55 @@ pub fn select_vertices(mesh: &Mesh, sel: &str, gravity: [f64; 3]) -> Result<Vec<
             }
             Ok(out)
         }
-        other => Err(format!(
-            "'{other}' is not a selection: use indices like \"0,39\", top_corners, top_edge, corners, first_row_ends, attr:NAME or none"
-        )),
+        other => Err(SelectionError::Unknown(other.to_string())),
+    }
+}
+
+/// `attr:NAME`: the vertices where the per-vertex float or integer attribute `name` is non-zero.
+fn attribute_selection(mesh: &Mesh, name: &str) -> Result<Vec<usize>, SelectionError> {
+    let n = mesh.num_vertices();
+    let a = mesh
+        .attributes
+        .get(name)
+        .ok_or_else(|| SelectionError::NoAttribute(name.to_string()))?;
+    let vals: Vec<f64> = match a {
+        AttributeData::Float(a) if a.domain == Domain::Vertex => a.values.clone(),
+        AttributeData::Int(a) if a.domain == Domain::Vertex => {
+            a.values.iter().map(|&v| v as f64).collect()
+        }
+        _ => return Err(SelectionError::NotPerVertex(name.to_string())),
+    };
+    Ok((0..n)
+        .filter(|&i| vals.get(i).is_some_and(|v| *v != 0.0))
+        .collect())
+}
+
+/// Why a vertex selection cannot be made.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum SelectionError {
+    /// An index past the mesh's vertices (or negative).
+    #[error("vertex index {index} is outside 0..{vertices}")]
+    IndexOutOfRange {
+        /// The index given.
+        index: i64,
+        /// The mesh's vertex count.
+        vertices: usize,
+    },
+    /// `attr:NAME` naming no attribute of the mesh.
+    #[error("the mesh has no attribute '{0}'")]
+    NoAttribute(String),
+    /// `attr:NAME` naming an attribute that is not a per-vertex float or integer.
+    #[error("attribute '{0}' is not a per-vertex number")]
+    NotPerVertex(String),
+    /// A selection that is none of the known forms.
+    #[error("'{0}' is not a selection: use indices like \"0,39\", top_corners, top_edge, corners, first_row_ends, attr:NAME or none")]
+    Unknown(String),
+}
+
+/// The nodes report errors as text: the message unchanged.
+impl From<SelectionError> for String {
+    fn from(e: SelectionError) -> String {
+        e.to_string()
     }
 }
 

@@ -5,12 +5,23 @@
 
 use cgnodes_api::prelude::*;
 
+/// Why the course's grid cannot be built.
+#[derive(Debug, thiserror::Error)]
+pub enum CreateGridError {
+    /// A resolution of 0.
+    #[error("the grid needs at least one cell")]
+    NoCells,
+    /// The quads do not make a valid mesh (non-finite positions).
+    #[error("{0}")]
+    Mesh(#[from] MeshError),
+}
+
 /// The course's grid: vertex `(i, j)` (i along y, j along z) has index `i (r + 1) + j`,
 /// position `(0, size i / r, size j / r)` and UV `(i / r, j / r)`; quad `(i, j)` is
 /// `[i n + j, i n + j + 1, (i + 1) n + j + 1, (i + 1) n + j]` with `n = r + 1`.
-pub fn create_grid(resolution: usize, size: f64) -> Result<Mesh, String> {
+pub fn create_grid(resolution: usize, size: f64) -> Result<Mesh, CreateGridError> {
     if resolution == 0 {
-        return Err("the grid needs at least one cell".into());
+        return Err(CreateGridError::NoCells);
     }
     let n = resolution + 1;
     let r = resolution as f64;
@@ -30,7 +41,7 @@ pub fn create_grid(resolution: usize, size: f64) -> Result<Mesh, String> {
             idx.extend([a, a + 1, b + 1, b]);
         }
     }
-    let mut m = Mesh::new(pos, vec![4; resolution * resolution], idx).map_err(|e| e.to_string())?;
+    let mut m = Mesh::new(pos, vec![4; resolution * resolution], idx)?;
     m.uvs = Some(Attribute {
         domain: Domain::Vertex,
         values: uv,
@@ -63,7 +74,8 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     if !(size.is_finite() && size > 0.0) {
         return Err(NodeError::invalid("size", "must be positive"));
     }
-    let m = create_grid(r as usize, size).map_err(|e| NodeError::invalid("resolution", e))?;
+    let m = create_grid(r as usize, size)
+        .map_err(|e| NodeError::invalid("resolution", e.to_string()))?;
     ctx.set_output("mesh", m);
     Ok(())
 }

@@ -52,12 +52,15 @@ pub fn angle_defects(
     (defect, area)
 }
 
+/// A mesh with faces that triangulation could not split.
+#[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
+#[error("the mesh has faces that could not be triangulated")]
+pub struct NotTriangulated;
+
 /// Gaussian curvature per vertex: angle defect over barycentric area (0 where the area is 0).
-pub fn gaussian_curvature(mesh: &Arc<Mesh>) -> Result<Vec<f64>, String> {
+pub fn gaussian_curvature(mesh: &Arc<Mesh>) -> Result<Vec<f64>, NotTriangulated> {
     let tris = mesh.triangulated();
-    let tris = tris
-        .triangles()
-        .ok_or("the mesh has faces that could not be triangulated")?;
+    let tris = tris.triangles().ok_or(NotTriangulated)?;
     let topo = mesh.topology();
     let boundary: Vec<bool> = (0..mesh.num_vertices())
         .map(|v| topo.is_boundary_vertex(v))
@@ -79,7 +82,7 @@ fn declare(b: &mut NodeBuilder) {
 
 fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let mesh: Arc<Mesh> = ctx.input("mesh")?;
-    let k = gaussian_curvature(&mesh).map_err(|e| NodeError::invalid("mesh", e))?;
+    let k = gaussian_curvature(&mesh).map_err(|e| NodeError::invalid("mesh", e.to_string()))?;
     ctx.set_output("curvature", k);
     Ok(())
 }

@@ -38,8 +38,41 @@ pub fn decompose(mesh: &Mesh) -> MeshBuffers {
     }
 }
 
+/// Why buffers do not make a mesh.
+#[derive(Debug, thiserror::Error)]
+pub enum ComposeError {
+    /// A count or index that is negative or over `u32`.
+    #[error("{what} holds {value}")]
+    OutOfRange {
+        /// The buffer: "face_counts" or "face_indices".
+        what: &'static str,
+        /// The value.
+        value: i64,
+    },
+    /// The faces do not make a valid mesh.
+    #[error("{0}")]
+    Mesh(#[from] MeshError),
+    /// A per-element buffer whose length matches no domain.
+    #[error("{what} has {len} values; expected one per vertex ({vertices}), corner ({corners}) or face ({faces})")]
+    Length {
+        /// The buffer: "normals" or "texcoords".
+        what: &'static str,
+        /// Its length.
+        len: usize,
+        /// The mesh's vertex count.
+        vertices: usize,
+        /// Its corner count.
+        corners: usize,
+        /// Its face count.
+        faces: usize,
+    },
+    /// Texture coordinates with one value per face.
+    #[error("texcoords per face are not supported")]
+    FaceTexcoords,
+}
+
 /// The domain whose size is `len`, preferring vertex, then corner, then face.
-fn domain_of(mesh: &Mesh, len: usize, what: &str) -> Result<Domain, String> {
+fn domain_of(mesh: &Mesh, len: usize, what: &'static str) -> Result<Domain, ComposeError> {
     if len == mesh.num_vertices() {
         Ok(Domain::Vertex)
     } else if len == mesh.face_indices().len() {
@@ -47,29 +80,29 @@ fn domain_of(mesh: &Mesh, len: usize, what: &str) -> Result<Domain, String> {
     } else if len == mesh.num_faces() {
         Ok(Domain::Face)
     } else {
-        Err(format!(
-            "{what} has {len} values; expected one per vertex ({}), corner ({}) or face ({})",
-            mesh.num_vertices(),
-            mesh.face_indices().len(),
-            mesh.num_faces()
-        ))
+        Err(ComposeError::Length {
+            what,
+            len,
+            vertices: mesh.num_vertices(),
+            corners: mesh.face_indices().len(),
+            faces: mesh.num_faces(),
+        })
     }
 }
 
 /// Builds a mesh from buffers, checking indices; normals and texcoords are placed on the
 /// domain their length matches (vertex, corner or face).
-pub fn compose(b: &MeshBuffers) -> Result<Mesh, String> {
-    let to_u32 = |v: &[i64], what: &str| -> Result<Vec<u32>, String> {
+pub fn compose(b: &MeshBuffers) -> Result<Mesh, ComposeError> {
+    let to_u32 = |v: &[i64], what: &'static str| {
         v.iter()
-            .map(|&x| u32::try_from(x).map_err(|_| format!("{what} holds {x}")))
-            .collect()
+            .map(|&x| u32::try_from(x).map_err(|_| ComposeError::OutOfRange { what, value: x }))
+            .collect::<Result<Vec<u32>, ComposeError>>()
     };
     let mut m = Mesh::new(
         b.vertices.clone(),
         to_u32(&b.face_counts, "face_counts")?,
         to_u32(&b.face_indices, "face_indices")?,
-    )
-    .map_err(|e| e.to_string())?;
+    )?;
     if !b.normals.is_empty() {
         let d = domain_of(&m, b.normals.len(), "normals")?;
         m.normals = Some(Attribute {
@@ -80,7 +113,7 @@ pub fn compose(b: &MeshBuffers) -> Result<Mesh, String> {
     if !b.texcoords.is_empty() {
         let d = domain_of(&m, b.texcoords.len(), "texcoords")?;
         if d == Domain::Face {
-            return Err("texcoords per face are not supported".into());
+            return Err(ComposeError::FaceTexcoords);
         }
         m.uvs = Some(Attribute {
             domain: d,
@@ -133,7 +166,7 @@ fn execute_compose(ctx: &mut ExecContext) -> Result<(), NodeError> {
         normals: ctx.input_opt("normals")?.unwrap_or_default(),
         texcoords: ctx.input_opt("texcoords")?.unwrap_or_default(),
     };
-    let m = compose(&b).map_err(|e| NodeError::invalid("face_indices", e))?;
+    let m = compose(&b).map_err(|e| NodeError::invalid("face_indices", e.to_string()))?;
     ctx.set_output("mesh", m);
     Ok(())
 }
@@ -162,7 +195,10 @@ mod tests {
         assert_eq!(r.uvs, m.uvs);
         let mut bad = b.clone();
         bad.texcoords.pop();
-        assert!(compose(&bad).unwrap_err().contains("texcoords has 2"));
+        assert!(compose(&bad)
+            .unwrap_err()
+            .to_string()
+            .contains("texcoords has 2"));
         bad = b;
         bad.face_indices[2] = 5;
         assert!(compose(&bad).is_err());

@@ -118,7 +118,7 @@ impl Clipper<'_> {
 
     /// Whether `b` is an ear: convex, with no remaining reflex corner other than the
     /// triangle's own in the closed triangle `prev(b), b, next(b)`.
-    fn is_ear(&mut self, b: usize) -> Result<bool, String> {
+    fn is_ear(&mut self, b: usize) -> Result<bool, OverBudget> {
         if self.reflex[b] {
             // Counted too: on self-intersecting input whole turns can pass over reflex
             // corners, and the budget must bound those walks as well.
@@ -162,27 +162,46 @@ impl Clipper<'_> {
     }
 
     /// `Ok(ear)` while the work spent is within the budget, else the error.
-    fn within_budget(&self, ear: bool) -> Result<bool, String> {
+    fn within_budget(&self, ear: bool) -> Result<bool, OverBudget> {
         if self.tests > self.budget {
-            return Err(format!(
-                "triangulating it would take more than {} point-in-triangle tests; split it first",
-                self.budget
-            ));
+            return Err(OverBudget {
+                budget: self.budget,
+            });
         }
         Ok(ear)
     }
+}
+
+/// A polygon whose ear clipping would cost more than its budget of point-in-triangle tests.
+#[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
+#[error("triangulating it would take more than {budget} point-in-triangle tests; split it first")]
+pub struct OverBudget {
+    /// The budget of tests.
+    pub budget: u64,
+}
+
+/// A face of a mesh too costly to triangulate, by index and corner count.
+#[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
+#[error("face {face} ({corners} corners): {source}")]
+pub struct FaceTooCostly {
+    /// The face's index.
+    pub face: usize,
+    /// Its corner count.
+    pub corners: usize,
+    /// The budget it exceeds.
+    pub source: OverBudget,
 }
 
 /// Triangles (as local corner indices) covering a simple polygon given by its 3-D corners,
 /// in the polygon's winding. Degenerate or self-intersecting input still yields `n - 2`
 /// triangles (a corner is cut off anyway once no ear is left). Fails only when the polygon
 /// would cost more than `MAX_EAR_TESTS` point-in-triangle tests.
-pub fn triangulate_polygon(p: &[[f64; 3]]) -> Result<Vec<[usize; 3]>, String> {
+pub fn triangulate_polygon(p: &[[f64; 3]]) -> Result<Vec<[usize; 3]>, OverBudget> {
     clip_polygon(p, MAX_EAR_TESTS)
 }
 
 /// `triangulate_polygon` with a given budget of point-in-triangle tests.
-fn clip_polygon(p: &[[f64; 3]], budget: u64) -> Result<Vec<[usize; 3]>, String> {
+fn clip_polygon(p: &[[f64; 3]], budget: u64) -> Result<Vec<[usize; 3]>, OverBudget> {
     let n = p.len();
     if n < 3 {
         return Ok(Vec::new());
@@ -271,12 +290,12 @@ fn clip_polygon(p: &[[f64; 3]], budget: u64) -> Result<Vec<[usize; 3]>, String> 
 /// A copy of `mesh` with every face split into triangles; returns the mesh and how many
 /// polygons (faces with more than 3 corners) were split. Fails, naming the face and its
 /// corner count, on a face too costly to clip (see `MAX_EAR_TESTS`).
-pub fn triangulate(mesh: &Mesh) -> Result<(Mesh, usize), String> {
+pub fn triangulate(mesh: &Mesh) -> Result<(Mesh, usize), FaceTooCostly> {
     triangulate_within(mesh, MAX_EAR_TESTS)
 }
 
 /// `triangulate` with a budget of point-in-triangle tests per face.
-fn triangulate_within(mesh: &Mesh, budget: u64) -> Result<(Mesh, usize), String> {
+fn triangulate_within(mesh: &Mesh, budget: u64) -> Result<(Mesh, usize), FaceTooCostly> {
     let starts = mesh.face_starts();
     let mut idx = Vec::new();
     let mut corner_src = Vec::new();
@@ -288,8 +307,11 @@ fn triangulate_within(mesh: &Mesh, budget: u64) -> Result<(Mesh, usize), String>
             split += 1;
         }
         let pts: Vec<[f64; 3]> = face.iter().map(|&v| mesh.positions[v as usize]).collect();
-        let tris = clip_polygon(&pts, budget)
-            .map_err(|e| format!("face {f} ({} corners): {e}", face.len()))?;
+        let tris = clip_polygon(&pts, budget).map_err(|source| FaceTooCostly {
+            face: f,
+            corners: face.len(),
+            source,
+        })?;
         for t in tris {
             for k in t {
                 idx.push(face[k]);
@@ -345,7 +367,7 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
         ctx.set_output("mesh", mesh);
         return Ok(());
     }
-    let (out, split) = triangulate(&mesh).map_err(|e| NodeError::invalid("mesh", e))?;
+    let (out, split) = triangulate(&mesh).map_err(|e| NodeError::invalid("mesh", e.to_string()))?;
     ctx.log(format!(
         "split {split} polygons: {} faces -> {} triangles",
         mesh.num_faces(),
@@ -560,7 +582,9 @@ mod tests {
                 .collect()
         };
         assert_eq!(triangulate_polygon(&eight(200)).unwrap().len(), 198);
-        let e = clip_polygon(&eight(20_000), 1_000_000).unwrap_err();
+        let e = clip_polygon(&eight(20_000), 1_000_000)
+            .unwrap_err()
+            .to_string();
         assert!(
             e.contains("more than 1000000 point-in-triangle tests"),
             "{e}"
@@ -576,7 +600,7 @@ mod tests {
         p.extend(star(400, 0.3));
         let counts = vec![3, 400];
         let m = Mesh::new(p, counts, (0..403).collect()).unwrap();
-        let e = triangulate_within(&m, 1000).unwrap_err();
+        let e = triangulate_within(&m, 1000).unwrap_err().to_string();
         assert!(e.starts_with("face 1 (400 corners): triangulating it would take more than 1000 point-in-triangle tests"), "{e}");
         assert!(triangulate_within(&m, MAX_EAR_TESTS).is_ok());
     }

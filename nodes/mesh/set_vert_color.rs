@@ -120,6 +120,9 @@ mod tests {
             }),
         );
         assert_eq!(vertex_values(&m, "velocity").unwrap(), vec![5.0, 1.0]);
-        assert!(vertex_values(&m, "speed").unwrap_err().contains("velocity"));
+        assert!(vertex_values(&m, "speed")
+            .unwrap_err()
+            .to_string()
+            .contains("velocity"));
     }
 }

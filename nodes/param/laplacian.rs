@@ -12,13 +12,34 @@ use rayon::prelude::*;
 
 pub use cgnodes_linalg::laplace_weights::EdgeWeight;
 
+/// Why Laplacian weights or the matrix cannot be built.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum LaplacianError {
+    /// A zero-area triangle, where the angle-based weights are undefined.
+    #[error("triangle {triangle} (vertices {vertices:?}) is degenerate (zero area); {weights} weights are undefined")]
+    Degenerate {
+        /// The triangle's index.
+        triangle: usize,
+        /// Its vertices.
+        vertices: [u32; 3],
+        /// Which weights: "cotangent" or "mean-value".
+        weights: &'static str,
+    },
+    /// Mean-value weights asked for where the system must be symmetric.
+    #[error("mean-value weights are not symmetric")]
+    NotSymmetric,
+    /// The sparse matrix could not be assembled (faer's error, debug-printed).
+    #[error("{0}")]
+    Assembly(String),
+}
+
 /// The cotangent of each corner's angle, per triangle: `cot[t][k]` is the cotangent of the
 /// angle at corner `k` of triangle `t`, opposite the edge from corner `k+1` to corner `k+2`.
 /// A degenerate (zero-area) triangle gives an error naming it.
 pub fn corner_cotangents(
     positions: &[[f64; 3]],
     triangles: &[[u32; 3]],
-) -> Result<Vec<[f64; 3]>, String> {
+) -> Result<Vec<[f64; 3]>, LaplacianError> {
     triangles
         .par_iter()
         .enumerate()
@@ -31,10 +52,11 @@ pub fn corner_cotangents(
                 let cr = norm(cross(a, b));
                 // cot = cos / sin = (a.b) / |a x b|
                 if cr <= 1e-300 || !cr.is_finite() {
-                    return Err(format!(
-                        "triangle {t} (vertices {:?}) is degenerate (zero area); cotangent weights are undefined",
-                        tri
-                    ));
+                    return Err(LaplacianError::Degenerate {
+                        triangle: t,
+                        vertices: *tri,
+                        weights: "cotangent",
+                    });
                 }
                 c[k] = dot(a, b) / cr;
             }
@@ -50,7 +72,7 @@ pub fn corner_cotangents(
 pub fn cotangent_weights(
     positions: &[[f64; 3]],
     triangles: &[[u32; 3]],
-) -> Result<(Vec<EdgeWeight>, usize), String> {
+) -> Result<(Vec<EdgeWeight>, usize), LaplacianError> {
     let cot = corner_cotangents(positions, triangles)?;
     let w: Vec<EdgeWeight> = triangles
         .par_iter()
@@ -73,7 +95,7 @@ pub fn cotangent_weights(
 pub fn mean_value_weights(
     positions: &[[f64; 3]],
     triangles: &[[u32; 3]],
-) -> Result<Vec<EdgeWeight>, String> {
+) -> Result<Vec<EdgeWeight>, LaplacianError> {
     let mut w = Vec::with_capacity(triangles.len() * 6);
     for (t, tri) in triangles.iter().enumerate() {
         let p = tri.map(|v| positions[v as usize]);
@@ -83,10 +105,11 @@ pub fn mean_value_weights(
             let (la, lb) = (norm(a), norm(b));
             let cr = norm(cross(a, b));
             if cr <= 1e-300 || la <= 0.0 || lb <= 0.0 {
-                return Err(format!(
-                    "triangle {t} (vertices {:?}) is degenerate (zero area); mean-value weights are undefined",
-                    tri
-                ));
+                return Err(LaplacianError::Degenerate {
+                    triangle: t,
+                    vertices: *tri,
+                    weights: "mean-value",
+                });
             }
             let half_tan = (la * lb - dot(a, b)) / cr;
             w.push((tri[k], tri[(k + 1) % 3], half_tan / la));
@@ -102,7 +125,7 @@ pub fn mean_value_weights(
 pub fn cotangent_laplacian(
     positions: &[[f64; 3]],
     triangles: &[[u32; 3]],
-) -> Result<SparseColMat<usize, f64>, String> {
+) -> Result<SparseColMat<usize, f64>, LaplacianError> {
     let (w, _) = cotangent_weights(positions, triangles)?;
     laplacian_matrix(positions.len(), &w)
 }
@@ -111,7 +134,7 @@ pub fn cotangent_laplacian(
 pub fn laplacian_matrix(
     n: usize,
     weights: &[EdgeWeight],
-) -> Result<SparseColMat<usize, f64>, String> {
+) -> Result<SparseColMat<usize, f64>, LaplacianError> {
     let mut trip = Vec::with_capacity(weights.len() + n);
     let mut diag = vec![0.0; n];
     for &(i, j, w) in weights {
@@ -119,7 +142,8 @@ pub fn laplacian_matrix(
         diag[i as usize] += w;
     }
     trip.extend(diag.iter().enumerate().map(|(i, &d)| Triplet::new(i, i, d)));
-    SparseColMat::try_new_from_triplets(n, n, &trip).map_err(|e| format!("{e:?}"))
+    SparseColMat::try_new_from_triplets(n, n, &trip)
+        .map_err(|e| LaplacianError::Assembly(format!("{e:?}")))
 }
 
 /// Number of undirected edges whose summed weight is negative.
@@ -189,6 +213,7 @@ mod tests {
         let p = vec![[0.0; 3], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]];
         assert!(corner_cotangents(&p, &[[0, 1, 2]])
             .unwrap_err()
+            .to_string()
             .contains("degenerate"));
     }
 }

@@ -44,7 +44,7 @@ impl LaplacianRows {
         positions: &[[f64; 3]],
         triangles: &[[u32; 3]],
         cotangent: bool,
-    ) -> Result<LaplacianRows, String> {
+    ) -> Result<LaplacianRows, super::laplacian::LaplacianError> {
         let n = positions.len();
         if !cotangent {
             return Ok(Self::uniform(n, triangles));

@@ -57,7 +57,7 @@ pub fn minimal_surface(
             fixed[v as usize] = Some(mesh.positions[v as usize]);
         }
     }
-    let bad = |m: String| NodeError::invalid("mesh", m);
+    let bad = |m: super::laplacian::LaplacianError| NodeError::invalid("mesh", m.to_string());
     let with_hint = |e: NodeError| {
         NodeError::new(
             e.kind,

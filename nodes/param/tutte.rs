@@ -13,7 +13,7 @@
 //! dropped, which keeps the no-fold guarantee for the real triangles.
 
 use super::boundary_map::{map_boundary, parse_start, rotate_loop, Spacing};
-use super::laplacian::mean_value_weights;
+use super::laplacian::{mean_value_weights, LaplacianError};
 use super::laplacian_rows::LaplacianRows;
 use super::triangles::fan_triangles;
 use super::uv_metrics::uv_metrics;
@@ -175,7 +175,7 @@ pub fn tutte(mesh: &Mesh, opts: &TutteOptions) -> Result<TutteResult, NodeError>
             let (rows, order) = symmetric_rows(&mesh.positions, &triangles, opts.weights)?;
             let factor =
                 DirichletFactor::new(rows.laplace(), &rows.boundary_or_unused(), order.as_ref());
-            Ok::<_, String>((rows, factor))
+            Ok::<_, LaplacianError>((rows, factor))
         },
     );
     checked?;
@@ -232,7 +232,7 @@ pub fn tutte(mesh: &Mesh, opts: &TutteOptions) -> Result<TutteResult, NodeError>
     for (&v, uv) in boundary.iter().zip(&buv) {
         fixed[v as usize] = Some(*uv);
     }
-    let bad = |m: String| NodeError::invalid("mesh", m);
+    let bad = |m: LaplacianError| NodeError::invalid("mesh", m.to_string());
     let (mut uvs, negative) = if opts.weights == TutteWeights::MeanValue {
         let w = mean_value_weights(&positions, &triangles).map_err(bad)?;
         (solve_dirichlet_weights(&w, &fixed, false)?, 0)
@@ -270,9 +270,9 @@ fn symmetric_rows(
     positions: &[[f64; 3]],
     triangles: &[[u32; 3]],
     weights: TutteWeights,
-) -> Result<(LaplacianRows, Option<Dissection>), String> {
+) -> Result<(LaplacianRows, Option<Dissection>), LaplacianError> {
     if weights == TutteWeights::MeanValue {
-        return Err("mean-value weights are not symmetric".into());
+        return Err(LaplacianError::NotSymmetric);
     }
     let rows = LaplacianRows::symmetric(positions, triangles, weights == TutteWeights::Cotangent)?;
     let order = rows.fill_reducing_order(positions);

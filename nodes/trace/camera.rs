@@ -5,6 +5,31 @@
 use super::sampling::V3;
 use cgnodes_api::types::{Camera, LookAt};
 
+/// Why a camera cannot be used by the tracers.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum CameraError {
+    /// A NaN or infinite eye, target or up.
+    #[error("camera eye/target/up must be finite")]
+    NonFinite,
+    /// A film size of 0 or over 16384 pixels.
+    #[error("camera resolution {width}x{height} must be between 1 and 16384")]
+    Resolution {
+        /// Width in pixels.
+        width: u32,
+        /// Height in pixels.
+        height: u32,
+    },
+    /// A vertical field of view outside (0, 180) degrees.
+    #[error("camera fov {0} must be in (0, 180) degrees")]
+    Fov(f64),
+    /// The eye and target coincide.
+    #[error("camera target equals eye")]
+    TargetIsEye,
+    /// The up vector is parallel to the viewing direction.
+    #[error("camera up is parallel to the viewing direction")]
+    UpParallel,
+}
+
 /// A pinhole camera (Mitsuba `perspective` without depth of field).
 #[derive(Clone, Debug)]
 pub struct PinholeCamera {
@@ -25,30 +50,27 @@ pub struct PinholeCamera {
 impl PinholeCamera {
     /// Builds the camera; +x of the image is `forward x up` (world +x on the right for a
     /// camera looking down -z with +y up, as in Mitsuba's `look_at`).
-    pub fn new(c: &Camera) -> Result<PinholeCamera, String> {
+    pub fn new(c: &Camera) -> Result<PinholeCamera, CameraError> {
         let fin = |a: [f64; 3]| a.iter().all(|x| x.is_finite());
         if !fin(c.eye) || !fin(c.target) || !fin(c.up) {
-            return Err("camera eye/target/up must be finite".into());
+            return Err(CameraError::NonFinite);
         }
         if c.width == 0 || c.height == 0 || c.width > 16384 || c.height > 16384 {
-            return Err(format!(
-                "camera resolution {}x{} must be between 1 and 16384",
-                c.width, c.height
-            ));
+            return Err(CameraError::Resolution {
+                width: c.width,
+                height: c.height,
+            });
         }
         if !(c.fov_deg > 0.0 && c.fov_deg < 180.0) {
-            return Err(format!(
-                "camera fov {} must be in (0, 180) degrees",
-                c.fov_deg
-            ));
+            return Err(CameraError::Fov(c.fov_deg));
         }
         // The look-at basis in f32, with the tracers' own tolerances.
         let b = c.look_at::<f32>();
         if b.forward_len == 0.0 {
-            return Err("camera target equals eye".into());
+            return Err(CameraError::TargetIsEye);
         }
         if b.right_len < 1e-6 {
-            return Err("camera up is parallel to the viewing direction".into());
+            return Err(CameraError::UpParallel);
         }
         let tan_y = c.tan_half_fov() as f32;
         let tan_x = tan_y * c.width as f32 / c.height as f32;

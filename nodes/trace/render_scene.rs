@@ -5,6 +5,7 @@
 
 use super::bsdf::Bsdf;
 use super::bvh::{triangle_normal, Bvh, Hit};
+use super::camera::CameraError;
 pub use super::camera::PinholeCamera;
 use super::environment::Environment;
 use super::sampling::{
@@ -12,7 +13,7 @@ use super::sampling::{
     V3,
 };
 use cgnodes_api::types::{Camera, Light, Material, MaterialKind, Scene};
-use cgnodes_geometry::scene_geometry::{normal_mapped, scene_geometry_creased};
+use cgnodes_geometry::scene_geometry::{normal_mapped, scene_geometry_creased, SceneGeometryError};
 use cgnodes_geometry::texture::{MipTexture, Wrap};
 
 /// A material reduced to what the tracers evaluate.
@@ -225,7 +226,7 @@ pub struct RenderScene {
 
 impl RenderScene {
     /// Flattens `scene` with the default crease angle (`DEFAULT_CREASE_DEG`).
-    pub fn new(scene: &Scene) -> Result<RenderScene, String> {
+    pub fn new(scene: &Scene) -> Result<RenderScene, SceneError> {
         RenderScene::with_crease(scene, DEFAULT_CREASE_DEG)
     }
 
@@ -234,7 +235,7 @@ impl RenderScene {
     /// Corner normals, UVs and tangents come from the rasterizer's flattening
     /// (`scene_geometry_creased`): the mesh's own normals, else normals smoothed across
     /// edges whose dihedral angle is below `crease_deg` (0 = flat shading).
-    pub fn with_crease(scene: &Scene, crease_deg: f64) -> Result<RenderScene, String> {
+    pub fn with_crease(scene: &Scene, crease_deg: f64) -> Result<RenderScene, SceneError> {
         check_scene(scene, crease_deg)?;
         let g = scene_geometry_creased(scene, crease_deg)?;
         let tris: Vec<[V3; 3]> = g.pos.iter().map(|t| t.map(v3)).collect();
@@ -418,10 +419,41 @@ pub enum TraceError {
     NoCamera,
     /// The camera cannot be used (non-finite, degenerate, out-of-range size or field of view).
     #[error("{0}")]
-    Camera(String),
+    Camera(#[from] CameraError),
     /// The scene cannot be rendered (non-finite vertices, bad indices).
     #[error("{0}")]
-    Scene(String),
+    Scene(#[from] SceneError),
+}
+
+/// Why a scene cannot be traced.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum SceneError {
+    /// A NaN or infinite vertex.
+    #[error("object {object}: vertex {vertex} is not finite")]
+    NonFiniteVertex {
+        /// The object's index in the scene.
+        object: usize,
+        /// The vertex's index in its mesh.
+        vertex: usize,
+    },
+    /// A face under 3 corners or with an index past the vertices.
+    #[error("object {object}: a face has a bad vertex index")]
+    BadFace {
+        /// The object's index in the scene.
+        object: usize,
+    },
+    /// A crease angle outside 0..=180 degrees.
+    #[error("crease angle {0} must be in 0..=180 degrees")]
+    Crease(f64),
+    /// The scene could not be flattened.
+    #[error("{0}")]
+    Geometry(#[from] SceneGeometryError),
+    /// A point light with a NaN or infinite parameter.
+    #[error("a point light has a non-finite parameter")]
+    PointLight,
+    /// A directional light with a non-finite or zero direction (or non-finite colour).
+    #[error("a directional light needs a finite non-zero direction")]
+    DirectionalLight,
 }
 
 impl TraceError {
@@ -445,18 +477,21 @@ pub fn prepare(
     let cam = camera
         .or(scene.camera.as_ref())
         .ok_or(TraceError::NoCamera)?;
-    let cam = PinholeCamera::new(cam).map_err(TraceError::Camera)?;
-    let sc = RenderScene::with_crease(scene, crease_deg).map_err(TraceError::Scene)?;
+    let cam = PinholeCamera::new(cam)?;
+    let sc = RenderScene::with_crease(scene, crease_deg)?;
     Ok((sc, cam))
 }
 /// Refuses a scene the tracers cannot build: non-finite vertices, faces with a bad vertex
 /// index, a crease angle outside 0..=180 degrees.
-fn check_scene(scene: &Scene, crease_deg: f64) -> Result<(), String> {
+fn check_scene(scene: &Scene, crease_deg: f64) -> Result<(), SceneError> {
     for (oi, obj) in scene.objects.iter().enumerate() {
         let mesh = &obj.mesh;
         for (vi, p) in mesh.positions.iter().enumerate() {
             if !p.iter().all(|x| x.is_finite()) {
-                return Err(format!("object {oi}: vertex {vi} is not finite"));
+                return Err(SceneError::NonFiniteVertex {
+                    object: oi,
+                    vertex: vi,
+                });
             }
         }
         let n = mesh.positions.len() as u32;
@@ -464,13 +499,11 @@ fn check_scene(scene: &Scene, crease_deg: f64) -> Result<(), String> {
             .faces()
             .any(|f| f.len() < 3 || f.iter().any(|&i| i >= n))
         {
-            return Err(format!("object {oi}: a face has a bad vertex index"));
+            return Err(SceneError::BadFace { object: oi });
         }
     }
     if !(0.0..=180.0).contains(&crease_deg) {
-        return Err(format!(
-            "crease angle {crease_deg} must be in 0..=180 degrees"
-        ));
+        return Err(SceneError::Crease(crease_deg));
     }
     Ok(())
 }
@@ -561,7 +594,7 @@ impl EmitterTables {
 
 /// The scene's point and directional lights, checked finite (environment lights are
 /// sampled through `Environment`, not with the delta lights).
-fn delta_lights(lights: &[Light]) -> Result<Vec<Light>, String> {
+fn delta_lights(lights: &[Light]) -> Result<Vec<Light>, SceneError> {
     let mut out = Vec::new();
     for l in lights {
         match l {
@@ -571,7 +604,7 @@ fn delta_lights(lights: &[Light]) -> Result<Vec<Light>, String> {
                 intensity,
             } => {
                 if !position.iter().chain(color).all(|x| x.is_finite()) || !intensity.is_finite() {
-                    return Err("a point light has a non-finite parameter".into());
+                    return Err(SceneError::PointLight);
                 }
             }
             Light::Directional {
@@ -583,7 +616,7 @@ fn delta_lights(lights: &[Light]) -> Result<Vec<Light>, String> {
                     || !intensity.is_finite()
                     || direction.iter().all(|x| *x == 0.0)
                 {
-                    return Err("a directional light needs a finite non-zero direction".into());
+                    return Err(SceneError::DirectionalLight);
                 }
             }
             Light::Environment { .. } => continue,

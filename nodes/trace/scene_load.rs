@@ -9,8 +9,35 @@
 //! (`load_obj_objects`), so its errors carry line numbers.
 
 use cgnodes_api::prelude::*;
-use cgnodes_formats::obj::load_obj_objects;
-use std::path::Path;
+use cgnodes_formats::obj::{load_obj_objects, ObjError};
+use std::path::{Path, PathBuf};
+
+/// Why an OBJ file is not a scene, naming the file.
+#[derive(Debug, thiserror::Error)]
+pub enum SceneLoadError {
+    /// The OBJ cannot be read.
+    #[error("{}: {source}", path.display())]
+    Obj {
+        /// The OBJ file.
+        path: PathBuf,
+        /// What the reader found.
+        source: ObjError,
+    },
+    /// Its material library cannot be read.
+    #[error("{}: material library: {source}", path.display())]
+    Materials {
+        /// The OBJ file.
+        path: PathBuf,
+        /// What tobj found.
+        source: tobj::LoadError,
+    },
+    /// An object names a material the libraries do not define.
+    #[error("object '{0}' names a missing material")]
+    MissingMaterial(String),
+    /// The file has no faces.
+    #[error("{}: no faces", .0.display())]
+    NoFaces(PathBuf),
+}
 
 /// Converts one MTL material.
 pub fn material_from_mtl(m: &tobj::Material, two_sided_emission: bool) -> Material {
@@ -51,9 +78,15 @@ pub fn material_from_mtl(m: &tobj::Material, two_sided_emission: bool) -> Materi
 
 /// Reads `path` (OBJ) and the MTL files it references into a scene without lights or
 /// camera; faces keep their winding (counter-clockwise = front).
-pub fn load_obj_scene(path: &Path, two_sided_emission: bool) -> Result<Scene, String> {
-    let (blocks, mats) = load_obj_objects(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    let mats = mats.map_err(|e| format!("{}: material library: {e}", path.display()))?;
+pub fn load_obj_scene(path: &Path, two_sided_emission: bool) -> Result<Scene, SceneLoadError> {
+    let (blocks, mats) = load_obj_objects(path).map_err(|source| SceneLoadError::Obj {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let mats = mats.map_err(|source| SceneLoadError::Materials {
+        path: path.to_path_buf(),
+        source,
+    })?;
     let mats: Vec<Arc<Material>> = mats
         .iter()
         .map(|m| Arc::new(material_from_mtl(m, two_sided_emission)))
@@ -64,7 +97,7 @@ pub fn load_obj_scene(path: &Path, two_sided_emission: bool) -> Result<Scene, St
             Some(i) => Some(
                 mats.get(i)
                     .cloned()
-                    .ok_or_else(|| format!("object '{}' names a missing material", b.name))?,
+                    .ok_or_else(|| SceneLoadError::MissingMaterial(b.name.clone()))?,
             ),
             None => None,
         };
@@ -75,7 +108,7 @@ pub fn load_obj_scene(path: &Path, two_sided_emission: bool) -> Result<Scene, St
         });
     }
     if scene.objects.is_empty() {
-        return Err(format!("{}: no faces", path.display()));
+        return Err(SceneLoadError::NoFaces(path.to_path_buf()));
     }
     Ok(scene)
 }
@@ -101,8 +134,8 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let two: bool = ctx.input("two_sided_emission")?;
     let cam: Option<Arc<Camera>> = ctx.input_opt("camera")?;
     let path = ctx.input_path(&p);
-    let mut scene =
-        load_obj_scene(&path, two).map_err(|e| NodeError::new(ErrorKind::Io, e).at("path"))?;
+    let mut scene = load_obj_scene(&path, two)
+        .map_err(|e| NodeError::new(ErrorKind::Io, e.to_string()).at("path"))?;
     scene.camera = cam.map(|c| (*c).clone());
     let ne = scene
         .objects

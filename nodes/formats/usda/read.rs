@@ -162,20 +162,7 @@ pub fn read_mesh_chain(
     apply_transform: bool,
 ) -> Result<Mesh, UsdaError> {
     let prim = chain[chain.len() - 1];
-    for a in &prim.attrs {
-        check_time_samples(a).or_else(|e| {
-            // Animation on attributes the mesh does not read is harmless.
-            let base = a.name.trim_end_matches(".timeSamples");
-            if ["points", "faceVertexCounts", "faceVertexIndices", "normals"].contains(&base)
-                || base.starts_with("primvars:")
-                || base.starts_with("xformOp:")
-            {
-                Err(e)
-            } else {
-                Ok(())
-            }
-        })?;
-    }
+    check_mesh_animation(prim)?;
     let need = |n: &str| {
         prim.attr(n).ok_or_else(|| {
             UsdaError::prim(
@@ -188,9 +175,93 @@ pub fn read_mesh_chain(
     let mut positions = tuples::<3>(pa)?;
     let ca = need("faceVertexCounts")?;
     let ia = need("faceVertexIndices")?;
+    let nv = positions.len();
+    let (c32, i32v) = face_topology(ca, ia, nv)?;
+    let sizes = (nv, i32v.len(), c32.len());
+    let mut normals = None;
+    let na = prim.attr("primvars:normals").or(prim.attr("normals"));
+    if let Some(a) = na {
+        let v = expand_indexed(prim, a, tuples::<3>(a)?)?;
+        normals = Some(domain_for(a, v, interpolation(a)?, sizes)?);
+    }
+    let mut uvs = None;
+    let ua = prim
+        .attr("primvars:UVMap")
+        .or(prim.attr("primvars:st"))
+        .or(prim.attr("primvars:uv"));
+    if let Some(a) = ua {
+        let v = expand_indexed(prim, a, tuples::<2>(a)?)?;
+        uvs = Some(domain_for(a, v, interpolation(a)?, sizes)?);
+    }
+    let mut colors = None;
+    if let Some(a) = prim.attr("primvars:displayColor") {
+        let v = expand_indexed(prim, a, tuples::<3>(a)?)?;
+        colors = Some(domain_for(a, v, interpolation(a)?, sizes)?);
+    }
+    let attributes = generic_primvars(prim, [ua, na], sizes)?;
+    // Left-handed meshes wind clockwise: reverse faces so outputs are counter-clockwise.
+    let left = prim
+        .attr("orientation")
+        .and_then(|a| a.value.as_ref())
+        .is_some_and(|v| matches!(v, UsdValue::Str(s) | UsdValue::Ident(s) if s == "leftHanded"));
+    let mut applied = None;
+    if apply_transform {
+        let m = world_transform(chain)?;
+        if m != Mat4::identity() {
+            applied = Some(m);
+            transform_points(&m, &mut positions);
+            if let Some(n) = normals.as_mut() {
+                transform_normals(&m, &mut n.values).ok_or_else(|| {
+                    UsdaError::prim(
+                        &prim.path,
+                        format!("the transform of '{}' is singular", prim.path),
+                    )
+                })?;
+            }
+        }
+    }
+    let mut mesh = Mesh::new(positions, c32, i32v).map_err(|e| match e {
+        MeshError::NonFinite { .. } => err(pa.line, e),
+        _ => err(ia.line, e),
+    })?;
+    mesh.normals = normals;
+    mesh.uvs = uvs;
+    mesh.colors = colors;
+    mesh.attributes = attributes;
+    mesh.skin = super::skel::read_binding(layer, chain, nv, applied.as_ref(), apply_transform)?
+        .map(std::sync::Arc::new);
+    if left {
+        reverse_faces(&mut mesh);
+    }
+    mesh.check()
+        .map_err(|e| UsdaError::prim(&prim.path, e.to_string()))?;
+    Ok(mesh)
+}
+
+/// Refuses time samples on the attributes a mesh reads (points, topology, normals, primvars,
+/// transform ops): a static mesh cannot honour them. Animation elsewhere is harmless.
+fn check_mesh_animation(prim: &UsdPrim) -> Result<(), UsdaError> {
+    for a in &prim.attrs {
+        check_time_samples(a).or_else(|e| {
+            let base = a.name.trim_end_matches(".timeSamples");
+            if ["points", "faceVertexCounts", "faceVertexIndices", "normals"].contains(&base)
+                || base.starts_with("primvars:")
+                || base.starts_with("xformOp:")
+            {
+                Err(e)
+            } else {
+                Ok(())
+            }
+        })?;
+    }
+    Ok(())
+}
+
+/// Checks `faceVertexCounts` and `faceVertexIndices` against each other and the `nv` points
+/// and returns them as `u32` (counts, indices).
+fn face_topology(ca: &UsdAttr, ia: &UsdAttr, nv: usize) -> Result<(Vec<u32>, Vec<u32>), UsdaError> {
     let counts = ints(ca)?;
     let idx = ints(ia)?;
-    let nv = positions.len();
     // Counts are checked before anything is sized from them (issue 23): each between 3 and
     // the number of indices, so `as u32` cannot truncate, and their sum with checked
     // arithmetic (an i64 sum of hostile counts overflowed).
@@ -234,38 +305,25 @@ pub fn read_mesh_chain(
             ),
         ));
     }
-    let nc = i32v.len();
-    let nf = c32.len();
-    let sizes = (nv, nc, nf);
-    let mut normals = None;
-    let na = prim.attr("primvars:normals").or(prim.attr("normals"));
-    if let Some(a) = na {
-        let v = expand_indexed(prim, a, tuples::<3>(a)?)?;
-        normals = Some(domain_for(a, v, interpolation(a)?, sizes)?);
-    }
-    let mut uvs = None;
-    let ua = prim
-        .attr("primvars:UVMap")
-        .or(prim.attr("primvars:st"))
-        .or(prim.attr("primvars:uv"));
-    if let Some(a) = ua {
-        let v = expand_indexed(prim, a, tuples::<2>(a)?)?;
-        uvs = Some(domain_for(a, v, interpolation(a)?, sizes)?);
-    }
-    let mut colors = None;
-    if let Some(a) = prim.attr("primvars:displayColor") {
-        let v = expand_indexed(prim, a, tuples::<3>(a)?)?;
-        colors = Some(domain_for(a, v, interpolation(a)?, sizes)?);
-    }
+    Ok((c32, i32v))
+}
+
+/// The mesh's other per-element primvars (float, int, 2- and 3-vectors) as named attributes;
+/// `taken` are the UV and normal primvars already read, skipped here with the display colour,
+/// index arrays, the skeleton binding and multi-influence primvars.
+fn generic_primvars(
+    prim: &UsdPrim,
+    taken: [Option<&UsdAttr>; 2],
+    sizes: (usize, usize, usize),
+) -> Result<std::collections::BTreeMap<String, AttributeData>, UsdaError> {
     let mut attributes = std::collections::BTreeMap::new();
     for a in &prim.attrs {
         let Some(name) = a.name.strip_prefix("primvars:") else {
             continue;
         };
         if name.ends_with(":indices")
-            || name.starts_with("skel:") // the skeleton binding, read below
-            || ua.is_some_and(|u| std::ptr::eq(u, a))
-            || na.is_some_and(|u| std::ptr::eq(u, a))
+            || name.starts_with("skel:") // the skeleton binding, read by skel::read_binding
+            || taken.iter().any(|t| t.is_some_and(|u| std::ptr::eq(u, a)))
             || name == "displayColor"
             || a.value.is_none()
         {
@@ -301,43 +359,7 @@ pub fn read_mesh_chain(
         };
         attributes.insert(name.to_string(), data);
     }
-    // Left-handed meshes wind clockwise: reverse faces so outputs are counter-clockwise.
-    let left = prim
-        .attr("orientation")
-        .and_then(|a| a.value.as_ref())
-        .is_some_and(|v| matches!(v, UsdValue::Str(s) | UsdValue::Ident(s) if s == "leftHanded"));
-    let mut applied = None;
-    if apply_transform {
-        let m = world_transform(chain)?;
-        if m != Mat4::identity() {
-            applied = Some(m);
-            transform_points(&m, &mut positions);
-            if let Some(n) = normals.as_mut() {
-                transform_normals(&m, &mut n.values).ok_or_else(|| {
-                    UsdaError::prim(
-                        &prim.path,
-                        format!("the transform of '{}' is singular", prim.path),
-                    )
-                })?;
-            }
-        }
-    }
-    let mut mesh = Mesh::new(positions, c32, i32v).map_err(|e| match e {
-        MeshError::NonFinite { .. } => err(pa.line, e),
-        _ => err(ia.line, e),
-    })?;
-    mesh.normals = normals;
-    mesh.uvs = uvs;
-    mesh.colors = colors;
-    mesh.attributes = attributes;
-    mesh.skin = super::skel::read_binding(layer, chain, nv, applied.as_ref(), apply_transform)?
-        .map(std::sync::Arc::new);
-    if left {
-        reverse_faces(&mut mesh);
-    }
-    mesh.check()
-        .map_err(|e| UsdaError::prim(&prim.path, e.to_string()))?;
-    Ok(mesh)
+    Ok(attributes)
 }
 
 /// Reverses the winding of every face, carrying per-corner data along.

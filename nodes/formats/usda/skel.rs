@@ -135,6 +135,40 @@ fn skeleton_from_chain(layer: &UsdLayer, chain: &[&UsdPrim]) -> Result<Skeleton,
             ),
         ));
     }
+    let parents = joint_parents(ja, &paths)?;
+    let rest = rest_transforms(prim, ba, &paths, &bind, &parents)?;
+    let joints = paths
+        .into_iter()
+        .zip(parents)
+        .zip(bind.into_iter().zip(rest))
+        .map(|((path, parent), (bind, rest))| Joint {
+            path,
+            parent,
+            bind,
+            rest,
+        })
+        .collect();
+    let mut skel = Skeleton {
+        prim: prim.path.clone(),
+        joints,
+        animation: None,
+    };
+    if let Some((_, a)) = inherited_rel(chain, "skel:animationSource") {
+        let target = rel_target(a)?;
+        let achain = chain_to(layer, &target).ok_or_else(|| {
+            err(
+                a.line,
+                format!("skel:animationSource names '{target}', which does not exist"),
+            )
+        })?;
+        skel.animation = Some(read_animation(achain[achain.len() - 1], &skel)?);
+    }
+    Ok(skel)
+}
+
+/// Each joint's parent index: the nearest ancestor path that is itself a joint
+/// (UsdSkelTopology). Refuses repeated joints and a joint listed before its parent.
+fn joint_parents(ja: &UsdAttr, paths: &[String]) -> Result<Vec<Option<usize>>, UsdaError> {
     let mut parents = Vec::with_capacity(paths.len());
     for (i, p) in paths.iter().enumerate() {
         if paths[..i].contains(p) {
@@ -158,7 +192,19 @@ fn skeleton_from_chain(layer: &UsdLayer, chain: &[&UsdPrim]) -> Result<Skeleton,
         }
         parents.push(parent);
     }
-    let rest = match prim.attr("restTransforms") {
+    Ok(parents)
+}
+
+/// The joints' rest transforms (local): `restTransforms` when authored, else derived from the
+/// bind transforms.
+fn rest_transforms(
+    prim: &UsdPrim,
+    ba: &UsdAttr,
+    paths: &[String],
+    bind: &[RowMatrix],
+    parents: &[Option<usize>],
+) -> Result<Vec<RowMatrix>, UsdaError> {
+    Ok(match prim.attr("restTransforms") {
         Some(ra) => {
             let r = matrices(ra)?;
             if r.len() != paths.len() {
@@ -196,34 +242,7 @@ fn skeleton_from_chain(layer: &UsdLayer, chain: &[&UsdPrim]) -> Result<Skeleton,
             }
             r
         }
-    };
-    let joints = paths
-        .into_iter()
-        .zip(parents)
-        .zip(bind.into_iter().zip(rest))
-        .map(|((path, parent), (bind, rest))| Joint {
-            path,
-            parent,
-            bind,
-            rest,
-        })
-        .collect();
-    let mut skel = Skeleton {
-        prim: prim.path.clone(),
-        joints,
-        animation: None,
-    };
-    if let Some((_, a)) = inherited_rel(chain, "skel:animationSource") {
-        let target = rel_target(a)?;
-        let achain = chain_to(layer, &target).ok_or_else(|| {
-            err(
-                a.line,
-                format!("skel:animationSource names '{target}', which does not exist"),
-            )
-        })?;
-        skel.animation = Some(read_animation(achain[achain.len() - 1], &skel)?);
-    }
-    Ok(skel)
+    })
 }
 
 /// An attribute's track: its `timeSamples` when authored, else its default value.
@@ -405,94 +424,8 @@ pub fn read_binding(
     let wa = prim.attr("primvars:skel:jointWeights").ok_or_else(|| {
         here("is bound to a skeleton but has no primvars:skel:jointWeights".into())
     })?;
-    let size = |a: &UsdAttr| -> Result<usize, UsdaError> {
-        match a.meta.iter().find(|(k, _)| k == "elementSize") {
-            None => Ok(1),
-            Some((_, UsdValue::Num(n))) if *n >= 1.0 && n.fract() == 0.0 && *n < 1e6 => {
-                Ok(*n as usize)
-            }
-            Some((_, v)) => Err(err(a.line, format!("bad elementSize {v:?}"))),
-        }
-    };
-    let constant = |a: &UsdAttr| {
-        a.meta.iter().any(|(k, v)| {
-            k == "interpolation"
-                && matches!(v, UsdValue::Str(s) | UsdValue::Ident(s) if s == "constant")
-        })
-    };
-    let k = size(ia)?;
-    if size(wa)? != k {
-        return Err(err(
-            wa.line,
-            format!(
-                "jointWeights has elementSize {} but jointIndices has {k}",
-                size(wa)?
-            ),
-        ));
-    }
-    let mut idx = ints(ia)?;
-    let mut w = floats(wa)?;
-    if idx.len() != w.len() {
-        return Err(err(
-            wa.line,
-            format!(
-                "'{}' has {} jointWeights but {} jointIndices",
-                prim.path,
-                w.len(),
-                idx.len()
-            ),
-        ));
-    }
-    let want = if constant(ia) { k } else { nv * k };
-    if idx.len() != want {
-        return Err(err(
-            ia.line,
-            format!(
-                "jointIndices has {} values; {} points with elementSize {k} need {want}",
-                idx.len(),
-                if constant(ia) { 1 } else { nv }
-            ),
-        ));
-    }
-    if constant(ia) {
-        idx = idx.repeat(nv);
-        w = w.repeat(nv);
-    }
-    // The mesh's own joint order (`skel:joints`) maps its indices onto the skeleton's.
-    let map: Option<Vec<usize>> = match inherited_rel(chain, "skel:joints") {
-        None => None,
-        Some((_, a)) => Some(
-            tokens(a)?
-                .iter()
-                .map(|t| {
-                    skeleton.joint_index(t).ok_or_else(|| {
-                        err(
-                            a.line,
-                            format!(
-                                "skel:joints names '{t}', which Skeleton '{}' does not have",
-                                skeleton.prim
-                            ),
-                        )
-                    })
-                })
-                .collect::<Result<_, _>>()?,
-        ),
-    };
-    let nj = map.as_ref().map_or(skeleton.joints.len(), |m| m.len());
-    let mut joint_indices = Vec::with_capacity(idx.len());
-    for (i, &j) in idx.iter().enumerate() {
-        if j < 0 || j as usize >= nj {
-            return Err(err(
-                ia.line,
-                format!(
-                    "jointIndices[{i}] = {j} is out of range: Skeleton '{}' has {nj} joints",
-                    skeleton.prim
-                ),
-            ));
-        }
-        let j = map.as_ref().map_or(j as usize, |m| m[j as usize]);
-        joint_indices.push(j as u32);
-    }
+    let (k, idx, w) = influences(prim, ia, wa, nv)?;
+    let joint_indices = skeleton_joint_indices(chain, &skeleton, ia, &idx)?;
     let mut geom_bind = match prim.attr("primvars:skel:geomBindTransform") {
         Some(a) => {
             let v = a
@@ -528,4 +461,116 @@ pub fn read_binding(
         geom_bind: to_rows(&geom_bind),
         skel_to_world: to_rows(&skel_to_world),
     }))
+}
+
+/// A skinning primvar's `elementSize` (influences per point), 1 when not authored.
+fn skin_element_size(a: &UsdAttr) -> Result<usize, UsdaError> {
+    match a.meta.iter().find(|(k, _)| k == "elementSize") {
+        None => Ok(1),
+        Some((_, UsdValue::Num(n))) if *n >= 1.0 && n.fract() == 0.0 && *n < 1e6 => Ok(*n as usize),
+        Some((_, v)) => Err(err(a.line, format!("bad elementSize {v:?}"))),
+    }
+}
+
+/// Whether a primvar's interpolation is `constant` (one value for every point).
+fn is_constant(a: &UsdAttr) -> bool {
+    a.meta.iter().any(|(k, v)| {
+        k == "interpolation"
+            && matches!(v, UsdValue::Str(s) | UsdValue::Ident(s) if s == "constant")
+    })
+}
+
+/// The influences per point `k` and the joint indices and weights of the `nv` points
+/// (`k` each, constant interpolation broadcast), checked against each other.
+fn influences(
+    prim: &UsdPrim,
+    ia: &UsdAttr,
+    wa: &UsdAttr,
+    nv: usize,
+) -> Result<(usize, Vec<i64>, Vec<f64>), UsdaError> {
+    let k = skin_element_size(ia)?;
+    if skin_element_size(wa)? != k {
+        return Err(err(
+            wa.line,
+            format!(
+                "jointWeights has elementSize {} but jointIndices has {k}",
+                skin_element_size(wa)?
+            ),
+        ));
+    }
+    let mut idx = ints(ia)?;
+    let mut w = floats(wa)?;
+    if idx.len() != w.len() {
+        return Err(err(
+            wa.line,
+            format!(
+                "'{}' has {} jointWeights but {} jointIndices",
+                prim.path,
+                w.len(),
+                idx.len()
+            ),
+        ));
+    }
+    let want = if is_constant(ia) { k } else { nv * k };
+    if idx.len() != want {
+        return Err(err(
+            ia.line,
+            format!(
+                "jointIndices has {} values; {} points with elementSize {k} need {want}",
+                idx.len(),
+                if is_constant(ia) { 1 } else { nv }
+            ),
+        ));
+    }
+    if is_constant(ia) {
+        idx = idx.repeat(nv);
+        w = w.repeat(nv);
+    }
+    Ok((k, idx, w))
+}
+
+/// The skeleton joint of each influence: the mesh's own joint order (`skel:joints`, inherited)
+/// maps its indices onto the skeleton's; each index is checked against that order.
+fn skeleton_joint_indices(
+    chain: &[&UsdPrim],
+    skeleton: &Skeleton,
+    ia: &UsdAttr,
+    idx: &[i64],
+) -> Result<Vec<u32>, UsdaError> {
+    // The mesh's own joint order (`skel:joints`) maps its indices onto the skeleton's.
+    let map: Option<Vec<usize>> = match inherited_rel(chain, "skel:joints") {
+        None => None,
+        Some((_, a)) => Some(
+            tokens(a)?
+                .iter()
+                .map(|t| {
+                    skeleton.joint_index(t).ok_or_else(|| {
+                        err(
+                            a.line,
+                            format!(
+                                "skel:joints names '{t}', which Skeleton '{}' does not have",
+                                skeleton.prim
+                            ),
+                        )
+                    })
+                })
+                .collect::<Result<_, _>>()?,
+        ),
+    };
+    let nj = map.as_ref().map_or(skeleton.joints.len(), |m| m.len());
+    let mut joint_indices = Vec::with_capacity(idx.len());
+    for (i, &j) in idx.iter().enumerate() {
+        if j < 0 || j as usize >= nj {
+            return Err(err(
+                ia.line,
+                format!(
+                    "jointIndices[{i}] = {j} is out of range: Skeleton '{}' has {nj} joints",
+                    skeleton.prim
+                ),
+            ));
+        }
+        let j = map.as_ref().map_or(j as usize, |m| m[j as usize]);
+        joint_indices.push(j as u32);
+    }
+    Ok(joint_indices)
 }

@@ -89,6 +89,17 @@ pub fn write_usda(mesh: &Mesh, prim_path: &str, w: &mut dyn Write) -> std::io::R
         writeln!(w, "{ind}{{")?;
     }
     let ind = "    ".repeat(n);
+    write_mesh_body(mesh, &ind, w)?;
+    writeln!(w, "{ind}uniform token subdivisionScheme = \"none\"")?;
+    for d in (0..n).rev() {
+        writeln!(w, "{}}}", "    ".repeat(d))?;
+    }
+    Ok(())
+}
+
+/// The `Mesh` prim's attributes, indented by `ind`: extent, topology, normals, points,
+/// display colour, UVs, then the named attributes as primvars.
+fn write_mesh_body(mesh: &Mesh, ind: &str, w: &mut dyn Write) -> std::io::Result<()> {
     let (lo, hi) = mesh.bounds();
     write!(w, "{ind}float3[] extent = ")?;
     write_tuples(w, &[lo, hi])?;
@@ -129,6 +140,11 @@ pub fn write_usda(mesh: &Mesh, prim_path: &str, w: &mut dyn Write) -> std::io::R
             interp_name(uv.domain)
         )?;
     }
+    write_named_primvars(mesh, ind, w)
+}
+
+/// The mesh's named attributes as double/int primvars with their interpolation.
+fn write_named_primvars(mesh: &Mesh, ind: &str, w: &mut dyn Write) -> std::io::Result<()> {
     for (name, a) in &mesh.attributes {
         let name = usd_identifier(name);
         let d = match a {
@@ -158,10 +174,6 @@ pub fn write_usda(mesh: &Mesh, prim_path: &str, w: &mut dyn Write) -> std::io::R
             " (\n{ind}    interpolation = \"{}\"\n{ind})",
             interp_name(d)
         )?;
-    }
-    writeln!(w, "{ind}uniform token subdivisionScheme = \"none\"")?;
-    for d in (0..n).rev() {
-        writeln!(w, "{}}}", "    ".repeat(d))?;
     }
     Ok(())
 }

@@ -217,10 +217,10 @@ struct ShardArgs {
 
 impl ShardArgs {
     /// The shard asked for, from the command line and the process environment.
-    fn resolve(&self) -> Result<Option<crate::shard::Shard>, String> {
+    fn resolve(&self) -> Result<Option<crate::shard::Shard>, crate::shard::ShardError> {
         match (&self.shard, self.shards) {
             (None, None) => Ok(None),
-            (None, Some(_)) => Err("--shards needs --shard auto (or --shard I/N)".into()),
+            (None, Some(_)) => Err(crate::shard::ShardError::ShardsAlone),
             (Some(s), n) => crate::shard::Shard::resolve(s, n, |k| std::env::var(k).ok()).map(Some),
         }
     }

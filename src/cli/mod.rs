@@ -8,6 +8,7 @@
 mod chart;
 mod describe;
 mod dot;
+mod error;
 #[cfg(feature = "render")]
 mod f3d_project;
 mod import_f3d;
@@ -28,6 +29,7 @@ use std::path::PathBuf;
 
 pub use crate::graph::{apply_sets, parse_frames};
 pub use describe::describe;
+pub use error::FileError;
 pub use run::profile_json;
 pub use validate::{load_valid, load_valid_with, read_aliases};
 

@@ -44,7 +44,7 @@ pub enum SweepError {
     },
     /// The provenance of a written file was not recorded.
     #[error("{0}")]
-    Record(String),
+    Record(cgnodes_api::node::ProvenanceError),
 }
 
 /// A measure (`node.socket[:column[:summary]]`) that could not be read from a run.

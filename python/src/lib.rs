@@ -77,7 +77,7 @@ fn run_job(job: &Job) -> Result<Outputs, Failure> {
         )
     }
     .map_err(|e| graph_problem(e.to_string()))?;
-    apply_sets(&mut g, &job.sets).map_err(graph_problem)?;
+    apply_sets(&mut g, &job.sets).map_err(|e| graph_problem(e.to_string()))?;
     if let Some(ts) = &job.targets {
         for t in ts {
             if !g.spec.nodes.contains_key(t) {

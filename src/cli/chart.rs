@@ -1,9 +1,40 @@
 //! `cgnodes chart`: charts columns of one or more CSV files (a sweep beside a peer's
 //! results, say), one series per file or per value of a column.
 
-use super::{ChartArgs, EXIT_INVALID};
-use crate::chart::{draw, Chart, Series};
+use super::{ChartArgs, FileError, EXIT_INVALID};
+use crate::chart::{draw, Chart, ChartError, Series};
 use crate::io::csv::read;
+use std::path::PathBuf;
+
+/// Why `cgnodes chart` could not chart its CSV files.
+#[derive(Debug, thiserror::Error)]
+enum ChartCmdError {
+    /// A CSV file could not be read.
+    #[error(transparent)]
+    File(#[from] FileError),
+    /// A CSV file that does not parse (the CSV reader's message).
+    #[error("{}: {message}", .path.display())]
+    Csv {
+        /// The file.
+        path: PathBuf,
+        /// The reader's message.
+        message: String,
+    },
+    /// A CSV file without a header.
+    #[error("{}: empty", .0.display())]
+    Empty(PathBuf),
+    /// A column named by `--x`, `--y` or `--series` that the file lacks.
+    #[error("{}: no column '{name}'", .path.display())]
+    NoColumn {
+        /// The file.
+        path: PathBuf,
+        /// The column.
+        name: String,
+    },
+    /// The chart could not be drawn.
+    #[error("{0}")]
+    Draw(#[from] ChartError),
+}
 
 /// `cgnodes chart CSV... --x X --y Y --plot FILE`.
 pub(super) fn cmd(a: &ChartArgs) -> i32 {
@@ -16,7 +47,7 @@ pub(super) fn cmd(a: &ChartArgs) -> i32 {
     }
 }
 
-fn chart_from_csv(a: &ChartArgs) -> Result<(), String> {
+fn chart_from_csv(a: &ChartArgs) -> Result<(), ChartCmdError> {
     let mut chart = Chart {
         title: a.title.clone(),
         x_label: a.x.clone(),
@@ -26,13 +57,18 @@ fn chart_from_csv(a: &ChartArgs) -> Result<(), String> {
         ..Default::default()
     };
     for f in &a.csv {
-        let text = std::fs::read_to_string(f).map_err(|e| format!("{}: {e}", f.display()))?;
+        let text = std::fs::read_to_string(f).map_err(FileError::at(f))?;
         let csv = read(&text, false, false)
-            .map_err(|e| format!("{}: {e}", f.display()))?
-            .ok_or_else(|| format!("{}: empty", f.display()))?;
+            .map_err(|message| ChartCmdError::Csv {
+                path: f.clone(),
+                message,
+            })?
+            .ok_or_else(|| ChartCmdError::Empty(f.clone()))?;
         let col = |name: &str| {
-            csv.column(name)
-                .ok_or_else(|| format!("{}: no column '{name}'", f.display()))
+            csv.column(name).ok_or_else(|| ChartCmdError::NoColumn {
+                path: f.clone(),
+                name: name.into(),
+            })
         };
         let (ix, iy) = (col(&a.x)?, col(&a.y)?);
         let is = a.series.as_deref().map(col).transpose()?;
@@ -68,5 +104,5 @@ fn chart_from_csv(a: &ChartArgs) -> Result<(), String> {
     for s in &mut chart.series {
         s.points.sort_by(|p, q| p.0.total_cmp(&q.0));
     }
-    draw(&chart, &a.plot).map_err(|e| e.to_string())
+    Ok(draw(&chart, &a.plot)?)
 }

@@ -8,6 +8,7 @@
 mod chart;
 mod describe;
 mod dot;
+mod error;
 #[cfg(feature = "render")]
 mod f3d_project;
 mod import_f3d;
@@ -28,6 +29,7 @@ use std::path::PathBuf;
 
 pub use crate::graph::{apply_sets, parse_frames};
 pub use describe::describe;
+pub use error::FileError;
 pub use run::profile_json;
 pub use validate::{load_valid, load_valid_with, read_aliases};
 
@@ -217,10 +219,10 @@ struct ShardArgs {
 
 impl ShardArgs {
     /// The shard asked for, from the command line and the process environment.
-    fn resolve(&self) -> Result<Option<crate::shard::Shard>, String> {
+    fn resolve(&self) -> Result<Option<crate::shard::Shard>, crate::shard::ShardError> {
         match (&self.shard, self.shards) {
             (None, None) => Ok(None),
-            (None, Some(_)) => Err("--shards needs --shard auto (or --shard I/N)".into()),
+            (None, Some(_)) => Err(crate::shard::ShardError::ShardsAlone),
             (Some(s), n) => crate::shard::Shard::resolve(s, n, |k| std::env::var(k).ok()).map(Some),
         }
     }

@@ -179,9 +179,23 @@ fn run_graph(
         profile.push(profile_json(&report));
         collected.add(&report);
     }
-    // A shard's report would cover only its frames, and shards share one output folder.
+    let code = code.max(finish(registry, args, exec, &graph, &collected, &profile));
+    (code, Some(graph))
+}
+
+/// After the frames: the run report (not for a shard: it would cover only its frames, and
+/// shards share one output folder), the disk cache trimmed to `--cache-size`, and
+/// `--profile-json`. Returns `EXIT_NODE_FAILED` when the profile could not be written, else 0.
+fn finish(
+    registry: &Registry,
+    args: &RunArgs,
+    exec: &Executor,
+    graph: &crate::validate::ValidGraph,
+    collected: &crate::report::Collector,
+    profile: &[serde_json::Value],
+) -> i32 {
     if !args.no_report && args.shard.shard.is_none() {
-        match crate::report::write_run_report(&graph, &collected, &args.out, registry.mesh_hooks) {
+        match crate::report::write_run_report(graph, collected, &args.out, registry.mesh_hooks) {
             Ok(p) if !args.quiet => eprintln!("report: {}", p.display()),
             Ok(_) => {}
             Err(e) => eprintln!("warning: report not written: {e}"),
@@ -198,13 +212,13 @@ fn run_graph(
         }
     }
     if let Some(p) = &args.profile_json {
-        let text = serde_json::to_string_pretty(&profile).unwrap_or_default();
+        let text = serde_json::to_string_pretty(profile).unwrap_or_default();
         if let Err(e) = crate::io::write_atomic(p, |w| w.write_all(text.as_bytes())) {
             eprintln!("error: {}: {e}", p.display());
-            code = code.max(EXIT_NODE_FAILED);
+            return EXIT_NODE_FAILED;
         }
     }
-    (code, Some(graph))
+    0
 }
 
 /// This process's frames under `--shard I/N` (a contiguous block of `f0..=f1`), `None` when

@@ -82,9 +82,9 @@ pub fn load_valid(registry: &Registry, path: &Path, sets: &[String]) -> Result<V
 }
 
 /// Reads Framework3D aliases (`--f3d-aliases FILE`).
-pub fn read_aliases(p: &Path) -> Result<Aliases, String> {
-    let t = std::fs::read_to_string(p).map_err(|e| format!("{}: {e}", p.display()))?;
-    serde_json::from_str(&t).map_err(|e| format!("{}: {e}", p.display()))
+pub fn read_aliases(p: &Path) -> Result<Aliases, super::FileError> {
+    let t = std::fs::read_to_string(p).map_err(super::FileError::at(p))?;
+    serde_json::from_str(&t).map_err(super::FileError::at(p))
 }
 
 /// Like `load_valid`, with aliases for custom Framework3D node names; also returns the

@@ -36,10 +36,15 @@ pub fn normalize(path: &Path) -> PathBuf {
     }
 }
 
+/// The system's file watcher could not be started.
+#[derive(Debug, thiserror::Error)]
+#[error("cannot watch files: {0}")]
+pub struct WatchError(notify::Error);
+
 impl FileWatch {
     /// A watch that calls `on_change(path)` from the watcher's thread for every change to a
     /// wanted path (nothing is wanted until `set`).
-    pub fn new(on_change: impl Fn(PathBuf) + Send + 'static) -> Result<FileWatch, String> {
+    pub fn new(on_change: impl Fn(PathBuf) + Send + 'static) -> Result<FileWatch, WatchError> {
         let wanted: Arc<Mutex<BTreeSet<PathBuf>>> = Arc::default();
         let w = wanted.clone();
         let watcher = notify::recommended_watcher(move |ev: notify::Result<notify::Event>| {
@@ -57,7 +62,7 @@ impl FileWatch {
                 }
             }
         })
-        .map_err(|e| format!("cannot watch files: {e}"))?;
+        .map_err(WatchError)?;
         Ok(FileWatch {
             watcher,
             dirs: BTreeSet::new(),

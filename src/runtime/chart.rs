@@ -175,6 +175,39 @@ fn legend_corner(chart: &Chart, x: (f64, f64), y: (f64, f64)) -> SeriesLabelPosi
     best.0.clone()
 }
 
+/// The points of series `s` that can be drawn: finite, and positive on a log axis.
+fn plotted(chart: &Chart, s: &Series) -> Vec<(f64, f64)> {
+    s.points
+        .iter()
+        .copied()
+        .filter(|p| {
+            p.0.is_finite()
+                && p.1.is_finite()
+                && (!chart.log_x || p.0 > 0.0)
+                && (!chart.log_y || p.1 > 0.0)
+        })
+        .collect()
+}
+
+/// Where the failed runs' crosses go: at their x, in a row just below the top of the y range
+/// `(y0, y1)`.
+fn failure_marks(chart: &Chart, (y0, y1): (f64, f64)) -> Vec<(f64, f64)> {
+    let top = if chart.log_y {
+        y1 / 1.2
+    } else {
+        y1 - 0.02 * (y1 - y0)
+    };
+    chart
+        .failures
+        .iter()
+        .filter(|f| f.0.is_finite() && (!chart.log_x || f.0 > 0.0))
+        .map(|f| (f.0, top))
+        .collect()
+}
+
+/// Draws `chart` on `root`: axes, a line per series, crosses for failed runs, the legend.
+/// The body is a macro because each linear/log combination of the axes is another
+/// coordinate type.
 fn draw_on<DB: DrawingBackend>(
     chart: &Chart,
     root: &DrawingArea<DB, Shift>,
@@ -217,17 +250,7 @@ where
                 .map_err(e)?;
             for (i, s) in chart.series.iter().enumerate() {
                 let color = Palette99::pick(i).to_rgba();
-                let pts: Vec<(f64, f64)> = s
-                    .points
-                    .iter()
-                    .copied()
-                    .filter(|p| {
-                        p.0.is_finite()
-                            && p.1.is_finite()
-                            && (!chart.log_x || p.0 > 0.0)
-                            && (!chart.log_y || p.1 > 0.0)
-                    })
-                    .collect();
+                let pts = plotted(chart, s);
                 ctx.draw_series(LineSeries::new(pts.clone(), color.stroke_width(2)))
                     .map_err(e)?
                     .label(s.label.as_str())
@@ -238,17 +261,7 @@ where
                     .map_err(e)?;
             }
             if !chart.failures.is_empty() {
-                let top = if chart.log_y {
-                    y1 / 1.2
-                } else {
-                    y1 - 0.02 * (y1 - y0)
-                };
-                let pts: Vec<(f64, f64)> = chart
-                    .failures
-                    .iter()
-                    .filter(|f| f.0.is_finite() && (!chart.log_x || f.0 > 0.0))
-                    .map(|f| (f.0, top))
-                    .collect();
+                let pts = failure_marks(chart, (y0, y1));
                 ctx.draw_series(pts.iter().map(|&p| Cross::new(p, 7, RED.stroke_width(3))))
                     .map_err(e)?
                     .label(format!("failed ({})", chart.failures.len()))

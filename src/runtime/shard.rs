@@ -15,6 +15,74 @@ pub struct Shard {
     pub count: usize,
 }
 
+/// Why `--shard`/`--shards` (or the engine's environment for `--shard auto`) give no shard.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum ShardError {
+    /// `N` is 0.
+    #[error("--shard: the number of shards must be at least 1")]
+    NoShards,
+    /// `I >= N`.
+    #[error("--shard {index}/{count}: the shard index counts from 0 and must be below {count}")]
+    IndexTooLarge {
+        /// The index given.
+        index: usize,
+        /// The number of shards.
+        count: usize,
+    },
+    /// Not of the form `I/N`.
+    #[error("--shard '{0}': expected I/N (for example 0/4) or auto")]
+    Syntax(String),
+    /// `I` or `N` is not a whole number.
+    #[error("--shard '{0}': expected I/N with whole numbers I >= 0, N >= 1")]
+    NotWhole(String),
+    /// `--shard I/N` with a `--shards` other than `N`.
+    #[error("--shard {shard} and --shards {shards} disagree on the number of shards")]
+    Disagree {
+        /// The shard given.
+        shard: Shard,
+        /// `--shards`.
+        shards: usize,
+    },
+    /// `--shards` without `--shard`.
+    #[error("--shards needs --shard auto (or --shard I/N)")]
+    ShardsAlone,
+    /// An environment variable that is not a whole number.
+    #[error("--shard auto: {name}='{value}' is not a whole number >= 0")]
+    EnvNotWhole {
+        /// The variable.
+        name: String,
+        /// Its value.
+        value: String,
+    },
+    /// A Slurm task id without the array's size.
+    #[error("--shard auto: SLURM_ARRAY_TASK_ID is set but neither SLURM_ARRAY_TASK_COUNT nor SLURM_ARRAY_TASK_MIN/MAX")]
+    SlurmNoCount,
+    /// A Slurm task id off the array's min and step.
+    #[error("--shard auto: SLURM_ARRAY_TASK_ID={id} is not in the array (min {min}, step {step})")]
+    NotInArray {
+        /// `SLURM_ARRAY_TASK_ID`.
+        id: usize,
+        /// `SLURM_ARRAY_TASK_MIN`.
+        min: usize,
+        /// `SLURM_ARRAY_TASK_STEP`.
+        step: usize,
+    },
+    /// A Slurm array size other than `--shards`.
+    #[error("--shard auto: the Slurm array has {count} tasks but --shards says {shards}")]
+    SlurmDisagree {
+        /// The array's tasks.
+        count: usize,
+        /// `--shards`.
+        shards: usize,
+    },
+    /// A Kubernetes completion index without the number of shards.
+    #[error("--shard auto: JOB_COMPLETION_INDEX is set (a Kubernetes Indexed Job) but not the number of shards: give --shards N (the Job's completions) or set CGNODES_SHARDS")]
+    KubernetesNoCount,
+    /// `--shard auto` outside a job array.
+    #[error("--shard auto: no shard in the environment (SLURM_ARRAY_TASK_ID for a Slurm job array, JOB_COMPLETION_INDEX for a Kubernetes Indexed Job); give --shard I/N")]
+    NoEnvironment,
+}
+
 impl Default for Shard {
     fn default() -> Shard {
         Shard::ALL
@@ -32,27 +100,25 @@ impl Shard {
     pub const ALL: Shard = Shard { index: 0, count: 1 };
 
     /// A shard, checked: `count >= 1` and `index < count`.
-    pub fn new(index: usize, count: usize) -> Result<Shard, String> {
+    pub fn new(index: usize, count: usize) -> Result<Shard, ShardError> {
         if count == 0 {
-            return Err("--shard: the number of shards must be at least 1".into());
+            return Err(ShardError::NoShards);
         }
         if index >= count {
-            return Err(format!(
-                "--shard {index}/{count}: the shard index counts from 0 and must be below {count}"
-            ));
+            return Err(ShardError::IndexTooLarge { index, count });
         }
         Ok(Shard { index, count })
     }
 
     /// Parses `I/N` (`--shard 2/8`).
-    pub fn parse(s: &str) -> Result<Shard, String> {
+    pub fn parse(s: &str) -> Result<Shard, ShardError> {
         let (i, n) = s
             .split_once('/')
-            .ok_or_else(|| format!("--shard '{s}': expected I/N (for example 0/4) or auto"))?;
+            .ok_or_else(|| ShardError::Syntax(s.into()))?;
         let num = |t: &str| {
-            t.trim().parse::<usize>().map_err(|_| {
-                format!("--shard '{s}': expected I/N with whole numbers I >= 0, N >= 1")
-            })
+            t.trim()
+                .parse::<usize>()
+                .map_err(|_| ShardError::NotWhole(s.into()))
         };
         Shard::new(num(i)?, num(n)?)
     }
@@ -64,15 +130,16 @@ impl Shard {
         arg: &str,
         shards: Option<usize>,
         env: impl Fn(&str) -> Option<String>,
-    ) -> Result<Shard, String> {
+    ) -> Result<Shard, ShardError> {
         if arg.trim() == "auto" {
             Shard::from_env(shards, env)
         } else {
             let s = Shard::parse(arg)?;
             match shards {
-                Some(n) if n != s.count => Err(format!(
-                    "--shard {s} and --shards {n} disagree on the number of shards"
-                )),
+                Some(n) if n != s.count => Err(ShardError::Disagree {
+                    shard: s,
+                    shards: n,
+                }),
                 _ => Ok(s),
             }
         }
@@ -86,53 +153,47 @@ impl Shard {
     pub fn from_env(
         shards: Option<usize>,
         env: impl Fn(&str) -> Option<String>,
-    ) -> Result<Shard, String> {
-        let num =
-            |name: &str| -> Result<Option<usize>, String> {
-                match env(name) {
-                    None => Ok(None),
-                    Some(v) if v.trim().is_empty() => Ok(None),
-                    Some(v) => v.trim().parse::<usize>().map(Some).map_err(|_| {
-                        format!("--shard auto: {name}='{v}' is not a whole number >= 0")
-                    }),
+    ) -> Result<Shard, ShardError> {
+        let num = |name: &str| -> Result<Option<usize>, ShardError> {
+            match env(name) {
+                None => Ok(None),
+                Some(v) if v.trim().is_empty() => Ok(None),
+                Some(v) => {
+                    v.trim()
+                        .parse::<usize>()
+                        .map(Some)
+                        .map_err(|_| ShardError::EnvNotWhole {
+                            name: name.into(),
+                            value: v,
+                        })
                 }
-            };
+            }
+        };
         if let Some(id) = num("SLURM_ARRAY_TASK_ID")? {
             let min = num("SLURM_ARRAY_TASK_MIN")?.unwrap_or(0);
             let step = num("SLURM_ARRAY_TASK_STEP")?.unwrap_or(1).max(1);
             let count = match (num("SLURM_ARRAY_TASK_COUNT")?, num("SLURM_ARRAY_TASK_MAX")?) {
                 (Some(c), _) => c,
                 (None, Some(max)) if max >= min => (max - min) / step + 1,
-                _ => {
-                    return Err(
-                        "--shard auto: SLURM_ARRAY_TASK_ID is set but neither SLURM_ARRAY_TASK_COUNT nor SLURM_ARRAY_TASK_MIN/MAX"
-                            .into(),
-                    )
-                }
+                _ => return Err(ShardError::SlurmNoCount),
             };
             if id < min || (id - min) % step != 0 {
-                return Err(format!(
-                    "--shard auto: SLURM_ARRAY_TASK_ID={id} is not in the array (min {min}, step {step})"
-                ));
+                return Err(ShardError::NotInArray { id, min, step });
             }
             let s = Shard::new((id - min) / step, count)?;
             return match shards {
-                Some(n) if n != count => Err(format!(
-                    "--shard auto: the Slurm array has {count} tasks but --shards says {n}"
-                )),
+                Some(n) if n != count => Err(ShardError::SlurmDisagree { count, shards: n }),
                 _ => Ok(s),
             };
         }
         if let Some(i) = num("JOB_COMPLETION_INDEX")? {
             let n = match shards {
                 Some(n) => n,
-                None => num("CGNODES_SHARDS")?.ok_or(
-                    "--shard auto: JOB_COMPLETION_INDEX is set (a Kubernetes Indexed Job) but not the number of shards: give --shards N (the Job's completions) or set CGNODES_SHARDS",
-                )?,
+                None => num("CGNODES_SHARDS")?.ok_or(ShardError::KubernetesNoCount)?,
             };
             return Shard::new(i, n);
         }
-        Err("--shard auto: no shard in the environment (SLURM_ARRAY_TASK_ID for a Slurm job array, JOB_COMPLETION_INDEX for a Kubernetes Indexed Job); give --shard I/N".into())
+        Err(ShardError::NoEnvironment)
     }
 
     /// This shard's contiguous block of `0..len`: blocks of sizes differing by at most one,
@@ -232,12 +293,16 @@ mod tests {
         assert_eq!(Shard::parse("2/8"), Ok(Shard { index: 2, count: 8 }));
         assert_eq!(Shard::parse(" 0 / 1 "), Ok(Shard::ALL));
         for bad in ["3", "8/8", "1/0", "-1/4", "a/4", "1/b", "", "1/2/3"] {
-            let e = Shard::parse(bad).unwrap_err();
+            let e = Shard::parse(bad).unwrap_err().to_string();
             assert!(e.contains("--shard"), "{bad}: {e}");
         }
-        assert!(Shard::parse("8/8").unwrap_err().contains("below 8"));
+        assert!(Shard::parse("8/8")
+            .unwrap_err()
+            .to_string()
+            .contains("below 8"));
         assert!(Shard::resolve("1/4", Some(3), env(&[]))
             .unwrap_err()
+            .to_string()
             .contains("disagree"));
         assert_eq!(Shard::resolve("1/4", Some(4), env(&[])), Shard::new(1, 4));
     }
@@ -284,10 +349,12 @@ mod tests {
             ]
         )
         .unwrap_err()
+        .to_string()
         .contains("4 tasks"));
         // Slurm without a count.
         assert!(auto(None, &[("SLURM_ARRAY_TASK_ID", "0")])
             .unwrap_err()
+            .to_string()
             .contains("SLURM_ARRAY_TASK_COUNT"));
         assert!(auto(
             None,
@@ -297,6 +364,7 @@ mod tests {
             ]
         )
         .unwrap_err()
+        .to_string()
         .contains("whole number"));
         // Kubernetes with --shards, with CGNODES_SHARDS, and with neither.
         assert_eq!(
@@ -312,12 +380,14 @@ mod tests {
         );
         assert!(auto(None, &[("JOB_COMPLETION_INDEX", "1")])
             .unwrap_err()
+            .to_string()
             .contains("--shards N"));
         assert!(auto(Some(2), &[("JOB_COMPLETION_INDEX", "2")])
             .unwrap_err()
+            .to_string()
             .contains("below 2"));
         // Nothing set.
-        let e = auto(Some(4), &[]).unwrap_err();
+        let e = auto(Some(4), &[]).unwrap_err().to_string();
         assert!(e.contains("SLURM_ARRAY_TASK_ID") && e.contains("JOB_COMPLETION_INDEX"));
     }
 }

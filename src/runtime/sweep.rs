@@ -44,7 +44,7 @@ pub enum SweepError {
     },
     /// The provenance of a written file was not recorded.
     #[error("{0}")]
-    Record(String),
+    Record(cgnodes_api::node::ProvenanceError),
 }
 
 /// A measure (`node.socket[:column[:summary]]`) that could not be read from a run.
@@ -389,8 +389,8 @@ fn combinations(vary: &[Vary]) -> Vec<Vec<serde_json::Value>> {
 #[derive(Debug, thiserror::Error)]
 enum Invalid {
     /// An override does not apply.
-    #[error("{0}")]
-    Set(String),
+    #[error(transparent)]
+    Set(crate::graph::overrides::SetError),
     /// The first validation error.
     #[error(transparent)]
     Graph(Box<crate::validate::GraphError>),

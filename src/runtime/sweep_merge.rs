@@ -111,7 +111,7 @@ pub enum RowError {
     #[error("{fields} fields, the header has {header}")]
     Fields { fields: usize, header: usize },
     #[error("{0}")]
-    Shard(String),
+    Shard(crate::shard::ShardError),
     #[error("rows of two shards in one part")]
     TwoShards,
     #[error("{column} '{text}' is not a whole number")]

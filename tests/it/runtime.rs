@@ -609,9 +609,11 @@ fn set_overrides_reach_the_node_and_are_type_checked() {
     // Linked sockets and unknown nodes are refused.
     assert!(cgnodes::cli::apply_sets(&mut g, &["area.a=2".into()])
         .unwrap_err()
+        .to_string()
         .contains("linked"));
     assert!(cgnodes::cli::apply_sets(&mut g, &["radios.value=2".into()])
         .unwrap_err()
+        .to_string()
         .contains("did you mean 'radius'"));
 }
 

@@ -42,4 +42,4 @@ pub use memory::{
     bytes_of, default_memory_limit, format_size, parse_size, physical_memory,
     FALLBACK_MEMORY_LIMIT, MAX_MEMORY_ENV,
 };
-pub use provenance::Provenance;
+pub use provenance::{Provenance, ProvenanceError};

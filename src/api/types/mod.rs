@@ -22,7 +22,7 @@ pub use scene::{Camera, FovAxis, Light, LookAt, Material, MaterialKind, Scene, S
 pub use skeleton::{
     Joint, RowMatrix, SkelAnimation, Skeleton, SkinBinding, Track, IDENTITY as IDENTITY_MATRIX,
 };
-pub use topology::{grid_triangles, grid_triangles_with, Topology};
+pub use topology::{grid_triangles, grid_triangles_with, NotADisk, Topology};
 pub use value::{Color, FromValue, SocketType, Typed, Value};
 
 /// The `Any` socket type marker (`b.add_input::<value_any::Any>("value")`).

@@ -152,47 +152,58 @@ impl Topology {
 
     /// Checks that the mesh is a topological disk (one component, manifold, one boundary loop,
     /// Euler characteristic 1), saying what is wrong otherwise.
-    pub fn check_disk(&self) -> Result<(), String> {
+    pub fn check_disk(&self) -> Result<(), NotADisk> {
         if !self.nonmanifold_edges.is_empty() || !self.nonmanifold_vertices.is_empty() {
-            return Err(format!(
-                "mesh is not manifold ({} edges with more than two faces, {} non-manifold vertices); a disk is needed",
-                self.nonmanifold_edges.len(),
-                self.nonmanifold_vertices.len()
-            ));
+            return Err(NotADisk::NonManifold {
+                edges: self.nonmanifold_edges.len(),
+                vertices: self.nonmanifold_vertices.len(),
+            });
         }
         if !self.misoriented_edges.is_empty() {
-            return Err(format!(
-                "mesh faces are inconsistently oriented ({} edges); a disk is needed",
-                self.misoriented_edges.len()
-            ));
+            return Err(NotADisk::Misoriented(self.misoriented_edges.len()));
         }
         if self.num_face_components() != 1 {
-            return Err(format!(
-                "mesh has {} connected components; a disk is needed",
-                self.num_face_components()
-            ));
+            return Err(NotADisk::Components(self.num_face_components()));
         }
         match self.boundary_loops.len() {
-            0 => {
-                return Err(
-                    "mesh is closed (no boundary loop); a disk is needed: cut it open first".into(),
-                )
-            }
+            0 => return Err(NotADisk::Closed),
             1 => {}
-            n => {
-                return Err(format!(
-                    "mesh has {n} boundary loops; a disk is needed; use holes: fill"
-                ))
-            }
+            n => return Err(NotADisk::Holes(n)),
         }
         let chi = self.euler_characteristic();
         if chi != 1 {
-            return Err(format!(
-                "mesh has Euler characteristic {chi} (genus > 0); a disk has 1"
-            ));
+            return Err(NotADisk::Genus(chi));
         }
         Ok(())
     }
+}
+
+/// Why a mesh is not a topological disk (`Topology::check_disk`).
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum NotADisk {
+    /// Edges with more than two faces or non-manifold vertices.
+    #[error("mesh is not manifold ({edges} edges with more than two faces, {vertices} non-manifold vertices); a disk is needed")]
+    NonManifold {
+        /// Edges with more than two faces.
+        edges: usize,
+        /// Non-manifold vertices.
+        vertices: usize,
+    },
+    /// Edges whose two faces disagree on orientation.
+    #[error("mesh faces are inconsistently oriented ({0} edges); a disk is needed")]
+    Misoriented(usize),
+    /// More than one connected component.
+    #[error("mesh has {0} connected components; a disk is needed")]
+    Components(usize),
+    /// No boundary.
+    #[error("mesh is closed (no boundary loop); a disk is needed: cut it open first")]
+    Closed,
+    /// Several boundary loops.
+    #[error("mesh has {0} boundary loops; a disk is needed; use holes: fill")]
+    Holes(usize),
+    /// One boundary but handles.
+    #[error("mesh has Euler characteristic {0} (genus > 0); a disk has 1")]
+    Genus(i64),
 }
 
 /// The fan triangulation of polygon faces given by their corner counts: for a face `f` whose
@@ -334,7 +345,7 @@ mod tests {
         let t = m.topology();
         assert_eq!(t.euler_characteristic(), 2);
         assert!(t.boundary_loops.is_empty());
-        assert!(t.check_disk().unwrap_err().contains("closed"));
+        assert!(t.check_disk().unwrap_err().to_string().contains("closed"));
         // two triangles sharing only a vertex
         let p = vec![
             [0.0; 3],

@@ -98,7 +98,7 @@ pub(super) fn cmd(registry: &Registry, args: ProjectArgs) -> i32 {
 fn run(registry: &Registry, args: &ProjectArgs) -> Result<i32, ProjectError> {
     let (f0, f1) = check_args(args)?;
     let aliases = match &args.f3d_aliases {
-        Some(p) => super::read_aliases(p).map_err(ProjectError::Usage)?,
+        Some(p) => super::read_aliases(p).map_err(|e| ProjectError::Usage(e.to_string()))?,
         None => Default::default(),
     };
     let load = |name| load_project_graph(&args.dir, name, &aliases, registry);

@@ -14,6 +14,7 @@
 
 use super::edit::set_param;
 use super::session::{url_decode, Session};
+use crate::cli::FileError;
 use crate::types::Value;
 use serde_json::{json, Value as Json};
 use std::io::{Read, Write};
@@ -234,7 +235,7 @@ pub fn handle(mut req: Request, session: &Session, gate: &Gate, run: &Sender<()>
                     Ok(bytes) => cached(200, content_type(&f), bytes, KEEP),
                     Err(e) => error(404, &format!("{}: {e}", f.display())),
                 },
-                Err(e) => error(403, &e),
+                Err(e) => error(403, &e.to_string()),
             }
         }
         _ => error(404, "no such route"),
@@ -271,7 +272,7 @@ fn set(req: &mut Request, session: &Session, run: &Sender<()>) -> Resp {
             let _ = run.send(());
             text(200, "application/json", json!({ "ok": true }).to_string())
         }
-        Err(e) => error(400, &e),
+        Err(e) => error(400, &e.to_string()),
     }
 }
 
@@ -310,7 +311,7 @@ fn mesh(url: &str, session: &Session) -> Resp {
     };
     let f = match out_file(session, &rel) {
         Ok(f) => f,
-        Err(e) => return error(403, &e),
+        Err(e) => return error(403, &e.to_string()),
     };
     match cgnodes_formats::mesh_file::load_mesh(&f, &Default::default()) {
         Ok(m) => cached(200, "application/octet-stream", viewer_mesh(&m), KEEP),
@@ -386,25 +387,99 @@ fn viewer_mesh(m: &crate::types::Mesh) -> Vec<u8> {
 
 /// The file `rel` (URL-encoded, relative) under `--out`: no `..`, no absolute path, and after
 /// resolving links still inside `--out`.
-fn out_file(session: &Session, rel: &str) -> Result<PathBuf, String> {
-    let rel = url_decode(rel).ok_or("bad escape in the path")?;
+fn out_file(session: &Session, rel: &str) -> Result<PathBuf, OutFileError> {
+    let rel = url_decode(rel).ok_or(OutFileError::BadEscape)?;
     let p = Path::new(&rel);
     if p.components().any(|c| !matches!(c, Component::Normal(_))) {
-        return Err("only plain paths under the output folder".into());
+        return Err(OutFileError::NotPlain);
     }
     let out = session
         .setup
         .out
         .canonicalize()
-        .map_err(|e| format!("{}: {e}", session.setup.out.display()))?;
+        .map_err(FileError::at(&session.setup.out))?;
     let f = out
         .join(p)
         .canonicalize()
-        .map_err(|_| format!("{rel}: not found"))?;
+        .map_err(|_| OutFileError::NotFound(rel.clone()))?;
     if !f.starts_with(&out) {
-        return Err("only files under the output folder".into());
+        return Err(OutFileError::Outside);
     }
     Ok(f)
+}
+
+/// Why a `/files/` or `/api/mesh` path names no file the page may read (a 403).
+#[derive(Debug, thiserror::Error)]
+enum OutFileError {
+    /// A `%` escape that does not decode.
+    #[error("bad escape in the path")]
+    BadEscape,
+    /// `..`, a root or a prefix in the path.
+    #[error("only plain paths under the output folder")]
+    NotPlain,
+    /// The output folder itself is gone.
+    #[error(transparent)]
+    Out(#[from] FileError),
+    /// No such file.
+    #[error("{0}: not found")]
+    NotFound(String),
+    /// A link that leads out of the output folder.
+    #[error("only files under the output folder")]
+    Outside,
+}
+
+/// Why the page's parameter edit was refused (a 400).
+#[derive(Debug, thiserror::Error)]
+pub enum SetParamError {
+    /// The graph file could not be read, parsed or written.
+    #[error(transparent)]
+    File(#[from] FileError),
+    /// The node is not in the graph file.
+    #[error("no node '{0}' in the graph file")]
+    NoNode(String),
+    /// The node's type is not registered.
+    #[error("node '{node}': unknown node type '{ty}'")]
+    UnknownType {
+        /// The node id.
+        node: String,
+        /// Its type.
+        ty: String,
+    },
+    /// The node type has no such input.
+    #[error("node '{node}' ({ty}): no input '{socket}'")]
+    NoInput {
+        /// The node id.
+        node: String,
+        /// Its type.
+        ty: String,
+        /// The socket.
+        socket: String,
+    },
+    /// The input is linked: a literal cannot replace the link.
+    #[error("node '{node}' ({ty}): input '{socket}' is linked")]
+    Linked {
+        /// The node id.
+        node: String,
+        /// Its type.
+        ty: String,
+        /// The socket.
+        socket: String,
+    },
+    /// The value is not a valid literal of the socket (the literal check's message).
+    #[error("node '{node}' ({ty}): input '{socket}': {message}")]
+    BadValue {
+        /// The node id.
+        node: String,
+        /// Its type.
+        ty: String,
+        /// The socket.
+        socket: String,
+        /// Why the value does not fit.
+        message: String,
+    },
+    /// The graph file's text could not be edited in place.
+    #[error("{0}")]
+    Edit(#[from] super::edit::EditError),
 }
 
 fn content_type(p: &Path) -> &'static str {
@@ -430,32 +505,45 @@ fn content_type(p: &Path) -> &'static str {
 impl Session<'_> {
     /// Sets `node.socket` to `value` in the graph file after checking it against the socket's
     /// declaration; the file is replaced atomically and only the value's bytes change.
-    pub fn set_param(&self, node: &str, socket: &str, value: &Json) -> Result<(), String> {
+    pub fn set_param(&self, node: &str, socket: &str, value: &Json) -> Result<(), SetParamError> {
         let path = &self.setup.graph;
-        let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
-        let spec: Json =
-            serde_json::from_str(&text).map_err(|e| format!("{}: {e}", path.display()))?;
+        let text = std::fs::read_to_string(path).map_err(FileError::at(path))?;
+        let spec: Json = serde_json::from_str(&text).map_err(FileError::at(path))?;
         let ty = spec["nodes"][node]["type"]
             .as_str()
-            .ok_or_else(|| format!("no node '{node}' in the graph file"))?;
+            .ok_or_else(|| SetParamError::NoNode(node.into()))?;
         let decl = self
             .registry()
             .get(ty)
-            .ok_or_else(|| format!("node '{node}': unknown node type '{ty}'"))?;
-        let s = decl
-            .input(socket)
-            .ok_or_else(|| format!("node '{node}' ({ty}): no input '{socket}'"))?;
+            .ok_or_else(|| SetParamError::UnknownType {
+                node: node.into(),
+                ty: ty.into(),
+            })?;
+        let s = decl.input(socket).ok_or_else(|| SetParamError::NoInput {
+            node: node.into(),
+            ty: ty.into(),
+            socket: socket.into(),
+        })?;
         if spec["nodes"][node]["inputs"].get(socket).is_some() {
-            return Err(format!("node '{node}' ({ty}): input '{socket}' is linked"));
+            return Err(SetParamError::Linked {
+                node: node.into(),
+                ty: ty.into(),
+                socket: socket.into(),
+            });
         }
-        let v = Value::from_json(&s.ty, value)
-            .map_err(|e| format!("node '{node}' ({ty}): input '{socket}': {e}"))?;
-        s.check_literal(&v)
-            .map_err(|e| format!("node '{node}' ({ty}): input '{socket}': {e}"))?;
-        let new = set_param(&text, node, socket, value).map_err(|e| e.to_string())?;
+        let bad_value = |message: String| SetParamError::BadValue {
+            node: node.into(),
+            ty: ty.into(),
+            socket: socket.into(),
+            message,
+        };
+        let v = Value::from_json(&s.ty, value).map_err(bad_value)?;
+        s.check_literal(&v).map_err(bad_value)?;
+        let new = set_param(&text, node, socket, value)?;
         self.note_written(&new);
         crate::io::write_atomic(path, |w| w.write_all(new.as_bytes()))
-            .map_err(|e| format!("{}: {e}", path.display()))
+            .map_err(FileError::at(path))?;
+        Ok(())
     }
 }
 

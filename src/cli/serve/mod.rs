@@ -55,52 +55,13 @@ pub struct ServeArgs {
 
 /// Runs `serve` until interrupted; returns the exit code of a failure to start.
 pub fn cmd(registry: &Registry, args: ServeArgs) -> i32 {
-    if !args.graph.is_file() {
-        eprintln!("error: {}: no such file", args.graph.display());
-        return EXIT_INVALID;
-    }
-    let frames = match args.frames.as_deref().map(crate::graph::parse_frames) {
-        Some(Ok(r)) => Some(r),
-        Some(Err(e)) => {
-            eprintln!("error: {e}");
-            return EXIT_USAGE;
-        }
-        None => None,
-    };
-    let aliases = match args.f3d_aliases.as_deref().map(super::read_aliases) {
-        Some(Ok(a)) => a,
-        Some(Err(e)) => {
-            eprintln!("error: {e}");
-            return EXIT_USAGE;
-        }
-        None => Default::default(),
-    };
-    if let Err(e) = std::fs::create_dir_all(&args.out) {
-        eprintln!("error: {}: {e}", args.out.display());
-        return EXIT_USAGE;
-    }
-    let loopback = matches!(args.host.as_str(), "127.0.0.1" | "localhost" | "::1");
-    if !loopback {
-        eprintln!(
-            "warning: --host {}: the page can run this graph and write files under {}; anyone who can reach this address and has the token can",
-            args.host,
-            args.out.display()
-        );
-    }
-    let server = match tiny_http::Server::http((args.host.as_str(), args.port)) {
+    let setup = match setup(&args) {
         Ok(s) => s,
-        Err(e) => {
-            eprintln!("error: cannot listen on {}:{}: {e}", args.host, args.port);
-            return EXIT_USAGE;
-        }
+        Err(code) => return code,
     };
-    let port = server.server_addr().to_ip().map_or(args.port, |a| a.port());
-    let setup = Setup {
-        graph: args.graph.clone(),
-        out: args.out.clone(),
-        assets: args.assets.clone(),
-        frames,
-        aliases,
+    let (server, port) = match listen(&args) {
+        Ok(l) => l,
+        Err(code) => return code,
     };
     let session = match Session::new(registry, setup, args.threads) {
         Ok(s) => s,
@@ -111,18 +72,7 @@ pub fn cmd(registry: &Registry, args: ServeArgs) -> i32 {
     };
     let token = http::new_token();
     let gate = http::Gate::new(&args.host, port, token.clone());
-    let shown_host = if args.host == "::1" {
-        "[::1]".to_string()
-    } else {
-        args.host.clone()
-    };
-    println!("http://{shown_host}:{port}/?token={token}");
-    if !args.quiet {
-        eprintln!(
-            "serving {} (Ctrl-C stops); the page writes parameter changes into this file",
-            args.graph.display()
-        );
-    }
+    announce(&args, port, &token);
     // Runs are queued on one channel: page edits and file changes alike.
     let (run_tx, run_rx) = mpsc::channel::<()>();
     let (file_tx, file_rx) = mpsc::channel::<PathBuf>();
@@ -135,10 +85,111 @@ pub fn cmd(registry: &Registry, args: ServeArgs) -> i32 {
             return EXIT_USAGE;
         }
     };
+    let channels = Channels {
+        run_tx,
+        run_rx,
+        file_rx,
+    };
+    serve(&session, &server, &gate, watch, channels)
+}
+
+/// What the session serves, from the options: the graph must exist, the frames and aliases
+/// parse, the output folder can be made. `Err` is the exit code, the error printed.
+fn setup(args: &ServeArgs) -> Result<Setup, i32> {
+    if !args.graph.is_file() {
+        eprintln!("error: {}: no such file", args.graph.display());
+        return Err(EXIT_INVALID);
+    }
+    let frames = match args.frames.as_deref().map(crate::graph::parse_frames) {
+        Some(Ok(r)) => Some(r),
+        Some(Err(e)) => {
+            eprintln!("error: {e}");
+            return Err(EXIT_USAGE);
+        }
+        None => None,
+    };
+    let aliases = match args.f3d_aliases.as_deref().map(super::read_aliases) {
+        Some(Ok(a)) => a,
+        Some(Err(e)) => {
+            eprintln!("error: {e}");
+            return Err(EXIT_USAGE);
+        }
+        None => Default::default(),
+    };
+    if let Err(e) = std::fs::create_dir_all(&args.out) {
+        eprintln!("error: {}: {e}", args.out.display());
+        return Err(EXIT_USAGE);
+    }
+    Ok(Setup {
+        graph: args.graph.clone(),
+        out: args.out.clone(),
+        assets: args.assets.clone(),
+        frames,
+        aliases,
+    })
+}
+
+/// The HTTP server on `--host`/`--port` and the port it got (warning when the address is
+/// not a loopback one). `Err` is the exit code, the error printed.
+fn listen(args: &ServeArgs) -> Result<(tiny_http::Server, u16), i32> {
+    let loopback = matches!(args.host.as_str(), "127.0.0.1" | "localhost" | "::1");
+    if !loopback {
+        eprintln!(
+            "warning: --host {}: the page can run this graph and write files under {}; anyone who can reach this address and has the token can",
+            args.host,
+            args.out.display()
+        );
+    }
+    let server = match tiny_http::Server::http((args.host.as_str(), args.port)) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("error: cannot listen on {}:{}: {e}", args.host, args.port);
+            return Err(EXIT_USAGE);
+        }
+    };
+    let port = server.server_addr().to_ip().map_or(args.port, |a| a.port());
+    Ok((server, port))
+}
+
+/// Prints the page's URL with its token (on stdout, for scripts) and what is served.
+fn announce(args: &ServeArgs, port: u16, token: &str) {
+    let shown_host = if args.host == "::1" {
+        "[::1]".to_string()
+    } else {
+        args.host.clone()
+    };
+    println!("http://{shown_host}:{port}/?token={token}");
+    if !args.quiet {
+        eprintln!(
+            "serving {} (Ctrl-C stops); the page writes parameter changes into this file",
+            args.graph.display()
+        );
+    }
+}
+
+/// The channels between the server's threads: runs asked for (by the page or a file
+/// change), and the changed files the watch reports.
+struct Channels {
+    run_tx: mpsc::Sender<()>,
+    run_rx: mpsc::Receiver<()>,
+    file_rx: mpsc::Receiver<PathBuf>,
+}
+
+/// Serves until the server stops: a runner thread, a file-change thread and one thread per
+/// request.
+fn serve(
+    session: &Session,
+    server: &tiny_http::Server,
+    gate: &http::Gate,
+    watch: FileWatch,
+    channels: Channels,
+) -> i32 {
+    let Channels {
+        run_tx,
+        run_rx,
+        file_rx,
+    } = channels;
     std::thread::scope(|scope| {
-        let session = &session;
-        let server = &server;
-        let gate = &gate;
         // The runner: one run at a time; requests that arrive during a run make one more.
         // After each run the watch follows the graph's input files.
         let watch = std::sync::Mutex::new(watch);

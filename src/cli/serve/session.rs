@@ -76,11 +76,11 @@ impl<'r> Session<'r> {
         registry: &'r Registry,
         setup: Setup,
         threads: Option<usize>,
-    ) -> Result<Session<'r>, String> {
+    ) -> Result<Session<'r>, crate::exec::StartError> {
         Ok(Session {
             registry,
             setup,
-            exec: Executor::new(threads, None).map_err(|e| e.to_string())?,
+            exec: Executor::new(threads, None)?,
             state: Mutex::default(),
             subscribers: Subscribers::default(),
         })

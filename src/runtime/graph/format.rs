@@ -85,13 +85,24 @@ pub struct Graph {
     pub hash: String,
 }
 
+/// Why an older graph could not be migrated to the current version.
+#[derive(Debug, thiserror::Error)]
+pub enum MigrateError {
+    /// No migration step starts at this version.
+    #[error("no migration from version {from}")]
+    NoStep {
+        /// The file's version.
+        from: u32,
+    },
+}
+
 /// Migrates a raw graph of an older version to the current one, one version at a time.
 /// Version 1 is the first; later versions add steps here so old files keep working.
-pub fn migrate(raw: serde_json::Value, from: u32) -> Result<serde_json::Value, String> {
+pub fn migrate(raw: serde_json::Value, from: u32) -> Result<serde_json::Value, MigrateError> {
     // Each step rewrites version N into N + 1 (for example `1 => migrate_1_to_2(v)`).
     // Version 1 is the first, so there is no step yet.
     if from < VERSION {
-        return Err(format!("no migration from version {from}"));
+        return Err(MigrateError::NoStep { from });
     }
     Ok(raw)
 }

@@ -141,7 +141,7 @@ fn parse_any(
             "version {version} is newer than this cgnodes reads ({VERSION}); please upgrade"
         )));
     } else {
-        let migrated = migrate(raw, version).map_err(ferr)?;
+        let migrated = migrate(raw, version).map_err(|e| ferr(e.to_string()))?;
         serde_json::from_value(migrated).map_err(|e| ferr(e.to_string()))?
     };
     Ok(Graph {

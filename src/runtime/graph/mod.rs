@@ -14,5 +14,5 @@ pub use format::{
     migrate, schema, split_link, Graph, GraphFile, LinkSpec, NodeSpec, FORMAT, VERSION,
 };
 pub use load::{load, load_with, parse, parse_with, LoadError};
-pub use overrides::{apply_sets, parse_frames};
+pub use overrides::{apply_sets, parse_frames, SetError};
 pub use typed_schema::typed_schema;

@@ -35,27 +35,61 @@ pub fn parse_frames(s: &str) -> Result<(i64, i64), String> {
     Ok((a, b))
 }
 
+/// Why a `--set NODE.SOCKET=VALUE` override does not apply to a graph.
+#[derive(Debug, thiserror::Error)]
+pub enum SetError {
+    /// Not of the form `NODE.SOCKET=VALUE`.
+    #[error("--set '{0}': expected NODE.SOCKET=VALUE")]
+    Syntax(String),
+    /// The node is not in the graph; `hint` suggests the closest id.
+    #[error("--set '{set}': no node '{node}' in the graph{hint}")]
+    NoNode {
+        /// The override as given.
+        set: String,
+        /// The node id.
+        node: String,
+        /// ` (did you mean 'ID'?)` or empty.
+        hint: String,
+    },
+    /// The socket is linked: a literal cannot replace the link.
+    #[error("--set '{set}': input '{socket}' of node '{node}' is linked; a literal cannot replace a link")]
+    Linked {
+        /// The override as given.
+        set: String,
+        /// The node id.
+        node: String,
+        /// The input socket.
+        socket: String,
+    },
+}
+
 /// Applies `--set NODE.SOCKET=VALUE` overrides to a graph's literals. The value is read as
 /// JSON when it parses, else as a string, and checked later by validation against the
 /// socket's type.
-pub fn apply_sets(g: &mut Graph, sets: &[String]) -> Result<(), String> {
+pub fn apply_sets(g: &mut Graph, sets: &[String]) -> Result<(), SetError> {
     for s in sets {
-        let (lhs, val) = s
-            .split_once('=')
-            .ok_or_else(|| format!("--set '{s}': expected NODE.SOCKET=VALUE"))?;
-        let (node, socket) =
-            split_link(lhs).ok_or_else(|| format!("--set '{s}': expected NODE.SOCKET=VALUE"))?;
+        let syntax = || SetError::Syntax(s.clone());
+        let (lhs, val) = s.split_once('=').ok_or_else(syntax)?;
+        let (node, socket) = split_link(lhs).ok_or_else(syntax)?;
         if !g.spec.nodes.contains_key(node) {
             let hint = closest(node, g.spec.nodes.keys().map(String::as_str))
                 .map(|h| format!(" (did you mean '{h}'?)"))
                 .unwrap_or_default();
-            return Err(format!("--set '{s}': no node '{node}' in the graph{hint}"));
+            return Err(SetError::NoNode {
+                set: s.clone(),
+                node: node.into(),
+                hint,
+            });
         }
         let Some(spec) = g.spec.nodes.get_mut(node) else {
             continue;
         };
         if spec.inputs.contains_key(socket) {
-            return Err(format!("--set '{s}': input '{socket}' of node '{node}' is linked; a literal cannot replace a link"));
+            return Err(SetError::Linked {
+                set: s.clone(),
+                node: node.into(),
+                socket: socket.into(),
+            });
         }
         let j = serde_json::from_str(val)
             .unwrap_or_else(|_| serde_json::Value::String(val.to_string()));

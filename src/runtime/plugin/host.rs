@@ -53,13 +53,35 @@ pub fn search_path(
     v
 }
 
+/// Why the plugin search path could not be read: only `--plugins` folders fail the run.
+#[derive(Debug, thiserror::Error)]
+pub enum PluginPathError {
+    /// A folder of the search path could not be listed.
+    #[error("{}: {source}", .root.display())]
+    Unreadable {
+        /// The folder.
+        root: PathBuf,
+        /// The system's error.
+        source: std::io::Error,
+    },
+    /// A `--plugins` folder does not exist.
+    #[error("--plugins {}: no such folder", .0.display())]
+    NoSuchFolder(PathBuf),
+    /// A `--plugins` folder holds no manifest, itself or in its subfolders.
+    #[error("--plugins {}: neither a plugin folder (no {MANIFEST}) nor a folder of plugins", .0.display())]
+    NoPlugins(PathBuf),
+}
+
 /// The plugin folders under `root`: `root` itself if it holds a manifest, else its
 /// subfolders that do, sorted by name.
-pub fn discover(root: &Path) -> Result<Vec<PathBuf>, String> {
+pub fn discover(root: &Path) -> Result<Vec<PathBuf>, PluginPathError> {
     if root.join(MANIFEST).is_file() {
         return Ok(vec![root.to_path_buf()]);
     }
-    let rd = std::fs::read_dir(root).map_err(|e| format!("{}: {e}", root.display()))?;
+    let rd = std::fs::read_dir(root).map_err(|source| PluginPathError::Unreadable {
+        root: root.into(),
+        source,
+    })?;
     let mut v: Vec<PathBuf> = rd
         .filter_map(|e| e.ok().map(|e| e.path()))
         .filter(|p| p.join(MANIFEST).is_file())
@@ -94,13 +116,13 @@ pub fn register(registry: &mut Registry, p: Plugin) -> Vec<String> {
 pub fn load_all(
     registry: &mut Registry,
     search: &[(PathBuf, Origin)],
-) -> Result<Vec<String>, String> {
+) -> Result<Vec<String>, PluginPathError> {
     let mut warnings = Vec::new();
     for (root, origin) in search {
         let explicit = &(*origin == Origin::Cli);
         if !root.exists() {
             match origin {
-                Origin::Cli => return Err(format!("--plugins {}: no such folder", root.display())),
+                Origin::Cli => return Err(PluginPathError::NoSuchFolder(root.clone())),
                 Origin::Env => {
                     warnings.push(format!("{PATH_VAR}: {}: no such folder", root.display()))
                 }
@@ -112,15 +134,12 @@ pub fn load_all(
             Ok(d) => d,
             Err(e) if *explicit => return Err(e),
             Err(e) => {
-                warnings.push(e);
+                warnings.push(e.to_string());
                 continue;
             }
         };
         if dirs.is_empty() && *explicit {
-            return Err(format!(
-                "--plugins {}: neither a plugin folder (no {MANIFEST}) nor a folder of plugins",
-                root.display()
-            ));
+            return Err(PluginPathError::NoPlugins(root.clone()));
         }
         for d in dirs {
             match load(&d) {
@@ -134,7 +153,7 @@ pub fn load_all(
 
 /// The registry the command line uses: `base` plus the plugins from `--plugins` folders,
 /// `CGNODES_PLUGIN_PATH` and the user's folder. Warnings go to stderr.
-pub fn cli_registry(base: Registry, cli_dirs: &[PathBuf]) -> Result<Registry, String> {
+pub fn cli_registry(base: Registry, cli_dirs: &[PathBuf]) -> Result<Registry, PluginPathError> {
     let mut r = base;
     let search = search_path(cli_dirs, std::env::var_os(PATH_VAR).as_deref(), user_dir());
     for w in load_all(&mut r, &search)? {

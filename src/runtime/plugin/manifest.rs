@@ -11,6 +11,128 @@ use std::ffi::OsString;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
+/// Why a plugin's manifest could not be loaded.
+#[derive(Debug, thiserror::Error)]
+pub enum ManifestError {
+    /// The manifest could not be read.
+    #[error("{}: {source}", .file.display())]
+    Read {
+        /// The manifest file.
+        file: PathBuf,
+        /// The system's error.
+        source: std::io::Error,
+    },
+    /// The manifest is not JSON of the manifest's schema.
+    #[error("{}: {source}", .file.display())]
+    Json {
+        /// The manifest file.
+        file: PathBuf,
+        /// The parser's error.
+        source: serde_json::Error,
+    },
+    /// The plugin folder has no absolute path.
+    #[error("{}: {source}", .dir.display())]
+    Folder {
+        /// The plugin folder.
+        dir: PathBuf,
+        /// The system's error.
+        source: std::io::Error,
+    },
+    /// The manifest parses but declares something cgnodes refuses.
+    #[error("{}: {problem}", .file.display())]
+    Invalid {
+        /// The manifest file.
+        file: PathBuf,
+        /// What it declares wrong.
+        problem: Box<ManifestProblem>,
+    },
+}
+
+/// What a parsed manifest declares wrong.
+#[derive(Debug, thiserror::Error)]
+pub enum ManifestProblem {
+    /// Another protocol version.
+    #[error("plugin '{name}' speaks protocol {protocol}, this cgnodes speaks {PROTOCOL}")]
+    Protocol {
+        /// The plugin's name.
+        name: String,
+        /// The protocol it speaks.
+        protocol: u32,
+    },
+    /// A plugin name that is not snake_case.
+    #[error("plugin name '{0}' should be snake_case letters, digits and '_'")]
+    Name(String),
+    /// No program to run.
+    #[error("'command' is empty")]
+    EmptyCommand,
+    /// A time limit that is not a positive number.
+    #[error("'timeout' must be a positive number of seconds, got {0}")]
+    Timeout(f64),
+    /// A node declaration cgnodes refuses.
+    #[error("node '{node}': {problem}")]
+    Node {
+        /// The node's type name.
+        node: String,
+        /// What is wrong with it.
+        problem: DeclProblem,
+    },
+}
+
+/// What a plugin's node declaration declares wrong; `side` is `input` or `output`.
+#[derive(Debug, thiserror::Error)]
+pub enum DeclProblem {
+    /// A type name that is not snake_case.
+    #[error("the type name should be snake_case letters, digits and '_'")]
+    TypeName,
+    /// A socket name that is not snake_case.
+    #[error("{side} '{name}': socket names are snake_case")]
+    SocketName {
+        /// `input` or `output`.
+        side: &'static str,
+        /// The socket.
+        name: String,
+    },
+    /// A socket declared twice on one side.
+    #[error("{side} '{name}' is declared twice")]
+    Twice {
+        /// `input` or `output`.
+        side: &'static str,
+        /// The socket.
+        name: String,
+    },
+    /// A socket type the protocol cannot carry (scenes).
+    #[error("{side} '{name}': {ty} values cannot cross the plugin boundary")]
+    Unsupported {
+        /// `input` or `output`.
+        side: &'static str,
+        /// The socket.
+        name: String,
+        /// Its type.
+        ty: SocketType,
+    },
+    /// A default that is not a valid literal of the socket.
+    #[error("{side} '{name}': default: {message}")]
+    Default {
+        /// `input` or `output`.
+        side: &'static str,
+        /// The socket.
+        name: String,
+        /// The literal check's message.
+        message: String,
+    },
+    /// A file role on a socket that is not a string.
+    #[error("{side} '{name}': only string sockets name files")]
+    FileRole {
+        /// `input` or `output`.
+        side: &'static str,
+        /// The socket.
+        name: String,
+    },
+    /// A `timeout` input that is not a float.
+    #[error("input '{TIMEOUT_SOCKET}' is the call's time limit and must be a float")]
+    TimeoutType,
+}
+
 /// A plugin manifest (`cgnodes-plugin.json`).
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -71,27 +193,35 @@ impl Plugin {
 }
 
 /// Reads and checks the manifest in `dir`; the nodes run the plugin's command.
-pub fn load(dir: &Path) -> Result<Plugin, String> {
+pub fn load(dir: &Path) -> Result<Plugin, ManifestError> {
     let file = dir.join(MANIFEST);
-    let text = std::fs::read_to_string(&file).map_err(|e| format!("{}: {e}", file.display()))?;
-    let m: Manifest =
-        serde_json::from_str(&text).map_err(|e| format!("{}: {e}", file.display()))?;
-    let dir = std::path::absolute(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
-    let err = |msg: String| format!("{}: {msg}", file.display());
+    let text = std::fs::read_to_string(&file).map_err(|source| ManifestError::Read {
+        file: file.clone(),
+        source,
+    })?;
+    let m: Manifest = serde_json::from_str(&text).map_err(|source| ManifestError::Json {
+        file: file.clone(),
+        source,
+    })?;
+    let dir = std::path::absolute(dir).map_err(|source| ManifestError::Folder {
+        dir: dir.into(),
+        source,
+    })?;
+    let err = |problem: ManifestProblem| ManifestError::Invalid {
+        file: file.clone(),
+        problem: Box::new(problem),
+    };
     if m.protocol != PROTOCOL {
-        return Err(err(format!(
-            "plugin '{}' speaks protocol {}, this cgnodes speaks {PROTOCOL}",
-            m.name, m.protocol
-        )));
+        return Err(err(ManifestProblem::Protocol {
+            name: m.name.clone(),
+            protocol: m.protocol,
+        }));
     }
     if !is_name(&m.name) {
-        return Err(err(format!(
-            "plugin name '{}' should be snake_case letters, digits and '_'",
-            m.name
-        )));
+        return Err(err(ManifestProblem::Name(m.name.clone())));
     }
     let Some((prog, args)) = m.command.split_first() else {
-        return Err(err("'command' is empty".into()));
+        return Err(err(ManifestProblem::EmptyCommand));
     };
     let prog_os: OsString = if prog.contains('/') {
         if Path::new(prog).is_absolute() {
@@ -106,9 +236,7 @@ pub fn load(dir: &Path) -> Result<Plugin, String> {
     argv.extend(args.iter().map(OsString::from));
     let timeout = m.timeout.unwrap_or(DEFAULT_TIMEOUT_S);
     if !(timeout.is_finite() && timeout > 0.0) {
-        return Err(err(format!(
-            "'timeout' must be a positive number of seconds, got {timeout}"
-        )));
+        return Err(err(ManifestProblem::Timeout(timeout)));
     }
     let runner = Arc::new(Runner {
         plugin: m.name.clone(),
@@ -131,29 +259,13 @@ pub fn load(dir: &Path) -> Result<Plugin, String> {
     );
     let mut nodes = Vec::new();
     for mut d in m.nodes {
-        check_decl(&d).map_err(|e| err(format!("node '{}': {e}", d.type_name)))?;
-        let added_timeout = d.input(TIMEOUT_SOCKET).is_none();
-        if added_timeout {
-            d.inputs.push(SocketDecl {
-                name: TIMEOUT_SOCKET.into(),
-                ty: SocketType::Float,
-                doc: "Seconds before the plugin process is killed.".into(),
-                default: Some(json!(timeout)),
-                min: Some(0.001),
-                max: None,
-                choices: None,
-                optional: false,
-                file: FileRole::None,
-            });
-        }
-        d.source = source.clone();
-        if d.category.is_empty() {
-            d.category = "plugin".into();
-        }
-        let r = runner.clone();
-        d.exec = Some(Arc::new(move |ctx: &mut ExecContext| {
-            execute(&r, added_timeout, ctx)
-        }));
+        check_decl(&d).map_err(|problem| {
+            err(ManifestProblem::Node {
+                node: d.type_name.clone(),
+                problem,
+            })
+        })?;
+        bind_node(&mut d, &runner, &source);
         nodes.push(d);
     }
     Ok(Plugin {
@@ -164,6 +276,33 @@ pub fn load(dir: &Path) -> Result<Plugin, String> {
         timeout,
         nodes,
     })
+}
+
+/// Makes a checked declaration runnable: the `timeout` input (unless declared), the
+/// plugin's `source` and category, and an `exec` that calls the plugin through `runner`.
+fn bind_node(d: &mut NodeDecl, runner: &Arc<Runner>, source: &str) {
+    let added_timeout = d.input(TIMEOUT_SOCKET).is_none();
+    if added_timeout {
+        d.inputs.push(SocketDecl {
+            name: TIMEOUT_SOCKET.into(),
+            ty: SocketType::Float,
+            doc: "Seconds before the plugin process is killed.".into(),
+            default: Some(json!(runner.timeout)),
+            min: Some(0.001),
+            max: None,
+            choices: None,
+            optional: false,
+            file: FileRole::None,
+        });
+    }
+    d.source = source.into();
+    if d.category.is_empty() {
+        d.category = "plugin".into();
+    }
+    let r = runner.clone();
+    d.exec = Some(Arc::new(move |ctx: &mut ExecContext| {
+        execute(&r, added_timeout, ctx)
+    }));
 }
 
 /// Files and folders of a plugin at most this deep are stamped.
@@ -228,44 +367,52 @@ fn is_name(s: &str) -> bool {
 
 /// Checks a node declaration from a manifest: names, unique sockets, types the protocol
 /// carries, defaults of the socket's type.
-fn check_decl(d: &NodeDecl) -> Result<(), String> {
+fn check_decl(d: &NodeDecl) -> Result<(), DeclProblem> {
     if !is_name(&d.type_name) {
-        return Err("the type name should be snake_case letters, digits and '_'".into());
+        return Err(DeclProblem::TypeName);
     }
     for (side, list) in [("input", &d.inputs), ("output", &d.outputs)] {
         let mut seen = std::collections::BTreeSet::new();
         for s in list.iter() {
             if !is_name(&s.name) {
-                return Err(format!("{side} '{}': socket names are snake_case", s.name));
+                return Err(DeclProblem::SocketName {
+                    side,
+                    name: s.name.clone(),
+                });
             }
             if !seen.insert(&s.name) {
-                return Err(format!("{side} '{}' is declared twice", s.name));
+                return Err(DeclProblem::Twice {
+                    side,
+                    name: s.name.clone(),
+                });
             }
             if !codec::supported(&s.ty) {
-                return Err(format!(
-                    "{side} '{}': {} values cannot cross the plugin boundary",
-                    s.name, s.ty
-                ));
+                return Err(DeclProblem::Unsupported {
+                    side,
+                    name: s.name.clone(),
+                    ty: s.ty.clone(),
+                });
             }
             if let Some(j) = &s.default {
-                let v = Value::from_json(&s.ty, j)
-                    .map_err(|e| format!("{side} '{}': default: {e}", s.name))?;
-                s.check_literal(&v)
-                    .map_err(|e| format!("{side} '{}': default: {e}", s.name))?;
+                let bad_default = |message: String| DeclProblem::Default {
+                    side,
+                    name: s.name.clone(),
+                    message,
+                };
+                let v = Value::from_json(&s.ty, j).map_err(bad_default)?;
+                s.check_literal(&v).map_err(bad_default)?;
             }
             if s.file != FileRole::None && s.ty != SocketType::String {
-                return Err(format!(
-                    "{side} '{}': only string sockets name files",
-                    s.name
-                ));
+                return Err(DeclProblem::FileRole {
+                    side,
+                    name: s.name.clone(),
+                });
             }
         }
     }
     if let Some(t) = d.input(TIMEOUT_SOCKET) {
         if t.ty != SocketType::Float {
-            return Err(format!(
-                "input '{TIMEOUT_SOCKET}' is the call's time limit and must be a float"
-            ));
+            return Err(DeclProblem::TimeoutType);
         }
     }
     Ok(())
@@ -280,21 +427,30 @@ mod tests {
         let d = tempfile::tempdir().unwrap();
         let write = |text: &str| std::fs::write(d.path().join(MANIFEST), text).unwrap();
         write(r#"{"name": "p", "protocol": 2, "command": ["x"], "nodes": []}"#);
-        assert!(load(d.path()).unwrap_err().contains("protocol 2"));
+        assert!(load(d.path())
+            .unwrap_err()
+            .to_string()
+            .contains("protocol 2"));
         write(r#"{"name": "p", "protocol": 1, "command": [], "nodes": []}"#);
-        assert!(load(d.path()).unwrap_err().contains("empty"));
+        assert!(load(d.path()).unwrap_err().to_string().contains("empty"));
         write(r#"{"name": "p", "protocol": 1, "command": ["x"], "nodes": [], "shell": "rm"}"#);
-        assert!(load(d.path()).unwrap_err().contains("unknown field"));
+        assert!(load(d.path())
+            .unwrap_err()
+            .to_string()
+            .contains("unknown field"));
         write(
             r#"{"name": "p", "protocol": 1, "command": ["x"], "nodes": [
                {"type": "n", "inputs": [{"name": "s", "type": "scene"}]}]}"#,
         );
-        assert!(load(d.path()).unwrap_err().contains("cannot cross"));
+        assert!(load(d.path())
+            .unwrap_err()
+            .to_string()
+            .contains("cannot cross"));
         write(
             r#"{"name": "p", "protocol": 1, "command": ["x"], "nodes": [
                {"type": "n", "inputs": [{"name": "k", "type": "int", "default": 2.5}]}]}"#,
         );
-        assert!(load(d.path()).unwrap_err().contains("default"));
+        assert!(load(d.path()).unwrap_err().to_string().contains("default"));
         write(
             r#"{"name": "p", "protocol": 1, "command": ["bin/run"], "timeout": 5, "nodes": [
                {"type": "n", "inputs": [{"name": "k", "type": "int", "default": 2}],

@@ -23,8 +23,10 @@ pub mod npy;
 mod process;
 
 pub use call::{call, CallResult, CallStats, Runner};
-pub use host::{cli_registry, discover, load_all, register, search_path, user_dir, Origin};
-pub use manifest::{load, Manifest, Plugin};
+pub use host::{
+    cli_registry, discover, load_all, register, search_path, user_dir, Origin, PluginPathError,
+};
+pub use manifest::{load, DeclProblem, Manifest, ManifestError, ManifestProblem, Plugin};
 
 /// The protocol version this build speaks.
 pub const PROTOCOL: u32 = 1;

@@ -8,6 +8,91 @@ use std::path::Path;
 
 const MAGIC: &[u8] = b"\x93NUMPY";
 
+/// Why an `.npy` file could not be read, written or converted; the file's path is added by
+/// [`NpyArray::read`] and [`NpyArray::write`].
+#[derive(Debug, thiserror::Error)]
+pub enum NpyError {
+    /// A big-endian element type (NumPy's `>`), which cgnodes does not swap.
+    #[error("dtype '{descr}' is big-endian; write little-endian arrays (arr.astype('<{code}'))")]
+    BigEndian {
+        /// The header's `descr`.
+        descr: String,
+        /// Its type code without the byte order.
+        code: String,
+    },
+    /// A byte-order character other than `<`, `|` or `=`.
+    #[error("unsupported dtype '{0}'")]
+    ByteOrder(String),
+    /// A type code cgnodes does not read.
+    #[error("unsupported dtype '{0}' (cgnodes reads f8, f4, i8, i4, u8, u4, u1 and b1)")]
+    DType(String),
+    /// A `u8` element above `i64::MAX`, as an index.
+    #[error("index out of range")]
+    IndexOutOfRange,
+    /// Integers were asked of a floating-point array.
+    #[error("expected an integer array, got dtype {}", .0.descr())]
+    NotInteger(DType),
+    /// The bytes do not start with the `.npy` magic string.
+    #[error("not an .npy file (no \\x93NUMPY magic)")]
+    NoMagic,
+    /// A format version other than 1, 2 or 3.
+    #[error("unsupported .npy format version {0}")]
+    Version(u8),
+    /// The file ends inside its header.
+    #[error("truncated .npy header")]
+    TruncatedHeader,
+    /// The header is not UTF-8.
+    #[error("the .npy header is not text")]
+    HeaderNotText,
+    /// The header lacks one of `descr`, `fortran_order`, `shape`.
+    #[error("the .npy header has no '{0}'")]
+    MissingField(&'static str),
+    /// The header's `shape` is not a tuple of whole numbers.
+    #[error("bad shape {0}")]
+    BadShape(String),
+    /// A dimension larger than the file (issue 23).
+    #[error("shape {} declares a dimension of {dim}, more than a {file_len}-byte file can hold", shape_str(.shape))]
+    DimensionTooLarge {
+        /// The declared shape.
+        shape: Vec<usize>,
+        /// The offending dimension.
+        dim: usize,
+        /// The file's size in bytes.
+        file_len: usize,
+    },
+    /// A shape whose element or byte count overflows.
+    #[error("shape {} is too large", shape_str(.0))]
+    TooLarge(Vec<usize>),
+    /// The data is shorter or longer than the shape and type need.
+    #[error("the .npy data is {}: shape {} of {} needs {want} bytes, found {found}", if .found < .want { "truncated" } else { "longer than its shape" }, shape_str(.shape), .dtype.descr())]
+    DataSize {
+        /// The declared shape.
+        shape: Vec<usize>,
+        /// The declared element type.
+        dtype: DType,
+        /// Bytes the shape needs.
+        want: usize,
+        /// Bytes present.
+        found: usize,
+    },
+    /// The file could not be read or written.
+    #[error("{}: {source}", .path.display())]
+    Io {
+        /// The file.
+        path: std::path::PathBuf,
+        /// The system's error.
+        source: std::io::Error,
+    },
+    /// The file was read but its contents are not a valid array.
+    #[error("{}: {source}", .path.display())]
+    File {
+        /// The file.
+        path: std::path::PathBuf,
+        /// What is wrong with its contents.
+        source: Box<NpyError>,
+    },
+}
+
 /// The element types cgnodes reads and writes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum DType {
@@ -53,18 +138,19 @@ impl DType {
         }
     }
 
-    fn parse(descr: &str) -> Result<DType, String> {
+    fn parse(descr: &str) -> Result<DType, NpyError> {
         // Split after the first character, not the first byte: a multi-byte first character
         // made `split_at(1)` panic (issue 23).
         let cut = descr.chars().next().map_or(0, char::len_utf8);
         let (order, code) = descr.split_at(cut);
         if order == ">" && !matches!(code, "u1" | "b1" | "i1") {
-            return Err(format!(
-                "dtype '{descr}' is big-endian; write little-endian arrays (arr.astype('<{code}'))"
-            ));
+            return Err(NpyError::BigEndian {
+                descr: descr.into(),
+                code: code.into(),
+            });
         }
         if !matches!(order, "<" | "|" | "=") {
-            return Err(format!("unsupported dtype '{descr}'"));
+            return Err(NpyError::ByteOrder(descr.into()));
         }
         Ok(match code {
             "f8" => DType::F64,
@@ -75,11 +161,7 @@ impl DType {
             "u4" => DType::U32,
             "u1" => DType::U8,
             "b1" => DType::Bool,
-            _ => {
-                return Err(format!(
-                    "unsupported dtype '{descr}' (cgnodes reads f8, f4, i8, i4, u8, u4, u1 and b1)"
-                ))
-            }
+            _ => return Err(NpyError::DType(descr.into())),
         })
     }
 }
@@ -147,21 +229,16 @@ impl NpyArray {
     }
 
     /// The elements as integers; fails for floating-point arrays (indices must be integers).
-    pub fn to_i64(&self) -> Result<Vec<i64>, String> {
-        let conv = |b: &[u8]| -> Result<i64, String> {
+    pub fn to_i64(&self) -> Result<Vec<i64>, NpyError> {
+        let conv = |b: &[u8]| -> Result<i64, NpyError> {
             Ok(match self.dtype {
                 DType::I64 => i64::from_le_bytes(b.try_into().unwrap_or([0; 8])),
                 DType::I32 => i32::from_le_bytes(b.try_into().unwrap_or([0; 4])) as i64,
                 DType::U64 => i64::try_from(u64::from_le_bytes(b.try_into().unwrap_or([0; 8])))
-                    .map_err(|_| "index out of range".to_string())?,
+                    .map_err(|_| NpyError::IndexOutOfRange)?,
                 DType::U32 => u32::from_le_bytes(b.try_into().unwrap_or([0; 4])) as i64,
                 DType::U8 | DType::Bool => b[0] as i64,
-                DType::F64 | DType::F32 => {
-                    return Err(format!(
-                        "expected an integer array, got dtype {}",
-                        self.dtype.descr()
-                    ))
-                }
+                DType::F64 | DType::F32 => return Err(NpyError::NotInteger(self.dtype)),
             })
         };
         (0..self.len()).map(|i| conv(self.elem(i))).collect()
@@ -224,9 +301,9 @@ impl NpyArray {
     }
 
     /// Parses `.npy` file bytes. Fortran-ordered arrays are converted to C order.
-    pub fn from_bytes(bytes: &[u8]) -> Result<NpyArray, String> {
+    pub fn from_bytes(bytes: &[u8]) -> Result<NpyArray, NpyError> {
         if bytes.len() < 10 || &bytes[..6] != MAGIC {
-            return Err("not an .npy file (no \\x93NUMPY magic)".into());
+            return Err(NpyError::NoMagic);
         }
         let (hlen, start) = match bytes[6] {
             1 => (u16::from_le_bytes([bytes[8], bytes[9]]) as usize, 10),
@@ -234,58 +311,53 @@ impl NpyArray {
                 u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]) as usize,
                 12,
             ),
-            v => return Err(format!("unsupported .npy format version {v}")),
+            v => return Err(NpyError::Version(v)),
         };
         let header = bytes
             .get(start..start + hlen)
-            .ok_or("truncated .npy header")?;
-        let header = std::str::from_utf8(header).map_err(|_| "the .npy header is not text")?;
+            .ok_or(NpyError::TruncatedHeader)?;
+        let header = std::str::from_utf8(header).map_err(|_| NpyError::HeaderNotText)?;
         let descr = header_field(header, "descr")
-            .ok_or("the .npy header has no 'descr'")?
+            .ok_or(NpyError::MissingField("descr"))?
             .trim_matches(|c| c == '\'' || c == '"')
             .to_string();
         let dtype = DType::parse(&descr)?;
         let fortran = header_field(header, "fortran_order")
-            .ok_or("the .npy header has no 'fortran_order'")?
+            .ok_or(NpyError::MissingField("fortran_order"))?
             == "True";
-        let shape_text = header_field(header, "shape").ok_or("the .npy header has no 'shape'")?;
+        let shape_text = header_field(header, "shape").ok_or(NpyError::MissingField("shape"))?;
         let shape: Vec<usize> = shape_text
             .trim_matches(|c| c == '(' || c == ')')
             .split(',')
             .map(str::trim)
             .filter(|s| !s.is_empty())
-            .map(|s| s.parse().map_err(|_| format!("bad shape {shape_text}")))
+            .map(|s| s.parse().map_err(|_| NpyError::BadShape(shape_text.into())))
             .collect::<Result<_, _>>()?;
         // No dimension may exceed what the file could hold (issue 23): with another
         // dimension 0 the data check below passes, and readers size buffers from the rest
         // (a `(10**18, 0)` array of triangles asked for 10^18 face counts).
         if let Some(&d) = shape.iter().find(|&&d| d > bytes.len()) {
-            return Err(format!(
-                "shape {} declares a dimension of {d}, more than a {}-byte file can hold",
-                shape_str(&shape),
-                bytes.len()
-            ));
+            return Err(NpyError::DimensionTooLarge {
+                dim: d,
+                file_len: bytes.len(),
+                shape,
+            });
         }
         let n: usize = shape
             .iter()
             .try_fold(1usize, |a, &d| a.checked_mul(d))
-            .ok_or_else(|| format!("shape {} is too large", shape_str(&shape)))?;
+            .ok_or_else(|| NpyError::TooLarge(shape.clone()))?;
         let data = &bytes[start + hlen..];
         let want = n
             .checked_mul(dtype.size())
-            .ok_or_else(|| format!("shape {} is too large", shape_str(&shape)))?;
+            .ok_or_else(|| NpyError::TooLarge(shape.clone()))?;
         if data.len() != want {
-            let what = if data.len() < want {
-                "truncated"
-            } else {
-                "longer than its shape"
-            };
-            return Err(format!(
-                "the .npy data is {what}: shape {} of {} needs {want} bytes, found {}",
-                shape_str(&shape),
-                dtype.descr(),
-                data.len()
-            ));
+            return Err(NpyError::DataSize {
+                shape,
+                dtype,
+                want,
+                found: data.len(),
+            });
         }
         let mut a = NpyArray {
             shape,
@@ -299,14 +371,23 @@ impl NpyArray {
     }
 
     /// Reads an `.npy` file.
-    pub fn read(path: &Path) -> Result<NpyArray, String> {
-        let bytes = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
-        NpyArray::from_bytes(&bytes).map_err(|e| format!("{}: {e}", path.display()))
+    pub fn read(path: &Path) -> Result<NpyArray, NpyError> {
+        let bytes = std::fs::read(path).map_err(|source| NpyError::Io {
+            path: path.into(),
+            source,
+        })?;
+        NpyArray::from_bytes(&bytes).map_err(|e| NpyError::File {
+            path: path.into(),
+            source: Box::new(e),
+        })
     }
 
     /// Writes an `.npy` file.
-    pub fn write(&self, path: &Path) -> Result<(), String> {
-        std::fs::write(path, self.to_bytes()).map_err(|e| format!("{}: {e}", path.display()))
+    pub fn write(&self, path: &Path) -> Result<(), NpyError> {
+        std::fs::write(path, self.to_bytes()).map_err(|source| NpyError::Io {
+            path: path.into(),
+            source,
+        })
     }
 }
 
@@ -419,10 +500,14 @@ mod tests {
         assert!(NpyArray::from_bytes(b"hello").is_err());
         let mut b = NpyArray::from_f64(&[4, 3], &[0.0; 12]).to_bytes();
         b.truncate(b.len() - 8);
-        assert!(NpyArray::from_bytes(&b).unwrap_err().contains("truncated"));
+        assert!(NpyArray::from_bytes(&b)
+            .unwrap_err()
+            .to_string()
+            .contains("truncated"));
         let big = b"\x93NUMPY\x01\x00\x3c\x00{'descr': '>f8', 'fortran_order': False, 'shape': (1,), }    \n";
         assert!(NpyArray::from_bytes(big)
             .unwrap_err()
+            .to_string()
             .contains("big-endian"));
     }
 
@@ -442,18 +527,22 @@ mod tests {
     #[test]
     fn hostile_headers_are_errors() {
         let h = "{'descr': '\u{e9}8', 'fortran_order': False, 'shape': (1,), }";
-        let e = NpyArray::from_bytes(&npy(h, &[0; 8])).unwrap_err();
+        let e = NpyArray::from_bytes(&npy(h, &[0; 8]))
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("unsupported dtype"), "{e}");
         let h = "{'descr': '<f8', 'fortran_order': False, 'shape': (4294967296, 4294967296, 2), }";
-        let e = NpyArray::from_bytes(&npy(h, &[])).unwrap_err();
+        let e = NpyArray::from_bytes(&npy(h, &[])).unwrap_err().to_string();
         assert!(e.contains("declares a dimension of 4294967296"), "{e}");
         let h = "{'descr': '<f8', 'fortran_order': True, 'shape': (100000000000000, 100000000000000, 0), }";
-        let e = NpyArray::from_bytes(&npy(h, &[])).unwrap_err();
+        let e = NpyArray::from_bytes(&npy(h, &[])).unwrap_err().to_string();
         assert!(e.contains("declares a dimension of 100000000000000"), "{e}");
         let h = "{'descr': '<f8', 'fortran_order': True, 'shape': (3, 0), }";
         assert!(NpyArray::from_bytes(&npy(h, &[])).unwrap().is_empty());
         let h = "{'descr': '<i4', 'fortran_order': False, 'shape': (2,), }";
-        let e = NpyArray::from_bytes(&npy(h, &[0; 12])).unwrap_err();
+        let e = NpyArray::from_bytes(&npy(h, &[0; 12]))
+            .unwrap_err()
+            .to_string();
         assert!(
             e.contains("longer than its shape: shape (2,) of <i4 needs 8 bytes, found 12"),
             "{e}"

@@ -1,11 +1,231 @@
 //! Decoding a plugin's response into socket values: JSON literals, and `.npy` arrays that
 //! must stay inside the call folder, checked for shape, finiteness and valid indices.
 
-use crate::plugin::npy::{DType, NpyArray};
+use crate::plugin::npy::{DType, NpyArray, NpyError};
 use cgnodes_api::types::*;
 use serde_json::{Map, Value as J};
+use std::collections::BTreeMap;
 use std::path::{Component, Path};
 use std::sync::Arc;
+
+/// Why a plugin's output could not be read as a value of its socket's type. `key` is the
+/// JSON key naming an array, `what` the part of the value being read (`mesh 'uvs'`).
+#[derive(Debug, thiserror::Error)]
+pub enum DecodeError {
+    /// An array key whose value is not a string.
+    #[error("'{key}' should name an .npy file, got {got}")]
+    NotAFileName {
+        /// The JSON key.
+        key: String,
+        /// The value found instead.
+        got: String,
+    },
+    /// An absolute array path outside the call folder.
+    #[error("'{key}': {path} is outside the call folder; write arrays into the folder the request names")]
+    OutsideFolder {
+        /// The JSON key.
+        key: String,
+        /// The path given.
+        path: String,
+    },
+    /// A relative array path with `..` or a root.
+    #[error("'{key}': {path} leaves the call folder")]
+    LeavesFolder {
+        /// The JSON key.
+        key: String,
+        /// The path given.
+        path: String,
+    },
+    /// An array file that could not be read.
+    #[error("'{key}': {source}")]
+    Array {
+        /// The JSON key.
+        key: String,
+        /// The `.npy` reader's error.
+        source: NpyError,
+    },
+    /// A required array key is absent.
+    #[error("{what} has no '{key}'")]
+    Missing {
+        /// The value being read.
+        what: String,
+        /// The absent key.
+        key: String,
+    },
+    /// A value that should be a JSON object is not.
+    #[error("expected a {ty} object, got {got}")]
+    NotAnObject {
+        /// The socket type.
+        ty: SocketType,
+        /// The start of the JSON found.
+        got: String,
+    },
+    /// Image pixels not of shape (H, W, 3) or (H, W, 4).
+    #[error("image 'pixels' should have shape (H, W, 4) or (H, W, 3), got {0}")]
+    ImageShape(String),
+    /// An image side longer than `u32::MAX` ("wide" or "tall").
+    #[error("image too {0}")]
+    ImageSize(&'static str),
+    /// A points `dim` other than 2 or 3.
+    #[error("points 'dim' should be 2 or 3, got {0}")]
+    PointsDim(J),
+    /// A per-point scalar of the wrong shape.
+    #[error("points scalar '{name}' should have shape ({n},), got {shape}")]
+    ScalarShape {
+        /// The scalar's name.
+        name: String,
+        /// The number of points.
+        n: usize,
+        /// The shape found.
+        shape: String,
+    },
+    /// A per-point vector with a row count other than the number of points.
+    #[error("points vector '{name}' has {rows} rows but there are {n} points")]
+    VectorRows {
+        /// The vector's name.
+        name: String,
+        /// Its rows.
+        rows: usize,
+        /// The number of points.
+        n: usize,
+    },
+    /// A table without `columns`.
+    #[error("a table needs 'columns': {{name: [numbers]}}")]
+    NoColumns,
+    /// A table column that is not a list.
+    #[error("table column '{0}' should be a list of numbers")]
+    ColumnNotList(String),
+    /// A table entry that is not a number.
+    #[error("table column '{name}': {got} is not a number")]
+    ColumnNotNumber {
+        /// The column.
+        name: String,
+        /// The entry.
+        got: J,
+    },
+    /// A structured value (camera, light, ...) that does not deserialize.
+    #[error("not a valid {ty}: {source}")]
+    Serde {
+        /// The socket type.
+        ty: SocketType,
+        /// The deserializer's error.
+        source: serde_json::Error,
+    },
+    /// A scene output: scenes do not cross the plugin boundary.
+    #[error("plugins cannot return scenes")]
+    Scene,
+    /// A list output that is not a JSON array.
+    #[error("expected a list, got {0}")]
+    NotAList(String),
+    /// An item of a list output.
+    #[error("item {index}: {source}")]
+    Item {
+        /// The item's position.
+        index: usize,
+        /// What is wrong with it.
+        source: Box<DecodeError>,
+    },
+    /// A plain value's literal (the graph literal parser's message).
+    #[error("{0}")]
+    Literal(String),
+    /// A mesh `base` that is not a string.
+    #[error("mesh 'base' should name an input socket, got {0}")]
+    BaseNotName(J),
+    /// A mesh `base` naming no mesh input.
+    #[error("mesh 'base' names '{0}', which is not a mesh input")]
+    BaseNotMesh(String),
+    /// Mesh triangles not of shape (F, 3).
+    #[error("mesh 'triangles' should have shape (F, 3), got {0}")]
+    TriangleShape(String),
+    /// Mesh face counts or indices not 1-D.
+    #[error("mesh 'face_counts' and 'face_indices' should be 1-D, got {counts} and {indices}")]
+    FaceArrayShape {
+        /// The counts' shape.
+        counts: String,
+        /// The indices' shape.
+        indices: String,
+    },
+    /// Only one of face counts and face indices.
+    #[error("mesh needs both 'face_counts' and 'face_indices'")]
+    HalfFaces,
+    /// New positions for a base mesh, without new faces, of another length.
+    #[error("mesh 'positions' has {rows} rows but its base mesh has {vertices} vertices (send new faces too)")]
+    PositionsVsBase {
+        /// Rows sent.
+        rows: usize,
+        /// The base mesh's vertices.
+        vertices: usize,
+    },
+    /// Neither positions nor a base.
+    #[error("mesh has no 'positions' (and no 'base')")]
+    NoPositions,
+    /// Positions without faces or a base.
+    #[error(
+        "mesh has no faces: give 'triangles' or 'face_counts' and 'face_indices' (or a 'base')"
+    )]
+    NoFaces,
+    /// The mesh built does not pass its checks.
+    #[error("mesh: {0}")]
+    Mesh(#[from] MeshError),
+    /// A mesh attribute that is not `{"domain", "data"}`.
+    #[error("attribute '{0}' should be {{\"domain\", \"data\"}}")]
+    AttributeNotObject(String),
+    /// A mesh attribute of an unsupported shape.
+    #[error("attribute '{name}' should have shape (n,), (n, 2) or (n, 3), got {shape}")]
+    AttributeShape {
+        /// The attribute.
+        name: String,
+        /// The shape found.
+        shape: String,
+    },
+    /// An integer array that could not be read as integers.
+    #[error(transparent)]
+    Npy(#[from] NpyError),
+    /// A NaN or infinite element.
+    #[error("{what}: element {index} is {value}")]
+    NotFinite {
+        /// The array.
+        what: String,
+        /// The element's position.
+        index: usize,
+        /// Its value.
+        value: f64,
+    },
+    /// An array of rows of the wrong width (`(N, 3)` for positions).
+    #[error("{what} should have shape (N, {width}), got {shape}")]
+    RowShape {
+        /// The array.
+        what: String,
+        /// The row width wanted.
+        width: usize,
+        /// The shape found.
+        shape: String,
+    },
+    /// Mesh index arrays that are not integers.
+    #[error("mesh '{what}': {source}")]
+    Indices {
+        /// The array.
+        what: &'static str,
+        /// The conversion's error.
+        source: NpyError,
+    },
+    /// A negative or too large mesh index.
+    #[error("mesh '{what}': {index} is not a valid index")]
+    BadIndex {
+        /// The array.
+        what: &'static str,
+        /// The index.
+        index: i64,
+    },
+    /// A domain name other than vertex, corner or face.
+    #[error("{what}: unknown domain '{got}' (vertex, corner or face)")]
+    UnknownDomain {
+        /// The key or attribute.
+        what: String,
+        /// The name found.
+        got: String,
+    },
+}
 
 /// Reads a plugin's output `j` as a value of type `ty`. Array paths are resolved in `dir`
 /// and must stay inside it; `inputs` are the values sent, for `"base"` references.
@@ -13,33 +233,39 @@ pub fn decode(
     ty: &SocketType,
     j: &J,
     dir: &Path,
-    inputs: &std::collections::BTreeMap<String, Value>,
-) -> Result<Value, String> {
+    inputs: &BTreeMap<String, Value>,
+) -> Result<Value, DecodeError> {
     let r = Reader { dir, inputs };
     r.value(ty, j)
 }
 
+/// The faces of a mesh as sizes and indices (USD's `faceVertexCounts`/`faceVertexIndices`).
+type Faces = (Vec<u32>, Vec<u32>);
+
 struct Reader<'a> {
     dir: &'a Path,
-    inputs: &'a std::collections::BTreeMap<String, Value>,
+    inputs: &'a BTreeMap<String, Value>,
 }
 
 impl Reader<'_> {
-    fn array(&self, o: &Map<String, J>, key: &str) -> Result<Option<NpyArray>, String> {
+    /// The array named by `o[key]`, if the key is present; the path must stay in the folder.
+    fn array(&self, o: &Map<String, J>, key: &str) -> Result<Option<NpyArray>, DecodeError> {
         let Some(p) = o.get(key) else {
             return Ok(None);
         };
-        let p = p
-            .as_str()
-            .ok_or_else(|| format!("'{key}' should name an .npy file, got {p}"))?;
+        let p = p.as_str().ok_or_else(|| DecodeError::NotAFileName {
+            key: key.into(),
+            got: p.to_string(),
+        })?;
         let path = Path::new(p);
         let path = if path.is_absolute() {
             if !path.starts_with(self.dir)
                 || path.components().any(|c| matches!(c, Component::ParentDir))
             {
-                return Err(format!(
-                    "'{key}': {p} is outside the call folder; write arrays into the folder the request names"
-                ));
+                return Err(DecodeError::OutsideFolder {
+                    key: key.into(),
+                    path: p.into(),
+                });
             }
             path.to_path_buf()
         } else {
@@ -47,219 +273,164 @@ impl Reader<'_> {
                 .components()
                 .any(|c| !matches!(c, Component::Normal(_) | Component::CurDir))
             {
-                return Err(format!("'{key}': {p} leaves the call folder"));
+                return Err(DecodeError::LeavesFolder {
+                    key: key.into(),
+                    path: p.into(),
+                });
             }
             self.dir.join(path)
         };
         NpyArray::read(&path)
             .map(Some)
-            .map_err(|e| format!("'{key}': {e}"))
+            .map_err(|source| DecodeError::Array {
+                key: key.into(),
+                source,
+            })
     }
 
-    fn need(&self, o: &Map<String, J>, key: &str, what: &str) -> Result<NpyArray, String> {
-        self.array(o, key)?
-            .ok_or_else(|| format!("{what} has no '{key}'"))
+    /// The array named by `o[key]`, which must be present (`what` names the value for the
+    /// error).
+    fn need(&self, o: &Map<String, J>, key: &str, what: &str) -> Result<NpyArray, DecodeError> {
+        self.array(o, key)?.ok_or_else(|| DecodeError::Missing {
+            what: what.into(),
+            key: key.into(),
+        })
     }
 
-    fn value(&self, ty: &SocketType, j: &J) -> Result<Value, String> {
+    /// One value of type `ty`: a dispatch over the socket types to their readers.
+    fn value(&self, ty: &SocketType, j: &J) -> Result<Value, DecodeError> {
         use SocketType as T;
         let obj = || {
-            j.as_object()
-                .ok_or_else(|| format!("expected a {ty} object, got {}", brief(j)))
+            j.as_object().ok_or_else(|| DecodeError::NotAnObject {
+                ty: ty.clone(),
+                got: brief(j),
+            })
         };
         Ok(match ty {
             T::Mesh => Value::Mesh(Arc::new(self.mesh(obj()?)?)),
-            T::Image => {
-                let o = obj()?;
-                let a = self.need(o, "pixels", "image")?;
-                let (h, w, c) = match a.shape[..] {
-                    [h, w, c] if c == 3 || c == 4 => (h, w, c),
-                    _ => {
-                        return Err(format!(
-                            "image 'pixels' should have shape (H, W, 4) or (H, W, 3), got {}",
-                            a.shape_str()
-                        ))
-                    }
-                };
-                let v = a.to_f32();
-                let pixels = v
-                    .chunks_exact(c)
-                    .map(|p| [p[0], p[1], p[2], if c == 4 { p[3] } else { 1.0 }])
-                    .collect();
-                Value::Image(Arc::new(Image {
-                    width: u32::try_from(w).map_err(|_| "image too wide")?,
-                    height: u32::try_from(h).map_err(|_| "image too tall")?,
-                    pixels,
-                }))
-            }
-            T::Points => {
-                let o = obj()?;
-                let positions = vec3s(&self.need(o, "positions", "points")?, "points 'positions'")?;
-                let n = positions.len();
-                let dim = match o.get("dim") {
-                    None => 3,
-                    Some(d) => match d.as_u64() {
-                        Some(2) => 2,
-                        Some(3) => 3,
-                        _ => return Err(format!("points 'dim' should be 2 or 3, got {d}")),
-                    },
-                };
-                let mut p = Points {
-                    dim,
-                    positions,
-                    ..Default::default()
-                };
-                if let Some(s) = o.get("scalars").and_then(J::as_object) {
-                    for name in s.keys() {
-                        let a = self.need(s, name, "points 'scalars'")?;
-                        if a.shape != [n] {
-                            return Err(format!(
-                                "points scalar '{name}' should have shape ({n},), got {}",
-                                a.shape_str()
-                            ));
-                        }
-                        p.scalars.insert(name.clone(), finite(a.to_f64(), name)?);
-                    }
-                }
-                if let Some(s) = o.get("vectors").and_then(J::as_object) {
-                    for name in s.keys() {
-                        let v = vec3s(&self.need(s, name, "points 'vectors'")?, name)?;
-                        if v.len() != n {
-                            return Err(format!(
-                                "points vector '{name}' has {} rows but there are {n} points",
-                                v.len()
-                            ));
-                        }
-                        p.vectors.insert(name.clone(), v);
-                    }
-                }
-                Value::Points(Arc::new(p))
-            }
-            T::Curve => {
-                let o = obj()?;
-                let points = vec3s(&self.need(o, "points", "curve")?, "curve 'points'")?;
-                let closed = o.get("closed").and_then(J::as_bool).unwrap_or(false);
-                Value::Curve(Arc::new(Curve { points, closed }))
-            }
-            T::Table => {
-                let o = obj()?;
-                let cols = o
-                    .get("columns")
-                    .and_then(J::as_object)
-                    .ok_or("a table needs 'columns': {name: [numbers]}")?;
-                let order: Vec<String> = match o.get("order").and_then(J::as_array) {
-                    Some(a) => a
-                        .iter()
-                        .filter_map(|x| x.as_str().map(String::from))
-                        .collect(),
-                    None => cols.keys().cloned().collect(),
-                };
-                let mut t = Table::default();
-                for name in order {
-                    let col = cols.get(&name).and_then(J::as_array).ok_or_else(|| {
-                        format!("table column '{name}' should be a list of numbers")
-                    })?;
-                    let vals = col
-                        .iter()
-                        .map(|x| {
-                            x.as_f64().ok_or_else(|| {
-                                format!("table column '{name}': {x} is not a number")
-                            })
-                        })
-                        .collect::<Result<Vec<_>, _>>()?;
-                    t.columns.push((name, vals));
-                }
-                if let Some(m) = o.get("meta").and_then(J::as_object) {
-                    for (k, v) in m {
-                        let s = v
-                            .as_str()
-                            .map(String::from)
-                            .unwrap_or_else(|| v.to_string());
-                        t.meta.insert(k.clone(), s);
-                    }
-                }
-                Value::Table(Arc::new(t))
-            }
+            T::Image => Value::Image(Arc::new(self.image(obj()?)?)),
+            T::Points => Value::Points(Arc::new(self.points(obj()?)?)),
+            T::Curve => Value::Curve(Arc::new(self.curve(obj()?)?)),
+            T::Table => Value::Table(Arc::new(table(obj()?)?)),
             T::Camera => Value::Camera(Arc::new(from_serde(j, ty)?)),
             T::Light => Value::Light(Arc::new(from_serde(j, ty)?)),
             T::Material => Value::Material(Arc::new(from_serde(j, ty)?)),
             T::Skeleton => Value::Skeleton(Arc::new(from_serde(j, ty)?)),
             T::Model => Value::Model(Arc::new(from_serde(j, ty)?)),
-            T::Scene => return Err("plugins cannot return scenes".into()),
-            T::List(inner) => {
-                let items = j
-                    .as_array()
-                    .ok_or_else(|| format!("expected a list, got {}", brief(j)))?;
-                Value::List(Arc::new(
-                    items
-                        .iter()
-                        .enumerate()
-                        .map(|(i, x)| self.value(inner, x).map_err(|e| format!("item {i}: {e}")))
-                        .collect::<Result<_, _>>()?,
-                ))
-            }
-            plain => Value::from_json(plain, j)?,
+            T::Scene => return Err(DecodeError::Scene),
+            T::List(inner) => self.list(inner, j)?,
+            plain => Value::from_json(plain, j).map_err(DecodeError::Literal)?,
         })
     }
 
-    fn mesh(&self, o: &Map<String, J>) -> Result<Mesh, String> {
-        let base = match o.get("base") {
-            None => None,
-            Some(b) => {
-                let name = b
-                    .as_str()
-                    .ok_or_else(|| format!("mesh 'base' should name an input socket, got {b}"))?;
-                match self.inputs.get(name) {
-                    Some(Value::Mesh(m)) => Some(m.clone()),
-                    _ => {
-                        return Err(format!(
-                            "mesh 'base' names '{name}', which is not a mesh input"
-                        ))
-                    }
-                }
-            }
+    /// A list of `inner` values from a JSON array; errors name the item.
+    fn list(&self, inner: &SocketType, j: &J) -> Result<Value, DecodeError> {
+        let items = j
+            .as_array()
+            .ok_or_else(|| DecodeError::NotAList(brief(j)))?;
+        Ok(Value::List(Arc::new(
+            items
+                .iter()
+                .enumerate()
+                .map(|(index, x)| {
+                    self.value(inner, x).map_err(|e| DecodeError::Item {
+                        index,
+                        source: Box::new(e),
+                    })
+                })
+                .collect::<Result<_, _>>()?,
+        )))
+    }
+
+    /// An image from `pixels`, (H, W, 4) or (H, W, 3) (alpha 1).
+    fn image(&self, o: &Map<String, J>) -> Result<Image, DecodeError> {
+        let a = self.need(o, "pixels", "image")?;
+        let (h, w, c) = match a.shape[..] {
+            [h, w, c] if c == 3 || c == 4 => (h, w, c),
+            _ => return Err(DecodeError::ImageShape(a.shape_str())),
         };
+        let v = a.to_f32();
+        let pixels = v
+            .chunks_exact(c)
+            .map(|p| [p[0], p[1], p[2], if c == 4 { p[3] } else { 1.0 }])
+            .collect();
+        Ok(Image {
+            width: u32::try_from(w).map_err(|_| DecodeError::ImageSize("wide"))?,
+            height: u32::try_from(h).map_err(|_| DecodeError::ImageSize("tall"))?,
+            pixels,
+        })
+    }
+
+    /// Points from `positions`, `dim`, and named per-point `scalars` and `vectors`.
+    fn points(&self, o: &Map<String, J>) -> Result<Points, DecodeError> {
+        let positions = vec3s(&self.need(o, "positions", "points")?, "points 'positions'")?;
+        let n = positions.len();
+        let dim = match o.get("dim") {
+            None => 3,
+            Some(d) => match d.as_u64() {
+                Some(2) => 2,
+                Some(3) => 3,
+                _ => return Err(DecodeError::PointsDim(d.clone())),
+            },
+        };
+        let mut p = Points {
+            dim,
+            positions,
+            ..Default::default()
+        };
+        if let Some(s) = o.get("scalars").and_then(J::as_object) {
+            for name in s.keys() {
+                let a = self.need(s, name, "points 'scalars'")?;
+                if a.shape != [n] {
+                    return Err(DecodeError::ScalarShape {
+                        name: name.clone(),
+                        n,
+                        shape: a.shape_str(),
+                    });
+                }
+                p.scalars.insert(name.clone(), finite(a.to_f64(), name)?);
+            }
+        }
+        if let Some(s) = o.get("vectors").and_then(J::as_object) {
+            for name in s.keys() {
+                let v = vec3s(&self.need(s, name, "points 'vectors'")?, name)?;
+                if v.len() != n {
+                    return Err(DecodeError::VectorRows {
+                        name: name.clone(),
+                        rows: v.len(),
+                        n,
+                    });
+                }
+                p.vectors.insert(name.clone(), v);
+            }
+        }
+        Ok(p)
+    }
+
+    /// A polyline from `points` and `closed`.
+    fn curve(&self, o: &Map<String, J>) -> Result<Curve, DecodeError> {
+        let points = vec3s(&self.need(o, "points", "curve")?, "curve 'points'")?;
+        let closed = o.get("closed").and_then(J::as_bool).unwrap_or(false);
+        Ok(Curve { points, closed })
+    }
+
+    /// A mesh: a `base` input, new positions and faces, then its attributes; checked.
+    fn mesh(&self, o: &Map<String, J>) -> Result<Mesh, DecodeError> {
+        let base = self.base(o)?;
         let positions = match self.array(o, "positions")? {
             Some(a) => Some(vec3s(&a, "mesh 'positions'")?),
             None => None,
         };
-        let faces = if let Some(t) = self.array(o, "triangles")? {
-            if t.shape.len() != 2 || t.shape[1] != 3 {
-                return Err(format!(
-                    "mesh 'triangles' should have shape (F, 3), got {}",
-                    t.shape_str()
-                ));
-            }
-            Some((vec![3u32; t.shape[0]], indices(&t, "triangles")?))
-        } else {
-            match (
-                self.array(o, "face_counts")?,
-                self.array(o, "face_indices")?,
-            ) {
-                (Some(c), Some(i)) => {
-                    if c.shape.len() != 1 || i.shape.len() != 1 {
-                        return Err(format!(
-                            "mesh 'face_counts' and 'face_indices' should be 1-D, got {} and {}",
-                            c.shape_str(),
-                            i.shape_str()
-                        ));
-                    }
-                    Some((indices(&c, "face_counts")?, indices(&i, "face_indices")?))
-                }
-                (None, None) => None,
-                _ => return Err("mesh needs both 'face_counts' and 'face_indices'".into()),
-            }
-        };
+        let faces = self.faces(o)?;
         let mut mesh = match (base, positions, faces) {
             (Some(b), p, f) => {
                 let mut m = (*b).clone();
                 if let Some(p) = p {
                     if f.is_none() && p.len() != m.positions.len() {
-                        return Err(format!(
-                            "mesh 'positions' has {} rows but its base mesh has {} vertices (send new faces too)",
-                            p.len(),
-                            m.positions.len()
-                        ));
+                        return Err(DecodeError::PositionsVsBase {
+                            rows: p.len(),
+                            vertices: m.positions.len(),
+                        });
                     }
                     m.positions = p;
                 }
@@ -268,14 +439,61 @@ impl Reader<'_> {
                 }
                 m
             }
-            (None, Some(p), Some((c, i))) => {
-                Mesh::new(p, c, i).map_err(|e| format!("mesh: {e}"))?
-            }
-            (None, None, _) => return Err("mesh has no 'positions' (and no 'base')".into()),
-            (None, Some(_), None) => {
-                return Err("mesh has no faces: give 'triangles' or 'face_counts' and 'face_indices' (or a 'base')".into())
-            }
+            (None, Some(p), Some((c, i))) => Mesh::new(p, c, i)?,
+            (None, None, _) => return Err(DecodeError::NoPositions),
+            (None, Some(_), None) => return Err(DecodeError::NoFaces),
         };
+        self.standard_attributes(o, &mut mesh)?;
+        self.custom_attributes(o, &mut mesh)?;
+        mesh.check()?;
+        Ok(mesh)
+    }
+
+    /// The input mesh named by `base`, which the response edits instead of sending it back.
+    fn base(&self, o: &Map<String, J>) -> Result<Option<Arc<Mesh>>, DecodeError> {
+        let Some(b) = o.get("base") else {
+            return Ok(None);
+        };
+        let name = b
+            .as_str()
+            .ok_or_else(|| DecodeError::BaseNotName(b.clone()))?;
+        match self.inputs.get(name) {
+            Some(Value::Mesh(m)) => Ok(Some(m.clone())),
+            _ => Err(DecodeError::BaseNotMesh(name.into())),
+        }
+    }
+
+    /// The faces, from `triangles` (F, 3) or from `face_counts` with `face_indices`.
+    fn faces(&self, o: &Map<String, J>) -> Result<Option<Faces>, DecodeError> {
+        if let Some(t) = self.array(o, "triangles")? {
+            if t.shape.len() != 2 || t.shape[1] != 3 {
+                return Err(DecodeError::TriangleShape(t.shape_str()));
+            }
+            return Ok(Some((vec![3u32; t.shape[0]], indices(&t, "triangles")?)));
+        }
+        match (
+            self.array(o, "face_counts")?,
+            self.array(o, "face_indices")?,
+        ) {
+            (Some(c), Some(i)) => {
+                if c.shape.len() != 1 || i.shape.len() != 1 {
+                    return Err(DecodeError::FaceArrayShape {
+                        counts: c.shape_str(),
+                        indices: i.shape_str(),
+                    });
+                }
+                Ok(Some((
+                    indices(&c, "face_counts")?,
+                    indices(&i, "face_indices")?,
+                )))
+            }
+            (None, None) => Ok(None),
+            _ => Err(DecodeError::HalfFaces),
+        }
+    }
+
+    /// The mesh's `uvs`, `normals` and `colors`, each with its `*_domain`.
+    fn standard_attributes(&self, o: &Map<String, J>, mesh: &mut Mesh) -> Result<(), DecodeError> {
         if let Some(a) = self.array(o, "uvs")? {
             let d = parse_domain(o.get("uv_domain").unwrap_or(&J::Null), "uv_domain")?;
             mesh.uvs = Some(Attribute {
@@ -297,49 +515,99 @@ impl Reader<'_> {
                 values: vec3s(&a, "mesh 'colors'")?,
             });
         }
-        if let Some(attrs) = o.get("attributes").and_then(J::as_object) {
-            for (name, spec) in attrs {
-                let spec = spec.as_object().ok_or_else(|| {
-                    format!("attribute '{name}' should be {{\"domain\", \"data\"}}")
-                })?;
-                let d = parse_domain(spec.get("domain").unwrap_or(&J::Null), name)?;
-                let a = self.need(spec, "data", &format!("attribute '{name}'"))?;
-                let data = match (a.shape.len(), a.shape.get(1)) {
-                    (1, _) if matches!(a.dtype, DType::F32 | DType::F64) => {
-                        AttributeData::Float(Attribute {
-                            domain: d,
-                            values: finite(a.to_f64(), name)?,
-                        })
-                    }
-                    (1, _) => AttributeData::Int(Attribute {
+        Ok(())
+    }
+
+    /// The mesh's named `attributes`: float or int (n,), vec2 (n, 2) or vec3 (n, 3).
+    fn custom_attributes(&self, o: &Map<String, J>, mesh: &mut Mesh) -> Result<(), DecodeError> {
+        let Some(attrs) = o.get("attributes").and_then(J::as_object) else {
+            return Ok(());
+        };
+        for (name, spec) in attrs {
+            let spec = spec
+                .as_object()
+                .ok_or_else(|| DecodeError::AttributeNotObject(name.clone()))?;
+            let d = parse_domain(spec.get("domain").unwrap_or(&J::Null), name)?;
+            let a = self.need(spec, "data", &format!("attribute '{name}'"))?;
+            let data = match (a.shape.len(), a.shape.get(1)) {
+                (1, _) if matches!(a.dtype, DType::F32 | DType::F64) => {
+                    AttributeData::Float(Attribute {
                         domain: d,
-                        values: a.to_i64()?,
-                    }),
-                    (2, Some(2)) => AttributeData::Vec2(Attribute {
-                        domain: d,
-                        values: vec2s(&a, name)?,
-                    }),
-                    (2, Some(3)) => AttributeData::Vec3(Attribute {
-                        domain: d,
-                        values: vec3s(&a, name)?,
-                    }),
-                    _ => {
-                        return Err(format!(
-                            "attribute '{name}' should have shape (n,), (n, 2) or (n, 3), got {}",
-                            a.shape_str()
-                        ))
-                    }
-                };
-                mesh.attributes.insert(name.clone(), data);
-            }
+                        values: finite(a.to_f64(), name)?,
+                    })
+                }
+                (1, _) => AttributeData::Int(Attribute {
+                    domain: d,
+                    values: a.to_i64()?,
+                }),
+                (2, Some(2)) => AttributeData::Vec2(Attribute {
+                    domain: d,
+                    values: vec2s(&a, name)?,
+                }),
+                (2, Some(3)) => AttributeData::Vec3(Attribute {
+                    domain: d,
+                    values: vec3s(&a, name)?,
+                }),
+                _ => {
+                    return Err(DecodeError::AttributeShape {
+                        name: name.clone(),
+                        shape: a.shape_str(),
+                    })
+                }
+            };
+            mesh.attributes.insert(name.clone(), data);
         }
-        mesh.check().map_err(|e| format!("mesh: {e}"))?;
-        Ok(mesh)
+        Ok(())
     }
 }
 
-fn from_serde<T: serde::de::DeserializeOwned>(j: &J, ty: &SocketType) -> Result<T, String> {
-    serde_json::from_value(j.clone()).map_err(|e| format!("not a valid {ty}: {e}"))
+/// A table from `columns` ({name: [numbers]}), their `order`, and string `meta`.
+fn table(o: &Map<String, J>) -> Result<Table, DecodeError> {
+    let cols = o
+        .get("columns")
+        .and_then(J::as_object)
+        .ok_or(DecodeError::NoColumns)?;
+    let order: Vec<String> = match o.get("order").and_then(J::as_array) {
+        Some(a) => a
+            .iter()
+            .filter_map(|x| x.as_str().map(String::from))
+            .collect(),
+        None => cols.keys().cloned().collect(),
+    };
+    let mut t = Table::default();
+    for name in order {
+        let col = cols
+            .get(&name)
+            .and_then(J::as_array)
+            .ok_or_else(|| DecodeError::ColumnNotList(name.clone()))?;
+        let vals = col
+            .iter()
+            .map(|x| {
+                x.as_f64().ok_or_else(|| DecodeError::ColumnNotNumber {
+                    name: name.clone(),
+                    got: x.clone(),
+                })
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        t.columns.push((name, vals));
+    }
+    if let Some(m) = o.get("meta").and_then(J::as_object) {
+        for (k, v) in m {
+            let s = v
+                .as_str()
+                .map(String::from)
+                .unwrap_or_else(|| v.to_string());
+            t.meta.insert(k.clone(), s);
+        }
+    }
+    Ok(t)
+}
+
+fn from_serde<T: serde::de::DeserializeOwned>(j: &J, ty: &SocketType) -> Result<T, DecodeError> {
+    serde_json::from_value(j.clone()).map_err(|source| DecodeError::Serde {
+        ty: ty.clone(),
+        source,
+    })
 }
 
 fn brief(j: &J) -> String {
@@ -351,50 +619,56 @@ fn brief(j: &J) -> String {
     }
 }
 
-fn finite(v: Vec<f64>, what: &str) -> Result<Vec<f64>, String> {
+fn finite(v: Vec<f64>, what: &str) -> Result<Vec<f64>, DecodeError> {
     match v.iter().position(|x| !x.is_finite()) {
-        Some(i) => Err(format!("{what}: element {i} is {}", v[i])),
+        Some(index) => Err(DecodeError::NotFinite {
+            what: what.into(),
+            index,
+            value: v[index],
+        }),
         None => Ok(v),
     }
 }
 
-fn vec3s(a: &NpyArray, what: &str) -> Result<Vec<[f64; 3]>, String> {
-    if a.shape.len() != 2 || a.shape[1] != 3 {
-        return Err(format!(
-            "{what} should have shape (N, 3), got {}",
-            a.shape_str()
-        ));
+/// Rows of `width` values from an (N, width) array, finite.
+fn rows<const W: usize>(a: &NpyArray, what: &str) -> Result<Vec<[f64; W]>, DecodeError> {
+    if a.shape.len() != 2 || a.shape[1] != W {
+        return Err(DecodeError::RowShape {
+            what: what.into(),
+            width: W,
+            shape: a.shape_str(),
+        });
     }
     let v = finite(a.to_f64(), what)?;
-    Ok(v.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())
+    Ok(v.chunks_exact(W)
+        .map(|c| std::array::from_fn(|k| c[k]))
+        .collect())
 }
 
-fn vec2s(a: &NpyArray, what: &str) -> Result<Vec<[f64; 2]>, String> {
-    if a.shape.len() != 2 || a.shape[1] != 2 {
-        return Err(format!(
-            "{what} should have shape (N, 2), got {}",
-            a.shape_str()
-        ));
-    }
-    let v = finite(a.to_f64(), what)?;
-    Ok(v.chunks_exact(2).map(|c| [c[0], c[1]]).collect())
+fn vec3s(a: &NpyArray, what: &str) -> Result<Vec<[f64; 3]>, DecodeError> {
+    rows::<3>(a, what)
 }
 
-fn indices(a: &NpyArray, what: &str) -> Result<Vec<u32>, String> {
+fn vec2s(a: &NpyArray, what: &str) -> Result<Vec<[f64; 2]>, DecodeError> {
+    rows::<2>(a, what)
+}
+
+fn indices(a: &NpyArray, what: &'static str) -> Result<Vec<u32>, DecodeError> {
     a.to_i64()
-        .map_err(|e| format!("mesh '{what}': {e}"))?
+        .map_err(|source| DecodeError::Indices { what, source })?
         .into_iter()
-        .map(|i| u32::try_from(i).map_err(|_| format!("mesh '{what}': {i} is not a valid index")))
+        .map(|index| u32::try_from(index).map_err(|_| DecodeError::BadIndex { what, index }))
         .collect()
 }
 
-fn parse_domain(s: &J, what: &str) -> Result<Domain, String> {
+fn parse_domain(s: &J, what: &str) -> Result<Domain, DecodeError> {
     match s.as_str() {
         Some("vertex") | None => Ok(Domain::Vertex),
         Some("corner") => Ok(Domain::Corner),
         Some("face") => Ok(Domain::Face),
-        Some(o) => Err(format!(
-            "{what}: unknown domain '{o}' (vertex, corner or face)"
-        )),
+        Some(o) => Err(DecodeError::UnknownDomain {
+            what: what.into(),
+            got: o.into(),
+        }),
     }
 }

@@ -1,14 +1,31 @@
 //! Encoding socket values for a plugin request: arrays into `.npy` files in the call
 //! folder, named from the socket, and the JSON that points at them.
 
-use crate::plugin::npy::NpyArray;
+use crate::plugin::npy::{NpyArray, NpyError};
 use cgnodes_api::types::*;
 use serde_json::{json, Map, Value as J};
 use std::path::Path;
 
+/// Why a value could not be sent to a plugin.
+#[derive(Debug, thiserror::Error)]
+pub enum EncodeError {
+    /// An array file could not be written.
+    #[error(transparent)]
+    Npy(#[from] NpyError),
+    /// A structured value did not serialize.
+    #[error("{0}")]
+    Serde(#[from] serde_json::Error),
+    /// A scene input: scenes do not cross the plugin boundary.
+    #[error("scenes cannot be sent to plugins")]
+    Scene,
+    /// A plain value without a JSON literal.
+    #[error("no JSON form for {0}")]
+    NoJson(SocketType),
+}
+
 /// Writes the arrays of `v` into `dir` (file names starting with `stem`) and returns its JSON
 /// form. Array paths in the JSON are absolute.
-pub fn encode(v: &Value, dir: &Path, stem: &str) -> Result<J, String> {
+pub fn encode(v: &Value, dir: &Path, stem: &str) -> Result<J, EncodeError> {
     let mut w = Writer { dir, stem };
     w.value(v, "")
 }
@@ -19,18 +36,18 @@ struct Writer<'a> {
 }
 
 impl Writer<'_> {
-    fn array(&mut self, suffix: &str, a: &NpyArray) -> Result<J, String> {
+    fn array(&mut self, suffix: &str, a: &NpyArray) -> Result<J, EncodeError> {
         let p = self.dir.join(format!("{}{suffix}.npy", self.stem));
         a.write(&p)?;
         Ok(J::String(p.to_string_lossy().into_owned()))
     }
 
-    fn vec3s(&mut self, suffix: &str, v: &[[f64; 3]]) -> Result<J, String> {
+    fn vec3s(&mut self, suffix: &str, v: &[[f64; 3]]) -> Result<J, EncodeError> {
         let flat: Vec<f64> = v.iter().flatten().copied().collect();
         self.array(suffix, &NpyArray::from_f64(&[v.len(), 3], &flat))
     }
 
-    fn value(&mut self, v: &Value, sub: &str) -> Result<J, String> {
+    fn value(&mut self, v: &Value, sub: &str) -> Result<J, EncodeError> {
         Ok(match v {
             Value::Mesh(m) => self.mesh(m, sub)?,
             Value::Image(img) => {
@@ -74,7 +91,7 @@ impl Writer<'_> {
             Value::Material(m) => serde(&**m)?,
             Value::Skeleton(s) => serde(&**s)?,
             Value::Model(m) => serde(&**m)?,
-            Value::Scene(_) => return Err("scenes cannot be sent to plugins".into()),
+            Value::Scene(_) => return Err(EncodeError::Scene),
             Value::List(items) => J::Array(
                 items
                     .iter()
@@ -84,11 +101,11 @@ impl Writer<'_> {
             ),
             plain => plain
                 .to_json()
-                .ok_or_else(|| format!("no JSON form for {}", plain.socket_type()))?,
+                .ok_or_else(|| EncodeError::NoJson(plain.socket_type()))?,
         })
     }
 
-    fn mesh(&mut self, m: &Mesh, sub: &str) -> Result<J, String> {
+    fn mesh(&mut self, m: &Mesh, sub: &str) -> Result<J, EncodeError> {
         let counts: Vec<i32> = m.face_counts().iter().map(|&c| c as i32).collect();
         let idx: Vec<i32> = m.face_indices().iter().map(|&c| c as i32).collect();
         let mut o = Map::new();
@@ -168,8 +185,8 @@ impl Writer<'_> {
     }
 }
 
-fn serde<T: serde::Serialize>(x: &T) -> Result<J, String> {
-    serde_json::to_value(x).map_err(|e| e.to_string())
+fn serde<T: serde::Serialize>(x: &T) -> Result<J, EncodeError> {
+    Ok(serde_json::to_value(x)?)
 }
 
 /// A name made safe for a file name.

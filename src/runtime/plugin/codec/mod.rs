@@ -8,8 +8,8 @@ mod encode;
 #[cfg(test)]
 mod tests;
 
-pub use decode::decode;
-pub use encode::encode;
+pub use decode::{decode, DecodeError};
+pub use encode::{encode, EncodeError};
 
 use cgnodes_api::types::SocketType;
 

@@ -51,7 +51,8 @@ fn meshes_round_trip_and_bad_outputs_are_refused() {
         dir,
         &inputs,
     )
-    .unwrap_err();
+    .unwrap_err()
+    .to_string();
     assert!(e.contains("refers to vertex 3"), "{e}");
     // Float indices, a path out of the folder, a base that is not a mesh input.
     write("tf.npy", NpyArray::from_f64(&[1, 3], &[0.0, 1.0, 2.0]));
@@ -61,7 +62,8 @@ fn meshes_round_trip_and_bad_outputs_are_refused() {
         dir,
         &inputs,
     )
-    .unwrap_err();
+    .unwrap_err()
+    .to_string();
     assert!(e.contains("integer"), "{e}");
     let e = decode(
         &SocketType::Mesh,
@@ -69,7 +71,8 @@ fn meshes_round_trip_and_bad_outputs_are_refused() {
         dir,
         &inputs,
     )
-    .unwrap_err();
+    .unwrap_err()
+    .to_string();
     assert!(e.contains("leaves the call folder"), "{e}");
     let e = decode(
         &SocketType::Mesh,
@@ -77,7 +80,8 @@ fn meshes_round_trip_and_bad_outputs_are_refused() {
         dir,
         &inputs,
     )
-    .unwrap_err();
+    .unwrap_err()
+    .to_string();
     assert!(e.contains("not a mesh input"), "{e}");
 }
 
@@ -107,6 +111,7 @@ fn images_accept_rgb_and_refuse_other_shapes() {
         dir,
         &BTreeMap::new(),
     )
-    .unwrap_err();
+    .unwrap_err()
+    .to_string();
     assert!(e.contains("(H, W, 4)"), "{e}");
 }

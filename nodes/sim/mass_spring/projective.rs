@@ -13,8 +13,7 @@
 //! vertices inside the contact radius are projected onto it and lose their inward normal
 //! velocity, so the prefactored matrix stays valid.
 
-use super::simulator::SetupError;
-use super::springs::{axpy, dot, norm, scale, sub, Model, Sphere, State};
+use super::springs::{axpy, dot, norm, scale, sub, Model, SetupError, Sphere, State};
 use cgnodes_linalg::SpdFactor;
 use faer::sparse::Triplet;
 use faer::{Mat, Par};

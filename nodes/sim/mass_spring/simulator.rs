@@ -6,7 +6,8 @@
 use super::implicit::{Implicit, NewtonError, NewtonOptions, NewtonProfile};
 use super::projective::Projective;
 use super::semi_implicit::SemiImplicit;
-use super::springs::{self, energy, Energy, Model, ModelError, Sphere, State};
+pub use super::springs::SetupError;
+use super::springs::{self, energy, Energy, Model, Sphere, State};
 
 /// Which time integrator advances the system.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -54,20 +55,6 @@ pub struct StepLog {
     pub energy: Energy,
     /// Newton iterations (implicit), local/global iterations (projective), 0 otherwise.
     pub iterations: usize,
-}
-
-/// Why a simulator could not be built.
-#[derive(Clone, Debug, PartialEq, thiserror::Error)]
-pub enum SetupError {
-    /// The model is inconsistent (`Model::check`).
-    #[error(transparent)]
-    Model(#[from] ModelError),
-    /// The initial state or the time step is invalid.
-    #[error("{0}")]
-    Invalid(String),
-    /// The projective integrator's global matrix could not be factored.
-    #[error("{0}")]
-    NotPositiveDefinite(String),
 }
 
 /// Why `Simulator::move_fixed` refused a target.

@@ -480,6 +480,21 @@ pub fn spring_hessian_psd(d: [f64; 3], rest: f64, k: f64) -> [[f64; 3]; 3] {
 
 pub use cgnodes_api::types::vec3::{axpy, dot, norm, scale, sub};
 
+/// Why a simulator over a model could not be built (here, below both the `Simulator` and
+/// the integrators that report it).
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum SetupError {
+    /// The model is inconsistent (`Model::check`).
+    #[error(transparent)]
+    Model(#[from] ModelError),
+    /// The initial state or the time step is invalid.
+    #[error("{0}")]
+    Invalid(String),
+    /// The projective integrator's global matrix could not be factored.
+    #[error("{0}")]
+    NotPositiveDefinite(String),
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

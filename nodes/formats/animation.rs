@@ -364,15 +364,16 @@ impl FramePattern {
 pub fn declare_options(b: &mut NodeBuilder) {
     b.add_choice::<AnimFormat>("format")
         .doc("gif (256 colours a frame) or apng (lossless).");
+    let d = AnimOptions::default();
     b.add_input::<f64>("fps")
-        .default(12.0)
+        .default(d.fps)
         .range(0.1, 100.0)
         .doc("Frames per second.");
     b.add_input::<bool>("loop")
-        .default(true)
+        .default(d.looped)
         .doc("Loop forever (else play once).");
     b.add_input::<i64>("max_width")
-        .default(0)
+        .default(d.max_width as i64)
         .range(0.0, 65535.0)
         .doc("Downscale wider frames to this width (aspect kept); 0 keeps the size.");
 }

@@ -68,17 +68,18 @@ fn declare(b: &mut NodeBuilder) {
         .doc("CSV with columns sx,sy,tx,ty, instead of the two lists.");
     b.add_choice::<Method>("method")
         .doc("idw, rbf (with affine part), mls_affine, mls_similarity, mls_rigid.");
+    let d = WarpParams::default();
     b.add_input::<f64>("mu")
-        .default(2.0)
+        .default(d.mu)
         .range(1e-3, 64.0)
         .doc("IDW exponent: weights 1 / |x - p_i|^mu.");
     b.add_choice::<Kernel>("kernel").doc("RBF kernel.");
     b.add_input::<f64>("radius")
-        .default(0.0)
+        .default(d.radius)
         .min(0.0)
         .doc("RBF radius in pixels; 0 = each centre's distance to its nearest other centre.");
     b.add_input::<f64>("alpha")
-        .default(1.0)
+        .default(d.alpha)
         .range(1e-3, 32.0)
         .doc("MLS weight exponent: weights 1 / |p_i - v|^(2 alpha).");
     b.add_choice::<Mapping>("mapping")

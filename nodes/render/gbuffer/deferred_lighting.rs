@@ -54,11 +54,7 @@ impl Default for Lighting {
             metallic: 0.0,
             roughness: 0.5,
             background: [0.05; 3],
-            shadow: ShadowParams {
-                pcf_radius: 1,
-                bias: 1.0,
-                slope_bias: 1.5,
-            },
+            shadow: ShadowParams::default(),
         }
     }
 }
@@ -136,21 +132,22 @@ fn declare(b: &mut NodeBuilder) {
     b.add_input::<Vec<Image>>("shadows")
         .optional()
         .doc("Shadow maps from shadow_mapping of the same scene, one per light.");
+    let d = Lighting::default();
     b.add_input::<f64>("metallic")
-        .default(0.0)
+        .default(d.metallic)
         .range(0.0, 1.0)
         .doc("Metallic without a metallic_roughness pass (ks = 0.8 metallic).");
     b.add_input::<f64>("roughness")
-        .default(0.5)
+        .default(d.roughness)
         .range(0.0, 1.0)
         .doc("Roughness without a metallic_roughness pass (sets the exponent).");
     b.add_input::<f64>("ambient")
-        .default(0.2)
+        .default(d.ambient)
         .range(0.0, 10.0)
         .doc("Ambient term ka*Ia, times the base colour.");
     crate::raster::render_raster::declare_shadow_params(b);
     b.add_input::<Color>("background")
-        .default(Color([0.05, 0.05, 0.05]))
+        .default(Color(d.background))
         .doc("Colour where no surface is.");
     b.add_output::<Image>("color").doc("Lit linear colour.");
 }

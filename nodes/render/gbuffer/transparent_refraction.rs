@@ -237,23 +237,24 @@ fn declare(b: &mut NodeBuilder) {
     b.add_input::<Image>("base_color")
         .optional()
         .doc("Base colour pass, the transmission tint when 'tint' is on.");
+    let d = Refraction::default();
     b.add_input::<f64>("ior")
-        .default(1.5)
+        .default(d.ior)
         .range(1.0, 4.0)
         .doc("Index of refraction (the course's shader uses 1.5).");
     b.add_input::<f64>("highlight")
-        .default(1.0)
+        .default(d.highlight)
         .range(0.0, 100.0)
         .doc("Weight of the lights' specular highlights (0: none).");
     b.add_input::<f64>("shininess")
-        .default(200.0)
+        .default(d.shininess)
         .range(1.0, 1e4)
         .doc("Blinn-Phong exponent of the highlights.");
     b.add_input::<bool>("tint")
-        .default(false)
+        .default(d.tint)
         .doc("Multiply the refracted light by the base colour.");
     b.add_input::<bool>("exit")
-        .default(true)
+        .default(d.exit)
         .doc("Refract out of the object's back too (its osculating sphere); off: one refraction, as the course's shader.");
     b.add_input::<Color>("background")
         .default(Color([0.0, 0.0, 0.0]))

@@ -107,11 +107,7 @@ impl Default for RasterOptions {
             cull_backfaces: false,
             shadows: true,
             shadow_resolution: 2048,
-            shadow: ShadowParams {
-                pcf_radius: 1,
-                bias: 1.0,
-                slope_bias: 1.5,
-            },
+            shadow: ShadowParams::default(),
             ambient: 0.2,
             wrap: Wrap::Repeat,
             mipmaps: true,

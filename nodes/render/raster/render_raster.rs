@@ -17,7 +17,7 @@ impl Choice for AntiAliasing {
 /// The shadow lookup's sockets (`pcf_radius`, `shadow_bias`, `shadow_slope_bias`), shared by
 /// `render_raster` and the G-buffer's `deferred_lighting`.
 pub(crate) fn declare_shadow_params(b: &mut NodeBuilder) {
-    let d = RasterOptions::default().shadow;
+    let d = ShadowParams::default();
     b.add_input::<i64>("pcf_radius")
         .default(d.pcf_radius as i64)
         .range(0.0, 4.0)

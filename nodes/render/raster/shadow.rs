@@ -28,6 +28,18 @@ pub struct ShadowParams {
     pub slope_bias: f64,
 }
 
+impl Default for ShadowParams {
+    /// One PCF ring, a one-texel constant bias and 1.5 texels of slope bias: the defaults of
+    /// `render_raster` and `deferred_lighting`.
+    fn default() -> Self {
+        ShadowParams {
+            pcf_radius: 1,
+            bias: 1.0,
+            slope_bias: 1.5,
+        }
+    }
+}
+
 /// One square depth map with a projection into it.
 #[derive(Clone, Debug)]
 pub struct Face {

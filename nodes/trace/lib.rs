@@ -16,6 +16,7 @@ pub mod render_scene;
 pub mod render_whitted;
 pub mod sampling;
 pub mod scene_load;
+pub mod trace_error;
 pub mod tracer_node;
 pub use cgnodes_geometry::environment;
 pub use cgnodes_geometry::v3;

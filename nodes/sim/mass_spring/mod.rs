@@ -13,6 +13,7 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod control;
+mod frame_run;
 pub mod implicit;
 pub mod keyframes;
 // The node lives in a file named after its node type, which is also this domain's name.

@@ -4,6 +4,7 @@
 //! materials, skeletons) as JSON objects. The layouts are documented in `docs/plugins.md`.
 
 mod decode;
+mod decode_error;
 mod encode;
 #[cfg(test)]
 mod tests;

@@ -49,6 +49,7 @@ fn course_paste_phases() {
             [62, 162],
             mode,
             Solver::Auto,
+            DEFAULT_TOLERANCE,
         )
         .unwrap();
         recycle(s.values);
@@ -73,7 +74,9 @@ fn course_paste_phases() {
             let t_factor = ms(t);
             let t = Instant::now();
             let mut x = b.clone();
-            let it = factor.solve_in_place(x.as_mut()).unwrap();
+            let it = factor
+                .solve_in_place(x.as_mut(), DEFAULT_TOLERANCE)
+                .unwrap();
             let t_solve = ms(t);
             let t = Instant::now();
             let r = system::residual_norm(&shape, x.as_ref(), b.as_ref());
@@ -85,7 +88,17 @@ fn course_paste_phases() {
             write_solution(&mut out, &shape, off, &x);
             let t_write = ms(t);
             let t = Instant::now();
-            let s = solve_keyed(&shape, &key, &target, &bear, off, mode, Solver::Auto).unwrap();
+            let s = solve_keyed(
+                &shape,
+                &key,
+                &target,
+                &bear,
+                off,
+                mode,
+                Solver::Auto,
+                DEFAULT_TOLERANCE,
+            )
+            .unwrap();
             let t_again = ms(t);
             eprintln!(
                 "{mode:?} paste {i}: region {t_region:.2} rhs {t_rhs:.2} factor {t_factor:.2} ({}, reused {reused}) \

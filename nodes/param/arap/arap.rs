@@ -4,8 +4,9 @@
 //! (`ArapError`) are reported as `NodeError`s, with the socket at fault.
 
 use super::error::ArapError;
-use super::local_global::arap_parameterize_progress;
+use super::local_global::arap_parameterize_prepared;
 use super::options::ArapOptions;
+use super::prepared::ArapSystem;
 use super::{init_uv_list, init_uvs, uv_outputs};
 use cgnodes_api::prelude::*;
 
@@ -21,7 +22,7 @@ impl From<ArapError> for NodeError {
             | ArapError::DegenerateTriangle { .. } => NodeError::invalid("mesh", message),
             ArapError::Tolerance => NodeError::invalid("tolerance", message),
             ArapError::Lambda => NodeError::invalid("lambda", message),
-            ArapError::Pin { .. } => NodeError::invalid("pin", message),
+            ArapError::Pin { .. } | ArapError::SystemOptions => NodeError::invalid("pin", message),
             ArapError::Pins => NodeError::invalid("pins", message),
             ArapError::Components(_) => NodeError::topology("mesh", message),
             ArapError::FoldedStart(_) => NodeError::new(ErrorKind::Folded, message),
@@ -96,17 +97,12 @@ fn execute_with(ctx: &mut ExecContext, lambda: Option<f64>) -> Result<(), NodeEr
         .triangles()
         .ok_or_else(|| NodeError::invalid("mesh", "could not triangulate the mesh"))?;
     let init_uv: Option<Vec<[f64; 2]>> = ctx.input_opt("init_uv")?;
-    let (uv0, init_note) = match init_uv {
-        Some(_) if init.is_some() => {
-            return Err(NodeError::invalid(
-                "init_uv",
-                "link either init (a mesh with UVs) or init_uv (a UV list), not both",
-            ))
-        }
-        Some(uv) => init_uv_list(tri_mesh.num_vertices(), uv)?,
-        None => init_uvs(&tri_mesh, init.as_deref())?,
-    };
-    ctx.log(init_note);
+    if init_uv.is_some() && init.is_some() {
+        return Err(NodeError::invalid(
+            "init_uv",
+            "link either init (a mesh with UVs) or init_uv (a UV list), not both",
+        ));
+    }
     let opts = ArapOptions {
         iterations: iterations.max(0) as usize,
         tolerance,
@@ -115,13 +111,17 @@ fn execute_with(ctx: &mut ExecContext, lambda: Option<f64>) -> Result<(), NodeEr
         lambda,
         ..Default::default()
     };
-    let res = arap_parameterize_progress(
-        &tri_mesh.positions,
-        &triangles,
-        &uv0,
-        &opts,
-        &ctx.progress_fn(),
-    )?;
+    // the start (Tutte's by default) on one core, the Laplacian's factorization on the other
+    let (start, system) = rayon::join(
+        || match init_uv {
+            Some(uv) => init_uv_list(tri_mesh.num_vertices(), uv),
+            None => init_uvs(&tri_mesh, init.as_deref()),
+        },
+        || ArapSystem::new(&tri_mesh.positions, &triangles, &opts),
+    );
+    let (uv0, init_note) = start?;
+    ctx.log(init_note);
+    let res = arap_parameterize_prepared(system?, &uv0, &opts, &ctx.progress_fn())?;
     let mut table = Table::with_columns(&super::LOG_COLUMNS);
     for r in &res.log {
         table.push_row(&[

@@ -47,6 +47,9 @@ pub enum ArapError {
         /// Number of mesh vertices.
         vertices: usize,
     },
+    /// `arap_parameterize_prepared` was given a system built for another pin or mode.
+    #[error("the prepared ARAP system was built for another pin or injective setting")]
+    SystemOptions,
     /// Fold-free mode was given a start with flipped or degenerate triangles.
     #[error(
         "the initial UVs have {0} flipped or degenerate triangles; fold-free ARAP needs a fold-free start (the default Tutte initialization is one), or set injective: false"

@@ -13,6 +13,7 @@
 use super::energy::ArapResult;
 use super::error::ArapError;
 use super::options::ArapOptions;
+use super::prepared::ArapSystem;
 use super::solver::iterate;
 
 /// ARAP (or hybrid) parameterization of a triangle mesh from initial UVs, libigl style.
@@ -44,7 +45,22 @@ pub fn arap_parameterize_progress(
     opts: &ArapOptions,
     progress: &(dyn Fn(f64) + Sync),
 ) -> Result<ArapResult, ArapError> {
-    rayon::scope(|_| iterate(positions, triangles, init_uv, opts, progress))
+    rayon::scope(|_| {
+        let system = ArapSystem::new(positions, triangles, opts)?;
+        iterate(system, init_uv, opts, progress)
+    })
+}
+
+/// `arap_parameterize_progress` on a system built already (`ArapSystem::new` with the same
+/// `opts.pin` and `opts.injective`, else `ArapError::SystemOptions`): the factorization can
+/// then run while the initial UVs are computed.
+pub fn arap_parameterize_prepared(
+    system: ArapSystem,
+    init_uv: &[[f64; 2]],
+    opts: &ArapOptions,
+    progress: &(dyn Fn(f64) + Sync),
+) -> Result<ArapResult, ArapError> {
+    rayon::scope(|_| iterate(system, init_uv, opts, progress))
 }
 
 #[cfg(test)]
@@ -104,6 +120,37 @@ pub(crate) mod tests {
                 }
             }
             assert_eq!(r.flips, 0);
+        }
+    }
+
+    /// A system built apart gives the same run, bit for bit, and one built for another pin
+    /// or mode is refused.
+    #[test]
+    fn prepared_system_runs_like_the_whole_call() {
+        let (p, t) = planar_grid(6);
+        let init: Vec<[f64; 2]> = p.iter().map(|q| [0.4 * q[0], q[1] + 0.1 * q[0]]).collect();
+        let opts = ArapOptions {
+            iterations: 30,
+            ..Default::default()
+        };
+        let whole = arap_parameterize(&p, &t, &init, &opts).unwrap();
+        let system = ArapSystem::new(&p, &t, &opts).unwrap();
+        let apart = arap_parameterize_prepared(system, &init, &opts, &|_| {}).unwrap();
+        assert_eq!(whole.uv, apart.uv);
+        assert_eq!(whole.energy, apart.energy);
+        for other in [
+            ArapOptions {
+                pin: Some(3),
+                ..opts.clone()
+            },
+            ArapOptions {
+                injective: !opts.injective,
+                ..opts.clone()
+            },
+        ] {
+            let system = ArapSystem::new(&p, &t, &opts).unwrap();
+            let e = arap_parameterize_prepared(system, &init, &other, &|_| {}).unwrap_err();
+            assert_eq!(e, ArapError::SystemOptions);
         }
     }
 

@@ -25,14 +25,16 @@ pub mod injective;
 mod line_search;
 pub mod local_global;
 pub mod options;
+pub mod prepared;
 mod solver;
 mod system;
 
 pub use asap::{asap_parameterize, AsapResult};
 pub use energy::{ArapIteration, ArapResult, LOG_COLUMNS};
 pub use error::ArapError;
-pub use local_global::{arap_parameterize, arap_parameterize_progress};
+pub use local_global::{arap_parameterize, arap_parameterize_prepared, arap_parameterize_progress};
 pub use options::{ArapOptions, RefactorSchedule, LOCAL_RINGS};
+pub use prepared::ArapSystem;
 
 use super::tutte::{tutte_parameterize, BoundaryShape, TutteWeights};
 use cgnodes_api::prelude::*;

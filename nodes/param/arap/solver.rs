@@ -13,10 +13,8 @@ use super::options::{
     ArapOptions, ARMIJO_C, BLOCKED_STEP, LOCAL_GIVE_UP, LOCAL_ROUNDS, MAX_BACKTRACKS, MIN_STEP,
     STEP_SAFETY,
 };
-use super::system::{
-    corner_weights, descent_direction, elimination_rows, fixed_vertices, free_rows, gradient_into,
-    laplacian_triplets,
-};
+use super::prepared::ArapSystem;
+use super::system::{descent_direction, gradient_into};
 use super::StopReason;
 use cgnodes_linalg::SpdFactor;
 use faer::sparse::Triplet;
@@ -24,22 +22,14 @@ use faer::{Mat, Par};
 use rayon::prelude::*;
 use std::time::Instant;
 
-/// Free vertices from which the fold-free mode, which refactors the Laplacian up to once per
-/// iteration, asks for a supernodal factor (`SpdFactor::new_supernodal`). 20 fold-free
-/// iterations on bunny_base4 (10k vertices), ms per iteration: 8.63 with faer's choice
-/// (simplicial) against 6.43 supernodal, the same 12 refactorizations and energy; on
-/// bunny_base (2.5k) 1.00 simplicial against 1.18; from about 40k faer picks supernodal.
-const SUPERNODAL_MIN: usize = 5000;
-
 /// `arap_parameterize` on a rayon pool thread: the local/global loop.
 pub(super) fn iterate(
-    positions: &[[f64; 3]],
-    triangles: &[[u32; 3]],
+    system: ArapSystem,
     init_uv: &[[f64; 2]],
     opts: &ArapOptions,
     progress: &(dyn Fn(f64) + Sync),
 ) -> Result<ArapResult, ArapError> {
-    let mut s = Solver::new(positions, triangles, init_uv, opts)?;
+    let mut s = Solver::new(system, init_uv, opts)?;
     while s.it < opts.iterations {
         progress(s.it as f64 / opts.iterations as f64);
         if s.factor.is_none() {
@@ -150,17 +140,28 @@ struct Solver<'a> {
 }
 
 impl<'a> Solver<'a> {
-    /// Checks the input, factors the Laplacian and evaluates the start (log row 0).
+    /// Checks the start and the options against `system` and evaluates the start (log row 0).
     fn new(
-        positions: &[[f64; 3]],
-        triangles: &[[u32; 3]],
+        system: ArapSystem,
         init_uv: &[[f64; 2]],
         opts: &'a ArapOptions,
     ) -> Result<Solver<'a>, ArapError> {
         let start = Instant::now();
-        let n = positions.len();
-        validate(n, triangles, init_uv, opts)?;
-        let frames = TriangleFrames::new(positions, triangles)?;
+        if !system.fits(opts) {
+            return Err(ArapError::SystemOptions);
+        }
+        let ArapSystem {
+            n,
+            frames,
+            trip,
+            trip_tri,
+            factor,
+            row_of,
+            row_vertex,
+            corner_w,
+            ..
+        } = system;
+        validate(n, init_uv, opts)?;
         let m = frames.len();
         let lambda = opts.lambda;
 
@@ -170,30 +171,7 @@ impl<'a> Solver<'a> {
             return Err(ArapError::FoldedStart(flips0));
         }
         let uv: Vec<[f64; 2]> = init_uv.iter().map(|p| [p[0], orient * p[1]]).collect();
-
-        // Fixed vertices: one pin per connected component, and vertices in no triangle.
-        let fixed = fixed_vertices(n, triangles, opts.pin);
-        let (free_index, free_vertices) = free_rows(&fixed);
-        let nf = free_vertices.len();
-
-        // Cotangent Laplacian on the free vertices (lower triangle), each entry tagged with its
-        // triangle so that the fold-free mode can reweight triangles (see `reweight`).
-        let (trip, trip_tri) = laplacian_triplets(&frames, &free_index);
-        let factor = if nf > 0 {
-            let mut f = if opts.injective && nf >= SUPERNODAL_MIN {
-                SpdFactor::new_supernodal(nf, &trip, Par::Seq)
-            } else {
-                SpdFactor::new(nf, &trip, Par::Seq)
-            }
-            .map_err(ArapError::SingularLaplacian)?;
-            f.prepare_many_solves();
-            Some(f)
-        } else {
-            None
-        };
-        let (row_of, row_vertex) = factor.as_ref().map_or((Vec::new(), Vec::new()), |f| {
-            elimination_rows(f, &free_index)
-        });
+        let nf = row_vertex.len();
         let fold = FoldFree::new(n, &frames, opts);
         // per triangle, twice the UV area of the margin and of the hard floor (see AREA_MARGIN)
         let floor2 = if opts.injective {
@@ -201,8 +179,6 @@ impl<'a> Solver<'a> {
         } else {
             Vec::new()
         };
-
-        let corner_w = corner_weights(&frames);
 
         let total_area = frames.total_area;
         let mut targets: Vec<Similarity> = vec![[1.0, 0.0]; m];
@@ -511,13 +487,9 @@ impl<'a> Solver<'a> {
     }
 }
 
-/// The input checks of `arap_parameterize`, in the order it reports them.
-fn validate(
-    n: usize,
-    triangles: &[[u32; 3]],
-    init_uv: &[[f64; 2]],
-    opts: &ArapOptions,
-) -> Result<(), ArapError> {
+/// The checks of the start and of the options `ArapSystem::new` does not use, in the order
+/// they are reported.
+fn validate(n: usize, init_uv: &[[f64; 2]], opts: &ArapOptions) -> Result<(), ArapError> {
     if init_uv.len() != n {
         return Err(ArapError::InitLength {
             len: init_uv.len(),
@@ -530,23 +502,12 @@ fn validate(
     {
         return Err(ArapError::InitNotFinite(v));
     }
-    if triangles.is_empty() {
-        return Err(ArapError::NoTriangles);
-    }
     if !(opts.tolerance >= 0.0 && opts.tolerance.is_finite()) {
         return Err(ArapError::Tolerance);
     }
     if let Some(l) = opts.lambda {
         if !(l >= 0.0 && l.is_finite()) {
             return Err(ArapError::Lambda);
-        }
-    }
-    if let Some(p) = opts.pin {
-        if p >= n {
-            return Err(ArapError::Pin {
-                pin: p,
-                vertices: n,
-            });
         }
     }
     Ok(())

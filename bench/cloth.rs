@@ -22,7 +22,7 @@ use cgnodes::chart::{draw, Chart, Series};
 use cgnodes::nodes::mesh::mesh_grid::grid_mesh;
 use cgnodes::nodes::sim::mass_spring::{
     springs_from_mesh, LinearSolver, Method, Model, NewtonOptions, NewtonProfile, Preconditioner,
-    Simulator, SolverOptions, SpringKinds,
+    QuasiNewtonOptions, Simulator, SolverOptions, SpringKinds,
 };
 use std::time::Instant;
 
@@ -397,82 +397,153 @@ fn phases(label: &str, p: &NewtonProfile) {
 /// What one run of `stiff` measured, per frame.
 struct Frames {
     ms: Vec<f64>,
-    newton: Vec<usize>,
+    iterations: Vec<usize>,
     cg: Vec<usize>,
     energy: Vec<f64>,
+    x: Vec<Vec<[f64; 3]>>,
 }
 
-/// `frames` backward Euler steps (h = 1/60) of `scene` with PCG Newton and `pre`, printed
-/// per frame.
-fn preconditioned(
+/// `frames` steps (h = 1/60) of `scene` by `method` with `opts`, printed per frame.
+fn frames_of(
     label: &str,
     (model, x0): (Model, Vec<[f64; 3]>),
     frames: usize,
-    pre: Preconditioner,
-    tol: f64,
+    method: Method,
+    opts: SolverOptions,
 ) -> Frames {
-    let opts = SolverOptions {
-        newton: NewtonOptions {
-            solver: LinearSolver::Pcg,
-            preconditioner: pre,
-            tol,
-            ..NewtonOptions::default()
-        },
-        ..SolverOptions::default()
-    };
-    let mut sim = Simulator::new(model, x0, None, Method::Implicit, 1.0 / 60.0, opts).unwrap();
+    let t = Instant::now();
+    let mut sim = Simulator::new(model, x0, None, method, 1.0 / 60.0, opts).unwrap();
+    let setup = t.elapsed().as_secs_f64() * 1e3;
     let mut last = 0;
     let mut out = Frames {
         ms: Vec::new(),
-        newton: Vec::new(),
+        iterations: Vec::new(),
         cg: Vec::new(),
         energy: Vec::new(),
+        x: Vec::new(),
     };
     for f in 1..=frames {
         let t = Instant::now();
         let log = sim.step(None).expect("stable");
         let ms = t.elapsed().as_secs_f64() * 1e3;
-        let cg_total = sim.newton_profile().unwrap_or_default().cg_iterations;
+        let cg_total = sim.newton_profile().map_or(0, |p| p.cg_iterations);
         let cg = cg_total - last;
         last = cg_total;
         println!(
-            "{label} {pre:?} tol {tol:e}: frame {f}: {ms:8.1} ms, {} Newton, {cg} CG, energy {:.6e}",
+            "{label}: frame {f}: {ms:8.1} ms, {} iterations, {cg} CG, energy {:.6e} (set-up {setup:.1} ms)",
             log.iterations,
             log.energy.total()
         );
         out.ms.push(ms);
-        out.newton.push(log.iterations);
+        out.iterations.push(log.iterations);
         out.cg.push(cg);
         out.energy.push(log.energy.total());
+        out.x.push(sim.state.x.clone());
     }
     out
 }
 
-/// `--stiff`: issue 59's stiff sheet, frames 1-5, block Jacobi against `Auto` (which moves to
-/// the per-axis Laplacians) at two Newton tolerances; then Warp's scene at 128 x 128 with
-/// block Jacobi against the per-axis Laplacians outright (where they do not pay). Writes
-/// `bench/results/cloth_stiff.json`.
+/// The largest coordinate difference between two position sets (m).
+fn max_dev(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
+    (a.iter().zip(b))
+        .flat_map(|(p, q)| (0..3).map(move |k| (p[k] - q[k]).abs()))
+        .fold(0.0, f64::max)
+}
+
+/// `--stiff`: issue 59's stiff sheet, frames 1-5: Newton with block Jacobi PCG and with
+/// `Auto` (which moves to the per-axis Laplacians) at two Newton tolerances, the quasi-Newton
+/// integrator (L-BFGS, Liu et al. 2017) at two tolerances, and projective dynamics at 10 and
+/// 100 iterations, each with its largest distance per frame from the first run (Newton, block
+/// Jacobi, 1e-7 m); then Warp's scene at 128 x 128 with block Jacobi against the per-axis
+/// Laplacians outright (where they do not pay). Writes `bench/results/cloth_stiff.json`.
 fn stiff(frames: usize) {
-    let mut runs = Vec::new();
+    struct Case {
+        scene: &'static str,
+        method: Method,
+        tol: f64,
+        pre: Preconditioner,
+        pd_iterations: usize,
+    }
+    let newton = |scene, tol, pre| Case {
+        scene,
+        method: Method::Implicit,
+        tol,
+        pre,
+        pd_iterations: 0,
+    };
+    let qn = |tol| Case {
+        scene: "stiff",
+        method: Method::QuasiNewton,
+        tol,
+        pre: Preconditioner::Auto,
+        pd_iterations: 0,
+    };
+    let pd = |pd_iterations| Case {
+        scene: "stiff",
+        method: Method::Projective,
+        tol: 0.0,
+        pre: Preconditioner::Auto,
+        pd_iterations,
+    };
     let cases = [
-        ("stiff", 1e-7, Preconditioner::BlockJacobi),
-        ("stiff", 1e-7, Preconditioner::Auto),
-        ("stiff", 1e-5, Preconditioner::BlockJacobi),
-        ("stiff", 1e-5, Preconditioner::Auto),
-        ("warp", 1e-7, Preconditioner::BlockJacobi),
-        ("warp", 1e-7, Preconditioner::AxisLaplacians),
+        newton("stiff", 1e-7, Preconditioner::BlockJacobi),
+        newton("stiff", 1e-7, Preconditioner::Auto),
+        newton("stiff", 1e-5, Preconditioner::BlockJacobi),
+        newton("stiff", 1e-5, Preconditioner::Auto),
+        qn(1e-5),
+        qn(1e-6),
+        pd(10),
+        pd(100),
+        newton("warp", 1e-7, Preconditioner::BlockJacobi),
+        newton("warp", 1e-7, Preconditioner::AxisLaplacians),
     ];
-    for (scene, tol, pre) in cases {
-        let model = if scene == "stiff" {
+    let mut runs = Vec::new();
+    let mut reference: Option<Vec<Vec<[f64; 3]>>> = None;
+    for c in cases {
+        let model = if c.scene == "stiff" {
             stiff_model(128)
         } else {
             warp_model(128)
         };
-        let r = preconditioned(scene, model, frames, pre, tol);
+        let opts = SolverOptions {
+            newton: NewtonOptions {
+                solver: LinearSolver::Pcg,
+                preconditioner: c.pre,
+                tol: c.tol,
+                ..NewtonOptions::default()
+            },
+            quasi_newton: QuasiNewtonOptions {
+                tol: c.tol,
+                ..QuasiNewtonOptions::default()
+            },
+            pd_iterations: c.pd_iterations.max(1),
+            ..SolverOptions::default()
+        };
+        let label = format!(
+            "{} {:?} {:?} tol {:e} pd {}",
+            c.scene, c.method, c.pre, c.tol, c.pd_iterations
+        );
+        let r = frames_of(&label, model, frames, c.method, opts);
+        let dev: Vec<f64> = match &reference {
+            Some(x) if c.scene == "stiff" => {
+                x.iter().zip(&r.x).map(|(a, b)| max_dev(a, b)).collect()
+            }
+            _ => vec![0.0; r.x.len()],
+        };
+        if reference.is_none() {
+            reference = Some(r.x.clone());
+        }
+        let method = match c.method {
+            Method::Implicit => "newton",
+            Method::QuasiNewton => "quasi_newton",
+            Method::Projective => "projective",
+            Method::SemiImplicit => "semi_implicit",
+        };
         runs.push(serde_json::json!({
-            "scene": scene, "preconditioner": format!("{pre:?}"), "newton_tol_m": tol,
-            "ms": r.ms, "newton": r.newton, "cg": r.cg, "energy": r.energy,
-            "median_ms": median(r.ms.clone()),
+            "scene": c.scene, "method": method, "preconditioner": format!("{:?}", c.pre),
+            "newton_tol_m": c.tol, "pd_iterations": c.pd_iterations,
+            "ms": r.ms, "newton": r.iterations, "cg": r.cg, "energy": r.energy,
+            "max_dev_m": dev, "median_ms": median(r.ms.clone()),
         }));
     }
     let p = record::write(
@@ -481,6 +552,7 @@ fn stiff(frames: usize) {
         serde_json::json!({ "grid": 128, "frames": frames, "h": 1.0 / 60.0,
             "stiff": { "spacing_m": 0.01, "mass_kg": 1.0, "stiffness": 1000.0 },
             "warp": { "spacing_m": 0.1, "mass_per_vertex_kg": 0.1, "stiffness": 1000.0 },
+            "reference": "the first stiff run (newton, BlockJacobi, 1e-7 m)",
             "runs": runs }),
     );
     println!("wrote {}", p.display());

@@ -158,11 +158,11 @@ fn control_graph(integrator: &str, speed: f64, linked: bool) -> String {
 }
 
 /// Control points: the fixed corners pair with themselves on a body that starts as the
-/// cloth, then follow it exactly while it moves (all three integrators); a body that stays
+/// cloth, then follow it exactly while it moves (all four integrators); a body that stays
 /// put gives the same run as plain fixed vertices.
 #[test]
 fn fixed_vertices_follow_the_control_mesh() {
-    for integrator in ["implicit", "semi_implicit", "projective"] {
+    for integrator in ["implicit", "semi_implicit", "projective", "quasi_newton"] {
         let plain = run_graph(&control_graph(integrator, 0.05, false), 0..=3);
         // Frame 0 is the rest state: the grid itself.
         let grid = output_mesh(&plain[0]);

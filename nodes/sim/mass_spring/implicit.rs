@@ -27,6 +27,25 @@ use super::springs::{
 use faer::Mat;
 use std::time::Instant;
 
+/// Backward Euler's objective `g(x) = 1/(2h^2) (x-y)^T M (x-y) + E(x)` (spring and collider
+/// energy), without the constant part of fixed vertices: its minimizer is the step's end.
+pub(super) fn incremental_potential(
+    m: &Model,
+    x: &[[f64; 3]],
+    y: &[[f64; 3]],
+    h: f64,
+    sp: Option<&Sphere>,
+) -> f64 {
+    let mut inertia = 0.0;
+    for i in 0..x.len() {
+        if !m.fixed[i] {
+            let d = sub(x[i], y[i]);
+            inertia += 0.5 * m.mass[i] * dot(d, d);
+        }
+    }
+    inertia / (h * h) + spring_energy(&m.springs, x).0 + collider_energy(sp, x, &m.fixed)
+}
+
 /// Why a Newton step failed.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum NewtonError {
@@ -160,25 +179,6 @@ impl Implicit {
         }
     }
 
-    /// `g(x)` (without the constant part of fixed vertices).
-    fn objective(
-        &self,
-        m: &Model,
-        x: &[[f64; 3]],
-        y: &[[f64; 3]],
-        h: f64,
-        sp: Option<&Sphere>,
-    ) -> f64 {
-        let mut inertia = 0.0;
-        for i in 0..x.len() {
-            if self.free[i] {
-                let d = sub(x[i], y[i]);
-                inertia += 0.5 * m.mass[i] * dot(d, d);
-            }
-        }
-        inertia / (h * h) + spring_energy(&m.springs, x).0 + collider_energy(sp, x, &m.fixed)
-    }
-
     /// The Newton direction `dx` solving `H(x) dx = rhs` (`rhs = -grad g`, three entries per
     /// vertex, zero at fixed vertices): by PCG, or by Cholesky when PCG is not used or fails.
     #[allow(clippy::too_many_arguments)]
@@ -255,7 +255,7 @@ impl Implicit {
         let mut x: Vec<[f64; 3]> = y.clone();
         let ih2 = 1.0 / (h * h);
         let mut iters = 0;
-        let mut g0 = self.objective(m, &x, &y, h, sp);
+        let mut g0 = incremental_potential(m, &x, &y, h, sp);
         let mut rhs = Mat::<f64>::zeros(3 * n, 1);
         let mut dx = Mat::<f64>::zeros(3 * n, 1);
         let mut xt = x.clone();
@@ -310,7 +310,7 @@ impl Implicit {
                         xt[i] = axpy(x[i], alpha, [dx[(p, 0)], dx[(p + 1, 0)], dx[(p + 2, 0)]]);
                     }
                 }
-                let gt = self.objective(m, &xt, &y, h, sp);
+                let gt = incremental_potential(m, &xt, &y, h, sp);
                 if gt <= g0 + 1e-4 * alpha * slope {
                     g0 = gt;
                     accepted = true;

@@ -7,6 +7,7 @@ use super::control::{pair_nearest, pairs_from_list, PairError};
 use super::frame_run::{log_row, FrameRun, Params};
 use super::implicit::NewtonOptions;
 use super::keyframes::parse_keyframes;
+use super::quasi_newton::QuasiNewtonOptions;
 use super::simulator::{Method, SetupError, Simulator, SolverOptions};
 use super::springs::{springs_from_mesh, Model, Sphere, SpringKinds, State};
 use cgnodes_api::prelude::*;
@@ -18,6 +19,7 @@ impl Choice for Method {
         ("implicit", Method::Implicit),
         ("semi_implicit", Method::SemiImplicit),
         ("projective", Method::Projective),
+        ("quasi_newton", Method::QuasiNewton),
     ];
 }
 
@@ -138,7 +140,11 @@ fn declare(b: &mut NodeBuilder) {
     b.add_input::<f64>("newton_tol")
         .default(d.newton.tol)
         .range(0.0, 1.0)
-        .doc("Newton stops when no vertex moves more than this.");
+        .doc("Newton (and quasi_newton) stops when no vertex moves more than this.");
+    b.add_input::<i64>("qn_iters")
+        .default(d.quasi_newton.max_iters as i64)
+        .range(1.0, 100000.0)
+        .doc("Most L-BFGS iterations per step (quasi_newton).");
     b.add_input::<i64>("pd_iters")
         .default(d.pd_iterations as i64)
         .range(1.0, 10000.0)
@@ -310,6 +316,11 @@ fn solver_options(ctx: &ExecContext) -> Result<SolverOptions, NodeError> {
             max_iters: ctx.input::<i64>("newton_iters")?.max(1) as usize,
             tol: ctx.input("newton_tol")?,
             ..NewtonOptions::default()
+        },
+        quasi_newton: QuasiNewtonOptions {
+            max_iters: ctx.input::<i64>("qn_iters")?.max(1) as usize,
+            tol: ctx.input("newton_tol")?,
+            ..QuasiNewtonOptions::default()
         },
         pd_iterations: ctx.input::<i64>("pd_iters")?.max(1) as usize,
         blowup_factor: ctx.input("blowup_factor")?,

@@ -1,7 +1,9 @@
 //! `mass_spring`: cloth as a mass-spring system (course assignment 8), stepped frame by frame
-//! with one of three integrators: `semi_implicit` (symplectic Euler, conditionally stable),
+//! with one of four integrators: `semi_implicit` (symplectic Euler, conditionally stable),
 //! `implicit` (backward Euler by Newton's method on its variational form, stable at large
-//! steps) or `projective` (Liu et al. 2013's local/global solver with a prefactored matrix).
+//! steps), `quasi_newton` (the same backward Euler by L-BFGS with a prefactored initial
+//! Hessian, Liu et al. 2017: fast on stiff cloth) or `projective` (Liu et al. 2013's
+//! local/global solver with a prefactored matrix).
 //!
 //! The core is plain data (`Model`, `State`, in `springs`) and a `Simulator` (`simulator`)
 //! that advances it step by step and detects blow-ups; the node (`mass_spring`) wraps it with
@@ -22,6 +24,7 @@ pub mod mass_spring;
 pub mod newton_direct;
 pub mod newton_pcg;
 pub mod projective;
+pub mod quasi_newton;
 pub mod semi_implicit;
 pub mod simulator;
 pub mod springs;
@@ -32,6 +35,7 @@ pub use keyframes::{keyframed_center, parse_keyframes};
 pub use mass_spring::LOG_COLUMNS;
 pub use newton_pcg::Preconditioner;
 pub use projective::Projective;
+pub use quasi_newton::{QuasiNewton, QuasiNewtonOptions};
 pub use semi_implicit::SemiImplicit;
 pub use simulator::{
     energy_scale, Method, MoveError, SetupError, SimError, Simulator, SolverOptions, StepLog,

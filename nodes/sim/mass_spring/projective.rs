@@ -19,6 +19,45 @@ use faer::sparse::Triplet;
 use faer::{Mat, Par};
 use rayon::prelude::*;
 
+/// The global matrix `M/h^2 + L` of Liu et al. 2013 (eq. 16) over the free vertices of `m`,
+/// factored for many solves: each vertex's row (`None` when fixed), the number of free
+/// vertices and the factor. Also the initial Hessian of the quasi-Newton integrator.
+pub(super) fn global_factor(
+    m: &Model,
+    h: f64,
+) -> Result<(Vec<Option<u32>>, usize, SpdFactor), SetupError> {
+    let n = m.num_vertices();
+    let (free, n_free) = m.free_indices();
+    let mut t = Vec::new();
+    for i in 0..n {
+        if let Some(p) = free[i] {
+            t.push(Triplet::new(p as usize, p as usize, m.mass[i] / (h * h)));
+        }
+    }
+    for (s, e) in m.springs.ends.iter().enumerate() {
+        let k = m.springs.k[s];
+        let (fi, fj) = (free[e[0] as usize], free[e[1] as usize]);
+        for p in [fi, fj].into_iter().flatten() {
+            t.push(Triplet::new(p as usize, p as usize, k));
+        }
+        if let (Some(p), Some(q)) = (fi, fj) {
+            let (p, q) = (p.max(q) as usize, p.min(q) as usize);
+            t.push(Triplet::new(p, q, -k));
+        }
+    }
+    // Small systems factor faster on one thread (and nodes already run in parallel).
+    let par = if n_free >= 60_000 {
+        Par::rayon(0)
+    } else {
+        Par::Seq
+    };
+    let mut factor = SpdFactor::new(n_free, &t, par).map_err(|e| {
+        SetupError::NotPositiveDefinite(format!("the global matrix is not positive definite: {e}"))
+    })?;
+    factor.prepare_many_solves();
+    Ok((free, n_free, factor))
+}
+
 /// The prefactored global matrix of Liu et al. 2013 for one model and time step.
 pub struct Projective {
     free: Vec<Option<u32>>,
@@ -33,37 +72,7 @@ pub struct Projective {
 impl Projective {
     /// Factors `M/h^2 + L` over the free vertices.
     pub fn new(m: &Model, h: f64, iterations: usize) -> Result<Projective, SetupError> {
-        let n = m.num_vertices();
-        let (free, n_free) = m.free_indices();
-        let mut t = Vec::new();
-        for i in 0..n {
-            if let Some(p) = free[i] {
-                t.push(Triplet::new(p as usize, p as usize, m.mass[i] / (h * h)));
-            }
-        }
-        for (s, e) in m.springs.ends.iter().enumerate() {
-            let k = m.springs.k[s];
-            let (fi, fj) = (free[e[0] as usize], free[e[1] as usize]);
-            for p in [fi, fj].into_iter().flatten() {
-                t.push(Triplet::new(p as usize, p as usize, k));
-            }
-            if let (Some(p), Some(q)) = (fi, fj) {
-                let (p, q) = (p.max(q) as usize, p.min(q) as usize);
-                t.push(Triplet::new(p, q, -k));
-            }
-        }
-        // Small systems factor faster on one thread (and nodes already run in parallel).
-        let par = if n_free >= 60_000 {
-            Par::rayon(0)
-        } else {
-            Par::Seq
-        };
-        let mut factor = SpdFactor::new(n_free, &t, par).map_err(|e| {
-            SetupError::NotPositiveDefinite(format!(
-                "the global matrix is not positive definite: {e}"
-            ))
-        })?;
-        factor.prepare_many_solves();
+        let (free, n_free, factor) = global_factor(m, h)?;
         Ok(Projective {
             free,
             n_free,

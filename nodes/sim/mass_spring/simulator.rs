@@ -1,10 +1,11 @@
 //! The mass-spring time stepper: a `Model` and its `State` advanced step by step with one of
-//! three integrators (`semi_implicit`, `implicit`, `projective`), and blow-up detection (NaN,
+//! four integrators (`semi_implicit`, `implicit`, `quasi_newton`, `projective`), and blow-up detection (NaN,
 //! infinity or runaway energy against the model's energy scale). Plain data in, plain data
 //! out: the `mass_spring` node and the tests and benchmarks drive it directly.
 
 use super::implicit::{Implicit, NewtonError, NewtonOptions, NewtonProfile};
 use super::projective::Projective;
+use super::quasi_newton::{QuasiNewton, QuasiNewtonOptions};
 use super::semi_implicit::SemiImplicit;
 pub use super::springs::SetupError;
 use super::springs::{self, energy, Energy, Model, Sphere, State};
@@ -16,6 +17,8 @@ pub enum Method {
     SemiImplicit,
     /// Backward Euler by Newton's method.
     Implicit,
+    /// Backward Euler by L-BFGS with the projective matrix as initial Hessian (Liu et al. 2017).
+    QuasiNewton,
     /// Liu et al. 2013 local/global.
     Projective,
 }
@@ -25,6 +28,8 @@ pub enum Method {
 pub struct SolverOptions {
     /// Newton options (implicit).
     pub newton: NewtonOptions,
+    /// L-BFGS options (quasi_newton).
+    pub quasi_newton: QuasiNewtonOptions,
     /// Local/global iterations per step (projective).
     pub pd_iterations: usize,
     /// A step is reported unstable when the total energy exceeds its initial value by more
@@ -36,6 +41,7 @@ impl Default for SolverOptions {
     fn default() -> Self {
         SolverOptions {
             newton: NewtonOptions::default(),
+            quasi_newton: QuasiNewtonOptions::default(),
             pd_iterations: 10,
             blowup_factor: 100.0,
         }
@@ -45,6 +51,7 @@ impl Default for SolverOptions {
 enum Solver {
     Semi(SemiImplicit),
     Implicit(Box<Implicit>),
+    QuasiNewton(Box<QuasiNewton>),
     Projective(Box<Projective>),
 }
 
@@ -163,6 +170,9 @@ impl Simulator {
         let solver = match method {
             Method::SemiImplicit => Solver::Semi(SemiImplicit::new(&model)),
             Method::Implicit => Solver::Implicit(Box::new(Implicit::new(&model, opts.newton))),
+            Method::QuasiNewton => {
+                Solver::QuasiNewton(Box::new(QuasiNewton::new(&model, h, opts.quasi_newton)?))
+            }
             Method::Projective => {
                 Solver::Projective(Box::new(Projective::new(&model, h, opts.pd_iterations)?))
             }
@@ -250,6 +260,13 @@ impl Simulator {
                             }
                         }
                         NewtonError::NotPositiveDefinite(_) => SimError::Solver(e.to_string()),
+                    })?
+            }
+            Solver::QuasiNewton(s) => {
+                s.step(&self.model, &mut self.state, sphere)
+                    .map_err(|e| SimError::Unstable {
+                        step,
+                        reason: e.to_string(),
                     })?
             }
             Solver::Projective(s) => s.step(&self.model, &mut self.state, sphere),

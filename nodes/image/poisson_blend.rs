@@ -664,42 +664,4 @@ mod tests {
             }
         }
     }
-
-    /// Seamless cloning of a source that is the target under Ω plus a constant: the exact
-    /// solution is the source shifted back by that constant, which is the multigrid's first
-    /// guess (`guidance::initial_guess`), so a new shape's cold solve needs no iteration at
-    /// a tolerance above the f32 images' rounding.
-    #[test]
-    fn a_constant_offset_source_is_solved_by_the_initial_guess() {
-        let target = image(120, 110, 21);
-        let mut source = crop(&target, 30, 25, 81, 77);
-        for p in &mut source.pixels {
-            for v in &mut p[..3] {
-                *v += 0.25;
-            }
-        }
-        let mask = disc(81, 77, 37.3); // about 4,370 pixels, a shape no other test uses
-        let region = Region::new(&source, Some(&mask)).unwrap();
-        let off = [30.0, 25.0];
-        let b = blend_region(
-            &target,
-            &source,
-            &region,
-            off,
-            Mode::Seamless,
-            Solver::Multigrid,
-            1e-6,
-        )
-        .unwrap();
-        let s = solved(&b);
-        assert_eq!((s.solver, s.iterations, s.reused), ("multigrid", 0, false));
-        // the f32 images' rounding: the guess is exact to about 1e-8
-        assert!(s.residual < 1e-6, "{}", s.residual);
-        assert!(b
-            .image
-            .pixels
-            .iter()
-            .zip(&target.pixels)
-            .all(|(p, q)| (0..3).all(|c| (p[c] - q[c]).abs() < 1e-5)));
-    }
 }

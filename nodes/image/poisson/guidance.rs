@@ -123,53 +123,6 @@ pub fn right_hand_side_into(
 /// Unknowns per parallel task.
 const CHUNK: usize = 1 << 12;
 
-/// A starting point for an iterative solve (`n x 3`): the source under Ω shifted per channel
-/// by the mean of `f*_q - g_q` over ∂Ω (the source clamped to its edge, as in the guidance).
-/// For seamless cloning the solution is the source plus the membrane interpolating
-/// `f* - g` on ∂Ω (Pérez et al. 2003, eq. 12), so this guess leaves only the membrane's
-/// variation about its mean to solve for.
-pub fn initial_guess(
-    shape: &MaskShape,
-    target: &Image,
-    source: &Image,
-    offset: [i64; 2],
-) -> Mat<f64> {
-    let (sw, sh, tw) = (
-        source.width as i64,
-        source.height as i64,
-        target.width as i64,
-    );
-    let n = shape.len();
-    let (mut sum, mut count) = ([0.0f64; 3], 0usize);
-    for k in 0..n {
-        let nb = shape.neighbours(k);
-        if nb.iter().all(|&q| q != u32::MAX) {
-            continue;
-        }
-        let [px, py] = shape.inside[k];
-        let (px, py) = (px as i64, py as i64);
-        // neighbours right, left, below, above, as in `right_hand_side_into`
-        for (q, (dx, dy)) in [(1, 0), (-1, 0), (0, 1), (0, -1)].into_iter().enumerate() {
-            if nb[q] != u32::MAX {
-                continue;
-            }
-            let (qx, qy) = (px + dx, py + dy);
-            let (sx, sy) = (qx.clamp(0, sw - 1), qy.clamp(0, sh - 1));
-            let gq = source.pixels[(sy * sw + sx) as usize];
-            let fq = target.pixels[((qy + offset[1]) * tw + qx + offset[0]) as usize];
-            for c in 0..3 {
-                sum[c] += f64::from(fq[c]) - f64::from(gq[c]);
-            }
-            count += 1;
-        }
-    }
-    let shift = sum.map(|v| v / count.max(1) as f64);
-    Mat::from_fn(n, 3, |k, c| {
-        let [px, py] = shape.inside[k];
-        f64::from(source.pixels[(py as i64 * sw + px as i64) as usize][c]) + shift[c]
-    })
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -192,29 +192,6 @@ impl Multigrid {
         }
     }
 
-    /// Offers `guess` (`n x 3`, one column per channel) as the next solve's starting point
-    /// when no previous solution of this shape is kept; the solve uses it only when its
-    /// residual is below `‖b‖`, as it does the previous solution.
-    pub fn seed_start(&self, guess: faer::MatRef<'_, f64>) {
-        if guess.ncols() != 3 || guess.nrows() != self.cells.len() {
-            return;
-        }
-        let Ok(mut last) = self.last.try_lock() else {
-            return;
-        };
-        if last.is_some() {
-            return;
-        }
-        let fine = &self.levels[0];
-        let mut f = Field::zeros(fine.w, fine.h);
-        let w = f.w;
-        for (k, &[y, xx]) in self.cells.iter().enumerate() {
-            let (p, i) = ((y & 1) as usize, (y >> 1) as usize * w + xx as usize);
-            f.rows[p][i] = [guess[(k, 0)], guess[(k, 1)], guess[(k, 2)]];
-        }
-        *last = Some(f);
-    }
-
     /// Work buffers for a solve: the spare ones (`SPARE`), reshaped to this hierarchy unless
     /// they already are, else new ones.
     fn take_work(&self) -> Work {

@@ -46,6 +46,24 @@ pub(super) fn incremental_potential(
     inertia / (h * h) + spring_energy(&m.springs, x).0 + collider_energy(sp, x, &m.fixed)
 }
 
+/// Moves `st` to the minimizer `x` of a backward Euler step of length `h`:
+/// `v = damping (x - x_n) / h` for free vertices, zero for fixed ones.
+pub(super) fn end_step(m: &Model, st: &mut State, x: &[[f64; 3]], h: f64) {
+    for i in 0..x.len() {
+        if m.fixed[i] {
+            st.v[i] = [0.0; 3];
+        } else {
+            let v = sub(x[i], st.x[i]);
+            st.v[i] = [
+                v[0] / h * m.damping,
+                v[1] / h * m.damping,
+                v[2] / h * m.damping,
+            ];
+            st.x[i] = x[i];
+        }
+    }
+}
+
 /// Why a Newton step failed.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum NewtonError {
@@ -327,19 +345,7 @@ impl Implicit {
                 break;
             }
         }
-        for i in 0..n {
-            if self.free[i] {
-                let v = sub(x[i], st.x[i]);
-                st.v[i] = [
-                    v[0] / h * m.damping,
-                    v[1] / h * m.damping,
-                    v[2] / h * m.damping,
-                ];
-                st.x[i] = x[i];
-            } else {
-                st.v[i] = [0.0; 3];
-            }
-        }
+        end_step(m, st, &x, h);
         Ok(iters)
     }
 }

@@ -12,7 +12,7 @@
 //! stiffness per mass, the quasi-Newton iteration's cost does not. Armijo backtracking keeps
 //! `g` decreasing; it stops, like Newton, when no vertex moves more than `tol` in an iteration.
 
-use super::implicit::{incremental_potential, NewtonError};
+use super::implicit::{end_step, incremental_potential, NewtonError};
 use super::projective::global_factor;
 use super::springs::{
     add_collider_forces, spring_forces, sub, Incidence, Model, SetupError, Sphere, State,
@@ -162,7 +162,7 @@ impl QuasiNewton {
         st: &mut State,
         sp: Option<&Sphere>,
     ) -> Result<usize, NewtonError> {
-        let (n, nf, h) = (m.num_vertices(), self.n_free, self.h);
+        let (nf, h) = (self.n_free, self.h);
         let y = m.inertial_positions(st, h);
         let mut x = y.clone();
         let mut xt = x.clone();
@@ -245,19 +245,7 @@ impl QuasiNewton {
             }
         }
         self.iterations += iters;
-        for i in 0..n {
-            if self.free[i].is_some() {
-                let v = sub(x[i], st.x[i]);
-                st.v[i] = [
-                    v[0] / h * m.damping,
-                    v[1] / h * m.damping,
-                    v[2] / h * m.damping,
-                ];
-                st.x[i] = x[i];
-            } else {
-                st.v[i] = [0.0; 3];
-            }
-        }
+        end_step(m, st, &x, h);
         Ok(iters)
     }
 }

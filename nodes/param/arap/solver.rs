@@ -6,7 +6,7 @@
 use super::energy::{evaluate, ArapIteration, ArapResult};
 use super::error::ArapError;
 use super::fold_free::FoldFree;
-use super::frames::{Similarity, TriangleFrames, PAR_CHUNK};
+use super::frames::{Similarity, PAR_CHUNK};
 use super::injective::orientation_and_flips;
 use super::line_search::{area_floors, Directional, StepLimits};
 use super::options::{
@@ -16,8 +16,6 @@ use super::options::{
 use super::prepared::ArapSystem;
 use super::system::{descent_direction, gradient_into};
 use super::StopReason;
-use cgnodes_linalg::SpdFactor;
-use faer::sparse::Triplet;
 use faer::{Mat, Par};
 use rayon::prelude::*;
 use std::time::Instant;
@@ -32,7 +30,7 @@ pub(super) fn iterate(
     let mut s = Solver::new(system, init_uv, opts)?;
     while s.it < opts.iterations {
         progress(s.it as f64 / opts.iterations as f64);
-        if s.factor.is_none() {
+        if s.sys.factor.is_none() {
             s.stop = StopReason::Tolerance;
             break;
         }
@@ -91,24 +89,13 @@ struct Solver<'a> {
     opts: &'a ArapOptions,
     /// When the call started (the log's `elapsed_ms`).
     start: Instant,
-    frames: TriangleFrames,
+    /// The frames, the factored Laplacian and its numbering (built before the start is read).
+    sys: ArapSystem,
     lambda: Option<f64>,
     total_area: f64,
     /// `-1` when the start is clockwise: the run works on the mirrored UVs.
     orient: f64,
 
-    /// Cotangent Laplacian on the free vertices (lower triangle), each entry tagged with its
-    /// triangle (`trip_tri`) so that the fold-free mode can reweight triangles.
-    trip: Vec<Triplet<usize, usize, f64>>,
-    trip_tri: Vec<u32>,
-    /// `None` when no vertex is free.
-    factor: Option<SpdFactor>,
-    /// Each vertex's row in the factor's elimination order (`u32::MAX` when fixed).
-    row_of: Vec<u32>,
-    /// The vertex of each row.
-    row_vertex: Vec<usize>,
-    /// Right-hand side weights per corner (`corner_weights`).
-    corner_w: Vec<[[f64; 2]; 3]>,
     /// Scratch of the solves.
     rhs: Mat<f64>,
     /// `∇E` on the free vertices, in elimination order.
@@ -150,32 +137,22 @@ impl<'a> Solver<'a> {
         if !system.fits(opts) {
             return Err(ArapError::SystemOptions);
         }
-        let ArapSystem {
-            n,
-            frames,
-            trip,
-            trip_tri,
-            factor,
-            row_of,
-            row_vertex,
-            corner_w,
-            ..
-        } = system;
+        let (n, frames) = (system.n, &system.frames);
         validate(n, init_uv, opts)?;
         let m = frames.len();
         let lambda = opts.lambda;
 
         // Orientation of the start; work counter-clockwise, mirroring a clockwise start.
-        let (orient, flips0) = orientation_and_flips(&frames, init_uv);
+        let (orient, flips0) = orientation_and_flips(frames, init_uv);
         if opts.injective && flips0 > 0 {
             return Err(ArapError::FoldedStart(flips0));
         }
         let uv: Vec<[f64; 2]> = init_uv.iter().map(|p| [p[0], orient * p[1]]).collect();
-        let nf = row_vertex.len();
-        let fold = FoldFree::new(n, &frames, opts);
+        let nf = system.row_vertex.len();
+        let fold = FoldFree::new(n, frames, opts);
         // per triangle, twice the UV area of the margin and of the hard floor (see AREA_MARGIN)
         let floor2 = if opts.injective {
-            area_floors(&frames, &uv)
+            area_floors(frames, &uv)
         } else {
             Vec::new()
         };
@@ -183,7 +160,7 @@ impl<'a> Solver<'a> {
         let total_area = frames.total_area;
         let mut targets: Vec<Similarity> = vec![[1.0, 0.0]; m];
         let trial_targets: Vec<Similarity> = vec![[1.0, 0.0]; m];
-        let (e_sum, flips) = evaluate(&frames, &uv, lambda, &mut targets);
+        let (e_sum, flips) = evaluate(frames, &uv, lambda, &mut targets);
         let energy = e_sum / total_area;
         let log = vec![ArapIteration {
             iteration: 0,
@@ -200,12 +177,7 @@ impl<'a> Solver<'a> {
             lambda,
             total_area,
             orient,
-            trip,
-            trip_tri,
-            factor,
-            row_of,
-            row_vertex,
-            corner_w,
+            sys: system,
             rhs: Mat::<f64>::zeros(nf, 2),
             gradient: Mat::<f64>::zeros(nf, 2),
             gradient_halves: [Vec::new(), Vec::new()],
@@ -217,7 +189,6 @@ impl<'a> Solver<'a> {
             energy,
             step_limits: StepLimits::new(floor2),
             fold,
-            frames,
             it: 0,
             log,
             stop: StopReason::Iterations,
@@ -230,11 +201,11 @@ impl<'a> Solver<'a> {
     /// ∇E at vertex i is Σ_t Σ_j cot θ_ij ((u_i - u_j) - L_t (x_i - x_j)) (eq. 6).
     fn global_step(&mut self) {
         gradient_into(
-            &self.frames,
-            &self.corner_w,
+            &self.sys.frames,
+            &self.sys.corner_w,
             &self.targets,
             &self.uv,
-            &self.row_of,
+            &self.sys.row_of,
             &mut self.gradient_halves,
             &mut self.gradient,
         );
@@ -244,6 +215,7 @@ impl<'a> Solver<'a> {
     /// `d` from the current gradient and factor.
     fn solve_direction(&mut self) {
         let factor = self
+            .sys
             .factor
             .as_ref()
             .expect("the loop stops without free vertices");
@@ -251,7 +223,7 @@ impl<'a> Solver<'a> {
             factor,
             &self.gradient,
             &mut self.rhs,
-            &self.row_vertex,
+            &self.sys.row_vertex,
             &mut self.d,
         );
     }
@@ -259,7 +231,7 @@ impl<'a> Solver<'a> {
     /// The line search's pass over the triangles along `d` (only over `touched` when given).
     fn directional(&mut self, changed: Option<&[u32]>) -> Directional {
         self.step_limits
-            .directional(&self.frames, &self.uv, &self.d, &self.targets, changed)
+            .directional(&self.sys.frames, &self.uv, &self.d, &self.targets, changed)
     }
 
     /// Fold-free mode: shapes `d` until the orientation-preserving step is no longer blocked
@@ -317,10 +289,10 @@ impl<'a> Solver<'a> {
             let before = dir.max_step / dir.best_step;
             self.fold.stiffen(&self.step_limits.limits, dir.best_step);
             let solved = self.fold.local_resolve(
-                &self.frames,
+                &self.sys.frames,
                 &self.step_limits.limits,
                 dir.best_step,
-                &self.row_of,
+                &self.sys.row_of,
                 &self.gradient,
                 &mut self.d,
             );
@@ -328,7 +300,7 @@ impl<'a> Solver<'a> {
                 break;
             }
             dir = self.step_limits.directional(
-                &self.frames,
+                &self.sys.frames,
                 &self.uv,
                 &self.d,
                 &self.targets,
@@ -356,7 +328,7 @@ impl<'a> Solver<'a> {
         mut dir: Directional,
     ) -> Result<(Directional, usize), ArapError> {
         let sched = self.opts.refactor;
-        let m = self.frames.len();
+        let m = self.sys.frames.len();
         let mut iter_refactors = 0;
         loop {
             if STEP_SAFETY * dir.max_step >= BLOCKED_STEP * dir.best_step {
@@ -372,10 +344,12 @@ impl<'a> Solver<'a> {
                 break;
             }
             let factor = self
+                .sys
                 .factor
                 .as_mut()
                 .expect("the loop stops without free vertices");
-            let (trip, trip_tri, weights) = (&self.trip, &self.trip_tri, &self.fold.weights);
+            let (trip, trip_tri, weights) =
+                (&self.sys.trip, &self.sys.trip_tri, &self.fold.weights);
             factor
                 .refactor_with(
                     trip.len(),
@@ -408,7 +382,7 @@ impl<'a> Solver<'a> {
                 .with_min_len(PAR_CHUNK)
                 .for_each(|(o, (u, dv))| *o = [u[0] + step * dv[0], u[1] + step * dv[1]]);
             let (e_sum, fl) = evaluate(
-                &self.frames,
+                &self.sys.frames,
                 &self.trial,
                 self.lambda,
                 &mut self.trial_targets,

@@ -351,7 +351,7 @@ impl Implicit {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::super::newton_direct::HessianCholesky;
     use super::super::newton_pcg::HessianPcg;
     use super::*;
@@ -404,7 +404,8 @@ mod tests {
         (xs, its, solver)
     }
 
-    fn max_diff(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
+    /// The largest coordinate difference between two position sets.
+    pub(in crate::mass_spring) fn max_diff(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
         (a.iter().zip(b))
             .flat_map(|(p, q)| (0..3).map(move |k| (p[k] - q[k]).abs()))
             .fold(0.0, f64::max)

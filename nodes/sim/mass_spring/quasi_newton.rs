@@ -58,6 +58,11 @@ pub struct QuasiNewton {
     inc: Incidence,
     f: Vec<[f64; 3]>,
     pairs: VecDeque<Pair>,
+    /// Pairs dropped from `pairs`, kept for their memory (a step's buffers are a few
+    /// megabytes at 128x128: fresh ones every step would page-fault them in again).
+    spare: Vec<Pair>,
+    /// Gradient, next gradient and search direction (`3 n_free` each), kept between steps.
+    buffers: [Vec<f64>; 3],
     /// Options.
     pub opts: QuasiNewtonOptions,
     /// Iterations over all steps.
@@ -87,6 +92,8 @@ impl QuasiNewton {
             inc: Incidence::new(&m.springs, n),
             f: vec![[0.0; 3]; n],
             pairs: VecDeque::new(),
+            spare: Vec::new(),
+            buffers: [Vec::new(), Vec::new(), Vec::new()],
             opts,
             iterations: 0,
         })
@@ -167,9 +174,11 @@ impl QuasiNewton {
         let mut x = y.clone();
         let mut xt = x.clone();
         // the pairs describe the previous step's objective: start afresh
-        self.pairs.clear();
-        let (mut grad, mut grad_new, mut d) =
-            (vec![0.0; 3 * nf], vec![0.0; 3 * nf], vec![0.0; 3 * nf]);
+        self.spare.extend(self.pairs.drain(..));
+        let [mut grad, mut grad_new, mut d] = std::mem::take(&mut self.buffers);
+        for v in [&mut grad, &mut grad_new, &mut d] {
+            v.resize(3 * nf, 0.0);
+        }
         let mut alphas = Vec::new();
         let mut gmax = self.gradient(m, &x, &y, sp, &mut grad);
         let mut g0 = incremental_potential(m, &x, &y, h, sp);
@@ -185,7 +194,7 @@ impl QuasiNewton {
             let mut slope = dot(&grad, &d);
             if slope.is_nan() || slope >= 0.0 {
                 // not a descent direction (curvature information gone stale): H0 alone
-                self.pairs.clear();
+                self.spare.extend(self.pairs.drain(..));
                 self.direction(&grad, &mut d, &mut alphas);
                 slope = dot(&grad, &d);
             }
@@ -219,15 +228,16 @@ impl QuasiNewton {
             }
             let gmax_new = self.gradient(m, &xt, &y, sp, &mut grad_new);
             // the correction pair: s = alpha d, y = grad_new - grad
-            let mut pair = if self.pairs.len() >= self.opts.history.max(1) {
-                self.pairs.pop_front().expect("a full history")
-            } else {
-                Pair {
-                    s: vec![0.0; 3 * nf],
-                    y: vec![0.0; 3 * nf],
-                    rho: 0.0,
-                }
-            };
+            if self.pairs.len() >= self.opts.history.max(1) {
+                self.spare.extend(self.pairs.pop_front());
+            }
+            let mut pair = self.spare.pop().unwrap_or_else(|| Pair {
+                s: vec![0.0; 3 * nf],
+                y: vec![0.0; 3 * nf],
+                rho: 0.0,
+            });
+            pair.s.resize(3 * nf, 0.0);
+            pair.y.resize(3 * nf, 0.0);
             for k in 0..3 * nf {
                 pair.s[k] = alpha * d[k];
                 pair.y[k] = grad_new[k] - grad[k];
@@ -236,6 +246,8 @@ impl QuasiNewton {
             if sy > 0.0 && sy.is_finite() && self.opts.history > 0 {
                 pair.rho = 1.0 / sy;
                 self.pairs.push_back(pair);
+            } else {
+                self.spare.push(pair);
             }
             std::mem::swap(&mut x, &mut xt);
             std::mem::swap(&mut grad, &mut grad_new);
@@ -245,6 +257,7 @@ impl QuasiNewton {
             }
         }
         self.iterations += iters;
+        self.buffers = [grad, grad_new, d];
         end_step(m, st, &x, h);
         Ok(iters)
     }
@@ -252,6 +265,7 @@ impl QuasiNewton {
 
 #[cfg(test)]
 mod tests {
+    use super::super::implicit::tests::max_diff;
     use super::super::implicit::{Implicit, LinearSolver, NewtonOptions};
     use super::*;
     use crate::mass_spring::{energy, springs_from_mesh, SpringKinds};
@@ -294,12 +308,6 @@ mod tests {
             .map(|p| [p[0] * stretch, p[1], p[2] * stretch])
             .collect();
         (model, x0)
-    }
-
-    fn max_diff(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
-        (a.iter().zip(b))
-            .flat_map(|(p, q)| (0..3).map(move |k| (p[k] - q[k]).abs()))
-            .fold(0.0, f64::max)
     }
 
     fn newton(model: &Model) -> Implicit {

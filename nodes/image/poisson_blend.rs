@@ -659,6 +659,10 @@ mod tests {
                 let s = solved(mg.as_ref().unwrap());
                 let err = (&s.values - &exact).norm_max();
                 assert_eq!(s.solver, "multigrid");
+                eprintln!(
+                    "{mode:?} tolerance {tol:e}: {} iterations, residual {:e}, max error {err:e}",
+                    s.iterations, s.residual
+                );
                 assert!(s.residual <= tol, "{mode:?} {tol:e}: {}", s.residual);
                 assert!(err < bound, "{mode:?} {tol:e}: {err:e}");
             }

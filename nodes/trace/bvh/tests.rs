@@ -335,3 +335,28 @@ fn fan(k: usize) -> Vec<[[f32; 3]; 3]> {
         })
         .collect()
 }
+
+/// obvhs builds on every core (its `parallel` feature): the tree must not depend on the
+/// thread count, or images would (ties at equal distance go to the first triangle found).
+/// 120k triangles, past obvhs's 100k threshold for its parallel Morton sort.
+#[test]
+fn the_tree_does_not_depend_on_the_thread_count() {
+    let tris = random_tris(120_000, 11);
+    let build = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("a thread pool");
+        pool.install(|| Bvh::build(&tris))
+    };
+    let (one, four) = (build(1), build(4));
+    assert_eq!(one.prim, four.prim);
+    assert_eq!(one.nodes.len(), four.nodes.len());
+    assert!(one
+        .nodes
+        .iter()
+        .zip(&four.nodes)
+        .all(|(a, b)| (a.first, a.count) == (b.first, b.count)
+            && a.bounds.min == b.bounds.min
+            && a.bounds.max == b.bounds.max));
+}

@@ -74,7 +74,7 @@ fn course_paste_phases() {
             let t_factor = ms(t);
             let t = Instant::now();
             let mut x = b.clone();
-            let it = factor
+            let (it, _) = factor
                 .solve_in_place(x.as_mut(), DEFAULT_TOLERANCE)
                 .unwrap();
             let t_solve = ms(t);
@@ -109,5 +109,92 @@ fn course_paste_phases() {
             recycle(s.values);
             target = out;
         }
+    }
+}
+
+/// The first paste of a new mask shape, by phase (median of 20 shapes, each the course
+/// mask less one of its rows): `Region::new` (checks, Ω, key), the right-hand side, the
+/// hierarchy, the cold solve, and what recomputing the residual would cost (the node takes
+/// multigrid's own). `cargo test --release -p cgnodes-image course_first_paste_phases --
+/// --ignored --nocapture`.
+#[test]
+#[ignore]
+fn course_first_paste_phases() {
+    let sea = load("NewBackGround.jpg", false);
+    let bear = load("BearInWater.jpg", false);
+    let mask = load("BearInWater_mask.png", true);
+    // on a pool thread, as the node runs: a call from outside the pool would pay a hand-off
+    // to the pool in every parallel loop
+    rayon::scope(|_| first_pastes(&sea, &bear, &mask));
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+fn first_pastes(sea: &Image, bear: &Image, mask: &Image) {
+    let (src, m) = (
+        std::sync::Arc::new(bear.clone()),
+        std::sync::Arc::new(mask.clone()),
+    );
+    let region = median(
+        (0..20)
+            .map(|_| {
+                let t = Instant::now();
+                let r = crate::poisson_blend::Region::new(&src, Some(&m));
+                assert!(r.is_ok());
+                ms(t)
+            })
+            .collect(),
+    );
+    let shape = MaskShape::from_image(mask);
+    let (first_row, w) = (shape.inside[0][1] as usize, mask.width as usize);
+    for mode in [Mode::Seamless, Mode::Mixed] {
+        let mut rows = Vec::new();
+        for i in 0..25 {
+            // a new shape every time: the mask less row first_row + 20 + i
+            let mut flags: Vec<bool> = shape.index.iter().map(|&k| k != u32::MAX).collect();
+            let y = first_row + 20 + i;
+            flags[y * w..(y + 1) * w].fill(false);
+            let s = MaskShape::from_flags(mask.width, mask.height, &flags);
+            let key = s.key();
+            let t = Instant::now();
+            let mut b = RHS_BUFFER.take();
+            guidance::right_hand_side_into(&s, sea, bear, [62, 162], mode, &mut b);
+            let t_rhs = ms(t);
+            let t = Instant::now();
+            let (factor, reused) = cached_factor_keyed(&s, &key, Solver::Auto).unwrap();
+            let t_factor = ms(t);
+            assert!(!reused);
+            let t = Instant::now();
+            let mut x = SOLUTION_BUFFER.take();
+            if (x.nrows(), x.ncols()) == (b.nrows(), b.ncols()) {
+                x.copy_from(&b);
+            } else {
+                x = b.clone();
+            }
+            let (it, _) = factor
+                .solve_in_place(x.as_mut(), DEFAULT_TOLERANCE)
+                .unwrap();
+            let t_solve = ms(t);
+            let t = Instant::now();
+            let r = relative_residual(&s, x.as_ref(), b.as_ref());
+            let t_res = ms(t);
+            assert!(r <= 1.01 * DEFAULT_TOLERANCE);
+            RHS_BUFFER.keep(b);
+            recycle(x);
+            rows.push([t_rhs, t_factor, t_solve, t_res, it as f64]);
+        }
+        let med = |k: usize| median(rows[5..].iter().map(|r| r[k]).collect());
+        eprintln!(
+            "{mode:?} new shape, medians (ms): region {region:.3} rhs {:.3} hierarchy {:.3} \
+             solve {:.3} ({} it.) residual {:.3}",
+            med(0),
+            med(1),
+            med(2),
+            med(4),
+            med(3)
+        );
     }
 }

@@ -21,6 +21,15 @@ fn load(name: &str, raw: bool) -> Image {
     out
 }
 
+/// The course's target, source and mask.
+fn course_images() -> (Image, Image, Image) {
+    (
+        load("NewBackGround.jpg", false),
+        load("BearInWater.jpg", false),
+        load("BearInWater_mask.png", true),
+    )
+}
+
 fn ms(t: Instant) -> f64 {
     t.elapsed().as_secs_f64() * 1e3
 }
@@ -28,9 +37,7 @@ fn ms(t: Instant) -> f64 {
 #[test]
 #[ignore]
 fn course_paste_phases() {
-    let sea = load("NewBackGround.jpg", false);
-    let bear = load("BearInWater.jpg", false);
-    let mask = load("BearInWater_mask.png", true);
+    let (sea, bear, mask) = course_images();
     for mode in [Mode::Seamless, Mode::Mixed] {
         // a warm-up paste of another shape (the mask less its first inside row)
         let t = Instant::now();
@@ -120,9 +127,7 @@ fn course_paste_phases() {
 #[test]
 #[ignore]
 fn course_first_paste_phases() {
-    let sea = load("NewBackGround.jpg", false);
-    let bear = load("BearInWater.jpg", false);
-    let mask = load("BearInWater_mask.png", true);
+    let (sea, bear, mask) = course_images();
     // on a pool thread, as the node runs: a call from outside the pool would pay a hand-off
     // to the pool in every parallel loop
     rayon::scope(|_| first_pastes(&sea, &bear, &mask));

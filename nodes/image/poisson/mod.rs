@@ -401,13 +401,7 @@ pub fn solve_keyed(
         || cached_factor_keyed(shape, key, solver),
     );
     let (factor, reused) = factor?;
-    // x = b, in the last solution's memory when it was given back
-    let mut x = SOLUTION_BUFFER.take();
-    if (x.nrows(), x.ncols()) == (b.nrows(), b.ncols()) {
-        x.copy_from(&b);
-    } else {
-        x = b.clone();
-    }
+    let mut x = copy_of_rhs(&b);
     let (iterations, recurrence) = factor.solve_in_place(x.as_mut(), tolerance)?;
     // multigrid's own residual (its conjugate-gradient recurrence), else recomputed
     let residual = recurrence.unwrap_or_else(|| relative_residual(shape, x.as_ref(), b.as_ref()));
@@ -420,6 +414,18 @@ pub fn solve_keyed(
         iterations,
         millis: t0.elapsed().as_secs_f64() * 1e3,
     })
+}
+
+/// A copy of `b` to solve in place, in the last solution's memory when it was given back
+/// (`recycle`).
+fn copy_of_rhs(b: &Mat<f64>) -> Mat<f64> {
+    let mut x = SOLUTION_BUFFER.take();
+    if (x.nrows(), x.ncols()) == (b.nrows(), b.ncols()) {
+        x.copy_from(b);
+        x
+    } else {
+        b.clone()
+    }
 }
 
 /// `||b - A x|| / ||b||` over all channels (`||b - A x||` when b = 0).

@@ -173,12 +173,7 @@ fn first_pastes(sea: &Image, bear: &Image, mask: &Image) {
             let t_factor = ms(t);
             assert!(!reused);
             let t = Instant::now();
-            let mut x = SOLUTION_BUFFER.take();
-            if (x.nrows(), x.ncols()) == (b.nrows(), b.ncols()) {
-                x.copy_from(&b);
-            } else {
-                x = b.clone();
-            }
+            let mut x = copy_of_rhs(&b);
             let (it, _) = factor
                 .solve_in_place(x.as_mut(), DEFAULT_TOLERANCE)
                 .unwrap();

@@ -17,7 +17,7 @@
 use super::bvh::{Hit, Segment, TraceStacks};
 use super::direct::{delta_lights, environment_nee, Vertex};
 pub use super::path_film::{render, render_opts, Shortcuts};
-use super::render_scene::{prepare, RenderScene, TraceError, SHADOW_END};
+use super::render_scene::{prepare_cached, RenderScene, TraceError, SHADOW_END};
 use super::sampling::{add, dot, max_comp, mul, power_heuristic, scale, sub, Pcg32, V3};
 use super::tracer_node::{crease_input, declare_crease, reserve_image, trace_error};
 use cgnodes_api::prelude::*;
@@ -410,7 +410,7 @@ pub fn render_path(
     s: &PathSettings,
     progress: &(dyn Fn(f64) + Sync),
 ) -> Result<(Image, Image), TraceError> {
-    let (sc, cam) = prepare(scene, camera, s.crease_deg)?;
+    let (sc, cam, _) = prepare_cached(scene, camera, s.crease_deg)?;
     Ok(render(&sc, &cam, s, progress))
 }
 
@@ -482,17 +482,25 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     reserve_image(ctx, &scene, camera.as_deref(), 104)?;
     let report = ctx.progress_fn();
     let t0 = std::time::Instant::now();
-    let (color, variance) =
-        render_path(&scene, camera.as_deref(), &s, &report).map_err(trace_error)?;
+    let (sc, cam, reused) =
+        prepare_cached(&scene, camera.as_deref(), s.crease_deg).map_err(trace_error)?;
+    let prep = t0.elapsed().as_secs_f64();
+    let (color, variance) = render(&sc, &cam, &s, &report);
     let secs = t0.elapsed().as_secs_f64();
     let paths = color.width as f64 * color.height as f64 * s.spp as f64;
     ctx.log(format!(
-        "{}x{} at {} spp in {:.3} s ({:.2} Mpaths/s)",
+        "{}x{} at {} spp in {:.3} s ({:.2} Mpaths/s); scene {} in {:.3} s",
         color.width,
         color.height,
         s.spp,
         secs,
-        paths / secs.max(1e-9) / 1e6
+        paths / secs.max(1e-9) / 1e6,
+        if reused {
+            "reused from the last render"
+        } else {
+            "prepared"
+        },
+        prep
     ));
     ctx.set_output("color", color);
     ctx.set_output("variance", variance);

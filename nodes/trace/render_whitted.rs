@@ -18,7 +18,7 @@
 
 use super::bsdf::{fresnel_dielectric, reflect, Bsdf};
 use super::direct::delta_incidence;
-use super::render_scene::{prepare, PinholeCamera, RenderScene, TraceError, SHADOW_END};
+use super::render_scene::{prepare_cached, PinholeCamera, RenderScene, TraceError, SHADOW_END};
 use super::sampling::{add, dot, max_comp, mul, normalize, scale, sub, uniform_triangle, V3};
 use super::tracer_node::{crease_input, declare_crease, reserve_image, trace_error};
 use cgnodes_api::prelude::*;
@@ -345,7 +345,7 @@ pub fn render_whitted(
     s: &WhittedSettings,
     progress: &(dyn Fn(f64) + Sync),
 ) -> Result<Image, TraceError> {
-    let (sc, cam) = prepare(scene, camera, s.crease_deg)?;
+    let (sc, cam, _) = prepare_cached(scene, camera, s.crease_deg)?;
     Ok(render(&sc, &cam, s, progress))
 }
 

@@ -194,9 +194,7 @@ impl SceneGeometry {
                         normalize(v).unwrap_or([0.0, 0.0, 1.0])
                     })
                 })),
-            _ if crease_deg < 180.0 => self
-                .nrm
-                .extend_from_slice(&creased_normals(p, tris, crease_deg)),
+            _ if crease_deg < 180.0 => creased_normals_into(&mut self.nrm, p, tris, crease_deg),
             _ => {
                 let mut vn = vec![[0.0; 3]; p.len()];
                 for t in tris {
@@ -304,18 +302,29 @@ fn push_tangents(
 /// corner's face (the crease-angle smoothing of modelling packages, e.g. Blender's auto
 /// smooth). Degenerate faces take +z.
 pub fn creased_normals(p: &[[f64; 3]], tris: &[[u32; 3]], crease_deg: f64) -> Vec<[[f64; 3]; 3]> {
-    let fnrm: Vec<[f64; 3]> = tris
-        .iter()
+    let mut out = Vec::new();
+    creased_normals_into(&mut out, p, tris, crease_deg);
+    out
+}
+
+/// `creased_normals` appended to `out`, written in place (no second copy of the corner
+/// normals, 11 MB for 154k triangles).
+pub fn creased_normals_into(
+    out: &mut Vec<[[f64; 3]; 3]>,
+    p: &[[f64; 3]],
+    tris: &[[u32; 3]],
+    crease_deg: f64,
+) {
+    // Per face: the area-weighted normal and the unit one.
+    let faces: Vec<([f64; 3], [f64; 3])> = tris
+        .par_iter()
         .map(|t| {
-            cross(
+            let n = cross(
                 sub(p[t[1] as usize], p[t[0] as usize]),
                 sub(p[t[2] as usize], p[t[0] as usize]),
-            )
+            );
+            (n, normalize(n).unwrap_or([0.0, 0.0, 1.0]))
         })
-        .collect();
-    let unit: Vec<[f64; 3]> = fnrm
-        .iter()
-        .map(|n| normalize(*n).unwrap_or([0.0, 0.0, 1.0]))
         .collect();
     // Faces around each vertex (compressed rows).
     let mut start = vec![0usize; p.len() + 1];
@@ -336,23 +345,22 @@ pub fn creased_normals(p: &[[f64; 3]], tris: &[[u32; 3]], crease_deg: f64) -> Ve
         }
     }
     let cos_c = crease_deg.clamp(0.0, 180.0).to_radians().cos() - 1e-9;
-    (0..tris.len())
-        .into_par_iter()
-        .map(|t| {
-            std::array::from_fn(|k| {
-                let v = tris[t][k] as usize;
-                let mut n = [0.0; 3];
-                for &f in &around[start[v]..start[v + 1]] {
-                    if dot(unit[f as usize], unit[t]) >= cos_c {
-                        for c in 0..3 {
-                            n[c] += fnrm[f as usize][c];
-                        }
+    out.par_extend((0..tris.len()).into_par_iter().map(|t| {
+        let unit = faces[t].1;
+        std::array::from_fn(|k| {
+            let v = tris[t][k] as usize;
+            let mut n = [0.0; 3];
+            for &f in &around[start[v]..start[v + 1]] {
+                let (area_n, unit_f) = faces[f as usize];
+                if dot(unit_f, unit) >= cos_c {
+                    for c in 0..3 {
+                        n[c] += area_n[c];
                     }
                 }
-                normalize(n).unwrap_or(unit[t])
-            })
+            }
+            normalize(n).unwrap_or(unit)
         })
-        .collect()
+    }));
 }
 
 /// The normal `n` (unit, at barycentrics `b` of a triangle with corner tangents `tan`)
@@ -388,6 +396,90 @@ fn attr_len_ok(d: Domain, n: usize, nv: usize, nt: usize) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A unit cube (corners at ±1) as twelve triangles, counter-clockwise from outside.
+    fn cube() -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
+        let p: Vec<[f64; 3]> = (0..8)
+            .map(|i| [0, 1, 2].map(|k| if i >> k & 1 == 1 { 1.0 } else { -1.0 }))
+            .collect();
+        let quads = [
+            [0, 2, 3, 1],
+            [4, 5, 7, 6],
+            [0, 1, 5, 4],
+            [2, 6, 7, 3],
+            [0, 4, 6, 2],
+            [1, 3, 7, 5],
+        ];
+        let t = quads
+            .iter()
+            .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
+            .collect();
+        (p, t)
+    }
+
+    /// Below the crease angle a cube keeps its face normals; at 180 degrees a corner's
+    /// normal points into its vertex's octant; a fine sphere's creased normals are radial
+    /// within a degree; appending to a non-empty array keeps what was there.
+    #[test]
+    fn creased_normals_keep_edges_and_smooth_curved_surfaces() {
+        let (p, t) = cube();
+        let unit = |t: &[u32; 3]| {
+            normalize(cross(
+                sub(p[t[1] as usize], p[t[0] as usize]),
+                sub(p[t[2] as usize], p[t[0] as usize]),
+            ))
+            .unwrap()
+        };
+        for (tri, c) in t.iter().zip(creased_normals(&p, &t, 60.0)) {
+            let f = unit(tri);
+            assert!(dot(f, p[tri[0] as usize]) > 0.0, "outward");
+            for n in c {
+                assert!(dot(n, f) > 1.0 - 1e-12, "{n:?} against {f:?}");
+            }
+        }
+        for (tri, c) in t.iter().zip(creased_normals(&p, &t, 180.0)) {
+            for (k, n) in c.iter().enumerate() {
+                let v = p[tri[k] as usize];
+                assert!((0..3).all(|a| n[a] * v[a] > 0.0), "{n:?} at {v:?}");
+            }
+        }
+        // A UV sphere of 64 x 32 segments (poles as fans).
+        let (nu, nv) = (64u32, 32u32);
+        let mut sp = vec![[0.0, 0.0, 1.0]];
+        for j in 1..nv {
+            let th = std::f64::consts::PI * j as f64 / nv as f64;
+            for i in 0..nu {
+                let ph = std::f64::consts::TAU * i as f64 / nu as f64;
+                sp.push([th.sin() * ph.cos(), th.sin() * ph.sin(), th.cos()]);
+            }
+        }
+        sp.push([0.0, 0.0, -1.0]);
+        let ring = |j: u32, i: u32| 1 + (j - 1) * nu + i % nu;
+        let mut st = Vec::new();
+        for i in 0..nu {
+            st.push([0, ring(1, i), ring(1, i + 1)]);
+            st.push([sp.len() as u32 - 1, ring(nv - 1, i + 1), ring(nv - 1, i)]);
+            for j in 1..nv - 1 {
+                let (a, b) = (ring(j, i), ring(j, i + 1));
+                let (c, d) = (ring(j + 1, i), ring(j + 1, i + 1));
+                st.push([a, c, d]);
+                st.push([a, d, b]);
+            }
+        }
+        let mut out = vec![[[7.0; 3]; 3]];
+        creased_normals_into(&mut out, &sp, &st, 60.0);
+        assert_eq!(out.len(), st.len() + 1);
+        assert_eq!(out[0], [[7.0; 3]; 3]);
+        for (tri, c) in st.iter().zip(&out[1..]) {
+            for (k, n) in c.iter().enumerate() {
+                let radial = sp[tri[k] as usize];
+                assert!(
+                    dot(*n, radial) > 1f64.to_radians().cos(),
+                    "{n:?} at {radial:?}"
+                );
+            }
+        }
+    }
 
     #[test]
     fn plane_tangents_follow_u_and_materials_resolve() {

@@ -201,6 +201,7 @@ impl CameraGrid {
         }
         // Nearest first, so that each pixel's list is filled in order.
         let mut order: Vec<(f32, u32)> = (0..tris.len() as u32)
+            .into_par_iter()
             .filter(|&i| projected[i as usize].1.is_some())
             .map(|i| (eye_distance(fr.eye, &tris[i as usize]), i))
             .collect();

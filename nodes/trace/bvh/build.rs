@@ -21,13 +21,13 @@ use obvhs::ploc::PlocSearchDistance;
 use obvhs::BvhBuildParams;
 
 /// The build settings for `n` triangles: obvhs's `slow_build` without its spatial pre-splits
-/// (which bought nothing on our scenes), with the nearest-neighbour search of PLOC over 6
-/// neighbours instead of 24, and reinsertion of at most about 2048 candidates a pass (20 % of
-/// the nodes up to 10k triangles, down to 1 %); leaves of at most four triangles (one
-/// `Tri4`). Measured as the instructions of `cargo bench --bench trace -- --rays` (callgrind)
-/// against `slow_build`: equal on the box (whose small tree needs the full reinsertion, +18 %
-/// without the pass after the leaf collapse), igea +0.6 %, five other scans -19 % to 0 %;
-/// igea's tree is built in 39-50 ms instead of 106-141 (docs/path_tracing.md).
+/// (which bought nothing on our scenes), with PLOC's nearest-neighbour search over 6
+/// neighbours instead of 24 and a reinsertion share that falls with the scene's size
+/// (`reinsertion_ratio`); leaves of at most four triangles (one `Tri4`). Against
+/// `slow_build`, in instructions of `cargo bench --bench trace -- --rays` (callgrind): equal
+/// on the box (whose small tree needs the pass after the leaf collapse: +18 % without it),
+/// igea +0.6 %, four other scans -19 % to 0 %; igea's tree builds in about a third of the
+/// time (docs/path_tracing.md).
 fn params(n: usize) -> BvhBuildParams {
     BvhBuildParams {
         pre_split: false,
@@ -38,8 +38,9 @@ fn params(n: usize) -> BvhBuildParams {
     }
 }
 
-/// The share of nodes reinserted per pass for `n` triangles: about 2048 candidates, within
-/// 1 % and 20 % (`slow_build`'s ratio).
+/// The share of the nodes reinserted per pass for `n` triangles: 2048 / n, within 1 % and
+/// 20 % (`slow_build`'s share, kept up to about 10k triangles). The binary tree has about
+/// 2n nodes, so a large scene's first pass takes about 4096 candidates.
 fn reinsertion_ratio(n: usize) -> f32 {
     (2048.0 / n.max(1) as f32).clamp(0.01, 0.2)
 }

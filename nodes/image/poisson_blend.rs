@@ -9,6 +9,7 @@ pub mod poisson;
 use cgnodes_api::prelude::*;
 use poisson::{MaskShape, Mode, ShapeKey, Solver};
 use rayon::prelude::*;
+use std::borrow::Borrow;
 use std::sync::{Mutex, Weak};
 
 /// Whether any value of `pixels` is NaN or infinite: exactly when its exponent bits are all
@@ -87,17 +88,17 @@ pub fn poisson_blend(
     offset: [f64; 2],
     mode: Mode,
 ) -> Result<Blend, NodeError> {
-    let region = Region::new(source, mask)?;
-    let tolerance = poisson::DEFAULT_TOLERANCE;
-    blend_region(
-        target,
-        source,
-        &region,
-        offset,
-        mode,
-        Solver::Auto,
-        tolerance,
-    )
+    poisson::with_companion(|| {
+        blend_found(
+            target,
+            source,
+            || Region::new(source, mask),
+            offset,
+            mode,
+            Solver::Auto,
+            poisson::DEFAULT_TOLERANCE,
+        )
+    })
 }
 
 /// Ω of a paste, from the mask or the source's alpha, with its cache key: found once per
@@ -144,9 +145,75 @@ pub fn blend_region(
     solver: Solver,
     tolerance: f64,
 ) -> Result<Blend, NodeError> {
+    blend_found(
+        target,
+        source,
+        || Ok(region),
+        offset,
+        mode,
+        solver,
+        tolerance,
+    )
+}
+
+/// `blend_region` with Ω found by `find_region` on this core while another copies the
+/// target: the copy (fresh pages, about 1.2 ms on the course's target) overlaps the mask
+/// scan, the right-hand side and the hierarchy, not only the solve.
+fn blend_found<R: Borrow<Region> + Send>(
+    target: &Image,
+    source: &Image,
+    find_region: impl FnOnce() -> Result<R, NodeError> + Send,
+    offset: [f64; 2],
+    mode: Mode,
+    solver: Solver,
+    tolerance: f64,
+) -> Result<Blend, NodeError> {
     if offset.iter().any(|v| !v.is_finite()) {
         return Err(NodeError::invalid("offset", "the offset is not finite"));
     }
+    let (solved, copy) = rayon::join(
+        || -> Result<Option<(R, [i64; 2], poisson::Solution)>, NodeError> {
+            let region = find_region()?;
+            let r = region.borrow();
+            let Some(off) = checked_offset(target, source, r, offset, solver)? else {
+                return Ok(None);
+            };
+            let sol = poisson::solve_keyed(
+                &r.shape, &r.key, target, source, off, mode, solver, tolerance,
+            )
+            .map_err(|e| NodeError::singular(format!("Poisson system: {e}")))?;
+            Ok(Some((region, off, sol)))
+        },
+        || poisson::copy_target(target),
+    );
+    let solved = solved?;
+    let mut image = copy.map_err(|e| NodeError::invalid("target", e.to_string()))?;
+    let Some((region, off, sol)) = solved else {
+        // an empty Ω: the target unchanged (checked finite by the copy)
+        return Ok(Blend {
+            image,
+            solution: None,
+            pixels: 0,
+        });
+    };
+    let shape = &region.borrow().shape;
+    poisson::write_solution(&mut image, shape, off, &sol.values);
+    Ok(Blend {
+        image,
+        pixels: shape.len(),
+        solution: Some(sol),
+    })
+}
+
+/// The paste's whole-pixel offset after the checks of Ω against the images and `solver`
+/// (`None` for an empty Ω, which has nothing to check).
+fn checked_offset(
+    target: &Image,
+    source: &Image,
+    region: &Region,
+    offset: [f64; 2],
+    solver: Solver,
+) -> Result<Option<[i64; 2]>, NodeError> {
     let (shape, socket) = (&region.shape, region.socket);
     if (shape.width, shape.height) != (source.width, source.height) {
         return Err(NodeError::invalid(
@@ -158,12 +225,7 @@ pub fn blend_region(
         ));
     }
     if shape.is_empty() {
-        check_finite(target).map_err(|e| NodeError::invalid("target", e.to_string()))?;
-        return Ok(Blend {
-            image: target.clone(),
-            solution: None,
-            pixels: 0,
-        });
+        return Ok(None);
     }
     let Some([xr, yr]) = shape.offset_range(target.width, target.height) else {
         let [x0, y0, x1, y1] = shape.bbox().unwrap_or([0; 4]);
@@ -209,31 +271,7 @@ pub fn blend_region(
             poisson::PoissonError::NotARectangle.to_string(),
         ));
     }
-    // the target's copy (fresh pages: on the course's target as long as the reused solve) on
-    // the other core while this one solves
-    let (sol, copy) = rayon::join(
-        || {
-            poisson::solve_keyed(
-                shape,
-                &region.key,
-                target,
-                source,
-                off,
-                mode,
-                solver,
-                tolerance,
-            )
-        },
-        || poisson::copy_target(target),
-    );
-    let sol = sol.map_err(|e| NodeError::singular(format!("Poisson system: {e}")))?;
-    let mut image = copy.map_err(|e| NodeError::invalid("target", e.to_string()))?;
-    poisson::write_solution(&mut image, shape, off, &sol.values);
-    Ok(Blend {
-        image,
-        pixels: shape.len(),
-        solution: Some(sol),
-    })
+    Ok(Some(off))
 }
 
 /// The last mask image the node found Ω of (held weakly: its allocation cannot be reused by
@@ -322,8 +360,17 @@ fn execute(ctx: &mut ExecContext) -> Result<(), NodeError> {
     let solver = ctx.choice::<Solver>("solver")?;
     let tolerance: f64 = ctx.input("tolerance")?;
     let t0 = std::time::Instant::now();
-    let region = region_of(&source, mask.as_ref())?;
-    let r = blend_region(&target, &source, &region, offset, mode, solver, tolerance)?;
+    let r = poisson::with_companion(|| {
+        blend_found(
+            &target,
+            &source,
+            || region_of(&source, mask.as_ref()),
+            offset,
+            mode,
+            solver,
+            tolerance,
+        )
+    })?;
     let millis = t0.elapsed().as_secs_f64() * 1e3;
     if r.solution.is_none() {
         ctx.log("warning: the mask is empty; the target is returned unchanged");

@@ -502,3 +502,94 @@ pub fn write_solution(out: &mut Image, shape: &MaskShape, offset: [i64; 2], valu
             }
         });
 }
+
+/// Runs `f` while another thread of the pool waits for its parallel pieces awake.
+///
+/// Rayon puts an idle worker to sleep after about 32 empty polls (some 20 µs here), and the
+/// next parallel loop pays a futex wake-up, which on the bench machine (a virtual machine)
+/// costs more than a multigrid smoothing sweep of the course mask: a paste's short serial
+/// stretches (the coarse levels, the scalar steps of conjugate gradients) put the worker to
+/// sleep about eight times per solve. The companion instead polls with `rayon::yield_now`,
+/// which runs whatever piece `f` (or anyone) has posted, until `f` returns. With one thread
+/// the companion runs after `f`, finds it done and returns.
+pub fn with_companion<R: Send>(f: impl FnOnce() -> R + Send) -> R {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    /// Sets the flag when dropped: on return and on unwinding alike, so the companion never
+    /// outlives a panicking `f` (`rayon::join` waits for both sides before it re-panics).
+    struct Done<'a>(&'a AtomicBool);
+    impl Drop for Done<'_> {
+        fn drop(&mut self) {
+            self.0.store(true, Ordering::Release);
+        }
+    }
+    let done = AtomicBool::new(false);
+    let (r, ()) = rayon::join(
+        || {
+            let _done = Done(&done);
+            f()
+        },
+        || {
+            while !done.load(Ordering::Acquire) {
+                if rayon::yield_now() != Some(rayon::Yield::Executed) {
+                    std::hint::spin_loop();
+                }
+            }
+        },
+    );
+    r
+}
+
+#[cfg(test)]
+mod companion_tests {
+    use super::with_companion;
+    use rayon::prelude::*;
+    use std::sync::mpsc;
+    use std::time::Duration;
+
+    /// Runs `f` on a pool of `threads` on its own thread; `None` if it has not returned
+    /// within 30 s (a companion that never stops).
+    fn bounded<R: Send + 'static>(
+        threads: usize,
+        f: impl FnOnce() -> R + Send + 'static,
+    ) -> Option<std::thread::Result<R>> {
+        let (tx, rx) = mpsc::channel();
+        std::thread::spawn(move || {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .expect("a pool");
+            let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| pool.install(f)));
+            let _ = tx.send(r);
+        });
+        rx.recv_timeout(Duration::from_secs(30)).ok()
+    }
+
+    #[test]
+    fn companion_returns_the_result_on_one_and_two_threads() {
+        for threads in [1, 2] {
+            let r = bounded(threads, || {
+                with_companion(|| (0..100_000u64).into_par_iter().map(|i| i * i).sum::<u64>())
+            });
+            let expected: u64 = (0..100_000u64).map(|i| i * i).sum();
+            assert_eq!(r.expect("returned").expect("no panic"), expected);
+        }
+    }
+
+    #[test]
+    fn companion_stops_when_the_work_panics() {
+        for threads in [1, 2] {
+            let r = bounded(threads, || {
+                with_companion(|| -> u32 {
+                    (0..64u32)
+                        .into_par_iter()
+                        .for_each(|i| assert!(i < 63, "a bad piece"));
+                    0
+                })
+            });
+            assert!(
+                r.expect("returned, not spinning").is_err(),
+                "the panic propagates"
+            );
+        }
+    }
+}

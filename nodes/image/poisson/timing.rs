@@ -198,3 +198,61 @@ fn first_pastes(sea: &Image, bear: &Image, mask: &Image) {
         );
     }
 }
+
+/// The first paste of a new mask shape (mixed gradients) in three orders, alternated in one
+/// process, medians of 30 shapes each (the course mask less one pixel): Ω found first and the
+/// target copied beside the solve, with no companion (`blend_region`); the same beside
+/// `with_companion`; and the node's order, the copy beside Ω's scan as well, with the
+/// companion (`poisson_blend`). `cargo test --release -p cgnodes-image
+/// course_first_paste_companion -- --ignored --nocapture`.
+#[test]
+#[ignore]
+fn course_first_paste_companion() {
+    let (sea, bear, mask) = course_images();
+    let shape = MaskShape::from_image(&mask);
+    let w = mask.width as usize;
+    rayon::scope(|_| {
+        let mut times = [Vec::new(), Vec::new(), Vec::new()];
+        for i in 0..90 {
+            let mut m = mask.clone();
+            // a new shape every time: the mask less one of its pixels
+            let [x, y] = shape.inside[(i * 211 + 7) % shape.len()];
+            m.pixels[y as usize * w + x as usize] = [0.0, 0.0, 0.0, 1.0];
+            let paste = || {
+                let region = crate::poisson_blend::Region::new(&bear, Some(&m)).unwrap();
+                crate::poisson_blend::blend_region(
+                    &sea,
+                    &bear,
+                    &region,
+                    [62.0, 162.0],
+                    Mode::Mixed,
+                    Solver::Auto,
+                    DEFAULT_TOLERANCE,
+                )
+                .unwrap()
+            };
+            let t = Instant::now();
+            let b = match i % 3 {
+                0 => paste(),
+                1 => with_companion(paste),
+                _ => crate::poisson_blend::poisson_blend(
+                    &sea,
+                    &bear,
+                    Some(&m),
+                    [62.0, 162.0],
+                    Mode::Mixed,
+                )
+                .unwrap(),
+            };
+            times[i % 3].push(ms(t));
+            if let Some(s) = b.solution {
+                recycle(s.values);
+            }
+        }
+        let [a, c, e] = times.map(median);
+        eprintln!(
+            "first paste, mixed, medians (ms): no companion {a:.3}, companion {c:.3}, \
+             companion and the copy beside the scan (the node) {e:.3}"
+        );
+    });
+}

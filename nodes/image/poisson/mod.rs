@@ -509,9 +509,11 @@ pub fn write_solution(out: &mut Image, shape: &MaskShape, offset: [i64; 2], valu
 /// next parallel loop pays a futex wake-up, which on the bench machine (a virtual machine)
 /// costs more than a multigrid smoothing sweep of the course mask: a paste's short serial
 /// stretches (the coarse levels, the scalar steps of conjugate gradients) put the worker to
-/// sleep about eight times per solve. The companion instead polls with `rayon::yield_now`,
-/// which runs whatever piece `f` (or anyone) has posted, until `f` returns. With one thread
-/// the companion runs after `f`, finds it done and returns.
+/// sleep about eight times per solve (context switches counted with `getrusage` on the course
+/// mask). The companion instead polls with `rayon::yield_now`, which runs whatever piece `f`
+/// (or anyone) has posted, until `f` returns; it spins while `f` is serial, and a piece of
+/// another node's work it picks up is finished before it stops. With one thread the companion
+/// runs after `f`, finds it done and returns.
 pub fn with_companion<R: Send>(f: impl FnOnce() -> R + Send) -> R {
     use std::sync::atomic::{AtomicBool, Ordering};
     /// Sets the flag when dropped: on return and on unwinding alike, so the companion never

@@ -8,6 +8,14 @@ use std::collections::BTreeMap;
 use std::ops::RangeInclusive;
 use std::path::{Path, PathBuf};
 
+/// Serializes the tests that paste with `poisson_blend` in this process: its caches are
+/// process-wide (four mask shapes' factors, a new shape's warm start in one shared slot), and
+/// a test pasting other shapes beside one that checks them could evict what it checks.
+pub fn poisson_lock() -> std::sync::MutexGuard<'static, ()> {
+    static LOCK: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    LOCK.lock().unwrap_or_else(|e| e.into_inner())
+}
+
 /// The project root (assets, graphs, tests/data are below it).
 pub fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))

@@ -1,7 +1,7 @@
 //! `poisson_blend` through the node interface: the table's facts (pixels, residual, reuse of
 //! the factorization), the empty-mask warning, and errors naming their socket.
 
-use crate::common::{run_node, NodeOutputs};
+use crate::common::{poisson_lock, run_node, NodeOutputs};
 use cgnodes::node::FileEnv;
 use cgnodes::types::{Image, Table, Value};
 use std::collections::BTreeMap;
@@ -70,6 +70,7 @@ fn inputs(
 
 #[test]
 fn second_paste_with_the_same_mask_shape_reuses_the_factorization() {
+    let _lock = poisson_lock();
     let target = ramp(120, 90, 1.0);
     let source = ramp(41, 37, 3.0);
     let mask = ring(41, 37); // a shape only this test uses
@@ -102,6 +103,7 @@ fn second_paste_with_the_same_mask_shape_reuses_the_factorization() {
 
 #[test]
 fn source_equal_to_target_gives_the_target_back() {
+    let _lock = poisson_lock();
     let target = ramp(64, 64, 1.0);
     let max_diff = |img: &Image| {
         img.pixels
@@ -135,6 +137,7 @@ fn source_equal_to_target_gives_the_target_back() {
 
 #[test]
 fn empty_mask_warns_and_returns_the_target() {
+    let _lock = poisson_lock();
     let target = ramp(16, 16, 1.0);
     let source = ramp(4, 4, 2.0);
     let mask = Image::new(4, 4, [0.0, 0.0, 0.0, 1.0]);
@@ -148,6 +151,7 @@ fn empty_mask_warns_and_returns_the_target() {
 
 #[test]
 fn bad_inputs_get_errors_naming_the_socket() {
+    let _lock = poisson_lock();
     let target = ramp(16, 16, 1.0);
     let source = ramp(6, 6, 2.0);
     let full = Image::new(6, 6, [1.0; 4]);
@@ -188,6 +192,7 @@ fn bad_inputs_get_errors_naming_the_socket() {
 
 #[test]
 fn solver_choice_multigrid_and_cholesky_agree_and_sine_transform_needs_a_rectangle() {
+    let _lock = poisson_lock();
     let target = ramp(200, 180, 1.0);
     let source = ramp(97, 83, 2.5);
     let mask = ring(97, 83); // 4,500 pixels: `auto` picks multigrid (a shape only this test uses)

@@ -12,10 +12,27 @@ pub(super) type P3 = [f64; 3];
 pub(super) type Q3 = [f32; 3];
 
 /// Even rows and odd rows of a `w x h` grid of 3-channel values.
-#[derive(Clone, Debug)]
+#[derive(Debug)]
 pub(super) struct Field<T> {
     pub(super) w: usize,
     pub(super) rows: [Vec<[T; 3]>; 2],
+}
+
+impl<T: Copy> Clone for Field<T> {
+    fn clone(&self) -> Self {
+        Field {
+            w: self.w,
+            rows: self.rows.clone(),
+        }
+    }
+
+    /// In `self`'s memory where it fits (the derived `clone_from` would allocate anew).
+    fn clone_from(&mut self, source: &Self) {
+        self.w = source.w;
+        for (r, s) in self.rows.iter_mut().zip(&source.rows) {
+            r.clone_from(s);
+        }
+    }
 }
 
 impl<T: Copy + Default> Field<T> {
@@ -26,6 +43,16 @@ impl<T: Copy + Default> Field<T> {
         };
         f.reset(w, h);
         f
+    }
+
+    /// Grid points held.
+    pub(super) fn len(&self) -> usize {
+        self.rows[0].len() + self.rows[1].len()
+    }
+
+    /// Grid points the allocations can hold.
+    pub(super) fn capacity(&self) -> usize {
+        self.rows[0].capacity() + self.rows[1].capacity()
     }
 
     /// Zeros on a `w x h` grid in the same allocations (new ones when those are too small,

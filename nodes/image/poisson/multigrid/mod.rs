@@ -35,9 +35,11 @@ use faer::{Mat, MatMut, Par};
 use rayon::prelude::*;
 use std::sync::Mutex;
 
+mod cg;
 mod coarsen;
 mod grid;
 
+use cg::*;
 use coarsen::*;
 use grid::*;
 
@@ -114,8 +116,8 @@ pub struct Multigrid {
     /// The last solution on the fine grid (one 3-channel group), a warm start for the next:
     /// kept here from the shape's second solve on (its first solve's is in `FIRST`).
     last: Mutex<Option<Field<f64>>>,
-    /// Solves that kept their solution (`last` or `FIRST`).
-    kept: std::sync::atomic::AtomicUsize,
+    /// Whether a solve has kept its solution (in `FIRST`; the later ones in `last`).
+    kept: std::sync::atomic::AtomicBool,
 }
 
 /// What a multigrid solve did.
@@ -187,7 +189,7 @@ impl Multigrid {
             id: NEXT_ID.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
             sweeps: SWEEPS,
             last: Mutex::new(None),
-            kept: std::sync::atomic::AtomicUsize::new(0),
+            kept: std::sync::atomic::AtomicBool::new(false),
         })
     }
 
@@ -362,29 +364,15 @@ impl Multigrid {
     /// Keeps `x`, this solve's solution, as the warm start of the shape's next solve: in
     /// `FIRST` after the shape's first solve, in `last` after the others.
     fn keep(&self, x: &Field<f64>) {
-        use std::sync::atomic::Ordering;
-        if self.kept.fetch_add(1, Ordering::Relaxed) == 0 {
+        if !self.kept.swap(true, std::sync::atomic::Ordering::Relaxed) {
             if let Ok(mut first) = FIRST.try_lock() {
-                match first.as_mut() {
-                    // (a far larger shape's memory is let go, as `Field::reset` does)
-                    Some((id, f)) if f.capacity() <= 4 * x.len().max(1024) => {
-                        *id = self.id;
-                        f.clone_from(x);
-                    }
-                    _ => {
-                        // a quarter more, so that the next shape a little larger still fits
-                        // (as `Field::reset` grows)
-                        let mut f = x.clone();
-                        f.rows.iter_mut().for_each(|r| r.reserve_exact(r.len() / 4));
-                        *first = Some((self.id, f));
-                    }
-                }
+                // into the previous first solve's memory (`Field::assign`)
+                let (id, f) = first.get_or_insert_with(|| (self.id, Field::empty()));
+                *id = self.id;
+                f.assign(x);
             }
         } else if let Ok(mut last) = self.last.try_lock() {
-            match last.as_mut() {
-                Some(f) => f.clone_from(x),
-                None => *last = Some(x.clone()),
-            }
+            last.get_or_insert_with(Field::empty).assign(x);
         }
     }
 
@@ -406,24 +394,17 @@ impl Multigrid {
         let goal = tolerance * bnorm;
         if warm {
             // the shape's own copy, else its first solve's if `FIRST` still holds it
-            let own = self.last.try_lock().ok();
-            let first = match own.as_ref().and_then(|g| g.as_ref()) {
-                Some(_) => None,
-                None => FIRST.try_lock().ok(),
-            };
-            let last = own.as_ref().and_then(|g| g.as_ref()).or_else(|| {
-                first
-                    .as_ref()
-                    .and_then(|g| g.as_ref())
-                    .filter(|(id, _)| *id == self.id)
-                    .map(|(_, f)| f)
+            let (own, first) = (self.last.try_lock().ok(), FIRST.try_lock().ok());
+            let last = own.as_deref().and_then(Option::as_ref).or_else(|| {
+                let (id, f) = first.as_deref()?.as_ref()?;
+                (*id == self.id).then_some(f)
             });
             if let Some(last) = last {
                 // r = b - A x_last (in x for now), kept when it is smaller than b
                 fine_residual(fine, last, Some(&wk.res), &mut wk.x);
                 if flat(norms(&wk.x)) < bnorm * bnorm {
                     std::mem::swap(&mut wk.res, &mut wk.x);
-                    wk.x.clone_from(last);
+                    wk.x.assign(last);
                     stats.warm = true;
                 } else {
                     wk.x.fill_zero();

@@ -15,96 +15,158 @@ pub(super) fn wt(d: isize) -> f64 {
 }
 
 /// `bc = Pᵀ (b - A u)` (full weighting times 4) at the coarse points inside, zero elsewhere
-/// (`Pᵀ (-A u)` when `b` is `None`). The fine residual is formed row by row for the three
-/// fine rows under each coarse row and never stored.
-#[allow(clippy::needless_range_loop)] // xc is a grid coordinate, doubled for the fine rows
+/// (`Pᵀ (-A u)` when `b` is `None`); the fine residual is formed in `r`. Coarse point `(yc,
+/// xc)` sits on fine point `(2 yc, 2 xc)`, which is fine colour 0 at index `yc w2 + xc`, so
+/// its 3 x 3 fine neighbourhood is at fixed offsets in the four fine colours: the
+/// restriction is formed there for every coarse point at once (`plain`, fine colour 0's
+/// grid), then sorted into the coarse colours.
+#[allow(clippy::too_many_arguments)]
 pub(super) fn restrict_residual(
     fine: &Level,
     coarse: &Level,
-    u: &Field<f32>,
-    b: Option<&Field<f32>>,
-    bc: &mut Field<f32>,
+    lays: [&Layout; 2],
+    u: &Grid,
+    b: Option<&Grid>,
+    r: &mut Grid,
+    plain: &mut Vec<f32>,
+    bc: &mut Grid,
+) {
+    residual(fine, lays[0], u, b, r);
+    let (mx, my) = ((fine.w - 1) / 2, (fine.h - 1) / 2);
+    let (g, gc) = (fine.g, coarse.g);
+    let wf = g.w2;
+    plain.resize(g.n2(), 0.0);
+    let [r00, r10, r01, r11] = &r.c;
+    let ps: Vec<(usize, &mut [f32])> = plain
+        .chunks_mut(PIECE)
+        .enumerate()
+        .map(|(k, o)| (k * PIECE, o))
+        .collect();
+    run(ps, fine.par(), |(lo, o)| {
+        let s = clip(&g, lo, o.len());
+        if s.is_empty() {
+            return;
+        }
+        let (i, n) = (lo + s.start, s.len());
+        let o = &mut o[s];
+        let c = &r00[i..i + n];
+        let (x0, x1) = (&r10[i..i + n], at(r10, i, 1, n));
+        let (y0, y1) = (&r01[i..i + n], at(r01, i, wf as isize, n));
+        let (d0, d1, d2, d3) = (
+            &r11[i..i + n],
+            at(r11, i, 1, n),
+            at(r11, i, wf as isize, n),
+            at(r11, i, wf as isize + 1, n),
+        );
+        for j in 0..n {
+            // weights 1/2, 1, 1/2 along each axis (bilinear P, transposed)
+            let side = (x0[j] + x1[j]) + (y0[j] + y1[j]);
+            let corner = (d0[j] + d1[j]) + (d2[j] + d3[j]);
+            o[j] = c[j] + 0.5 * side + 0.25 * corner;
+        }
+    });
+    let plain = &*plain;
+    run(pieces1(bc), coarse.par(), |(colour, lo, o)| {
+        let (qx, qy) = (colour & 1, colour >> 1);
+        let len = o.len();
+        o.fill(0.0);
+        let m = &lays[1].mask[colour];
+        // the piece's rows of the coarse colour grid
+        for yy in lo / gc.w2..(lo + len).div_ceil(gc.w2) {
+            // coarse row 2 yy - qy, inside only for 1 <= yc < my
+            let Some(yc) = (2 * yy).checked_sub(qy) else {
+                continue;
+            };
+            if yc == 0 || yc >= my {
+                continue;
+            }
+            let row = yy * gc.w2;
+            // coarse columns xc = 2 xx - qx with 1 <= xc < mx
+            let (xa, xe) = ((1 + qx).div_ceil(2), (mx + qx).div_ceil(2));
+            let (a, e) = ((row + xa).max(lo), (row + xe).min(lo + len));
+            if a >= e {
+                continue;
+            }
+            let src = &plain[yc * wf..];
+            for k in a..e {
+                let xc = 2 * (k - row) - qx;
+                o[k - lo] = m[k] * src[xc];
+            }
+        }
+    });
+}
+
+/// `u += P uc` at the fine points inside. The coarse values are first laid out on fine
+/// colour 0's grid (coarse point `(yc, xc)` at `yc w2 + xc`) in `plain`; each fine colour
+/// then interpolates from fixed offsets in it.
+pub(super) fn prolong_add(
+    fine: &Level,
+    coarse: &Level,
+    lay: &Layout,
+    uc: &Grid,
+    plain: &mut Grid,
+    u: &mut Grid,
 ) {
     let (mx, my) = ((fine.w - 1) / 2, (fine.h - 1) / 2);
-    let (wf, wc) = (fine.w, coarse.w);
-    for p in 0..2 {
-        let f = |rows: &mut Vec<Q3>, (i, o): (usize, &mut [Q3])| {
-            let yc = 2 * i + p;
-            o.iter_mut().for_each(|v| *v = [0.0; 3]);
-            if yc == 0 || yc >= my {
-                return;
-            }
-            for (k, r) in rows.chunks_mut(wf).enumerate() {
-                residual_row(fine, 2 * yc + k - 1, u, b, r);
-            }
-            let (r0, rest) = rows.split_at(wf);
-            let (r1, r2) = rest.split_at(wf);
-            for xc in 1..mx {
-                if !coarse.inside(yc, xc) {
-                    continue;
-                }
-                let x = 2 * xc;
-                let mut s = [0.0f32; 3];
-                for c in 0..3 {
-                    // weights 1/2, 1, 1/2 along each axis (bilinear P, transposed)
-                    let side = r0[x][c] + r2[x][c] + r1[x - 1][c] + r1[x + 1][c];
-                    let corner = r0[x - 1][c] + r0[x + 1][c] + r2[x - 1][c] + r2[x + 1][c];
-                    s[c] = r1[x][c] + 0.5 * side + 0.25 * corner;
-                }
-                o[xc] = s;
-            }
-        };
-        let init = || vec![[0.0f32; 3]; 3 * wf];
-        if coarse.par() {
-            bc.rows[p]
-                .par_chunks_mut(wc)
-                .enumerate()
-                .for_each_init(init, f);
-        } else {
-            let mut rows = init();
-            bc.rows[p]
-                .chunks_mut(wc)
-                .enumerate()
-                .for_each(|a| f(&mut rows, a));
+    let (g, gc) = (fine.g, coarse.g);
+    let wf = g.w2;
+    // every entry the interpolation reads: coarse points 0..=m along each axis, zero past
+    for (yc, row) in plain.c[0].chunks_mut(wf).enumerate() {
+        for (xc, v) in row.iter_mut().enumerate() {
+            *v = if yc <= my && xc <= mx {
+                let (c, i) = gc.at(yc, xc);
+                uc.c[c][i]
+            } else {
+                0.0
+            };
         }
     }
-}
-
-/// `u += P uc` at the fine points inside.
-#[allow(clippy::needless_range_loop)] // x indexes the row and, halved, the coarse rows
-pub(super) fn prolong_add(fine: &Level, uc: &Field<f32>, u: &mut Field<f32>) {
-    let (w, h) = (fine.w, fine.h);
-    for p in 0..2 {
-        for_rows(&mut u.rows[p], w, fine.par(), |i, o| {
-            let y = 2 * i + p;
-            if y == 0 || y + 1 >= h {
-                return;
-            }
-            // the coarse rows this fine row interpolates from, with their weights
-            // the coarse rows this fine row interpolates from (the same row twice for an even
-            // y), so that a quarter of the four parents' sum is the bilinear value
-            let (ra, rb) = (uc.row(y / 2), uc.row(y.div_ceil(2)));
-            for x in 1..w - 1 {
-                if !fine.inside(y, x) {
-                    continue;
-                }
-                let (xa, xb) = (x / 2, x.div_ceil(2));
-                for c in 0..3 {
-                    o[x][c] += 0.25 * (ra[xa][c] + ra[xb][c] + rb[xa][c] + rb[xb][c]);
+    let p = &plain.c[0];
+    run(pieces1(u), fine.par(), |(colour, lo, o)| {
+        let r = clip(&g, lo, o.len());
+        if r.is_empty() {
+            return;
+        }
+        let (i, n) = (lo + r.start, r.len());
+        let m = &lay.mask[colour][i..i + n];
+        let o = &mut o[r];
+        let c = &p[i..i + n];
+        match colour {
+            0 => {
+                for j in 0..n {
+                    o[j] += m[j] * c[j];
                 }
             }
-        });
-    }
+            1 | 2 => {
+                let q = at(p, i, if colour == 1 { -1 } else { -(wf as isize) }, n);
+                for j in 0..n {
+                    o[j] += m[j] * (0.5 * (q[j] + c[j]));
+                }
+            }
+            _ => {
+                let (l, ul, u0) = (
+                    at(p, i, -1, n),
+                    at(p, i, -(wf as isize) - 1, n),
+                    at(p, i, -(wf as isize), n),
+                );
+                for j in 0..n {
+                    o[j] += m[j] * (0.25 * ((ul[j] + u0[j]) + (l[j] + c[j])));
+                }
+            }
+        }
+    });
 }
 
-/// The coarse points whose bilinear basis function is non-zero at fine index `j` along one
-/// axis, with its value there (one parent of weight 1 for an even `j`, two of 1/2 else).
-pub(super) fn parents(j: usize) -> impl Iterator<Item = (usize, f64)> {
-    let two = j % 2 == 1;
-    [(j / 2, if two { 0.5 } else { 1.0 }), (j.div_ceil(2), 0.5)]
-        .into_iter()
-        .take(if two { 2 } else { 1 })
-}
+/// The coarse parents of a fine point at offset `t` (-2..=2) from a coarse point's fine
+/// position along one axis, as offsets from that coarse point with the bilinear weight: one
+/// of weight 1 for an even `t`, two of 1/2 for an odd one (the second slot then unused).
+const PARENTS: [[(isize, f64); 2]; 5] = [
+    [(-1, 1.0), (0, 0.0)],
+    [(-1, 0.5), (0, 0.5)],
+    [(0, 1.0), (0, 0.0)],
+    [(0, 0.5), (1, 0.5)],
+    [(1, 1.0), (0, 0.0)],
+];
 
 /// The Galerkin stencil `(Pᵀ A P)[I][·]` of coarse point `I = (yc, xc)`: for each fine point
 /// `i` of its support, each fine neighbour `j` of `i` and each coarse parent `J` of `j`,
@@ -112,29 +174,35 @@ pub(super) fn parents(j: usize) -> impl Iterator<Item = (usize, f64)> {
 /// and last outside).
 fn galerkin_at(fine: &Level, yc: usize, xc: usize, mx: usize, my: usize) -> [f64; 9] {
     let mut acc = [0.0f64; 9];
+    // which parent offsets are real coarse points (inside the padded range)
+    let ok = |c: usize, d: isize, m: usize| {
+        let p = c as isize + d;
+        p > 0 && (p as usize) < m
+    };
     for dy in 0..3 {
         let yi = 2 * yc + dy - 1;
         for dx in 0..3 {
             let xi = 2 * xc + dx - 1;
-            if !fine.inside(yi, xi) {
+            let s = fine.stencil(yi, xi);
+            if s[4] == 0.0 {
                 continue;
             }
             let wi = wt(dy as isize - 1) * wt(dx as isize - 1);
-            for k in 0..9 {
-                let aij = fine.coef(yi, xi, k);
-                if aij == 0.0 {
+            for (k, &a) in s.iter().enumerate() {
+                if a == 0.0 {
                     continue;
                 }
-                let (yj, xj) = (yi + k / 3 - 1, xi + k % 3 - 1);
-                for (yp, wy) in parents(yj) {
-                    if yp == 0 || yp >= my {
+                // offsets of the neighbour j from I's fine position, then j's parents
+                let (ty, tx) = (dy + k / 3, dx + k % 3);
+                for &(py, wy) in &PARENTS[ty] {
+                    if wy == 0.0 || !ok(yc, py, my) {
                         continue;
                     }
-                    for (xp, wx) in parents(xj) {
-                        if xp == 0 || xp >= mx {
+                    for &(px, wx) in &PARENTS[tx] {
+                        if wx == 0.0 || !ok(xc, px, mx) {
                             continue;
                         }
-                        acc[(yp + 1 - yc) * 3 + (xp + 1 - xc)] += wi * aij * wy * wx;
+                        acc[((py + 1) * 3 + px + 1) as usize] += wi * a * wy * wx;
                     }
                 }
             }
@@ -160,18 +228,18 @@ pub(super) fn galerkin(fine: &Level) -> Level {
             (probe_index[i * 9 + j], probe_index[j * 9 + i]) = (0, 0);
         }
     }
-    let probe = Level {
-        w: 9,
-        h: 9,
-        op: match &fine.op {
+    let probe = Level::new(
+        9,
+        9,
+        match &fine.op {
             Op::Fine(_) => Op::Fine(probe_index.iter().map(|&i| i != 0).collect()),
             Op::Stencil { table, .. } => Op::Stencil {
                 index: probe_index,
                 table: table[..2].to_vec(),
             },
         },
-        n: 49,
-    };
+        49,
+    );
     let mut interior = galerkin_at(&probe, 2, 2, 4, 4);
     for k in 5..9 {
         interior[k] = interior[8 - k];
@@ -233,15 +301,15 @@ pub(super) fn galerkin(fine: &Level) -> Level {
         }
     }
     let n = index.iter().filter(|&&i| i != 0).count();
-    Level {
+    Level::new(
         w,
         h,
-        op: Op::Stencil {
+        Op::Stencil {
             index,
             table: table.iter().map(|s| s.map(|v| v as f32)).collect(),
         },
         n,
-    }
+    )
 }
 
 /// The coarsest level's factor: its inside points numbered row-major and the sparse
@@ -288,18 +356,18 @@ impl Coarsest {
         Ok(Coarsest { cells, factor })
     }
 
-    pub(super) fn solve(&self, b: &Field<f32>, u: &mut Field<f32>) {
-        let w = b.w;
+    pub(super) fn solve(&self, level: &Level, b: &Grid, u: &mut Grid) {
+        let w = level.w;
         let at = |g: usize| (g / w, g % w);
-        let mut m = Mat::from_fn(self.cells.len(), 3, |k, c| {
+        let mut m = Mat::from_fn(self.cells.len(), 1, |k, _| {
             let (y, x) = at(self.cells[k]);
-            f64::from(b.row(y)[x][c])
+            f64::from(b.get(y, x))
         });
         self.factor.solve_in_place(m.as_mut());
         u.fill_zero();
         for (k, &g) in self.cells.iter().enumerate() {
             let (y, x) = at(g);
-            u.row_mut(y)[x] = [m[(k, 0)] as f32, m[(k, 1)] as f32, m[(k, 2)] as f32];
+            u.set(y, x, m[(k, 0)] as f32);
         }
     }
 }

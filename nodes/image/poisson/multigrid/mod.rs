@@ -18,14 +18,17 @@
 //! zero up to rounding).
 //!
 //! Smoothing is Gauss-Seidel in four colours (the parities of x and y: points of one colour
-//! never share a 9-point stencil, so a colour is updated in parallel rows; on the 5-point
-//! fine level this is red-black order). The pre-smoother runs the colours forwards and the
+//! never share a 9-point stencil, so a colour is updated all at once; on the 5-point fine
+//! level this is red-black order). The pre-smoother runs the colours forwards and the
 //! post-smoother backwards, so the V-cycle is a symmetric operator, as conjugate gradients
-//! needs (Tatebe 1993, §2). The three colour channels are solved together, interleaved.
+//! needs (Tatebe 1993, §2).
 //!
-//! Vectors live on the padded bounding box of each level (zero outside Ω), even and odd rows
-//! in separate arrays, so that a colour's rows are written in parallel while the other
-//! parity's rows are read, without `unsafe`.
+//! Vectors live on the padded bounding box of each level (zero outside Ω), stored by colour
+//! and channel (`grid.rs`): every kernel is a flat loop over contiguous arrays, compiled to
+//! packed SIMD arithmetic, in safe code. Conjugate gradients runs the three colour channels
+//! in lockstep (one α and β each, one stopping test on their summed residual); the V-cycle
+//! of each channel is a task of its own, the three in parallel, so that two threads meet
+//! once per cycle instead of once per sweep.
 
 use super::mask::MaskShape;
 use super::PoissonError;
@@ -52,10 +55,10 @@ const COARSEST_MAX: usize = 256;
 /// Relative diagonal shift of the coarsest matrix (see the module comment).
 const COARSE_SHIFT: f64 = 1e-10;
 
-/// Grid points from which a level's sweeps run their rows on several threads. At 4096 the
-/// course mask's fine level (19.5k points) and its first coarse level (4.9k) run on both
-/// cores: its multigrid paste took 5.3-6.3 ms instead of 7.4-7.5 at 32768 (no level
-/// parallel), the first paste with the hierarchy 7.6-7.9 instead of 10.0-10.5 (docs/image.md).
+/// Grid points from which a level's kernels run their pieces on several threads, also
+/// inside each channel's V-cycle task (three tasks leave a thread idle for a third of the
+/// cycle otherwise): the course's first paste (`course_first_paste_companion`, the node's
+/// path) took 2.99-3.05 ms against 3.23-3.26 ms with the V-cycle's pieces on one thread.
 const PAR_MIN: usize = 1 << 12;
 
 /// Gauss-Seidel sweeps before and after the coarse correction (`Multigrid::sweeps`).
@@ -70,12 +73,25 @@ pub const TOLERANCE: f64 = 8e-11;
 /// Iterations after which conjugate gradients gives up (it needs about 10).
 const MAX_ITERATIONS: usize = 200;
 
-/// Per-level vectors of a V-cycle (f32) and the conjugate-gradient vectors (f64), kept
+/// One colour channel's per-level vectors of a V-cycle (f32): each channel's V-cycle runs on
+/// its own (three tasks on the threads, with one join per cycle instead of one per sweep).
+#[derive(Default)]
+struct Cycle {
+    /// Per level: solution, right-hand side, and the residual before it is restricted (also
+    /// the coarse values laid out for the prolongation).
+    u: Vec<Grid>,
+    b: Vec<Grid>,
+    r: Vec<Grid>,
+    /// Per level: the restricted residual on the fine level's colour-0 grid (`restrict_residual`).
+    q: Vec<Vec<f32>>,
+}
+
+/// The V-cycle vectors of the three channels and the conjugate-gradient vectors (f64), kept
 /// between solves.
 struct Work {
-    /// Per level: solution and right-hand side (the residual is restricted as it is formed).
-    u: Vec<Field<f32>>,
-    b: Vec<Field<f32>>,
+    cyc: [Cycle; 3],
+    /// Each level's operator in the colour layout (`Layout`).
+    lay: Vec<Layout>,
     /// Conjugate gradients on the fine level: iterate, residual (f64), search direction
     /// (f32: `A p` is formed from it exactly in f64, so `x` and the residual stay consistent).
     x: Field<f64>,
@@ -146,6 +162,16 @@ impl Stats {
     }
 }
 
+/// Each channel's fine-level right-hand side.
+fn b0(c: &mut [Cycle; 3]) -> [&mut Grid; 3] {
+    c.each_mut().map(|c| &mut c.b[0])
+}
+
+/// Each channel's fine-level V-cycle result (the preconditioned residual `z`).
+fn z0(c: &[Cycle; 3]) -> [&Grid; 3] {
+    c.each_ref().map(|c| &c.u[0])
+}
+
 impl Multigrid {
     /// The hierarchy of `shape`'s Poisson matrix: coarse levels by Galerkin products until a
     /// level has at most `COARSEST_MAX` unknowns or cannot be coarsened, which is factored.
@@ -164,12 +190,7 @@ impl Multigrid {
         for &[y, x] in &cells {
             inside[y as usize * w + x as usize] = true;
         }
-        let mut levels = vec![Level {
-            w,
-            h,
-            op: Op::Fine(inside),
-            n: shape.len(),
-        }];
+        let mut levels = vec![Level::new(w, h, Op::Fine(inside), shape.len())];
         loop {
             let l = levels.last().expect("the fine level");
             if l.n <= COARSEST_MAX || l.w < 5 || l.h < 5 {
@@ -211,12 +232,18 @@ impl Multigrid {
     }
 
     fn work(&self) -> Work {
-        let f = |l: &Level| Field::zeros(l.w, l.h);
+        let f = |l: &Level| Grid::zeros(l.w, l.h);
         let fine = &self.levels[0];
         let g = || Field::zeros(fine.w, fine.h);
-        Work {
+        let cycle = || Cycle {
             u: self.levels.iter().map(f).collect(),
             b: self.levels.iter().map(f).collect(),
+            r: self.levels.iter().map(f).collect(),
+            q: self.levels.iter().map(|l| vec![0.0; l.g.n2()]).collect(),
+        };
+        Work {
+            cyc: [cycle(), cycle(), cycle()],
+            lay: self.layouts(Vec::new()),
             x: g(),
             res: g(),
             p: Field::zeros(fine.w, fine.h),
@@ -242,13 +269,21 @@ impl Multigrid {
         if wk.owner == self.id {
             return;
         }
-        for v in [&mut wk.u, &mut wk.b] {
-            v.truncate(self.levels.len());
-            for (f, l) in v.iter_mut().zip(&self.levels) {
-                f.reset(l.w, l.h);
+        wk.lay = self.layouts(std::mem::take(&mut wk.lay));
+        // every V-cycle vector is written in full before it is read: no clearing
+        for cy in &mut wk.cyc {
+            for v in [&mut cy.u, &mut cy.b, &mut cy.r] {
+                v.truncate(self.levels.len());
+                for (f, l) in v.iter_mut().zip(&self.levels) {
+                    f.reshape(l.w, l.h);
+                }
+                for l in &self.levels[v.len()..] {
+                    v.push(Grid::zeros(l.w, l.h));
+                }
             }
-            for l in &self.levels[v.len()..] {
-                v.push(Field::zeros(l.w, l.h));
+            cy.q.resize_with(self.levels.len(), Vec::new);
+            for (q, l) in cy.q.iter_mut().zip(&self.levels) {
+                reshape(q, l.g.n2());
             }
         }
         let fine = &self.levels[0];
@@ -258,44 +293,63 @@ impl Multigrid {
         wk.owner = self.id;
     }
 
-    /// One symmetric V-cycle on level `l`: `u[l] ≈ A_l⁻¹ b[l]` from a zero start.
-    fn vcycle(&self, l: usize, wk: &mut Work) {
+    /// Every level's `Layout`, in the memory of `lay` where it fits (the coarsest level,
+    /// solved directly, needs only its mask, for the restriction).
+    fn layouts(&self, mut lay: Vec<Layout>) -> Vec<Layout> {
+        lay.resize_with(self.levels.len(), Layout::default);
+        for (l, (out, level)) in lay.iter_mut().zip(&self.levels).enumerate() {
+            out.fill(level, l + 1 < self.levels.len());
+        }
+        lay
+    }
+
+    /// One symmetric V-cycle of one channel on level `l`: `u[l] ≈ A_l⁻¹ b[l]` from a zero
+    /// start.
+    fn vcycle(&self, l: usize, wk: &mut Cycle, lay: &[Layout]) {
         if l + 1 == self.levels.len() {
-            self.coarsest.solve(&wk.b[l], &mut wk.u[l]);
+            self.coarsest.solve(&self.levels[l], &wk.b[l], &mut wk.u[l]);
             return;
         }
-        let level = &self.levels[l];
+        let (level, coarse) = (&self.levels[l], &self.levels[l + 1]);
         for s in 0..self.sweeps {
-            for &(py, xs) in &COLOURS {
-                smooth_rows(level, &mut wk.u[l], &wk.b[l], py, xs, s == 0);
+            for c in COLOURS {
+                smooth(level, &lay[l], &mut wk.u[l], &wk.b[l], c, s == 0);
             }
         }
         {
             let (lo, hi) = wk.b.split_at_mut(l + 1);
             restrict_residual(
                 level,
-                &self.levels[l + 1],
+                coarse,
+                [&lay[l], &lay[l + 1]],
                 &wk.u[l],
                 Some(&lo[l]),
+                &mut wk.r[l],
+                &mut wk.q[l],
                 &mut hi[0],
             );
         }
-        self.vcycle(l + 1, wk);
+        self.vcycle(l + 1, wk, lay);
         {
             let (lo, hi) = wk.u.split_at_mut(l + 1);
-            prolong_add(level, &hi[0], &mut lo[l]);
+            prolong_add(level, coarse, &lay[l], &hi[0], &mut wk.r[l], &mut lo[l]);
         }
         for _ in 0..self.sweeps {
-            for &(py, [a, b]) in COLOURS.iter().rev() {
-                smooth_rows(level, &mut wk.u[l], &wk.b[l], py, [b, a], false);
+            for c in COLOURS.into_iter().rev() {
+                smooth(level, &lay[l], &mut wk.u[l], &wk.b[l], c, false);
             }
         }
     }
 
-    /// `z = M r` into `u[0]`: one V-cycle on the fine level from a zero start (the
-    /// preconditioner), with `r` already in `b[0]` (rounded to f32).
+    /// `z = M r` into each channel's `u[0]`: one V-cycle on the fine level from a zero start
+    /// (the preconditioner), with `r` already in `b[0]` (rounded to f32); the channels in
+    /// parallel.
     fn precondition(&self, wk: &mut Work) {
-        self.vcycle(0, wk);
+        let ([a, b, c], lay) = (&mut wk.cyc, &wk.lay[..]);
+        rayon::join(
+            || self.vcycle(0, a, lay),
+            || rayon::join(|| self.vcycle(0, b, lay), || self.vcycle(0, c, lay)),
+        );
     }
 
     /// Solves `A X = B` in place, every column of `x` (in groups of three), by conjugate
@@ -329,17 +383,18 @@ impl Multigrid {
         for g in (0..ncols).step_by(3) {
             let cols = (ncols - g).min(3);
             // b into the residual field (outside Ω it stays zero)
+            let geom = wk.res.g;
             for c in 0..cols {
                 let col = x.as_ref().col(g + c);
-                let w = wk.res.w;
                 for (&[y, xx], v) in self.cells.iter().zip(col.iter()) {
-                    let (p, i) = ((y & 1) as usize, (y >> 1) as usize * w + xx as usize);
-                    wk.res.rows[p][i][c] = *v;
+                    let (k, i) = geom.at(y as usize, xx as usize);
+                    wk.res.c[k][c][i] = *v;
                 }
             }
             for c in cols..3 {
                 for &[y, xx] in &self.cells {
-                    wk.res.row_mut(y as usize)[xx as usize][c] = 0.0;
+                    let (k, i) = geom.at(y as usize, xx as usize);
+                    wk.res.c[k][c][i] = 0.0;
                 }
             }
             let reuse = warm && ncols == 3;
@@ -349,9 +404,9 @@ impl Multigrid {
             stats.residual_sq += s.residual_sq;
             stats.rhs_sq += s.rhs_sq;
             for c in 0..cols {
-                let w = wk.x.w;
                 for (&[y, xx], v) in self.cells.iter().zip(x.as_mut().col_mut(g + c).iter_mut()) {
-                    *v = wk.x.rows[(y & 1) as usize][(y >> 1) as usize * w + xx as usize][c];
+                    let (k, i) = geom.at(y as usize, xx as usize);
+                    *v = wk.x.c[k][c][i];
                 }
             }
             if reuse {
@@ -401,7 +456,7 @@ impl Multigrid {
             });
             if let Some(last) = last {
                 // r = b - A x_last (in x for now), kept when it is smaller than b
-                fine_residual(fine, last, Some(&wk.res), &mut wk.x);
+                fine_residual(fine, &wk.lay[0], last, Some(&wk.res), &mut wk.x);
                 if flat(norms(&wk.x)) < bnorm * bnorm {
                     std::mem::swap(&mut wk.res, &mut wk.x);
                     wk.x.assign(last);
@@ -417,10 +472,10 @@ impl Multigrid {
             return Ok(stats);
         }
         // z = M r into u[0]; p = z
-        to_f32(fine, &wk.res, &mut wk.b[0]);
+        to_f32(fine, &wk.res, b0(&mut wk.cyc));
         self.precondition(wk);
-        next_direction(fine, &mut wk.p, &wk.u[0], [0.0; 3]);
-        let mut rz = z_dots(fine, &wk.u[0], &wk.res, None).0;
+        next_direction(fine, &mut wk.p, z0(&wk.cyc), [0.0; 3]);
+        let mut rz = z_dots(fine, z0(&wk.cyc), &wk.res, None).0;
         while rn > goal {
             if stats.iterations >= MAX_ITERATIONS {
                 return Err(PoissonError::NoConvergence {
@@ -439,10 +494,11 @@ impl Multigrid {
             });
             rn = flat(cg_update(
                 fine,
+                &wk.lay[0],
                 &mut wk.x,
                 &mut wk.res,
                 &wk.p,
-                &mut wk.b[0],
+                b0(&mut wk.cyc),
                 alpha,
             ))
             .sqrt();
@@ -455,7 +511,7 @@ impl Multigrid {
             // -α A p: it tolerates the f32 V-cycle being not exactly the same symmetric operator
             // every time (flexible CG; Notay 2000, "Flexible conjugate gradients", SIAM J. Sci.
             // Comput. 22(4)), and equals Fletcher and Reeves' β when it is
-            let (rz1, zq) = z_dots(fine, &wk.u[0], &wk.res, Some(&wk.p));
+            let (rz1, zq) = z_dots(fine, z0(&wk.cyc), &wk.res, Some(&wk.p));
             let beta = std::array::from_fn::<f64, 3, _>(|c| {
                 if rz[c] > 0.0 {
                     (-alpha[c] * zq[c] / rz[c]).max(0.0)
@@ -465,7 +521,7 @@ impl Multigrid {
             });
             rz = rz1;
             // p = z + β p
-            next_direction(fine, &mut wk.p, &wk.u[0], beta);
+            next_direction(fine, &mut wk.p, z0(&wk.cyc), beta);
         }
         Ok(stats)
     }
@@ -478,21 +534,22 @@ impl Multigrid {
         let fine = &self.levels[0];
         wk.x.fill_zero();
         for (k, &[y, xx]) in self.cells.iter().enumerate() {
-            let v = &mut wk.x.row_mut(y as usize)[xx as usize];
-            for c in 0..b.ncols().min(3) {
-                v[c] = b[(k, c)];
+            let mut v = [0.0; 3];
+            for (c, v) in v.iter_mut().enumerate().take(b.ncols()) {
+                *v = b[(k, c)];
             }
+            wk.x.set(y as usize, xx as usize, v);
         }
         let target = wk.x.clone();
         wk.x.fill_zero();
         let r0 = norms(&target).iter().sum::<f64>().sqrt();
         let mut r = r0;
         for _ in 0..cycles {
-            fine_residual(fine, &wk.x, Some(&target), &mut wk.res);
-            to_f32(fine, &wk.res, &mut wk.b[0]);
+            fine_residual(fine, &wk.lay[0], &wk.x, Some(&target), &mut wk.res);
+            to_f32(fine, &wk.res, b0(&mut wk.cyc));
             self.precondition(&mut wk);
-            add_correction(&mut wk.x, &wk.u[0]);
-            fine_residual(fine, &wk.x, Some(&target), &mut wk.res);
+            add_correction(&mut wk.x, z0(&wk.cyc));
+            fine_residual(fine, &wk.lay[0], &wk.x, Some(&target), &mut wk.res);
             r = norms(&wk.res).iter().sum::<f64>().sqrt();
         }
         (r / r0).powf(1.0 / cycles as f64)
@@ -677,6 +734,38 @@ mod tests {
     }
 
     #[test]
+    fn every_piece_boundary_solves() {
+        // L-shapes whose fine colour grids end just past a multiple of `PIECE` points, so
+        // that the last piece lies wholly outside the kernels' span (a colour's border row),
+        // and the sizes around them
+        let mut hits = Vec::new();
+        for bw in 40..140usize {
+            for bh in [40usize, 57, 90] {
+                let g = Geom::of((bw + 2) | 1, (bh + 2) | 1);
+                let tail = g.n2() % PIECE;
+                if tail > 0 && tail <= g.w2 + 1 {
+                    hits.push((bw, bh));
+                }
+            }
+        }
+        assert!(!hits.is_empty());
+        for &(bw, bh) in hits.iter().take(4) {
+            for dw in [0, 1, 2] {
+                let (w, h) = ((bw + dw) as i64, bh as i64);
+                let shape = mask(w as u32 + 2, h as u32 + 2, |x, y| {
+                    (1..=w).contains(&x) && (1..=h).contains(&y) && (x < w / 2 || y < h / 2)
+                });
+                let mg = Multigrid::new(&shape).unwrap();
+                let b = rhs(shape.len());
+                let mut x = b.clone();
+                mg.solve_in_place(x.as_mut(), false, TOLERANCE).unwrap();
+                let res = system::residual_norm(&shape, x.as_ref(), b.as_ref()) / b.norm_l2();
+                assert!(res <= 1e-10, "{w} x {h}: {res:e}");
+            }
+        }
+    }
+
+    #[test]
     fn the_hierarchy_coarsens_and_solves_more_than_three_columns() {
         let shape = disc(60.0);
         let mg = Multigrid::new(&shape).unwrap();
@@ -735,7 +824,9 @@ mod tests {
             (x - 11) * (x - 11) + 2 * (y - 9) * (y - 9) < 90 || (x == 3 && y > 2)
         });
         let mg = Multigrid::new(&shape).unwrap();
-        let (fine, coarse) = (&mg.levels[0], &galerkin(&mg.levels[0]));
+        let coarse = galerkin(&mg.levels[0]);
+        let lays = [Layout::of(&mg.levels[0], false), Layout::of(&coarse, true)];
+        let (fine, coarse) = (&mg.levels[0], &coarse);
         let Op::Stencil { index, table } = &coarse.op else {
             panic!("coarse levels are stencils")
         };
@@ -746,16 +837,26 @@ mod tests {
                 if !coarse.inside(yc, xc) {
                     continue;
                 }
-                let mut e = Field::<f32>::zeros(coarse.w, coarse.h);
-                e.row_mut(yc)[xc] = [1.0; 3];
-                let mut pe = Field::zeros(fine.w, fine.h);
-                prolong_add(fine, &e, &mut pe);
+                let mut e = Grid::zeros(coarse.w, coarse.h);
+                e.set(yc, xc, 1.0);
+                let mut pe = Grid::zeros(fine.w, fine.h);
+                let mut tmp = Grid::zeros(fine.w, fine.h);
+                prolong_add(fine, coarse, &lays[0], &e, &mut tmp, &mut pe);
                 // Pᵀ (0 - A P e): the column of A_c, negated
-                let mut col = Field::zeros(coarse.w, coarse.h);
-                restrict_residual(fine, coarse, &pe, None, &mut col);
+                let mut col = Grid::zeros(coarse.w, coarse.h);
+                restrict_residual(
+                    fine,
+                    coarse,
+                    [&lays[0], &lays[1]],
+                    &pe,
+                    None,
+                    &mut tmp,
+                    &mut Vec::new(),
+                    &mut col,
+                );
                 for k in 0..9 {
                     let (y, x) = (yc + k / 3 - 1, xc + k % 3 - 1);
-                    let want = -f64::from(col.row(y)[x][0]);
+                    let want = -f64::from(col.get(y, x));
                     // the stencil of the neighbour reaching back to (yc, xc) (symmetry)
                     // stored in f32: equal up to its rounding, and exactly symmetric
                     let (ai, aj) = (a[yc * coarse.w + xc][k], a[y * coarse.w + x][8 - k]);

@@ -37,12 +37,7 @@ pub(super) fn restrict_residual(
     let wf = g.w2;
     plain.resize(g.n2(), 0.0);
     let [r00, r10, r01, r11] = &r.c;
-    let ps: Vec<(usize, &mut [f32])> = plain
-        .chunks_mut(PIECE)
-        .enumerate()
-        .map(|(k, o)| (k * PIECE, o))
-        .collect();
-    run(ps, fine.par(), |(lo, o)| {
+    run(plane_pieces(plain), fine.par(), |(lo, o)| {
         let s = clip(&g, lo, o.len());
         if s.is_empty() {
             return;

@@ -217,16 +217,19 @@ pub(super) fn grid_pieces<'a>(grids: [&'a mut Grid; 3]) -> Vec<Piece<'a, f32>> {
     out
 }
 
+/// One array cut into pieces of `PIECE` values: (first index, view).
+pub(super) fn plane_pieces(v: &mut [f32]) -> Vec<(usize, &mut [f32])> {
+    v.chunks_mut(PIECE)
+        .enumerate()
+        .map(|(k, o)| (k * PIECE, o))
+        .collect()
+}
+
 /// A grid's colours cut into pieces of `PIECE` points: (colour, first index, view).
 pub(super) fn pieces1(f: &mut Grid) -> Vec<(usize, usize, &mut [f32])> {
     let mut out = Vec::new();
     for (colour, v) in f.c.iter_mut().enumerate() {
-        let mut lo = 0;
-        for a in v.chunks_mut(PIECE) {
-            let len = a.len();
-            out.push((colour, lo, a));
-            lo += len;
-        }
+        out.extend(plane_pieces(v).into_iter().map(|(lo, a)| (colour, lo, a)));
     }
     out
 }
@@ -498,12 +501,7 @@ pub(super) fn smooth(
         other[colour ^ 3].expect("diagonal neighbours"),
     );
     let (b, m) = (&b.c[colour], &lay.mask[colour]);
-    let ps: Vec<(usize, &mut [f32])> = mine
-        .chunks_mut(PIECE)
-        .enumerate()
-        .map(|(k, o)| (k * PIECE, o))
-        .collect();
-    run(ps, level.par(), |(lo, o)| {
+    run(plane_pieces(mine), level.par(), |(lo, o)| {
         let r = clip(&g, lo, o.len());
         if first {
             // the points outside the kernels' span stay zero (nothing else writes them)

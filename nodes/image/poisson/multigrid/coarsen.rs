@@ -245,10 +245,26 @@ pub(super) fn galerkin(fine: &Level) -> Level {
     };
     // per coarse row: the index of each point (1 interior, 0 outside, else 2 + the position
     // in the row's own list of stencils, renumbered below)
+    // on the fine level a clear point's stencil depends only on which of the 5 x 5 fine
+    // points around it are inside: points of the same pattern (along a smooth ∂Ω, most of
+    // them) share one computation
+    let fine_mask = match &fine.op {
+        Op::Fine(m) => Some(m),
+        Op::Stencil { .. } => None,
+    };
+    let pattern = |m: &[bool], y: usize, x: usize| {
+        let mut key = 0u32;
+        for yy in y - 2..=y + 2 {
+            for &b in &m[yy * fine.w + x - 2..=yy * fine.w + x + 2] {
+                key = key << 1 | u32::from(b);
+            }
+        }
+        key
+    };
     let rows: Vec<(Vec<u32>, Vec<[f64; 9]>)> = (0..h)
         .into_par_iter()
         .with_min_len(8)
-        .map(|yc| {
+        .map_init(std::collections::HashMap::new, |memo, yc| {
             let (mut index, mut own) = (vec![0u32; w], Vec::new());
             if yc == 0 || yc >= my {
                 return (index, own);
@@ -256,12 +272,28 @@ pub(super) fn galerkin(fine: &Level) -> Level {
             for xc in 1..mx {
                 let (y, x) = (2 * yc, 2 * xc);
                 let clear = yc >= 2 && yc + 2 <= my && xc >= 2 && xc + 2 <= mx;
-                if clear && (y - 2..=y + 2).all(|yy| (x - 2..=x + 2).all(|xx| is_interior(yy, xx)))
-                {
-                    index[xc] = 1;
-                    continue;
-                }
-                let s = galerkin_at(fine, yc, xc, mx, my);
+                let s = match (clear, fine_mask) {
+                    (true, Some(m)) => {
+                        let key = pattern(m, y, x);
+                        if key == (1 << 25) - 1 {
+                            index[xc] = 1;
+                            continue;
+                        }
+                        *memo
+                            .entry(key)
+                            .or_insert_with(|| galerkin_at(fine, yc, xc, mx, my))
+                    }
+                    _ => {
+                        if clear
+                            && (y - 2..=y + 2)
+                                .all(|yy| (x - 2..=x + 2).all(|xx| is_interior(yy, xx)))
+                        {
+                            index[xc] = 1;
+                            continue;
+                        }
+                        galerkin_at(fine, yc, xc, mx, my)
+                    }
+                };
                 if s[4] > 0.0 {
                     index[xc] = 2 + own.len() as u32;
                     own.push(s);

@@ -19,7 +19,9 @@ pub(super) fn wt(d: isize) -> f64 {
 /// xc)` sits on fine point `(2 yc, 2 xc)`, which is fine colour 0 at index `yc w2 + xc`, so
 /// its 3 x 3 fine neighbourhood is at fixed offsets in the four fine colours: the
 /// restriction is formed there for every coarse point at once (`plain`, fine colour 0's
-/// grid), then sorted into the coarse colours.
+/// grid), then sorted into the coarse colours. `relaxed`: `u` comes from a forward sweep,
+/// whose last colour (3) saw no neighbour change after it was relaxed, so its residual is
+/// zero (up to rounding) and is neither formed nor read.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn restrict_residual(
     fine: &Level,
@@ -27,11 +29,13 @@ pub(super) fn restrict_residual(
     lays: [&Layout; 2],
     u: &Grid,
     b: Option<&Grid>,
+    relaxed: bool,
     r: &mut Grid,
     plain: &mut Vec<f32>,
     bc: &mut Grid,
 ) {
-    residual(fine, lays[0], u, b, r);
+    let last = *COLOURS.last().expect("four colours");
+    residual(fine, lays[0], u, b, relaxed.then_some(last), r);
     let (mx, my) = ((fine.w - 1) / 2, (fine.h - 1) / 2);
     let (g, gc) = (fine.g, coarse.g);
     let wf = g.w2;
@@ -47,6 +51,13 @@ pub(super) fn restrict_residual(
         let c = &r00[i..i + n];
         let (x0, x1) = (&r10[i..i + n], at(r10, i, 1, n));
         let (y0, y1) = (&r01[i..i + n], at(r01, i, wf as isize, n));
+        // weights 1/2, 1, 1/2 along each axis (bilinear P, transposed)
+        if relaxed {
+            for j in 0..n {
+                o[j] = c[j] + 0.5 * ((x0[j] + x1[j]) + (y0[j] + y1[j]));
+            }
+            return;
+        }
         let (d0, d1, d2, d3) = (
             &r11[i..i + n],
             at(r11, i, 1, n),
@@ -54,7 +65,6 @@ pub(super) fn restrict_residual(
             at(r11, i, wf as isize + 1, n),
         );
         for j in 0..n {
-            // weights 1/2, 1, 1/2 along each axis (bilinear P, transposed)
             let side = (x0[j] + x1[j]) + (y0[j] + y1[j]);
             let corner = (d0[j] + d1[j]) + (d2[j] + d3[j]);
             o[j] = c[j] + 0.5 * side + 0.25 * corner;

@@ -618,10 +618,20 @@ pub(super) fn first_zero(c: usize) -> [bool; 3] {
     [!done(c ^ 1), !done(c ^ 2), !done(c ^ 3)]
 }
 
-/// `out = b - A u` (`- A u` when `b` is `None`) on every colour, zero outside Ω.
-pub(super) fn residual(level: &Level, lay: &Layout, u: &Grid, b: Option<&Grid>, out: &mut Grid) {
+/// `out = b - A u` (`- A u` when `b` is `None`) on every colour but `skip`, zero outside Ω.
+pub(super) fn residual(
+    level: &Level,
+    lay: &Layout,
+    u: &Grid,
+    b: Option<&Grid>,
+    skip: Option<usize>,
+    out: &mut Grid,
+) {
     let g = level.g;
     run(pieces1(out), level.par(), |(colour, lo, o)| {
+        if skip == Some(colour) {
+            return;
+        }
         let r = clip(&g, lo, o.len());
         o[..r.start].fill(0.0);
         o[r.end..].fill(0.0);

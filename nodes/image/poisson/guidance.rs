@@ -94,9 +94,7 @@ pub fn right_hand_side_into(
         [row[0], row[1], row[2]]
     };
     // the three channel columns filled in parallel chunks of unknowns (every entry written)
-    if (b.nrows(), b.ncols()) != (n, 3) {
-        *b = Mat::zeros(n, 3);
-    }
+    super::shape_mat(b, n, 3);
     {
         let (r, rest) = b.as_mut().split_at_col_mut(1);
         let (g, bl) = rest.split_at_col_mut(1);

@@ -4,6 +4,7 @@
 //! per piece of `PIECE` points in four running lanes and added in piece order, so the bits
 //! do not depend on the thread count.
 
+use super::field::*;
 use super::grid::*;
 use super::*;
 

@@ -1,6 +1,7 @@
 //! Moving between levels: bilinear prolongation truncated to Ω, its transpose as restriction,
 //! the Galerkin coarse operator `Pᵀ A P`, and the coarsest level's sparse Cholesky solve.
 
+use super::field::*;
 use super::grid::*;
 use super::*;
 
@@ -109,14 +110,15 @@ pub(super) fn prolong_add(
     coarse: &Level,
     lay: &Layout,
     uc: &Grid,
-    plain: &mut Grid,
+    plain: &mut Vec<f32>,
     u: &mut Grid,
 ) {
     let (mx, my) = ((fine.w - 1) / 2, (fine.h - 1) / 2);
     let (g, gc) = (fine.g, coarse.g);
     let wf = g.w2;
     // every entry the interpolation reads: coarse points 0..=m along each axis, zero past
-    for (yc, row) in plain.c[0].chunks_mut(wf).enumerate() {
+    plain.resize(g.n2(), 0.0);
+    for (yc, row) in plain.chunks_mut(wf).enumerate() {
         for (xc, v) in row.iter_mut().enumerate() {
             *v = if yc <= my && xc <= mx {
                 let (c, i) = gc.at(yc, xc);
@@ -126,7 +128,7 @@ pub(super) fn prolong_add(
             };
         }
     }
-    let p = &plain.c[0];
+    let p = &*plain;
     run(pieces1(u), fine.par(), |(colour, lo, o)| {
         let r = clip(&g, lo, o.len());
         if r.is_empty() {
@@ -375,10 +377,10 @@ impl Coarsest {
         let (mut row_idx, mut values) = (Vec::new(), Vec::new());
         for &g in &cells {
             let (y, x) = (g / w, g % w);
+            let s = level.stencil(y, x);
             // the lower triangle: the diagonal, then the later neighbours (row-major)
-            for k in 4..9 {
+            for (k, &a) in s.iter().enumerate().skip(4) {
                 let j = (y + k / 3 - 1) * w + x + k % 3 - 1;
-                let a = level.coef(y, x, k);
                 if a == 0.0 || number[j] == usize::MAX {
                     continue;
                 }

@@ -24,7 +24,7 @@
 //! needs (Tatebe 1993, §2).
 //!
 //! Vectors live on the padded bounding box of each level (zero outside Ω), stored by colour
-//! and channel (`grid.rs`): every kernel is a flat loop over contiguous arrays, compiled to
+//! and channel (`field.rs`): every kernel is a flat loop over contiguous arrays, compiled to
 //! packed SIMD arithmetic, in safe code. Conjugate gradients runs the three colour channels
 //! in lockstep (one α and β each, one stopping test on their summed residual); the V-cycle
 //! of each channel is a task of its own, the three in parallel, so that two threads meet
@@ -40,10 +40,12 @@ use std::sync::Mutex;
 
 mod cg;
 mod coarsen;
+mod field;
 mod grid;
 
 use cg::*;
 use coarsen::*;
+use field::*;
 use grid::*;
 
 /// A level with at most this many unknowns is solved directly (sparse Cholesky). At 1024 the
@@ -77,12 +79,12 @@ const MAX_ITERATIONS: usize = 200;
 /// its own (three tasks on the threads, with one join per cycle instead of one per sweep).
 #[derive(Default)]
 struct Cycle {
-    /// Per level: solution, right-hand side, and the residual before it is restricted (also
-    /// the coarse values laid out for the prolongation).
+    /// Per level: solution, right-hand side, and the residual before it is restricted.
     u: Vec<Grid>,
     b: Vec<Grid>,
     r: Vec<Grid>,
-    /// Per level: the restricted residual on the fine level's colour-0 grid (`restrict_residual`).
+    /// Per level: coarse values laid out on this level's colour-0 grid, the restricted
+    /// residual and the coarse correction in turn (`restrict_residual`, `prolong_add`).
     q: Vec<Vec<f32>>,
 }
 
@@ -231,24 +233,19 @@ impl Multigrid {
         self.levels.iter().map(|l| l.n).collect()
     }
 
+    /// New work buffers shaped for this hierarchy.
     fn work(&self) -> Work {
-        let f = |l: &Level| Grid::zeros(l.w, l.h);
-        let fine = &self.levels[0];
-        let g = || Field::zeros(fine.w, fine.h);
-        let cycle = || Cycle {
-            u: self.levels.iter().map(f).collect(),
-            b: self.levels.iter().map(f).collect(),
-            r: self.levels.iter().map(f).collect(),
-            q: self.levels.iter().map(|l| vec![0.0; l.g.n2()]).collect(),
+        let mut wk = Work {
+            cyc: Default::default(),
+            lay: Vec::new(),
+            x: Field::empty(),
+            res: Field::empty(),
+            p: Field::empty(),
+            // no hierarchy's (ids start at 1)
+            owner: 0,
         };
-        Work {
-            cyc: [cycle(), cycle(), cycle()],
-            lay: self.layouts(Vec::new()),
-            x: g(),
-            res: g(),
-            p: Field::zeros(fine.w, fine.h),
-            owner: self.id,
-        }
+        self.shape_work(&mut wk);
+        wk
     }
 
     /// Work buffers for a solve: the spare ones (`SPARE`), reshaped to this hierarchy unless
@@ -263,8 +260,10 @@ impl Multigrid {
         }
     }
 
-    /// Reshapes `wk` (made for any hierarchy) to this one's levels, all zero, in the same
-    /// memory where it fits; nothing to do when it was shaped for this hierarchy already.
+    /// Reshapes `wk` (made for any hierarchy, or none) to this one's levels in the same
+    /// memory where it fits, conjugate gradients' vectors zeroed, the V-cycle's left as they
+    /// are (every kernel writes them before it reads them); nothing to do when `wk` was
+    /// shaped for this hierarchy already.
     fn shape_work(&self, wk: &mut Work) {
         if wk.owner == self.id {
             return;
@@ -273,12 +272,9 @@ impl Multigrid {
         // every V-cycle vector is written in full before it is read: no clearing
         for cy in &mut wk.cyc {
             for v in [&mut cy.u, &mut cy.b, &mut cy.r] {
-                v.truncate(self.levels.len());
+                v.resize_with(self.levels.len(), Grid::default);
                 for (f, l) in v.iter_mut().zip(&self.levels) {
                     f.reshape(l.w, l.h);
-                }
-                for l in &self.levels[v.len()..] {
-                    v.push(Grid::zeros(l.w, l.h));
                 }
             }
             cy.q.resize_with(self.levels.len(), Vec::new);
@@ -333,7 +329,7 @@ impl Multigrid {
         self.vcycle(l + 1, wk, lay);
         {
             let (lo, hi) = wk.u.split_at_mut(l + 1);
-            prolong_add(level, coarse, &lay[l], &hi[0], &mut wk.r[l], &mut lo[l]);
+            prolong_add(level, coarse, &lay[l], &hi[0], &mut wk.q[l], &mut lo[l]);
         }
         for _ in 0..self.sweeps {
             for c in COLOURS.into_iter().rev() {
@@ -842,7 +838,7 @@ mod tests {
                 e.set(yc, xc, 1.0);
                 let mut pe = Grid::zeros(fine.w, fine.h);
                 let mut tmp = Grid::zeros(fine.w, fine.h);
-                prolong_add(fine, coarse, &lays[0], &e, &mut tmp, &mut pe);
+                prolong_add(fine, coarse, &lays[0], &e, &mut Vec::new(), &mut pe);
                 // Pᵀ (0 - A P e): the column of A_c, negated
                 let mut col = Grid::zeros(coarse.w, coarse.h);
                 restrict_residual(

@@ -200,15 +200,26 @@ impl Lanes {
     /// Adds lane `i`'s pending direct light (`add_direct`), the emitter sample's only when
     /// it has one and its shadow ray is not `blocked`.
     #[inline(always)]
-    fn add_pending(&mut self, i: usize, blocked: bool) {
+    fn add_pending<const LIGHTS: bool>(&mut self, i: usize, blocked: bool) {
         let nee = (self.nee[i] && !blocked).then(|| get(&self.nee_c, i));
-        self.l[i] = add_direct(self.l[i], nee, self.delta[i], self.env[i]);
+        self.l[i] = if LIGHTS {
+            add_direct(self.l[i], nee, self.delta[i], self.env[i])
+        } else {
+            // No point, directional or environment light: their terms are zero.
+            nee.map_or(self.l[i], |c| add(self.l[i], c))
+        };
         self.pending[i] = false;
     }
 
     /// Ends lane `i`'s path and stores its radiance, or, when a shadow ray is still to be
     /// traced, leaves that to an `Orphan`.
-    fn finish(&mut self, i: usize, sc: &RenderScene, stacks: &mut TraceStacks, out: &mut [Sample]) {
+    fn finish<const LIGHTS: bool>(
+        &mut self,
+        i: usize,
+        sc: &RenderScene,
+        stacks: &mut TraceStacks,
+        out: &mut [Sample],
+    ) {
         if self.pending[i] && self.nee[i] {
             self.orphans.push(Orphan {
                 seg: (get(&self.seg_o, i), get(&self.seg_d, i), SHADOW_END),
@@ -222,7 +233,7 @@ impl Lanes {
             self.flush_orphans(sc, ORPHANS, stacks, out);
         } else {
             if self.pending[i] {
-                self.add_pending(i, false);
+                self.add_pending::<LIGHTS>(i, false);
             }
             out[self.job[i]].c = self.l[i];
         }
@@ -268,7 +279,7 @@ pub fn trace(
         // SAFETY: `trace_avx2` needs exactly these features, detected on this CPU.
         return unsafe { trace_avx2(b, stacks) };
     }
-    trace_body(b, stacks)
+    trace_body::<true>(b, stacks)
 }
 
 /// `trace` compiled for x86-64-v3 (AVX2 and its companions), chosen at run time so that
@@ -278,12 +289,19 @@ pub fn trace(
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
 fn trace_avx2(b: Batch, stacks: &mut TraceStacks) -> Vec<Sample> {
-    trace_body(b, stacks)
+    if b.sc.lights.is_empty() && b.sc.env.is_none() {
+        trace_body::<false>(b, stacks)
+    } else {
+        trace_body::<true>(b, stacks)
+    }
 }
 
-/// `trace`'s loop, inlined into both builds.
+/// `trace`'s loop, inlined into both builds. `LIGHTS` is whether the scene may have point,
+/// directional or environment lights; without, their per-vertex estimates (zero) are not
+/// gathered, carried or added (the x86-64-v3 build is made both ways, the baseline one only
+/// with `LIGHTS`).
 #[inline(always)]
-fn trace_body(b: Batch, stacks: &mut TraceStacks) -> Vec<Sample> {
+fn trace_body<const LIGHTS: bool>(b: Batch, stacks: &mut TraceStacks) -> Vec<Sample> {
     let Batch {
         sc,
         cam,
@@ -323,10 +341,10 @@ fn trace_body(b: Batch, stacks: &mut TraceStacks) -> Vec<Sample> {
         }
         let mut go = [false; L];
         for (i, go) in go.iter_mut().enumerate() {
-            *go = ln.job[i] != IDLE && visit(sc, s, &mut ln, i, &mut g, stacks, &mut out);
+            *go = ln.job[i] != IDLE && visit::<LIGHTS>(sc, s, &mut ln, i, &mut g, stacks, &mut out);
         }
         if go.iter().any(|&b| b) {
-            shade(sc, s, &mut ln, &g, go, stacks, &mut out);
+            shade::<LIGHTS>(sc, s, &mut ln, &g, go, stacks, &mut out);
         }
     }
     out
@@ -336,7 +354,7 @@ fn trace_body(b: Batch, stacks: &mut TraceStacks) -> Vec<Sample> {
 /// ray), add emission found, and gather what the shading step needs, drawing the vertex's
 /// random numbers in the scalar loop's order. Returns false when the path has ended.
 #[inline(always)]
-fn visit(
+fn visit<const LIGHTS: bool>(
     sc: &RenderScene,
     s: &PathSettings,
     ln: &mut Lanes,
@@ -354,7 +372,7 @@ fn visit(
         } else {
             (ln.lone(sc, (org, dir, tmax), stacks, out), false)
         };
-        ln.add_pending(i, blocked);
+        ln.add_pending::<LIGHTS>(i, blocked);
         hit
     } else if ln.depth[i] == 0 {
         ln.first[i]
@@ -368,7 +386,7 @@ fn visit(
             let w = found_weight(s.strategy, first, ln.prev_pdf[i], || env.pdf(dir));
             ln.l[i] = add(ln.l[i], scale(mul(get(&ln.thr, i), env.eval(dir)), w));
         }
-        ln.finish(i, sc, stacks, out);
+        ln.finish::<LIGHTS>(i, sc, stacks, out);
         return false;
     };
     let tri = hit.prim;
@@ -385,7 +403,7 @@ fn visit(
         }
     }
     if ln.depth[i] + 1 >= s.max_depth {
-        ln.finish(i, sc, stacks, out);
+        ln.finish::<LIGHTS>(i, sc, stacks, out);
         return false;
     }
     let sp = sc.surface(&hit);
@@ -409,9 +427,11 @@ fn visit(
     }
     // Point and directional lights, and one environment sample, per lane in the scalar
     // loop's code (their shadow rays are traced here, as there).
-    g.delta[i] = [0.0; 3];
-    g.env[i] = None;
-    if !sc.lights.is_empty() || sc.env.is_some() {
+    if LIGHTS {
+        g.delta[i] = [0.0; 3];
+        g.env[i] = None;
+    }
+    if LIGHTS && (!sc.lights.is_empty() || sc.env.is_some()) {
         let thr = get(&ln.thr, i);
         let v = Vertex {
             p: add(org, scale(dir, hit.t)),
@@ -440,7 +460,7 @@ fn visit(
 /// towards the gathered emitter sample, the BSDF sample for the next segment, Russian
 /// roulette, and the next ray's origin.
 #[inline(always)]
-fn shade(
+fn shade<const LIGHTS: bool>(
     sc: &RenderScene,
     s: &PathSettings,
     ln: &mut Lanes,
@@ -508,10 +528,12 @@ fn shade(
         }
         ln.pending[i] = true;
         ln.nee[i] = nee_bits & (1 << i) != 0;
-        ln.delta[i] = g.delta[i];
-        ln.env[i] = g.env[i];
+        if LIGHTS {
+            ln.delta[i] = g.delta[i];
+            ln.env[i] = g.env[i];
+        }
         if sampled_bits & (1 << i) == 0 {
-            ln.finish(i, sc, stacks, out);
+            ln.finish::<LIGHTS>(i, sc, stacks, out);
             continue;
         }
         ln.prev_pdf[i] = pdf2[i];
@@ -521,14 +543,14 @@ fn shade(
             // The scalar loop's (tm eta eta).min(0.95) with eta = 1 (exact).
             let q = tm.min(0.95);
             if ln.rng[i].next_f32() >= q {
-                ln.finish(i, sc, stacks, out);
+                ln.finish::<LIGHTS>(i, sc, stacks, out);
                 continue;
             }
             let t = scale(get(&ln.thr, i), 1.0 / q);
             put(&mut ln.thr, i, t);
         }
         if tm <= 0.0 || !tm.is_finite() {
-            ln.finish(i, sc, stacks, out);
+            ln.finish::<LIGHTS>(i, sc, stacks, out);
             continue;
         }
         ln.tmax[i] = f32::INFINITY;

@@ -15,6 +15,7 @@ pub use super::trace_error::{SceneError, TraceError};
 use cgnodes_api::types::{Camera, Light, Material, MaterialKind, Mesh, Scene};
 use cgnodes_geometry::scene_geometry::{normal_mapped, scene_geometry_creased};
 use cgnodes_geometry::texture::{MipTexture, Wrap};
+use rayon::prelude::*;
 use std::sync::{Arc, Mutex, Weak};
 
 /// A material reduced to what the tracers evaluate.
@@ -198,7 +199,8 @@ pub struct RenderScene {
     /// albedo (corner normals within 2e-7 of the normal's direction, no texture or normal
     /// map), so `surface` skips the interpolation: every triangle of a flat-shaded scene.
     pub plain: Vec<bool>,
-    /// UVs at each triangle's corners (NaN when its mesh has none).
+    /// UVs at each triangle's corners (NaN when its mesh has none); empty when no material
+    /// has a texture, since only textures read them.
     pub corner_uvs: Vec<[[f32; 2]; 3]>,
     /// Tangents with handedness at each triangle's corners (empty when no material has a
     /// normal map).
@@ -239,7 +241,7 @@ impl RenderScene {
     pub fn with_crease(scene: &Scene, crease_deg: f64) -> Result<RenderScene, SceneError> {
         check_scene(scene, crease_deg)?;
         let g = scene_geometry_creased(scene, crease_deg)?;
-        let tris: Vec<[V3; 3]> = g.pos.iter().map(|t| t.map(v3)).collect();
+        let tris: Vec<[V3; 3]> = g.pos.par_iter().map(|t| t.map(v3)).collect();
         let tri_mat = g.mat;
         let materials: Vec<RMaterial> = g
             .materials
@@ -248,13 +250,24 @@ impl RenderScene {
             .collect();
         let textures = textures(&g.materials);
         let any_nmap = textures.iter().any(|t| t.normal.is_some());
-        let corner_normals: Vec<[V3; 3]> = g.nrm.iter().map(|t| t.map(v3)).collect();
-        let corner_uvs = corner_uvs(&g.uv, &g.has_uv);
+        let corner_normals: Vec<[V3; 3]> = g.nrm.par_iter().map(|t| t.map(v3)).collect();
+        // UVs are read only through textures.
+        let any_tex = textures
+            .iter()
+            .any(|t| t.base.is_some() || t.normal.is_some());
+        let corner_uvs = if any_tex {
+            corner_uvs(&g.uv, &g.has_uv)
+        } else {
+            Vec::new()
+        };
         let corner_tangents = if any_nmap { g.tan } else { Vec::new() };
         let bvh = Bvh::build(&tris);
-        let normals: Vec<V3> = tris.iter().map(|t| normalize(triangle_normal(t))).collect();
+        let normals: Vec<V3> = tris
+            .par_iter()
+            .map(|t| normalize(triangle_normal(t)))
+            .collect();
         let plain: Vec<bool> = corner_normals
-            .iter()
+            .par_iter()
             .zip(&normals)
             .zip(&tri_mat)
             .map(|((c, &n), &m)| {
@@ -265,7 +278,7 @@ impl RenderScene {
             })
             .collect();
         let areas: Vec<f32> = tris
-            .iter()
+            .par_iter()
             .map(|t| 0.5 * length(triangle_normal(t)))
             .collect();
         let em = EmitterTables::new(&tris, &normals, &areas, &tri_mat, &materials);
@@ -338,8 +351,15 @@ impl RenderScene {
         let m = self.tri_mat[t] as usize;
         let mut albedo = self.materials[m].albedo;
         let tx = &self.textures[m];
-        let w = &self.corner_uvs[t];
-        if (tx.base.is_some() || tx.normal.is_some()) && !w[0][0].is_nan() {
+        // With a texture in the scene, every triangle has corner UVs (NaN without).
+        let w = match (
+            tx.base.is_some() || tx.normal.is_some(),
+            self.corner_uvs.get(t),
+        ) {
+            (true, Some(w)) if !w[0][0].is_nan() => w,
+            _ => &[[f32::NAN; 2]; 3],
+        };
+        if !w[0][0].is_nan() {
             let u = (b0 * w[0][0] + b1 * w[1][0] + b2 * w[2][0]) as f64;
             let v = (b0 * w[0][1] + b1 * w[1][1] + b2 * w[2][1]) as f64;
             if let Some(tex) = &tx.base {
@@ -552,7 +572,7 @@ fn textures(materials: &[std::sync::Arc<Material>]) -> Vec<Textures> {
 
 /// Per-triangle corner UVs in `f32`; NaN marks a triangle without UVs.
 fn corner_uvs(uv: &[[[f64; 2]; 3]], has_uv: &[bool]) -> Vec<[[f32; 2]; 3]> {
-    uv.iter()
+    uv.par_iter()
         .zip(has_uv)
         .map(|(t, &h)| {
             t.map(|w| {

@@ -19,6 +19,7 @@ use glam::Vec3A;
 use obvhs::bvh2::builder::build_bvh2;
 use obvhs::ploc::PlocSearchDistance;
 use obvhs::BvhBuildParams;
+use rayon::prelude::*;
 
 /// The build settings for `n` triangles: obvhs's `slow_build` without its spatial pre-splits
 /// (which bought nothing on our scenes), with PLOC's nearest-neighbour search over 6
@@ -77,7 +78,7 @@ impl Bvh {
             .unwrap_or([0.0; 3]);
         let v = |p: V3| Vec3A::new(p[0], p[1], p[2]);
         let boxes: Vec<obvhs::aabb::Aabb> = tris
-            .iter()
+            .par_iter()
             .map(|t| {
                 let b = tri_box(t, fallback);
                 obvhs::aabb::Aabb::new(v(b.min), v(b.max))

@@ -17,7 +17,9 @@
 //! (`handles`).
 
 use super::bsdf::Bsdf;
-use super::bvh::{Hit, Segment, TraceStacks};
+#[cfg(target_arch = "x86_64")]
+use super::bvh::Avx;
+use super::bvh::{Hit, Segment, Slab, TraceStacks};
 use super::camera_grid::CameraGrid;
 use super::camera_sample::{camera_sample, Job};
 use super::direct::{delta_lights, environment_nee, Vertex};
@@ -158,11 +160,11 @@ impl Lanes {
     /// The closest hit along a segment that has no shadow ray beside it: traced together
     /// with an orphaned shadow ray when there is one.
     #[inline(always)]
-    fn lone(
+    fn lone<S: Slab>(
         &mut self,
         sc: &RenderScene,
         seg: Segment,
-        stacks: &mut TraceStacks,
+        stacks: &mut TraceStacks<S>,
         out: &mut [Sample],
     ) -> Option<Hit> {
         match self.orphans.pop() {
@@ -171,17 +173,17 @@ impl Lanes {
                 o.resolve(blocked, out);
                 hit
             }
-            None => sc.bvh.single_in::<false>(stacks, seg),
+            None => sc.bvh.single_in::<false, _>(stacks, seg),
         }
     }
 
     /// Traces the orphaned shadow rays two at a time until at most `keep` are left.
     #[inline(always)]
-    fn flush_orphans(
+    fn flush_orphans<S: Slab>(
         &mut self,
         sc: &RenderScene,
         keep: usize,
-        stacks: &mut TraceStacks,
+        stacks: &mut TraceStacks<S>,
         out: &mut [Sample],
     ) {
         while self.orphans.len() > keep {
@@ -192,7 +194,7 @@ impl Lanes {
                     a.resolve(ba, out);
                     b.resolve(bb, out);
                 }
-                None => a.resolve(sc.bvh.single_in::<true>(stacks, a.seg).is_some(), out),
+                None => a.resolve(sc.bvh.single_in::<true, _>(stacks, a.seg).is_some(), out),
             }
         }
     }
@@ -213,11 +215,12 @@ impl Lanes {
 
     /// Ends lane `i`'s path and stores its radiance, or, when a shadow ray is still to be
     /// traced, leaves that to an `Orphan`.
-    fn finish<const LIGHTS: bool>(
+    #[inline(always)]
+    fn finish<const LIGHTS: bool, S: Slab>(
         &mut self,
         i: usize,
         sc: &RenderScene,
-        stacks: &mut TraceStacks,
+        stacks: &mut TraceStacks<S>,
         out: &mut [Sample],
     ) {
         if self.pending[i] && self.nee[i] {
@@ -276,23 +279,27 @@ pub fn trace(
         && std::is_x86_feature_detected!("lzcnt")
         && std::is_x86_feature_detected!("popcnt")
     {
-        // SAFETY: `trace_avx2` needs exactly these features, detected on this CPU.
-        return unsafe { trace_avx2(b, stacks) };
+        if let Some(avx) = Avx::detect() {
+            // SAFETY: `trace_avx2` needs exactly these features, detected on this CPU.
+            return unsafe { trace_avx2(b, avx) };
+        }
     }
-    trace_body::<true>(b, stacks)
+    trace_body::<true, _>(b, stacks)
 }
 
 /// `trace` compiled for x86-64-v3 (AVX2 and its companions), chosen at run time so that
 /// the binary still starts on older CPUs. The same code as the baseline build: three-operand
 /// VEX forms of the same SSE instructions (Rust never contracts to FMA), so the same bits,
-/// in about 5 % fewer instructions (docs/path_tracing.md, "How it runs").
+/// in about 5 % fewer instructions (docs/path_tracing.md, "How it runs"), with the node box
+/// test on 256-bit registers (`Avx`, on stacks of its own).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
-fn trace_avx2(b: Batch, stacks: &mut TraceStacks) -> Vec<Sample> {
+fn trace_avx2(b: Batch, avx: Avx) -> Vec<Sample> {
+    let stacks = &mut TraceStacks::with_slab(avx);
     if b.sc.lights.is_empty() && b.sc.env.is_none() {
-        trace_body::<false>(b, stacks)
+        trace_body::<false, _>(b, stacks)
     } else {
-        trace_body::<true>(b, stacks)
+        trace_body::<true, _>(b, stacks)
     }
 }
 
@@ -301,7 +308,7 @@ fn trace_avx2(b: Batch, stacks: &mut TraceStacks) -> Vec<Sample> {
 /// gathered, carried or added (the x86-64-v3 build is made both ways, the baseline one only
 /// with `LIGHTS`).
 #[inline(always)]
-fn trace_body<const LIGHTS: bool>(b: Batch, stacks: &mut TraceStacks) -> Vec<Sample> {
+fn trace_body<const LIGHTS: bool, S: Slab>(b: Batch, stacks: &mut TraceStacks<S>) -> Vec<Sample> {
     let Batch {
         sc,
         cam,
@@ -341,10 +348,11 @@ fn trace_body<const LIGHTS: bool>(b: Batch, stacks: &mut TraceStacks) -> Vec<Sam
         }
         let mut go = [false; L];
         for (i, go) in go.iter_mut().enumerate() {
-            *go = ln.job[i] != IDLE && visit::<LIGHTS>(sc, s, &mut ln, i, &mut g, stacks, &mut out);
+            *go = ln.job[i] != IDLE
+                && visit::<LIGHTS, _>(sc, s, &mut ln, i, &mut g, stacks, &mut out);
         }
         if go.iter().any(|&b| b) {
-            shade::<LIGHTS>(sc, s, &mut ln, &g, go, stacks, &mut out);
+            shade::<LIGHTS, _>(sc, s, &mut ln, &g, go, stacks, &mut out);
         }
     }
     out
@@ -354,13 +362,13 @@ fn trace_body<const LIGHTS: bool>(b: Batch, stacks: &mut TraceStacks) -> Vec<Sam
 /// ray), add emission found, and gather what the shading step needs, drawing the vertex's
 /// random numbers in the scalar loop's order. Returns false when the path has ended.
 #[inline(always)]
-fn visit<const LIGHTS: bool>(
+fn visit<const LIGHTS: bool, S: Slab>(
     sc: &RenderScene,
     s: &PathSettings,
     ln: &mut Lanes,
     i: usize,
     g: &mut Gather,
-    stacks: &mut TraceStacks,
+    stacks: &mut TraceStacks<S>,
     out: &mut [Sample],
 ) -> bool {
     let (org, dir, tmax) = (get(&ln.org, i), get(&ln.dir, i), ln.tmax[i]);
@@ -386,7 +394,7 @@ fn visit<const LIGHTS: bool>(
             let w = found_weight(s.strategy, first, ln.prev_pdf[i], || env.pdf(dir));
             ln.l[i] = add(ln.l[i], scale(mul(get(&ln.thr, i), env.eval(dir)), w));
         }
-        ln.finish::<LIGHTS>(i, sc, stacks, out);
+        ln.finish::<LIGHTS, _>(i, sc, stacks, out);
         return false;
     };
     let tri = hit.prim;
@@ -403,7 +411,7 @@ fn visit<const LIGHTS: bool>(
         }
     }
     if ln.depth[i] + 1 >= s.max_depth {
-        ln.finish::<LIGHTS>(i, sc, stacks, out);
+        ln.finish::<LIGHTS, _>(i, sc, stacks, out);
         return false;
     }
     let sp = sc.surface(&hit);
@@ -460,13 +468,13 @@ fn visit<const LIGHTS: bool>(
 /// towards the gathered emitter sample, the BSDF sample for the next segment, Russian
 /// roulette, and the next ray's origin.
 #[inline(always)]
-fn shade<const LIGHTS: bool>(
+fn shade<const LIGHTS: bool, S: Slab>(
     sc: &RenderScene,
     s: &PathSettings,
     ln: &mut Lanes,
     g: &Gather,
     go: [bool; L],
-    stacks: &mut TraceStacks,
+    stacks: &mut TraceStacks<S>,
     out: &mut [Sample],
 ) {
     let zero = splat(0.0);
@@ -533,7 +541,7 @@ fn shade<const LIGHTS: bool>(
             ln.env[i] = g.env[i];
         }
         if sampled_bits & (1 << i) == 0 {
-            ln.finish::<LIGHTS>(i, sc, stacks, out);
+            ln.finish::<LIGHTS, _>(i, sc, stacks, out);
             continue;
         }
         ln.prev_pdf[i] = pdf2[i];
@@ -543,14 +551,14 @@ fn shade<const LIGHTS: bool>(
             // The scalar loop's (tm eta eta).min(0.95) with eta = 1 (exact).
             let q = tm.min(0.95);
             if ln.rng[i].next_f32() >= q {
-                ln.finish::<LIGHTS>(i, sc, stacks, out);
+                ln.finish::<LIGHTS, _>(i, sc, stacks, out);
                 continue;
             }
             let t = scale(get(&ln.thr, i), 1.0 / q);
             put(&mut ln.thr, i, t);
         }
         if tm <= 0.0 || !tm.is_finite() {
-            ln.finish::<LIGHTS>(i, sc, stacks, out);
+            ln.finish::<LIGHTS, _>(i, sc, stacks, out);
             continue;
         }
         ln.tmax[i] = f32::INFINITY;

@@ -2,8 +2,9 @@
 //! through the `wide` crate (safe code; `minps`, `maxps`, and comparisons straight to a bit
 //! mask with `cmpps` + `movmskps`, which LLVM had turned into four `ucomiss` and `set`s per
 //! mask when they were written as plain lane-wise Rust: docs/path_tracing.md, "How it runs");
-//! the eight-box slab test; and the watertight ray-triangle test of Woop, Benthin and Wald
-//! 2013 run on four triangles stored axis by axis (`Tri4`).
+//! the eight-box slab test, on two SSE halves (`Sse`) or one AVX register (`Avx`, the same
+//! bits); and the watertight ray-triangle test of Woop, Benthin and Wald 2013 run on four
+//! triangles stored axis by axis (`Tri4`).
 //!
 //! Every lane computes exactly the operations of the scalar `tri_test`, in the same order
 //! (Rust never contracts to FMA), so a lane's result is bit for bit the scalar one; the
@@ -130,9 +131,9 @@ impl RayBox {
 }
 
 /// Slab test of one ray against eight boxes (`min[axis][lane]`, `max[axis][lane]`) on
-/// eight lanes (`wide::f32x8`, which this crate's builds compute as two SSE halves, the
-/// x86-64-v3 build of the lane loop included: `wide` picks its AVX form only when the whole
-/// crate is built for AVX): the mask of the boxes entered before
+/// eight lanes (`wide::f32x8`, which this crate's builds compute as two SSE halves: `wide`
+/// picks its AVX form only when the whole crate is built for AVX; `Avx` is the 256-bit
+/// form for the lane loop's x86-64-v3 build): the mask of the boxes entered before
 /// `tmax` and the entry distances. A NaN from `0 * inf` keeps the previous bound (`maxps`
 /// and `minps` return their second operand then), and the exit distance is widened by
 /// 1 + 2 gamma(3) so round-off cannot cull a hit on a face (Ize 2013, "Robust BVH Ray
@@ -155,6 +156,80 @@ pub fn slab8(r: &RayBox, min: &[F8; 3], max: &[F8; 3], tmax: f32) -> (u32, F8) {
     }
     let t1 = t1 * f32x8::splat(1.000_000_4);
     (t0.simd_le(t1).to_bitmask(), t0.to_array())
+}
+
+/// How a node's eight boxes are tested: `Sse`, `slab8` on two SSE halves (every x86-64
+/// CPU), or `Avx`, the same operations on one 256-bit register (half the instructions, the
+/// same bits). The traversal is generic over it, so the four-lane loop's x86-64-v3 build
+/// takes `Avx` and everything else `Sse`.
+pub trait Slab: Copy {
+    /// `slab8`'s answer.
+    fn slab8(self, r: &RayBox, min: &[F8; 3], max: &[F8; 3], tmax: f32) -> (u32, F8);
+}
+
+/// `slab8` as it is: two SSE halves through `wide`.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Sse;
+
+impl Slab for Sse {
+    #[inline(always)]
+    fn slab8(self, r: &RayBox, min: &[F8; 3], max: &[F8; 3], tmax: f32) -> (u32, F8) {
+        slab8(r, min, max, tmax)
+    }
+}
+
+/// `slab8` on AVX's 256-bit registers; a value exists only on a CPU with AVX (`detect`).
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy, Debug)]
+pub struct Avx(());
+
+#[cfg(target_arch = "x86_64")]
+impl Avx {
+    /// An `Avx` when this CPU has AVX.
+    pub fn detect() -> Option<Avx> {
+        std::is_x86_feature_detected!("avx").then_some(Avx(()))
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+impl Slab for Avx {
+    #[inline(always)]
+    fn slab8(self, r: &RayBox, min: &[F8; 3], max: &[F8; 3], tmax: f32) -> (u32, F8) {
+        // SAFETY: an `Avx` is made only by `Avx::detect`, on a CPU that has AVX.
+        unsafe { slab8_avx(r, min, max, tmax) }
+    }
+}
+
+/// `slab8`'s operations in the same order on `ymm` registers: `vsubps`, `vmulps`,
+/// `vmaxps`/`vminps` with the previous bound as second operand (kept on NaN, as `maxps`
+/// keeps it), `vcmpps` less-or-equal ordered (false on NaN, as `cmpleps`) and `vmovmskps`.
+/// Unsafe: the CPU must have AVX. Not itself marked `target_feature` (that would forbid
+/// inlining it always): the intrinsics inline where the caller is built with AVX, as
+/// `path_lanes::trace_avx2` is, and would be calls elsewhere.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn slab8_avx(r: &RayBox, min: &[F8; 3], max: &[F8; 3], tmax: f32) -> (u32, F8) {
+    use std::arch::x86_64::*;
+    let mut t0 = _mm256_setzero_ps();
+    let mut t1 = _mm256_set1_ps(tmax);
+    for k in 0..3 {
+        let (near, far) = if r.neg[k] {
+            (&max[k], &min[k])
+        } else {
+            (&min[k], &max[k])
+        };
+        let o = _mm256_set1_ps(r.org[k]);
+        let inv = _mm256_set1_ps(r.inv[k]);
+        let tn = _mm256_mul_ps(_mm256_sub_ps(_mm256_loadu_ps(near.as_ptr()), o), inv);
+        let tf = _mm256_mul_ps(_mm256_sub_ps(_mm256_loadu_ps(far.as_ptr()), o), inv);
+        t0 = _mm256_max_ps(tn, t0);
+        t1 = _mm256_min_ps(tf, t1);
+    }
+    let t1 = _mm256_mul_ps(t1, _mm256_set1_ps(1.000_000_4));
+    let m = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(t0, t1)) as u32;
+    let mut te = [0.0f32; 8];
+    _mm256_storeu_ps(te.as_mut_ptr(), t0);
+    (m, te)
 }
 
 /// Up to four triangles of a leaf, axis by axis: `v[corner][axis][lane]`, and the

@@ -14,7 +14,9 @@ mod tests;
 mod traverse;
 mod wide;
 
-pub use lanes::Tri4;
+#[cfg(target_arch = "x86_64")]
+pub use lanes::Avx;
+pub use lanes::{Slab, Sse, Tri4};
 pub use pair::Segment;
 pub(crate) use traverse::tri_test;
 pub use traverse::{intersect_triangle, RayPre, TraceStacks};

@@ -9,7 +9,7 @@
 //! hits and `tmax` updates of a single-ray query, so the answers are bit for bit those of
 //! `intersect` and `occluded`.
 
-use super::lanes::Dyn;
+use super::lanes::{Dyn, Slab, Sse};
 use super::traverse::{with_stacks, RayPre, TraceStacks};
 use super::wide::Walk;
 use super::{Bvh, Hit};
@@ -25,21 +25,21 @@ impl Bvh {
     #[inline]
     pub fn intersect_occluded(&self, a: Segment, b: Segment) -> (Option<Hit>, bool) {
         with_stacks(|sa, sb| {
-            let (ha, hb) = self.trace_pair::<false, true>(a, b, sa, sb);
+            let (ha, hb) = self.trace_pair::<false, true, _>(a, b, sa, sb, Sse);
             (ha, hb.is_some())
         })
     }
 
     /// `intersect_occluded` on the caller's stacks, for a loop that traces many pairs.
     #[inline(always)]
-    pub fn intersect_occluded_in(
+    pub fn intersect_occluded_in<S: Slab>(
         &self,
-        st: &mut TraceStacks,
+        st: &mut TraceStacks<S>,
         a: Segment,
         b: Segment,
     ) -> (Option<Hit>, bool) {
-        let (sa, sb) = st.split();
-        let (ha, hb) = self.trace_pair::<false, true>(a, b, sa, sb);
+        let (sa, sb, slab) = st.split();
+        let (ha, hb) = self.trace_pair::<false, true, _>(a, b, sa, sb, slab);
         (ha, hb.is_some())
     }
 
@@ -48,14 +48,18 @@ impl Bvh {
     /// the same answer as `intersect` (`occluded`), in the caller's build (the four-lane
     /// loop's x86-64-v3 one) instead of the baseline build's `traverse`.
     #[inline(always)]
-    pub fn single_in<const ANY: bool>(&self, st: &mut TraceStacks, a: Segment) -> Option<Hit> {
+    pub fn single_in<const ANY: bool, S: Slab>(
+        &self,
+        st: &mut TraceStacks<S>,
+        a: Segment,
+    ) -> Option<Hit> {
         if self.wide.is_empty() {
             return self.traverse::<ANY>(a.0, a.1, a.2);
         }
         let r = RayPre::new(a.0, a.1);
         let p = Dyn(r.kx, r.ky, r.kz);
-        let (s, _) = st.split();
-        self.walk_out::<ANY, _>(&r, p, &mut Walk::new(&r, a.2), s)
+        let (s, _, slab) = st.split();
+        self.walk_out::<ANY, _, _>(&r, p, slab, &mut Walk::new(&r, a.2), s)
     }
 
     /// Whether anything blocks `a` and `b` (any-hit queries), traced interleaved: the same
@@ -63,16 +67,21 @@ impl Bvh {
     #[inline]
     pub fn occluded_pair(&self, a: Segment, b: Segment) -> (bool, bool) {
         with_stacks(|sa, sb| {
-            let (ha, hb) = self.trace_pair::<true, true>(a, b, sa, sb);
+            let (ha, hb) = self.trace_pair::<true, true, _>(a, b, sa, sb, Sse);
             (ha.is_some(), hb.is_some())
         })
     }
 
     /// `occluded_pair` on the caller's stacks.
     #[inline(always)]
-    pub fn occluded_pair_in(&self, st: &mut TraceStacks, a: Segment, b: Segment) -> (bool, bool) {
-        let (sa, sb) = st.split();
-        let (ha, hb) = self.trace_pair::<true, true>(a, b, sa, sb);
+    pub fn occluded_pair_in<S: Slab>(
+        &self,
+        st: &mut TraceStacks<S>,
+        a: Segment,
+        b: Segment,
+    ) -> (bool, bool) {
+        let (sa, sb, slab) = st.split();
+        let (ha, hb) = self.trace_pair::<true, true, _>(a, b, sa, sb, slab);
         (ha.is_some(), hb.is_some())
     }
 
@@ -80,16 +89,17 @@ impl Bvh {
     /// calls of `intersect`.
     #[inline]
     pub fn intersect_pair(&self, a: Segment, b: Segment) -> (Option<Hit>, Option<Hit>) {
-        with_stacks(|sa, sb| self.trace_pair::<false, false>(a, b, sa, sb))
+        with_stacks(|sa, sb| self.trace_pair::<false, false, _>(a, b, sa, sb, Sse))
     }
 
     #[inline(always)]
-    fn trace_pair<const ANY_A: bool, const ANY_B: bool>(
+    fn trace_pair<const ANY_A: bool, const ANY_B: bool, S: Slab>(
         &self,
         a: Segment,
         b: Segment,
         sa: &mut [(u32, f32)],
         sb: &mut [(u32, f32)],
+        slab: S,
     ) -> (Option<Hit>, Option<Hit>) {
         if self.wide.is_empty() || self.one_at_a_time {
             return (
@@ -102,11 +112,17 @@ impl Bvh {
         let mut wa = Walk::new(&ra, a.2);
         let mut wb = Walk::new(&rb, b.2);
         loop {
-            if self.step8::<ANY_A, _>(&ra, pa, &mut wa, sa) {
-                return (wa.best(), self.walk_out::<ANY_B, _>(&rb, pb, &mut wb, sb));
+            if self.step8::<ANY_A, _, _>(&ra, pa, slab, &mut wa, sa) {
+                return (
+                    wa.best(),
+                    self.walk_out::<ANY_B, _, _>(&rb, pb, slab, &mut wb, sb),
+                );
             }
-            if self.step8::<ANY_B, _>(&rb, pb, &mut wb, sb) {
-                return (self.walk_out::<ANY_A, _>(&ra, pa, &mut wa, sa), wb.best());
+            if self.step8::<ANY_B, _, _>(&rb, pb, slab, &mut wb, sb) {
+                return (
+                    self.walk_out::<ANY_A, _, _>(&ra, pa, slab, &mut wa, sa),
+                    wb.best(),
+                );
             }
         }
     }

@@ -281,7 +281,7 @@ fn interleaved_pairs_match_single_queries() {
         );
         assert_eq!(occ, bvh.occluded(b.0, b.1, b.2), "pair {i}, shadow ray");
         // The inline forms on the caller's stacks give the same answers.
-        let single_in = bvh.single_in::<false>(&mut st, a);
+        let single_in = bvh.single_in::<false, _>(&mut st, a);
         assert_eq!(
             key(single_in),
             key(single_a),
@@ -289,7 +289,7 @@ fn interleaved_pairs_match_single_queries() {
         );
         let occ_a = bvh.occluded(a.0, a.1, a.2);
         assert_eq!(
-            bvh.single_in::<true>(&mut st, b).is_some(),
+            bvh.single_in::<true, _>(&mut st, b).is_some(),
             occ,
             "pair {i}, inline shadow ray"
         );
@@ -359,4 +359,50 @@ fn the_tree_does_not_depend_on_the_thread_count() {
         .all(|(a, b)| (a.first, a.count) == (b.first, b.count)
             && a.bounds.min == b.bounds.min
             && a.bounds.max == b.bounds.max));
+}
+
+/// `Avx`'s 256-bit box test gives `Sse`'s mask and entry distances bit for bit: on every
+/// node of a tree over random triangles, for random rays, rays along the axes (zero
+/// direction components: `0 * inf` is NaN in some lanes) and rays starting on box faces.
+#[cfg(target_arch = "x86_64")]
+#[test]
+fn avx_box_test_is_the_sse_one() {
+    use super::lanes::{RayBox, Slab, Sse};
+    let Some(avx) = Avx::detect() else {
+        eprintln!("this CPU has no AVX: the AVX box test is never used here");
+        return;
+    };
+    let tris = random_tris(3000, 21);
+    let bvh = Bvh::build(&tris);
+    assert!(!bvh.wide.is_empty());
+    let mut r = Pcg32::new(5, 8);
+    let mut compared = 0;
+    let mut entered = 0;
+    for q in 0..600 {
+        let n = &bvh.wide[q % bvh.wide.len()];
+        let org = match q % 3 {
+            0 => [r.next_f32() * 4.0, r.next_f32() * 4.0, r.next_f32() * 4.0],
+            // On a face of the node's first box.
+            1 => [n.min[0][0], n.min[1][0] + 0.01, n.max[2][0]],
+            _ => [-1.0, 2.0, 2.0],
+        };
+        let dir = match q % 4 {
+            0 => [1.0, 0.0, 0.0],
+            1 => [0.0, -1.0, 0.0],
+            _ => normalize([r.next_f32() - 0.5, r.next_f32() - 0.5, r.next_f32() - 0.5]),
+        };
+        let ray = RayBox::new(&RayPre::new(org, dir));
+        for tmax in [f32::INFINITY, 1.0, 0.0] {
+            let (ms, ts) = Sse.slab8(&ray, &n.min, &n.max, tmax);
+            let (ma, ta) = avx.slab8(&ray, &n.min, &n.max, tmax);
+            assert_eq!(ms, ma, "node {q}, ray {org:?} {dir:?}, tmax {tmax}");
+            assert_eq!(ts.map(f32::to_bits), ta.map(f32::to_bits), "node {q}");
+            compared += 1;
+            entered += ms.count_ones();
+        }
+    }
+    assert!(
+        compared == 1800 && entered > 500,
+        "{compared} tests, {entered} boxes entered"
+    );
 }

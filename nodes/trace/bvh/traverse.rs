@@ -1,6 +1,7 @@
 //! BVH traversal: front-to-back closest-hit and any-hit queries with the watertight
 //! ray-triangle test of Woop, Benthin and Wald 2013 and a conservative slab test.
 
+use super::lanes::{Slab, Sse};
 use super::{Aabb, Bvh, Hit};
 use crate::sampling::{sub, V3};
 use std::cell::RefCell;
@@ -35,25 +36,35 @@ pub(super) type Stack = [(u32, f32)];
 
 /// Two traversal stacks owned by the caller, for a loop that traces many pairs of rays
 /// (`Bvh::intersect_occluded_in`): it takes them once instead of the thread's own stacks
-/// (a thread-local look-up and a borrow) per query.
-pub struct TraceStacks {
+/// (a thread-local look-up and a borrow) per query. They also carry the node box test
+/// (`Slab`) that the queries on them use.
+pub struct TraceStacks<S: Slab = Sse> {
     a: [(u32, f32); STACK],
     b: [(u32, f32); STACK],
+    slab: S,
 }
 
 impl TraceStacks {
-    /// Fresh stacks (4 KiB, zeroed once).
+    /// Fresh stacks (4 KiB, zeroed once), testing node boxes on SSE.
     pub fn new() -> TraceStacks {
+        TraceStacks::with_slab(Sse)
+    }
+}
+
+impl<S: Slab> TraceStacks<S> {
+    /// Fresh stacks whose queries test node boxes with `slab`.
+    pub fn with_slab(slab: S) -> TraceStacks<S> {
         TraceStacks {
             a: [(0, 0.0); STACK],
             b: [(0, 0.0); STACK],
+            slab,
         }
     }
 
-    /// The two stacks, apart.
+    /// The two stacks, apart, and the box test.
     #[inline(always)]
-    pub(super) fn split(&mut self) -> (&mut Stack, &mut Stack) {
-        (&mut self.a, &mut self.b)
+    pub(super) fn split(&mut self) -> (&mut Stack, &mut Stack, S) {
+        (&mut self.a, &mut self.b, self.slab)
     }
 }
 

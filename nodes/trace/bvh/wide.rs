@@ -12,7 +12,7 @@
 //!
 //! The lane arithmetic is in `lanes.rs`; docs/path_tracing.md has the measurements.
 
-use super::lanes::{slab8, tri4, Axes, Fixed, RayBox, Tri4, F8};
+use super::lanes::{tri4, Axes, Fixed, RayBox, Slab, Sse, Tri4, F8};
 use super::{Bvh, BvhNode};
 use crate::bvh::traverse::{with_stack, RayPre};
 use crate::bvh::Hit;
@@ -193,20 +193,22 @@ impl Bvh {
         tmax: f32,
     ) -> Option<Hit> {
         with_stack(|stack| {
-            self.walk_out::<ANY, _>(r, Fixed::<KX, KY, KZ>, &mut Walk::new(r, tmax), stack)
+            let w = &mut Walk::new(r, tmax);
+            self.walk_out::<ANY, _, _>(r, Fixed::<KX, KY, KZ>, Sse, w, stack)
         })
     }
 
     /// Advances `w` until its query is finished; its answer.
     #[inline(always)]
-    pub(super) fn walk_out<const ANY: bool, P: Axes>(
+    pub(super) fn walk_out<const ANY: bool, P: Axes, S: Slab>(
         &self,
         r: &RayPre,
         axes: P,
+        slab: S,
         w: &mut Walk,
         stack: &mut [(u32, f32)],
     ) -> Option<Hit> {
-        while !self.step8::<ANY, _>(r, axes, w, stack) {}
+        while !self.step8::<ANY, _, _>(r, axes, slab, w, stack) {}
         w.best
     }
 
@@ -215,17 +217,18 @@ impl Bvh {
     /// pops the next entry not farther than the closest hit. Returns true when the query
     /// is finished (stack empty, or an any-hit query found a hit); `w.best` is its answer.
     #[inline(always)]
-    pub(super) fn step8<const ANY: bool, P: Axes>(
+    pub(super) fn step8<const ANY: bool, P: Axes, S: Slab>(
         &self,
         r: &RayPre,
         axes: P,
+        slab: S,
         w: &mut Walk,
         stack: &mut [(u32, f32)],
     ) -> bool {
         let c = w.c;
         if c & LEAF == 0 {
             let n = &self.wide[c as usize];
-            let (mut m, te) = slab8(&w.ray, &n.min, &n.max, w.tmax);
+            let (mut m, te) = slab.slab8(&w.ray, &n.min, &n.max, w.tmax);
             if m != 0 {
                 let first = m.trailing_zeros() as usize;
                 m &= m - 1;

@@ -357,6 +357,7 @@ fn main() {
     let opts = Shortcuts {
         lanes: !args.iter().any(|a| a == "--scalar-paths"),
         camera_grid: !args.iter().any(|a| a == "--bvh-camera-rays"),
+        ..Default::default()
     };
     let run = |spp: u32, seed: u64| {
         let c0 = cpu_seconds();

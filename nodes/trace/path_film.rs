@@ -61,6 +61,9 @@ pub struct Shortcuts {
     /// Camera rays' first hits from per-pixel candidate lists (`CameraGrid`) instead of
     /// the BVH (the same hits but for ties between triangles at equal distance).
     pub camera_grid: bool,
+    /// Camera rays per triangle from which the grid is built (default 16: with fewer,
+    /// building it costs about what it saves).
+    pub grid_rays_per_triangle: u64,
 }
 
 impl Default for Shortcuts {
@@ -68,6 +71,7 @@ impl Default for Shortcuts {
         Shortcuts {
             lanes: true,
             camera_grid: true,
+            grid_rays_per_triangle: 16,
         }
     }
 }
@@ -82,11 +86,14 @@ pub fn render_opts(
 ) -> (Image, Image) {
     let lanes = opts.lanes && path_lanes::handles(sc);
     let (w, h) = (cam.width, cam.height);
-    // Building the grid costs about as much per triangle as it is estimated to save on
-    // 2.7 camera rays (igea, docs/path_tracing.md, "How it runs"): build it only when
-    // there are enough rays.
+    // Building the grid costs about what it saves on 7 to 27 camera rays per triangle
+    // (igea, docs/path_tracing.md, "How it runs"): build it only when there are more.
     let rays = w as u64 * h as u64 * s.spp as u64;
-    let grid = if opts.camera_grid && rays >= 4 * sc.tris.len() as u64 {
+    let enough = rays
+        >= opts
+            .grid_rays_per_triangle
+            .saturating_mul(sc.tris.len() as u64);
+    let grid = if opts.camera_grid && enough {
         CameraGrid::build(&sc.tris, cam)
     } else {
         None

@@ -17,9 +17,9 @@ mod wide;
 #[cfg(target_arch = "x86_64")]
 pub use lanes::Avx;
 pub use lanes::{Slab, Sse, Tri4};
-pub use pair::Segment;
+pub use pair::{Segment, TraceStacks};
 pub(crate) use traverse::tri_test;
-pub use traverse::{intersect_triangle, RayPre, TraceStacks};
+pub use traverse::{intersect_triangle, RayPre};
 pub use wide::Node8;
 
 use super::sampling::{cross, sub, V3};

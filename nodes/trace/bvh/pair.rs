@@ -10,7 +10,7 @@
 //! `intersect` and `occluded`.
 
 use super::lanes::{Dyn, Slab, Sse};
-use super::traverse::{with_stacks, RayPre, TraceStacks};
+use super::traverse::{with_stacks, RayPre, Stack, STACK};
 use super::wide::Walk;
 use super::{Bvh, Hit};
 use crate::sampling::V3;
@@ -18,6 +18,46 @@ use crate::sampling::V3;
 /// A ray segment to trace: origin, direction, and the far end of the ray parameter
 /// (hits count for `0 < t < tmax`).
 pub type Segment = (V3, V3, f32);
+
+/// Two traversal stacks owned by the caller, for a loop that traces many pairs of rays
+/// (`Bvh::intersect_occluded_in`): it takes them once instead of the thread's own stacks
+/// (a thread-local look-up and a borrow) per query. They also carry the node box test
+/// (`Slab`) that the queries on them use.
+pub struct TraceStacks<S: Slab = Sse> {
+    a: [(u32, f32); STACK],
+    b: [(u32, f32); STACK],
+    slab: S,
+}
+
+impl TraceStacks {
+    /// Fresh stacks (4 KiB, zeroed once), testing node boxes on SSE.
+    pub fn new() -> TraceStacks {
+        TraceStacks::with_slab(Sse)
+    }
+}
+
+impl<S: Slab> TraceStacks<S> {
+    /// Fresh stacks whose queries test node boxes with `slab`.
+    pub fn with_slab(slab: S) -> TraceStacks<S> {
+        TraceStacks {
+            a: [(0, 0.0); STACK],
+            b: [(0, 0.0); STACK],
+            slab,
+        }
+    }
+
+    /// The two stacks, apart, and the box test.
+    #[inline(always)]
+    pub(super) fn split(&mut self) -> (&mut Stack, &mut Stack, S) {
+        (&mut self.a, &mut self.b, self.slab)
+    }
+}
+
+impl Default for TraceStacks {
+    fn default() -> Self {
+        TraceStacks::new()
+    }
+}
 
 impl Bvh {
     /// The closest hit along `a` and whether anything blocks `b` (an any-hit query), the

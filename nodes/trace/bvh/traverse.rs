@@ -1,7 +1,6 @@
 //! BVH traversal: front-to-back closest-hit and any-hit queries with the watertight
 //! ray-triangle test of Woop, Benthin and Wald 2013 and a conservative slab test.
 
-use super::lanes::{Slab, Sse};
 use super::{Aabb, Bvh, Hit};
 use crate::sampling::{sub, V3};
 use std::cell::RefCell;
@@ -11,7 +10,7 @@ use wide::f32x4;
 /// pending entries per level and a binary node one, so 256 entries hold 36 levels of
 /// 8-wide nodes entered on every lane; trees over millions of triangles stay far below
 /// that (a full stack drops entries rather than overflow).
-const STACK: usize = 256;
+pub(super) const STACK: usize = 256;
 
 thread_local! {
     /// One traversal stack per thread, reused by every ray: a stack array local to the
@@ -33,46 +32,6 @@ pub(super) fn with_stack<R>(f: impl FnOnce(&mut [(u32, f32)]) -> R) -> R {
 
 /// A traversal stack: (node, entry distance) entries.
 pub(super) type Stack = [(u32, f32)];
-
-/// Two traversal stacks owned by the caller, for a loop that traces many pairs of rays
-/// (`Bvh::intersect_occluded_in`): it takes them once instead of the thread's own stacks
-/// (a thread-local look-up and a borrow) per query. They also carry the node box test
-/// (`Slab`) that the queries on them use.
-pub struct TraceStacks<S: Slab = Sse> {
-    a: [(u32, f32); STACK],
-    b: [(u32, f32); STACK],
-    slab: S,
-}
-
-impl TraceStacks {
-    /// Fresh stacks (4 KiB, zeroed once), testing node boxes on SSE.
-    pub fn new() -> TraceStacks {
-        TraceStacks::with_slab(Sse)
-    }
-}
-
-impl<S: Slab> TraceStacks<S> {
-    /// Fresh stacks whose queries test node boxes with `slab`.
-    pub fn with_slab(slab: S) -> TraceStacks<S> {
-        TraceStacks {
-            a: [(0, 0.0); STACK],
-            b: [(0, 0.0); STACK],
-            slab,
-        }
-    }
-
-    /// The two stacks, apart, and the box test.
-    #[inline(always)]
-    pub(super) fn split(&mut self) -> (&mut Stack, &mut Stack, S) {
-        (&mut self.a, &mut self.b, self.slab)
-    }
-}
-
-impl Default for TraceStacks {
-    fn default() -> Self {
-        TraceStacks::new()
-    }
-}
 
 /// Runs `f` with this thread's two traversal stacks (fresh ones if they are in use).
 #[inline(always)]

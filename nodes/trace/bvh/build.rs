@@ -95,7 +95,6 @@ impl Bvh {
             count: 0,
         };
         bvh.nodes.push(empty);
-        bvh.tris.reserve(tris.len());
         bvh.prim.reserve(tris.len());
         let mut todo = vec![(0usize, 0usize)]; // (obvhs node, our slot)
         while let Some((src, slot)) = todo.pop() {
@@ -105,12 +104,9 @@ impl Bvh {
                 max: n.aabb.max.into(),
             };
             if n.prim_count > 0 {
-                let first = bvh.tris.len() as u32;
+                let first = bvh.prim.len() as u32;
                 let ids = &b2.primitive_indices[n.first_index as usize..][..n.prim_count as usize];
-                for &p in ids {
-                    bvh.tris.push(tris[p as usize]);
-                    bvh.prim.push(p);
-                }
+                bvh.prim.extend_from_slice(ids);
                 bvh.nodes[slot] = BvhNode {
                     bounds,
                     first,
@@ -130,6 +126,8 @@ impl Bvh {
                 todo.push((n.first_index as usize, first));
             }
         }
+        // The triangles in tree order, copied on every core.
+        bvh.tris = bvh.prim.par_iter().map(|&p| tris[p as usize]).collect();
         bvh.widen();
         bvh
     }

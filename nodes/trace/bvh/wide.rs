@@ -16,6 +16,7 @@ use super::lanes::{tri4, Axes, Fixed, RayBox, Slab, Sse, Tri4, F8};
 use super::{Bvh, BvhNode};
 use crate::bvh::traverse::{with_stack, RayPre};
 use crate::bvh::Hit;
+use rayon::prelude::*;
 
 /// Children per node.
 pub const W: usize = 8;
@@ -54,9 +55,10 @@ pub struct Node8 {
 pub fn collapse(bvh: &Bvh) -> (Vec<Node8>, Vec<Tri4>) {
     let nodes = &bvh.nodes;
     let mut out = Vec::with_capacity(nodes.len() / 2 + 1);
-    let mut leaves = Vec::with_capacity(nodes.len() / 2 + 1);
+    // (first, count) of each wide leaf's triangles, packed at the end.
+    let mut leaves: Vec<(u32, u32)> = Vec::with_capacity(nodes.len() / 2 + 1);
     if nodes.is_empty() || bvh.tris.len() >= MAX_TRIS || nodes.iter().any(|n| n.count > 4) {
-        return (out, leaves);
+        return (out, Vec::new());
     }
     // Triangles under each binary node (`first` of the leftmost leaf, count); children
     // come after their parent, so a backward pass sees them first.
@@ -76,14 +78,15 @@ pub fn collapse(bvh: &Bvh) -> (Vec<Node8>, Vec<Tri4>) {
         let mut n = empty_node();
         set_lane(&mut n, 0, bvh, 0, under[0], &mut leaves);
         out.push(n);
-        return (out, leaves);
+        return (out, pack(bvh, &leaves));
     }
     out.push(empty_node());
     // (binary node to expand, slot in `out`)
     let mut todo = vec![(0usize, 0usize)];
     while let Some((b, slot)) = todo.pop() {
         let first = nodes[b].first as usize;
-        let mut kids = vec![first, first + 1];
+        let mut kids = Vec::with_capacity(W);
+        kids.extend([first, first + 1]);
         while kids.len() < W {
             // Open the interior child of largest area.
             let pick = kids
@@ -115,7 +118,18 @@ pub fn collapse(bvh: &Bvh) -> (Vec<Node8>, Vec<Tri4>) {
         }
         out[slot] = n;
     }
-    (out, leaves)
+    (out, pack(bvh, &leaves))
+}
+
+/// The leaves' triangles (first, count) packed into `Tri4`s, on every core.
+fn pack(bvh: &Bvh, leaves: &[(u32, u32)]) -> Vec<Tri4> {
+    leaves
+        .par_iter()
+        .map(|&(first, count)| {
+            let r = first as usize..(first + count) as usize;
+            Tri4::pack(&bvh.tris[r.clone()], &bvh.prim[r])
+        })
+        .collect()
 }
 
 fn empty_node() -> Node8 {
@@ -135,7 +149,7 @@ fn set_lane(
     bvh: &Bvh,
     k: usize,
     under: (u32, u32),
-    leaves: &mut Vec<Tri4>,
+    leaves: &mut Vec<(u32, u32)>,
 ) {
     let b: &BvhNode = &bvh.nodes[k];
     for a in 0..3 {
@@ -144,9 +158,8 @@ fn set_lane(
     }
     let (first, count) = under;
     if count <= 4 {
-        let r = first as usize..(first + count) as usize;
         n.child[lane] = LEAF | (leaves.len() as u32) << 3 | count;
-        leaves.push(Tri4::pack(&bvh.tris[r.clone()], &bvh.prim[r]));
+        leaves.push((first, count));
     }
 }
 

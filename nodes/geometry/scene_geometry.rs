@@ -70,7 +70,27 @@ pub fn scene_geometry_creased(
 pub fn scene_geometry_in(
     scene: &Scene,
     crease_deg: f64,
+    g: SceneGeometry,
+) -> Result<SceneGeometry, SceneGeometryError> {
+    flatten(scene, crease_deg, g, true)
+}
+
+/// `scene_geometry_creased` without the corner UVs and tangents (`uv` and `tan` left
+/// empty; `has_uv` still filled): what a renderer needs when no material has a texture,
+/// without writing their 22 MB of zeros for 154k triangles.
+pub fn scene_shape_creased(
+    scene: &Scene,
+    crease_deg: f64,
+) -> Result<SceneGeometry, SceneGeometryError> {
+    flatten(scene, crease_deg, SceneGeometry::default(), false)
+}
+
+/// `scene_geometry_in`, with the corner UVs and tangents only when `attributes`.
+fn flatten(
+    scene: &Scene,
+    crease_deg: f64,
     mut g: SceneGeometry,
+    attributes: bool,
 ) -> Result<SceneGeometry, SceneGeometryError> {
     g.clear();
     g.reserve_triangles(scene);
@@ -103,8 +123,14 @@ pub fn scene_geometry_in(
         let base = g.pos.len();
         let nt = tris.len();
         g.push_normals(&mesh, &tris, crease_deg);
-        let has_uv = g.push_uvs(&mesh, &tris);
-        if has_uv {
+        let has_uv = if attributes {
+            g.push_uvs(&mesh, &tris)
+        } else {
+            uvs_fit(&mesh, &tris)
+        };
+        if !attributes {
+            // Neither UVs nor tangents.
+        } else if has_uv {
             let (tan, nrm, uv) = (&mut g.tan, &g.nrm[base..], &g.uv[base..]);
             push_tangents(tan, p, &tris, nrm, uv);
         } else {
@@ -414,6 +440,14 @@ pub fn normal_mapped(
     }))
 }
 
+/// Whether `mesh` has UVs that fit its triangles `tris` (as `push_uvs` decides).
+fn uvs_fit(mesh: &Mesh, tris: &[[u32; 3]]) -> bool {
+    let fits = |a: &Attribute<[f64; 2]>| {
+        attr_len_ok(a.domain, a.values.len(), mesh.positions.len(), tris.len())
+    };
+    mesh.uvs.as_ref().is_some_and(fits)
+}
+
 fn attr_len_ok(d: Domain, n: usize, nv: usize, nt: usize) -> bool {
     match d {
         Domain::Vertex => n == nv,
@@ -604,5 +638,26 @@ mod tests {
             }
         }
         assert_eq!(g.bounds, ([-1.0, 0.0, -1.0], [1.0, 0.0, 1.0]));
+        // The shape alone: the same positions, normals, materials and UV flags, no UVs
+        // or tangents; a mesh without UVs is flagged so.
+        let (p, t) = cube();
+        let mut cube = Mesh::from_triangles(p, &t).unwrap();
+        cube.uvs = None;
+        let mut scene = scene;
+        scene.objects.push(SceneObject {
+            mesh: Arc::new(cube),
+            material: None,
+        });
+        let full = scene_geometry_creased(&scene, 60.0).unwrap();
+        let shape = scene_shape_creased(&scene, 60.0).unwrap();
+        assert_eq!(shape.pos, full.pos);
+        assert_eq!(shape.nrm, full.nrm);
+        assert_eq!(shape.mat, full.mat);
+        assert_eq!(shape.materials, full.materials);
+        assert_eq!(shape.bounds, full.bounds);
+        assert_eq!(shape.has_uv, full.has_uv);
+        assert_eq!(full.has_uv.iter().filter(|&&h| !h).count(), 12);
+        assert!(shape.uv.is_empty() && shape.tan.is_empty());
+        assert_eq!(full.uv.len(), full.pos.len());
     }
 }

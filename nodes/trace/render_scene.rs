@@ -13,7 +13,9 @@ use super::sampling::{
 };
 pub use super::trace_error::{SceneError, TraceError};
 use cgnodes_api::types::{Camera, Light, Material, MaterialKind, Mesh, Scene};
-use cgnodes_geometry::scene_geometry::{normal_mapped, scene_geometry_creased};
+use cgnodes_geometry::scene_geometry::{
+    normal_mapped, scene_geometry_creased, scene_shape_creased,
+};
 use cgnodes_geometry::texture::{MipTexture, Wrap};
 use rayon::prelude::*;
 use std::sync::{Arc, Mutex, Weak};
@@ -240,7 +242,12 @@ impl RenderScene {
     /// edges whose dihedral angle is below `crease_deg` (0 = flat shading).
     pub fn with_crease(scene: &Scene, crease_deg: f64) -> Result<RenderScene, SceneError> {
         check_scene(scene, crease_deg)?;
-        let g = scene_geometry_creased(scene, crease_deg)?;
+        // Corner UVs and tangents are read only through textures.
+        let g = if scene_has_textures(scene) {
+            scene_geometry_creased(scene, crease_deg)?
+        } else {
+            scene_shape_creased(scene, crease_deg)?
+        };
         let tris: Vec<[V3; 3]> = g.pos.par_iter().map(|t| t.map(v3)).collect();
         let tri_mat = g.mat;
         let materials: Vec<RMaterial> = g
@@ -554,6 +561,16 @@ fn check_scene(scene: &Scene, crease_deg: f64) -> Result<(), SceneError> {
         return Err(SceneError::Crease(crease_deg));
     }
     Ok(())
+}
+
+/// Whether a material the scene's objects may take (the object's or its mesh's) has a
+/// texture or a normal map.
+fn scene_has_textures(scene: &Scene) -> bool {
+    let textured = |m: &Arc<Material>| m.base_color_texture.is_some() || m.normal_map.is_some();
+    scene.objects.iter().any(|o| {
+        let m = o.material.iter().chain(o.mesh.material.iter());
+        m.into_iter().any(textured)
+    })
 }
 
 /// Each material's textures, sampled without mipmaps.

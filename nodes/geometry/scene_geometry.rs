@@ -97,12 +97,7 @@ fn flatten(
     let mut lo = [f64::INFINITY; 3];
     let mut hi = [f64::NEG_INFINITY; 3];
     let default_mat = Arc::new(Material::default());
-    for (oi, obj) in scene.objects.iter().enumerate() {
-        let mesh = obj.mesh.triangulated();
-        let tris = mesh.triangles().unwrap_or_default();
-        if tris.is_empty() {
-            continue;
-        }
+    for (oi, obj, mesh, tris) in object_triangles(scene) {
         if mesh.positions.iter().flatten().any(|x| !x.is_finite()) {
             return Err(SceneGeometryError::NonFinitePositions { object: oi });
         }
@@ -147,6 +142,32 @@ fn flatten(
     }
     g.bounds = (lo, hi);
     Ok(g)
+}
+
+/// The objects that have triangles, in scene order, each with its index, its mesh as
+/// triangles and their corners: the walk `flatten` and `scene_positions` share, so that
+/// their triangles come in the same order.
+fn object_triangles(
+    scene: &Scene,
+) -> impl Iterator<Item = (usize, &SceneObject, Arc<Mesh>, Vec<[u32; 3]>)> {
+    scene.objects.iter().enumerate().filter_map(|(oi, obj)| {
+        let mesh = obj.mesh.triangulated();
+        let tris = mesh.triangles().unwrap_or_default();
+        (!tris.is_empty()).then_some((oi, obj, mesh, tris))
+    })
+}
+
+/// The world positions of the triangles of `scene_shape_creased` (and
+/// `scene_geometry_creased`), in the same order, without their normals: a renderer can
+/// start its BVH on them while the normals are computed.
+pub fn scene_positions(scene: &Scene) -> Vec<[[f32; 3]; 3]> {
+    let mut pos = Vec::new();
+    for (_, _, mesh, tris) in object_triangles(scene) {
+        let p = &mesh.positions;
+        let f = |v: u32| p[v as usize].map(|x| x as f32);
+        pos.par_extend(tris.par_iter().map(|t| t.map(f)));
+    }
+    pos
 }
 
 /// Why a scene cannot be flattened.
@@ -659,5 +680,21 @@ mod tests {
         assert_eq!(full.has_uv.iter().filter(|&&h| !h).count(), 12);
         assert!(shape.uv.is_empty() && shape.tan.is_empty());
         assert_eq!(full.uv.len(), full.pos.len());
+        // The bare positions: the same triangles in the same order, past an empty mesh.
+        scene.objects.insert(
+            1,
+            SceneObject {
+                mesh: Arc::new(Mesh::default()),
+                material: None,
+            },
+        );
+        let shape = scene_shape_creased(&scene, 60.0).unwrap();
+        let f32s: Vec<[[f32; 3]; 3]> = shape
+            .pos
+            .iter()
+            .map(|t| t.map(|p| p.map(|x| x as f32)))
+            .collect();
+        assert_eq!(shape.pos.len(), 28);
+        assert_eq!(scene_positions(&scene), f32s);
     }
 }

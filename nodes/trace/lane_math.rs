@@ -4,7 +4,7 @@
 //! lane's result is the scalar one bit for bit.
 
 use super::render_scene::OFFSET_REL;
-use super::sampling::V3;
+use super::sampling::{SERIES_RECIPROCALS, V3};
 use std::f32::consts::FRAC_PI_4;
 use wide::f32x4;
 
@@ -88,10 +88,9 @@ pub(super) fn power4(pa: F, pb: F) -> F {
 pub(super) fn sin_cos_quarter4(a: F) -> (F, F) {
     let one = splat(1.0);
     let a2 = a * a;
-    let s = a * (one - a2 / splat(6.0) * (one - a2 / splat(20.0) * (one - a2 / splat(42.0))));
-    let c = one
-        - a2 / splat(2.0)
-            * (one - a2 / splat(12.0) * (one - a2 / splat(30.0) * (one - a2 / splat(56.0))));
+    let r = SERIES_RECIPROCALS.map(splat);
+    let s = a * (one - a2 * r[0] * (one - a2 * r[1] * (one - a2 * r[2])));
+    let c = one - a2 * splat(0.5) * (one - a2 * r[3] * (one - a2 * r[4] * (one - a2 * r[5])));
     (s, c)
 }
 

@@ -14,7 +14,7 @@ use super::sampling::{
 pub use super::trace_error::{SceneError, TraceError};
 use cgnodes_api::types::{Light, Material, MaterialKind, Scene};
 use cgnodes_geometry::scene_geometry::{
-    normal_mapped, scene_geometry_creased, scene_shape_creased,
+    normal_mapped, scene_geometry_creased, scene_positions, scene_shape_creased,
 };
 use cgnodes_geometry::texture::{MipTexture, Wrap};
 use rayon::prelude::*;
@@ -245,13 +245,22 @@ impl RenderScene {
     /// edges whose dihedral angle is below `crease_deg` (0 = flat shading).
     pub fn with_crease(scene: &Scene, crease_deg: f64) -> Result<RenderScene, SceneError> {
         check_scene(scene, crease_deg)?;
-        // Corner UVs and tangents are read only through textures.
-        let g = if scene_has_textures(scene) {
-            scene_geometry_creased(scene, crease_deg)?
-        } else {
-            scene_shape_creased(scene, crease_deg)?
-        };
-        let tris: Vec<[V3; 3]> = g.pos.par_iter().map(|t| t.map(v3)).collect();
+        // The BVH is built on the bare positions while the corner attributes are flattened:
+        // its build has serial stretches that the other core fills.
+        let tris = scene_positions(scene);
+        let (bvh, g) = rayon::join(
+            || Bvh::build(&tris),
+            || {
+                // Corner UVs and tangents are read only through textures.
+                if scene_has_textures(scene) {
+                    scene_geometry_creased(scene, crease_deg)
+                } else {
+                    scene_shape_creased(scene, crease_deg)
+                }
+            },
+        );
+        let g = g?;
+        debug_assert_eq!(tris.len(), g.mat.len(), "one walk over the objects");
         let tri_mat = g.mat;
         let materials: Vec<RMaterial> = g
             .materials
@@ -271,7 +280,6 @@ impl RenderScene {
             Vec::new()
         };
         let corner_tangents = if any_nmap { g.tan } else { Vec::new() };
-        let bvh = Bvh::build(&tris);
         let normals: Vec<V3> = tris
             .par_iter()
             .map(|t| normalize(triangle_normal(t)))

@@ -48,10 +48,23 @@ pub fn cosine_hemisphere(n: V3, u: [f32; 2]) -> V3 {
 #[inline(always)]
 pub fn sin_cos_quarter(a: f32) -> (f32, f32) {
     let a2 = a * a;
-    let s = a * (1.0 - a2 / 6.0 * (1.0 - a2 / 20.0 * (1.0 - a2 / 42.0)));
-    let c = 1.0 - a2 / 2.0 * (1.0 - a2 / 12.0 * (1.0 - a2 / 30.0 * (1.0 - a2 / 56.0)));
+    let r = SERIES_RECIPROCALS;
+    let s = a * (1.0 - a2 * r[0] * (1.0 - a2 * r[1] * (1.0 - a2 * r[2])));
+    let c = 1.0 - a2 * 0.5 * (1.0 - a2 * r[3] * (1.0 - a2 * r[4] * (1.0 - a2 * r[5])));
     (s, c)
 }
+
+/// The series' divisors of `sin_cos_quarter` as reciprocals (1/6, 1/20, 1/42 for the sine,
+/// 1/12, 1/30, 1/56 for the cosine): a product each instead of a division, which costs
+/// about as much as the rest of the series.
+pub(crate) const SERIES_RECIPROCALS: [f32; 6] = [
+    1.0 / 6.0,
+    1.0 / 20.0,
+    1.0 / 42.0,
+    1.0 / 12.0,
+    1.0 / 30.0,
+    1.0 / 56.0,
+];
 
 /// Uniform barycentrics on a triangle (Heitz 2019, "A Low-Distortion Map Between Triangle
 /// and Square"). Returns (b1, b2); the point is `(1-b1-b2) a + b1 b + b2 c`.

@@ -103,7 +103,14 @@ pub struct Bvh {
     /// rays one after the other instead of interleaved (same answers; to measure what the
     /// interleaving buys).
     pub one_at_a_time: bool,
+    /// Whether the 8-wide walk asks the cache for a node's data as soon as it picks the
+    /// node (set by `widen` when the tree outgrows `PREFETCH_BYTES`: on a small tree, which
+    /// stays in the first-level cache, the prefetches only cost instructions).
+    pub prefetch: bool,
 }
+
+/// The 8-wide tree size (nodes and leaves) from which the walk prefetches.
+pub const PREFETCH_BYTES: usize = 256 << 10;
 
 /// The closest hit along a ray.
 #[derive(Clone, Copy, Debug)]
@@ -123,6 +130,9 @@ impl Bvh {
     /// when the leaves cannot be encoded: 2^28 triangles or more). `build` calls it.
     pub fn widen(&mut self) {
         (self.wide, self.wide_tris) = wide::collapse(self);
+        let bytes =
+            std::mem::size_of_val(&self.wide[..]) + std::mem::size_of_val(&self.wide_tris[..]);
+        self.prefetch = bytes >= PREFETCH_BYTES;
     }
 
     /// Drops the 8-wide tree so that the queries traverse the binary one (to compare the

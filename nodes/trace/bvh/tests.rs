@@ -241,8 +241,16 @@ fn wide_tree_matches_binary_tree_on_shared_edges() {
 fn interleaved_pairs_match_single_queries() {
     let mut tris = random_tris(5000, 31);
     tris.extend(fan(8));
-    let bvh = Bvh::build(&tris);
+    let mut bvh = Bvh::build(&tris);
     assert!(!bvh.wide.is_empty());
+    // The same answers whether or not the walk prefetches the nodes it picks.
+    for prefetch in [false, true] {
+        bvh.prefetch = prefetch;
+        pairs_match_single_queries(&bvh, &tris);
+    }
+}
+
+fn pairs_match_single_queries(bvh: &Bvh, tris: &[[V3; 3]]) {
     let mut r = Pcg32::new(17, 9);
     let mut ray = |i: usize| {
         let org = if i.is_multiple_of(3) {
@@ -301,7 +309,7 @@ fn interleaved_pairs_match_single_queries() {
         // Brute force over the caller's triangles agrees on triangle and distance, except
         // through the fan's shared vertex: there the fan's triangles tie, the visiting
         // order picks one, and each computes the distance with its own round-off.
-        let brute_b = brute(&tris, b.0, b.1).filter(|x| x.0 < b.2);
+        let brute_b = brute(tris, b.0, b.1).filter(|x| x.0 < b.2);
         if (2 * i + 1).is_multiple_of(5) {
             let (t, tb) = (pb.map(|h| h.t), brute_b.map(|x| x.0));
             assert_eq!(t.is_some(), tb.is_some(), "pair {i}");

@@ -16,7 +16,8 @@
 //! (trace a path's shadow ray and its next ray one after the other instead of interleaved,
 //! to measure what `Bvh::intersect_occluded` buys), `--scalar-paths` (one path at a time
 //! instead of four on SSE lanes, `path_lanes`, to measure what the lanes buy),
-//! `--bvh-camera-rays` (camera rays through the BVH instead of `CameraGrid`), `--scene igea`
+//! `--bvh-camera-rays` (camera rays through the BVH instead of `CameraGrid`),
+//! `--baseline-build` (no x86-64-v3 build of either loop, to measure what it buys), `--scene igea`
 //! (the box with the 154k-triangle igea scan standing in it, white diffuse, as
 //! `trace_mitsuba.py --scene igea` builds it; `--igea PATH`, default
 //! `assets/meshes/igea_front.obj`), `--rays` (traversal alone, no shading:
@@ -357,6 +358,7 @@ fn main() {
     let opts = Shortcuts {
         lanes: !args.iter().any(|a| a == "--scalar-paths"),
         camera_grid: !args.iter().any(|a| a == "--bvh-camera-rays"),
+        x86_64_v3: !args.iter().any(|a| a == "--baseline-build"),
         ..Default::default()
     };
     let run = |spp: u32, seed: u64| {

@@ -6,9 +6,9 @@
 
 use super::bvh::TraceStacks;
 use super::camera_grid::CameraGrid;
-use super::camera_sample::{camera_sample, Job};
+use super::camera_sample::Job;
 use super::path_lanes::{self, Sample};
-use super::render_path::{radiance, Filter, PathSettings};
+use super::render_path::{radiance_samples, Filter, PathSettings};
 use super::render_scene::{PinholeCamera, RenderScene};
 use cgnodes_api::types::Image;
 use rayon::prelude::*;
@@ -64,6 +64,9 @@ pub struct Shortcuts {
     /// Camera rays per triangle from which the grid is built (default 16: with fewer,
     /// building it costs about what it saves).
     pub grid_rays_per_triangle: u64,
+    /// Both loops' second builds for x86-64-v3 CPUs (AVX2 and companions), where the CPU
+    /// has it (the same bits as the baseline build).
+    pub x86_64_v3: bool,
 }
 
 impl Default for Shortcuts {
@@ -72,6 +75,7 @@ impl Default for Shortcuts {
             lanes: true,
             camera_grid: true,
             grid_rays_per_triangle: 16,
+            x86_64_v3: true,
         }
     }
 }
@@ -110,7 +114,7 @@ pub fn render_opts(
     let outs: Vec<TileOut> = tiles
         .par_iter()
         .map(|&(x0, y0)| {
-            let out = render_tile(sc, cam, grid, s, (x0, y0), lanes);
+            let out = render_tile(sc, cam, grid, s, (x0, y0), lanes, opts.x86_64_v3);
             let d = done.fetch_add(1, Ordering::Relaxed) + 1;
             progress(d as f64 / ntiles as f64);
             out
@@ -127,6 +131,7 @@ fn render_tile(
     s: &PathSettings,
     (x0, y0): (u32, u32),
     lanes: bool,
+    v3: bool,
 ) -> TileOut {
     let x1 = (x0 + TILE).min(cam.width);
     let y1 = (y0 + TILE).min(cam.height);
@@ -136,41 +141,24 @@ fn render_tile(
         splat: vec![[0.0f32; 4]; PW * PW],
         var: Vec::with_capacity(((x1 - x0) * (y1 - y0)) as usize),
     };
-    // Pixels per batch of samples for the four-lane loop (about 16k samples, so lanes
-    // seldom wait for a batch's last paths; the scalar loop goes pixel by pixel).
-    let ppc = if lanes {
-        (16384 / s.spp as usize).max(1)
-    } else {
-        1
-    };
+    // Pixels per batch of samples (about 16k samples, so lanes seldom wait for a batch's
+    // last paths).
+    let ppc = (16384 / s.spp as usize).max(1);
     let mut stacks = TraceStacks::new();
     let pixels: Vec<(u32, u32)> = (y0..y1)
         .flat_map(|y| (x0..x1).map(move |x| (x, y)))
         .collect();
-    let mut samples: Vec<Sample> = Vec::new();
     let spp = s.spp as usize;
     for chunk in pixels.chunks(ppc) {
-        if lanes {
-            let jobs: Vec<Job> = chunk
-                .iter()
-                .flat_map(|&(x, y)| (0..s.spp).map(move |k| (x, y, k)))
-                .collect();
-            samples = path_lanes::trace(sc, cam, grid, s, &jobs, &mut stacks);
+        let jobs: Vec<Job> = chunk
+            .iter()
+            .flat_map(|&(x, y)| (0..s.spp).map(move |k| (x, y, k)))
+            .collect();
+        let samples = if lanes {
+            path_lanes::trace(sc, cam, grid, s, &jobs, &mut stacks, v3)
         } else {
-            samples.clear();
-            for &(x, y) in chunk {
-                for k in 0..s.spp {
-                    let mut cs = camera_sample(sc, cam, grid, s.seed, (x, y, k));
-                    let (dir, far) = (cs.dir, cam.far);
-                    let c = radiance(sc, cam.eye, dir, far, cs.hit, &mut cs.rng, s, &mut stacks);
-                    samples.push(Sample {
-                        c,
-                        fx: cs.fx,
-                        fy: cs.fy,
-                    });
-                }
-            }
-        }
+            radiance_samples(sc, cam, grid, s, &jobs, &mut stacks, v3)
+        };
         for (j, &(x, y)) in chunk.iter().enumerate() {
             let v = t.add_pixel(cam, s.filter, (x, y), &samples[j * spp..(j + 1) * spp]);
             t.var.push(v);

@@ -254,7 +254,8 @@ struct Batch<'a> {
 }
 
 /// Traces `jobs` (pixel samples) and returns their radiance and film positions, in
-/// `jobs`' order, as `render_path`'s per-sample loop computes them.
+/// `jobs`' order, as `render_path`'s per-sample loop computes them. `v3`: whether the
+/// x86-64-v3 build may run where the CPU has it (the same bits; off to compare).
 pub fn trace(
     sc: &RenderScene,
     cam: &PinholeCamera,
@@ -262,6 +263,7 @@ pub fn trace(
     s: &PathSettings,
     jobs: &[Job],
     stacks: &mut TraceStacks,
+    v3: bool,
 ) -> Vec<Sample> {
     let b = Batch {
         sc,
@@ -271,17 +273,9 @@ pub fn trace(
         jobs,
     };
     #[cfg(target_arch = "x86_64")]
-    if std::is_x86_feature_detected!("avx2")
-        && std::is_x86_feature_detected!("fma")
-        && std::is_x86_feature_detected!("bmi1")
-        && std::is_x86_feature_detected!("bmi2")
-        && std::is_x86_feature_detected!("lzcnt")
-        && std::is_x86_feature_detected!("popcnt")
-    {
-        if let Some(avx) = Avx::detect() {
-            // SAFETY: `trace_avx2` needs exactly these features, detected on this CPU.
-            return unsafe { trace_avx2(b, avx) };
-        }
+    if let Some(avx) = Avx::detect_v3().filter(|_| v3) {
+        // SAFETY: `trace_avx2` needs exactly the features `detect_v3` found on this CPU.
+        return unsafe { trace_avx2(b, avx) };
     }
     trace_body::<true, _>(b, stacks)
 }

@@ -309,9 +309,12 @@ fn four_lane_paths_change_no_bit() {
         };
         assert!(handles(&sc), "the four-lane loop takes this scene");
         // The grid is built however few the camera rays, so that it is compared below.
+        // The one-path loop in the baseline build against the lanes in the x86-64-v3 one
+        // (where the CPU has it).
         let lanes_on = |lanes| Shortcuts {
             lanes,
             grid_rays_per_triangle: 0,
+            x86_64_v3: lanes,
             ..Default::default()
         };
         let (lanes, lanes_var) = render_opts(&sc, &pc, &s, &noop, lanes_on(true));
@@ -338,8 +341,20 @@ fn four_lane_paths_change_no_bit() {
     let mut m = (**glossy.objects[0].material.as_ref().unwrap()).clone();
     m.kind = MaterialKind::Conductor { roughness: 0.3 };
     glossy.objects[0].material = Some(Arc::new(m));
-    let (sc, _) = prepare(&glossy, Some(&cam), 60.0).unwrap();
+    let (sc, pc) = prepare(&glossy, Some(&cam), 60.0).unwrap();
     assert!(!handles(&sc));
+    // Its one-path loop gives the same bits in both builds (the x86-64-v3 one where the
+    // CPU has it).
+    let s = settings(8, 8, Strategy::Mis, Filter::Box);
+    let build = |x86_64_v3| Shortcuts {
+        x86_64_v3,
+        ..Default::default()
+    };
+    let (v3, v3_var) = render_opts(&sc, &pc, &s, &noop, build(true));
+    let (base, base_var) = render_opts(&sc, &pc, &s, &noop, build(false));
+    assert!(mean(&base)[0] > 0.01, "the glossy render is black");
+    assert_eq!(bits(&v3), bits(&base));
+    assert_eq!(bits(&v3_var), bits(&base_var));
 }
 
 /// Emitter sampling alone, BSDF sampling alone and their MIS combination estimate the same

@@ -163,6 +163,11 @@ pub fn slab8(r: &RayBox, min: &[F8; 3], max: &[F8; 3], tmax: f32) -> (u32, F8) {
 /// same bits). The traversal is generic over it, so the four-lane loop's x86-64-v3 build
 /// takes `Avx` and everything else `Sse`.
 pub trait Slab: Copy {
+    /// Whether the loops built with this test walk the tree inline (`Bvh::closest_in`): the
+    /// x86-64-v3 builds, where a call would pass the AVX registers through memory; the
+    /// baseline calls the walks specialised per axis permutation.
+    const INLINE_WALKS: bool;
+
     /// `slab8`'s answer.
     fn slab8(self, r: &RayBox, min: &[F8; 3], max: &[F8; 3], tmax: f32) -> (u32, F8);
 }
@@ -172,6 +177,8 @@ pub trait Slab: Copy {
 pub struct Sse;
 
 impl Slab for Sse {
+    const INLINE_WALKS: bool = false;
+
     #[inline(always)]
     fn slab8(self, r: &RayBox, min: &[F8; 3], max: &[F8; 3], tmax: f32) -> (u32, F8) {
         slab8(r, min, max, tmax)
@@ -189,10 +196,28 @@ impl Avx {
     pub fn detect() -> Option<Avx> {
         std::is_x86_feature_detected!("avx").then_some(Avx(()))
     }
+
+    /// An `Avx` when this CPU has all of x86-64-v3 that the tracers' second builds are
+    /// compiled for (AVX2, FMA, BMI1/2, LZCNT, POPCNT).
+    pub fn detect_v3() -> Option<Avx> {
+        let v3 = std::is_x86_feature_detected!("avx2")
+            && std::is_x86_feature_detected!("fma")
+            && std::is_x86_feature_detected!("bmi1")
+            && std::is_x86_feature_detected!("bmi2")
+            && std::is_x86_feature_detected!("lzcnt")
+            && std::is_x86_feature_detected!("popcnt");
+        if v3 {
+            Avx::detect()
+        } else {
+            None
+        }
+    }
 }
 
 #[cfg(target_arch = "x86_64")]
 impl Slab for Avx {
+    const INLINE_WALKS: bool = true;
+
     #[inline(always)]
     fn slab8(self, r: &RayBox, min: &[F8; 3], max: &[F8; 3], tmax: f32) -> (u32, F8) {
         // SAFETY: an `Avx` is made only by `Avx::detect`, on a CPU that has AVX.

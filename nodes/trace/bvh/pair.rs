@@ -102,6 +102,18 @@ impl Bvh {
         self.walk_out::<ANY, _, _>(&r, p, slab, &mut Walk::new(&r, a.2), s)
     }
 
+    /// The closest hit along `a` in a loop built with `S`'s box test: walked inline
+    /// (`single_in`) in the x86-64-v3 builds, by the walk specialised per axis permutation
+    /// (`intersect`) in the baseline one. The same answer either way.
+    #[inline(always)]
+    pub fn closest_in<S: Slab>(&self, st: &mut TraceStacks<S>, a: Segment) -> Option<Hit> {
+        if S::INLINE_WALKS {
+            self.single_in::<false, _>(st, a)
+        } else {
+            self.intersect(a.0, a.1, a.2)
+        }
+    }
+
     /// Whether anything blocks `a` and `b` (any-hit queries), traced interleaved: the same
     /// answers as two calls of `occluded`.
     #[inline]

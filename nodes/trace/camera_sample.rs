@@ -10,6 +10,17 @@ use super::sampling::{Pcg32, V3};
 /// One pixel sample to trace: pixel column, row and sample index.
 pub type Job = (u32, u32, u32);
 
+/// A traced sample: its radiance and film position.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Sample {
+    /// Radiance estimate (may be non-finite; the caller discards those).
+    pub c: V3,
+    /// Film position, pixels.
+    pub fx: f32,
+    /// Film position, pixels.
+    pub fy: f32,
+}
+
 /// The start of one pixel sample's path: its random stream (after the film position's two
 /// numbers), film position, camera ray direction and that ray's first hit.
 pub(crate) struct CameraSample {

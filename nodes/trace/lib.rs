@@ -11,6 +11,7 @@ pub mod direct;
 pub mod lane_math;
 pub mod path_film;
 pub mod path_lanes;
+pub mod path_one;
 pub mod render_path;
 pub mod render_scene;
 pub mod render_whitted;

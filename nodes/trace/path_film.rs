@@ -6,9 +6,10 @@
 
 use super::bvh::TraceStacks;
 use super::camera_grid::CameraGrid;
-use super::camera_sample::Job;
-use super::path_lanes::{self, Sample};
-use super::render_path::{radiance_samples, Filter, PathSettings};
+use super::camera_sample::{Job, Sample};
+use super::path_lanes;
+use super::path_one::radiance_samples;
+use super::render_path::{Filter, PathSettings};
 use super::render_scene::{PinholeCamera, RenderScene};
 use cgnodes_api::types::Image;
 use rayon::prelude::*;

@@ -21,7 +21,7 @@ use super::bsdf::Bsdf;
 use super::bvh::Avx;
 use super::bvh::{Hit, Segment, Slab, TraceStacks};
 use super::camera_grid::CameraGrid;
-use super::camera_sample::{camera_sample, Job};
+use super::camera_sample::{camera_sample, Job, Sample};
 use super::direct::{delta_lights, environment_nee, Vertex};
 use super::lane_math::{get, put, L};
 use super::render_path::{add_direct, found_weight, PathSettings, Strategy};
@@ -30,17 +30,6 @@ use super::sampling::{add, dot, max_comp, mul, scale, Pcg32, V3};
 
 mod shade;
 use shade::shade;
-
-/// A traced sample: its radiance and film position.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct Sample {
-    /// Radiance estimate (may be non-finite; the caller discards those).
-    pub c: V3,
-    /// Film position, pixels.
-    pub fx: f32,
-    /// Film position, pixels.
-    pub fy: f32,
-}
 
 /// Whether the four-lane loop renders `sc`: every material is diffuse (the loop's
 /// shading arithmetic is the diffuse lobe's); every strategy, filter and light is handled.

@@ -14,15 +14,10 @@
 //! box or Gaussian reconstruction filter, variance) is `path_film.rs`, and the estimator
 //! run on four paths at a time for diffuse scenes is `path_lanes.rs`.
 
-#[cfg(target_arch = "x86_64")]
-use super::bvh::Avx;
 use super::bvh::{Hit, Segment, Slab, TraceStacks};
-use super::camera_grid::CameraGrid;
-use super::camera_sample::{camera_sample, Job};
 use super::direct::{delta_lights, environment_nee, Vertex};
 pub use super::path_film::{render, render_opts, Shortcuts};
-use super::path_lanes::Sample;
-use super::render_scene::{prepare_cached, PinholeCamera, RenderScene, TraceError, SHADOW_END};
+use super::render_scene::{prepare_cached, RenderScene, TraceError, SHADOW_END};
 use super::sampling::{add, dot, max_comp, mul, power_heuristic, scale, sub, Pcg32, V3};
 use super::tracer_node::{crease_input, declare_crease, reserve_image, trace_error};
 use cgnodes_api::prelude::*;
@@ -198,73 +193,10 @@ pub fn radiance(
     radiance_in(sc, org, dir, tmax, first, rng, s, stacks)
 }
 
-/// The samples `jobs` traced one path at a time (`radiance`), their radiance and film
-/// positions in `jobs`' order: the loop for scenes the four-lane one does not take
-/// (`path_lanes::handles`). Where `v3` and the CPU has x86-64-v3 it runs a build of itself
-/// for that (`radiance_samples_avx2`: walks inlined, node boxes on 256-bit registers, the
-/// same bits).
-pub fn radiance_samples(
-    sc: &RenderScene,
-    cam: &PinholeCamera,
-    grid: Option<&CameraGrid>,
-    s: &PathSettings,
-    jobs: &[Job],
-    stacks: &mut TraceStacks,
-    v3: bool,
-) -> Vec<Sample> {
-    #[cfg(target_arch = "x86_64")]
-    if let Some(avx) = Avx::detect_v3().filter(|_| v3) {
-        // SAFETY: `radiance_samples_avx2` needs exactly the features `detect_v3` found.
-        return unsafe { radiance_samples_avx2(sc, cam, grid, s, jobs, avx) };
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = v3;
-    samples_body(sc, cam, grid, s, jobs, stacks)
-}
-
-/// `radiance_samples` built for x86-64-v3, chosen at run time (as `path_lanes::trace_avx2`).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
-fn radiance_samples_avx2(
-    sc: &RenderScene,
-    cam: &PinholeCamera,
-    grid: Option<&CameraGrid>,
-    s: &PathSettings,
-    jobs: &[Job],
-    avx: Avx,
-) -> Vec<Sample> {
-    samples_body(sc, cam, grid, s, jobs, &mut TraceStacks::with_slab(avx))
-}
-
-/// `radiance_samples`' loop, inlined into both builds.
-#[inline(always)]
-fn samples_body<S: Slab>(
-    sc: &RenderScene,
-    cam: &PinholeCamera,
-    grid: Option<&CameraGrid>,
-    s: &PathSettings,
-    jobs: &[Job],
-    stacks: &mut TraceStacks<S>,
-) -> Vec<Sample> {
-    // A loop, not a closure: a closure is not built for the caller's target features
-    // unless LLVM inlines it, and this one is too large to be.
-    let mut out = Vec::with_capacity(jobs.len());
-    for &job in jobs {
-        let mut cs = camera_sample(sc, cam, grid, s.seed, job);
-        let c = radiance_in(sc, cam.eye, cs.dir, cam.far, cs.hit, &mut cs.rng, s, stacks);
-        out.push(Sample {
-            c,
-            fx: cs.fx,
-            fy: cs.fy,
-        });
-    }
-    out
-}
-
 /// `radiance` on stacks testing node boxes with `S`.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn radiance_in<S: Slab>(
+pub(crate) fn radiance_in<S: Slab>(
     sc: &RenderScene,
     org: V3,
     dir: V3,

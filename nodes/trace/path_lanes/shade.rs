@@ -4,11 +4,11 @@
 
 use super::{Gather, Lanes, L};
 use crate::bvh::{Slab, TraceStacks};
+use crate::camera_sample::Sample;
 use crate::lane_math::{
     add3, bits, cosine_hemisphere4, dot3, f4, f43, get, max3, mul3, offset4, power4, put, scale3,
     sel3, splat, store3, sub3, F, F3,
 };
-use crate::path_lanes::Sample;
 use crate::render_path::{PathSettings, Strategy};
 use crate::render_scene::RenderScene;
 use crate::sampling::scale;

@@ -1,6 +1,6 @@
 //! Where every path sample starts: its random stream, film position, camera ray and that
 //! ray's first hit (`camera_sample`), shared by the one-path loop (`path_film`) and the
-//! four-lane loop (`path_lanes`), below both.
+//! lane loop (`path_lanes`), below both.
 
 use super::bvh::Hit;
 use super::camera_grid::CameraGrid;

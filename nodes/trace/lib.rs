@@ -8,6 +8,7 @@ pub mod camera;
 pub mod camera_grid;
 pub mod camera_sample;
 pub mod direct;
+mod lane_avx;
 pub mod lane_math;
 pub mod path_film;
 pub mod path_lanes;

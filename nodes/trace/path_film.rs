@@ -1,5 +1,5 @@
 //! `render_path`'s film: the image cut into 16x16-pixel tiles rendered in parallel, each
-//! pixel's samples traced (four paths at a time by `path_lanes` where it applies, else one
+//! pixel's samples traced (eight paths at a time by `path_lanes` where it applies, else one
 //! at a time by `render_path::radiance`), splatted through the reconstruction filter, and
 //! the per-pixel variance of the estimate. Tiles are summed in a fixed order, so images do
 //! not depend on the thread count.
@@ -41,7 +41,7 @@ struct TileOut {
 /// Renders `cam`'s view of `sc`. Returns the colour image (linear radiance) and, per
 /// pixel, the variance of the pixel's estimate (sample variance of its own samples over
 /// spp, before filtering). `progress` receives the fraction of tiles done. Scenes the
-/// four-lane loop handles (`path_lanes::handles`: every material diffuse) are traced four
+/// lane loop handles (`path_lanes::handles`: every material diffuse) are traced eight
 /// paths at a time, with the same result bit for bit.
 pub fn render(
     sc: &RenderScene,
@@ -56,7 +56,7 @@ pub fn render(
 /// off to measure what each buys and to check that they change nothing.
 #[derive(Clone, Copy, Debug)]
 pub struct Shortcuts {
-    /// Four paths at a time on SSE lanes where `path_lanes::handles` the scene (the image
+    /// Eight paths at a time on lanes where `path_lanes::handles` the scene (the image
     /// is the one-at-a-time loop's bit for bit).
     pub lanes: bool,
     /// Camera rays' first hits from per-pixel candidate lists (`CameraGrid`) instead of

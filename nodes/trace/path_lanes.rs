@@ -1,16 +1,17 @@
-//! `render_path`'s estimator run on four paths at a time: the scalar work of a path vertex
+//! `render_path`'s estimator run on eight paths at a time: the scalar work of a path vertex
 //! (tracing, random numbers, material and emitter look-ups) stays per path, and the
 //! arithmetic of shading it (next-event geometry, the diffuse BSDF's value and density,
-//! the power heuristic, cosine-weighted sampling, ray offsets) runs on four SSE lanes, one
-//! path per lane, with masks in place of branches. A lane whose path ends takes the next
+//! the power heuristic, cosine-weighted sampling, ray offsets) runs on eight lanes, one path
+//! per lane, with masks in place of branches (`lane_math::Lane`: two SSE halves in the
+//! baseline build, one AVX register in the x86-64-v3 one). A lane whose path ends takes the next
 //! pixel sample at once, so the lanes stay full (the path regeneration of wavefront path
 //! tracers: Laine, Karras and Aila 2013, "Megakernels Considered Harmful").
 //!
 //! Every lane performs the scalar `radiance`'s floating-point operations in the same order
-//! (Rust never contracts to FMA; SSE's add, multiply, divide and square root are IEEE
-//! correctly rounded like their scalar forms) and draws the same random numbers from the
+//! (Rust never contracts to FMA; SSE's and AVX's add, multiply, divide and square root are
+//! IEEE correctly rounded like their scalar forms) and draws the same random numbers from the
 //! path's own stream, so a sample's radiance is bit for bit the scalar one
-//! (`four_lane_paths_change_no_bit` in `tests/it/trace.rs`). It covers scenes whose
+//! (`lane_paths_change_no_bit` in `tests/it/trace.rs`). It covers scenes whose
 //! materials are all diffuse (textured or not), under any strategy and any lights: the
 //! point, directional and environment lights' estimates are made per lane, in the scalar
 //! loop's code. Scenes with a glossy or specular material take the scalar loop
@@ -23,7 +24,9 @@ use super::bvh::{Hit, Segment, Slab, TraceStacks};
 use super::camera_grid::CameraGrid;
 use super::camera_sample::{camera_sample, Job, Sample};
 use super::direct::{delta_lights, environment_nee, Vertex};
-use super::lane_math::{get, put, L};
+#[cfg(target_arch = "x86_64")]
+use super::lane_avx::Avx8;
+use super::lane_math::{get, put, Lane, L};
 use super::render_path::{add_direct, found_weight, PathSettings, Strategy};
 use super::render_scene::{PinholeCamera, RenderScene, SHADOW_END};
 use super::sampling::{add, dot, max_comp, mul, scale, Pcg32, V3};
@@ -31,7 +34,7 @@ use super::sampling::{add, dot, max_comp, mul, scale, Pcg32, V3};
 mod shade;
 use shade::shade;
 
-/// Whether the four-lane loop renders `sc`: every material is diffuse (the loop's
+/// Whether the lane loop renders `sc`: every material is diffuse (the loop's
 /// shading arithmetic is the diffuse lobe's); every strategy, filter and light is handled.
 pub fn handles(sc: &RenderScene) -> bool {
     sc.materials.iter().all(|m| m.bsdf == Bsdf::Diffuse)
@@ -266,7 +269,7 @@ pub fn trace(
         // SAFETY: `trace_avx2` needs exactly the features `detect_v3` found on this CPU.
         return unsafe { trace_avx2(b, avx) };
     }
-    trace_body::<true, _>(b, stacks)
+    trace_body::<true, _, wide::f32x8>(b, stacks)
 }
 
 /// `trace` compiled for x86-64-v3 (AVX2 and its companions), chosen at run time so that
@@ -279,9 +282,9 @@ pub fn trace(
 fn trace_avx2(b: Batch, avx: Avx) -> Vec<Sample> {
     let stacks = &mut TraceStacks::with_slab(avx);
     if b.sc.lights.is_empty() && b.sc.env.is_none() {
-        trace_body::<false, _>(b, stacks)
+        trace_body::<false, _, Avx8>(b, stacks)
     } else {
-        trace_body::<true, _>(b, stacks)
+        trace_body::<true, _, Avx8>(b, stacks)
     }
 }
 
@@ -290,7 +293,10 @@ fn trace_avx2(b: Batch, avx: Avx) -> Vec<Sample> {
 /// gathered, carried or added (the x86-64-v3 build is made both ways, the baseline one only
 /// with `LIGHTS`).
 #[inline(always)]
-fn trace_body<const LIGHTS: bool, S: Slab>(b: Batch, stacks: &mut TraceStacks<S>) -> Vec<Sample> {
+fn trace_body<const LIGHTS: bool, S: Slab, F: Lane>(
+    b: Batch,
+    stacks: &mut TraceStacks<S>,
+) -> Vec<Sample> {
     let Batch {
         sc,
         cam,
@@ -334,7 +340,7 @@ fn trace_body<const LIGHTS: bool, S: Slab>(b: Batch, stacks: &mut TraceStacks<S>
                 && visit::<LIGHTS, _>(sc, s, &mut ln, i, &mut g, stacks, &mut out);
         }
         if go.iter().any(|&b| b) {
-            shade::<LIGHTS, _>(sc, s, &mut ln, &g, go, stacks, &mut out);
+            shade::<LIGHTS, _, F>(sc, s, &mut ln, &g, go, stacks, &mut out);
         }
     }
     out

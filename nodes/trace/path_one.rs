@@ -1,5 +1,5 @@
 //! `render_path`'s estimator over a batch of pixel samples one path at a time
-//! (`render_path::radiance`): the loop for scenes the four-lane one does not take (a mirror,
+//! (`render_path::radiance`): the loop for scenes the lane one does not take (a mirror,
 //! glass or GGX material), in a baseline build and, chosen at run time, one for x86-64-v3.
 
 #[cfg(target_arch = "x86_64")]
@@ -11,7 +11,7 @@ use super::render_path::{radiance_in, PathSettings};
 use super::render_scene::{PinholeCamera, RenderScene};
 
 /// The samples `jobs` traced one path at a time (`radiance`), their radiance and film
-/// positions in `jobs`' order: the loop for scenes the four-lane one does not take
+/// positions in `jobs`' order: the loop for scenes the lane one does not take
 /// (`path_lanes::handles`). Where `v3` and the CPU has x86-64-v3 it runs a build of itself
 /// for that (`radiance_samples_avx2`: walks inlined, node boxes on 256-bit registers, the
 /// same bits).

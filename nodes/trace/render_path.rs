@@ -12,7 +12,7 @@
 //! (pixel, sample index, seed), so images are identical whatever the thread count. This
 //! file holds the estimator for one path (`radiance`) and the node; the film (tiles, the
 //! box or Gaussian reconstruction filter, variance) is `path_film.rs`, and the estimator
-//! run on four paths at a time for diffuse scenes is `path_lanes.rs`.
+//! run on eight paths at a time for diffuse scenes is `path_lanes.rs`.
 
 use super::bvh::{Hit, Segment, Slab, TraceStacks};
 use super::direct::{delta_lights, environment_nee, Vertex};

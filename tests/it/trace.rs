@@ -228,7 +228,7 @@ fn interleaved_shadow_rays_change_no_bit() {
 /// none. Camera rays through the BVH instead of the per-pixel candidates of `CameraGrid`
 /// change no bit either.
 #[test]
-fn four_lane_paths_change_no_bit() {
+fn lane_paths_change_no_bit() {
     use cgnodes::nodes::trace::path_lanes::handles;
     use cgnodes::nodes::trace::render_path::{render_opts, Shortcuts};
     use cgnodes::nodes::trace::render_scene::prepare;

@@ -160,7 +160,7 @@ pub fn slab8(r: &RayBox, min: &[F8; 3], max: &[F8; 3], tmax: f32) -> (u32, F8) {
 
 /// How a node's eight boxes are tested: `Sse`, `slab8` on two SSE halves (every x86-64
 /// CPU), or `Avx`, the same operations on one 256-bit register (half the instructions, the
-/// same bits). The traversal is generic over it, so the four-lane loop's x86-64-v3 build
+/// same bits). The traversal is generic over it, so the lane loop's x86-64-v3 build
 /// takes `Avx` and everything else `Sse`.
 pub trait Slab: Copy {
     /// Whether the loops built with this test walk the tree inline (`Bvh::closest_in`): the

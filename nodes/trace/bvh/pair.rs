@@ -85,7 +85,7 @@ impl Bvh {
 
     /// The closest hit along `a` (or, with `ANY`, whether anything blocks it: `Some` then)
     /// on the caller's stack, walked inline with the axis permutation read from the ray:
-    /// the same answer as `intersect` (`occluded`), in the caller's build (the four-lane
+    /// the same answer as `intersect` (`occluded`), in the caller's build (the lane
     /// loop's x86-64-v3 one) instead of the baseline build's `traverse`.
     #[inline(always)]
     pub fn single_in<const ANY: bool, S: Slab>(

@@ -4,11 +4,29 @@
 
 use super::bvh::Hit;
 use super::camera_grid::CameraGrid;
+use super::render_path::PathSettings;
 use super::render_scene::{PinholeCamera, RenderScene};
 use super::sampling::{Pcg32, V3};
 
 /// One pixel sample to trace: pixel column, row and sample index.
 pub type Job = (u32, u32, u32);
+
+/// A batch of pixel samples for a path loop (`path_lanes::trace`,
+/// `path_one::radiance_samples`) to trace: the scene, camera and its grid, the settings and
+/// the samples.
+#[derive(Clone, Copy)]
+pub struct Batch<'a> {
+    /// The flattened scene.
+    pub sc: &'a RenderScene,
+    /// The camera.
+    pub cam: &'a PinholeCamera,
+    /// The camera rays' first hits, when built (`CameraGrid::build`).
+    pub grid: Option<&'a CameraGrid>,
+    /// Samples per pixel, depth, strategy, seed.
+    pub s: &'a PathSettings,
+    /// The pixel samples.
+    pub jobs: &'a [Job],
+}
 
 /// A traced sample: its radiance and film position.
 #[derive(Clone, Copy, Debug, Default)]

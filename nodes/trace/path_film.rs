@@ -6,7 +6,7 @@
 
 use super::bvh::TraceStacks;
 use super::camera_grid::CameraGrid;
-use super::camera_sample::{Job, Sample};
+use super::camera_sample::{Batch, Job, Sample};
 use super::path_lanes;
 use super::path_one::radiance_samples;
 use super::render_path::{Filter, PathSettings};
@@ -155,10 +155,17 @@ fn render_tile(
             .iter()
             .flat_map(|&(x, y)| (0..s.spp).map(move |k| (x, y, k)))
             .collect();
+        let b = Batch {
+            sc,
+            cam,
+            grid,
+            s,
+            jobs: &jobs,
+        };
         let samples = if lanes {
-            path_lanes::trace(sc, cam, grid, s, &jobs, &mut stacks, v3)
+            path_lanes::trace(b, &mut stacks, v3)
         } else {
-            radiance_samples(sc, cam, grid, s, &jobs, &mut stacks, v3)
+            radiance_samples(b, &mut stacks, v3)
         };
         for (j, &(x, y)) in chunk.iter().enumerate() {
             let v = t.add_pixel(cam, s.filter, (x, y), &samples[j * spp..(j + 1) * spp]);

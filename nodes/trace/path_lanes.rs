@@ -21,14 +21,13 @@ use super::bsdf::Bsdf;
 #[cfg(target_arch = "x86_64")]
 use super::bvh::Avx;
 use super::bvh::{Hit, Segment, Slab, TraceStacks};
-use super::camera_grid::CameraGrid;
-use super::camera_sample::{camera_sample, Job, Sample};
+use super::camera_sample::{camera_sample, Batch, Sample};
 use super::direct::{delta_lights, environment_nee, Vertex};
 #[cfg(target_arch = "x86_64")]
 use super::lane_avx::Avx8;
 use super::lane_math::{get, put, Lane, L};
 use super::render_path::{add_direct, found_weight, PathSettings, Strategy};
-use super::render_scene::{PinholeCamera, RenderScene, SHADOW_END};
+use super::render_scene::{RenderScene, SHADOW_END};
 use super::sampling::{add, dot, max_comp, mul, scale, Pcg32, V3};
 
 mod shade;
@@ -235,35 +234,10 @@ impl Lanes {
     }
 }
 
-/// What one call of `trace` works on.
-#[derive(Clone, Copy)]
-struct Batch<'a> {
-    sc: &'a RenderScene,
-    cam: &'a PinholeCamera,
-    grid: Option<&'a CameraGrid>,
-    s: &'a PathSettings,
-    jobs: &'a [Job],
-}
-
-/// Traces `jobs` (pixel samples) and returns their radiance and film positions, in
+/// Traces the batch's pixel samples and returns their radiance and film positions, in
 /// `jobs`' order, as `render_path`'s per-sample loop computes them. `v3`: whether the
 /// x86-64-v3 build may run where the CPU has it (the same bits; off to compare).
-pub fn trace(
-    sc: &RenderScene,
-    cam: &PinholeCamera,
-    grid: Option<&CameraGrid>,
-    s: &PathSettings,
-    jobs: &[Job],
-    stacks: &mut TraceStacks,
-    v3: bool,
-) -> Vec<Sample> {
-    let b = Batch {
-        sc,
-        cam,
-        grid,
-        s,
-        jobs,
-    };
+pub fn trace(b: Batch, stacks: &mut TraceStacks, v3: bool) -> Vec<Sample> {
     #[cfg(target_arch = "x86_64")]
     if let Some(avx) = Avx::detect_v3().filter(|_| v3) {
         // SAFETY: `trace_avx2` needs exactly the features `detect_v3` found on this CPU.

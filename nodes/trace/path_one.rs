@@ -5,65 +5,51 @@
 #[cfg(target_arch = "x86_64")]
 use super::bvh::Avx;
 use super::bvh::{Slab, TraceStacks};
-use super::camera_grid::CameraGrid;
-use super::camera_sample::{camera_sample, Job, Sample};
-use super::render_path::{radiance_in, PathSettings};
-use super::render_scene::{PinholeCamera, RenderScene};
+use super::camera_sample::{camera_sample, Batch, Sample};
+use super::render_path::radiance;
 
-/// The samples `jobs` traced one path at a time (`radiance`), their radiance and film
-/// positions in `jobs`' order: the loop for scenes the lane one does not take
+/// The batch's pixel samples traced one path at a time (`radiance`), their radiance and
+/// film positions in `jobs`' order: the loop for scenes the lane one does not take
 /// (`path_lanes::handles`). Where `v3` and the CPU has x86-64-v3 it runs a build of itself
 /// for that (`radiance_samples_avx2`: walks inlined, node boxes on 256-bit registers, the
 /// same bits).
-pub fn radiance_samples(
-    sc: &RenderScene,
-    cam: &PinholeCamera,
-    grid: Option<&CameraGrid>,
-    s: &PathSettings,
-    jobs: &[Job],
-    stacks: &mut TraceStacks,
-    v3: bool,
-) -> Vec<Sample> {
+pub fn radiance_samples(b: Batch, stacks: &mut TraceStacks, v3: bool) -> Vec<Sample> {
     #[cfg(target_arch = "x86_64")]
     if let Some(avx) = Avx::detect_v3().filter(|_| v3) {
         // SAFETY: `radiance_samples_avx2` needs exactly the features `detect_v3` found.
-        return unsafe { radiance_samples_avx2(sc, cam, grid, s, jobs, avx) };
+        return unsafe { radiance_samples_avx2(b, avx) };
     }
     #[cfg(not(target_arch = "x86_64"))]
     let _ = v3;
-    samples_body(sc, cam, grid, s, jobs, stacks)
+    samples_body(b, stacks)
 }
 
 /// `radiance_samples` built for x86-64-v3, chosen at run time (as `path_lanes::trace_avx2`).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
-fn radiance_samples_avx2(
-    sc: &RenderScene,
-    cam: &PinholeCamera,
-    grid: Option<&CameraGrid>,
-    s: &PathSettings,
-    jobs: &[Job],
-    avx: Avx,
-) -> Vec<Sample> {
-    samples_body(sc, cam, grid, s, jobs, &mut TraceStacks::with_slab(avx))
+fn radiance_samples_avx2(b: Batch, avx: Avx) -> Vec<Sample> {
+    samples_body(b, &mut TraceStacks::with_slab(avx))
 }
 
 /// `radiance_samples`' loop, inlined into both builds.
 #[inline(always)]
-fn samples_body<S: Slab>(
-    sc: &RenderScene,
-    cam: &PinholeCamera,
-    grid: Option<&CameraGrid>,
-    s: &PathSettings,
-    jobs: &[Job],
-    stacks: &mut TraceStacks<S>,
-) -> Vec<Sample> {
+fn samples_body<S: Slab>(b: Batch, stacks: &mut TraceStacks<S>) -> Vec<Sample> {
+    let (sc, cam) = (b.sc, b.cam);
     // A loop, not a closure: a closure is not built for the caller's target features
     // unless LLVM inlines it, and this one is too large to be.
-    let mut out = Vec::with_capacity(jobs.len());
-    for &job in jobs {
-        let mut cs = camera_sample(sc, cam, grid, s.seed, job);
-        let c = radiance_in(sc, cam.eye, cs.dir, cam.far, cs.hit, &mut cs.rng, s, stacks);
+    let mut out = Vec::with_capacity(b.jobs.len());
+    for &job in b.jobs {
+        let mut cs = camera_sample(sc, cam, b.grid, b.s.seed, job);
+        let c = radiance(
+            sc,
+            cam.eye,
+            cs.dir,
+            cam.far,
+            cs.hit,
+            &mut cs.rng,
+            b.s,
+            stacks,
+        );
         out.push(Sample {
             c,
             fx: cs.fx,

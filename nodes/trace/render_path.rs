@@ -179,24 +179,10 @@ pub(crate) fn found_weight(
 /// Radiance arriving at `org` from direction `-dir` (unit `dir`), estimated with one path
 /// whose first segment (`org + t dir`, `t < tmax`) hits `first` (the caller traced it).
 /// `stacks` are the traversal stacks the path's rays use (one set per thread, reused).
-#[allow(clippy::too_many_arguments)]
-pub fn radiance(
-    sc: &RenderScene,
-    org: V3,
-    dir: V3,
-    tmax: f32,
-    first: Option<Hit>,
-    rng: &mut Pcg32,
-    s: &PathSettings,
-    stacks: &mut TraceStacks,
-) -> V3 {
-    radiance_in(sc, org, dir, tmax, first, rng, s, stacks)
-}
-
-/// `radiance` on stacks testing node boxes with `S`.
+/// Inlined into its callers: the x86-64-v3 build of `path_one` needs it built with AVX.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-pub(crate) fn radiance_in<S: Slab>(
+pub fn radiance<S: Slab>(
     sc: &RenderScene,
     org: V3,
     dir: V3,

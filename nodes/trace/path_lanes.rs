@@ -243,6 +243,8 @@ pub fn trace(b: Batch, stacks: &mut TraceStacks, v3: bool) -> Vec<Sample> {
         // SAFETY: `trace_avx2` needs exactly the features `detect_v3` found on this CPU.
         return unsafe { trace_avx2(b, avx) };
     }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = v3;
     trace_body::<true, _, wide::f32x8>(b, stacks)
 }
 

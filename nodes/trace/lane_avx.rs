@@ -60,6 +60,17 @@ unsafe fn bits_eq(a: __m256i, k: i32) -> __m256 {
     _mm256_castsi256_ps(_mm256_cmpeq_epi32(a, _mm256_set1_epi32(k)))
 }
 
+/// A `Lane` comparison as `vcmpps` with predicate `$p`.
+macro_rules! cmp {
+    ($f:ident, $p:ident) => {
+        #[inline(always)]
+        fn $f(self, rhs: Self) -> Self {
+            // SAFETY: an `Avx8` exists only in the lane loop's AVX2 build.
+            Avx8(unsafe { _mm256_cmp_ps::<$p>(self.0, rhs.0) })
+        }
+    };
+}
+
 impl Lane for Avx8 {
     #[inline(always)]
     fn splat(x: f32) -> Self {
@@ -81,26 +92,12 @@ impl Lane for Avx8 {
         // `blendvps`, as `wide` selects: the sign bit of each mask lane picks `t`.
         Avx8(unsafe { _mm256_blendv_ps(f.0, t.0, self.0) })
     }
-    #[inline(always)]
-    fn simd_eq(self, rhs: Self) -> Self {
-        Avx8(unsafe { _mm256_cmp_ps::<_CMP_EQ_OQ>(self.0, rhs.0) })
-    }
-    #[inline(always)]
-    fn simd_ne(self, rhs: Self) -> Self {
-        Avx8(unsafe { _mm256_cmp_ps::<_CMP_NEQ_UQ>(self.0, rhs.0) })
-    }
-    #[inline(always)]
-    fn simd_lt(self, rhs: Self) -> Self {
-        Avx8(unsafe { _mm256_cmp_ps::<_CMP_LT_OQ>(self.0, rhs.0) })
-    }
-    #[inline(always)]
-    fn simd_le(self, rhs: Self) -> Self {
-        Avx8(unsafe { _mm256_cmp_ps::<_CMP_LE_OQ>(self.0, rhs.0) })
-    }
-    #[inline(always)]
-    fn simd_gt(self, rhs: Self) -> Self {
-        Avx8(unsafe { _mm256_cmp_ps::<_CMP_GT_OQ>(self.0, rhs.0) })
-    }
+    // The predicates of `wide`'s `cmpps` forms (ordered, but not-equal unordered).
+    cmp!(simd_eq, _CMP_EQ_OQ);
+    cmp!(simd_ne, _CMP_NEQ_UQ);
+    cmp!(simd_lt, _CMP_LT_OQ);
+    cmp!(simd_le, _CMP_LE_OQ);
+    cmp!(simd_gt, _CMP_GT_OQ);
     #[inline(always)]
     fn max(self, rhs: Self) -> Self {
         // `maxps` returns its second operand when either is NaN; `wide` then keeps `self`

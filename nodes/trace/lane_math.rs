@@ -60,6 +60,16 @@ pub(super) trait Lane:
     fn to_bitmask(self) -> u32;
 }
 
+/// `Lane` methods that are `f32x8`'s inherent ones of the same name and signature.
+macro_rules! inherent {
+    ($($f:ident($($a:ident: $t:ty),*) -> $r:ty;)*) => {$(
+        #[inline(always)]
+        fn $f(self, $($a: $t),*) -> $r {
+            f32x8::$f(self, $($a),*)
+        }
+    )*};
+}
+
 impl Lane for f32x8 {
     #[inline(always)]
     fn splat(x: f32) -> Self {
@@ -69,61 +79,21 @@ impl Lane for f32x8 {
     fn from_array(a: [f32; L]) -> Self {
         f32x8::new(a)
     }
-    #[inline(always)]
-    fn to_array(self) -> [f32; L] {
-        f32x8::to_array(self)
-    }
-    #[inline(always)]
-    fn select(self, t: Self, f: Self) -> Self {
-        f32x8::select(self, t, f)
-    }
-    #[inline(always)]
-    fn simd_eq(self, rhs: Self) -> Self {
-        f32x8::simd_eq(self, rhs)
-    }
-    #[inline(always)]
-    fn simd_ne(self, rhs: Self) -> Self {
-        f32x8::simd_ne(self, rhs)
-    }
-    #[inline(always)]
-    fn simd_lt(self, rhs: Self) -> Self {
-        f32x8::simd_lt(self, rhs)
-    }
-    #[inline(always)]
-    fn simd_le(self, rhs: Self) -> Self {
-        f32x8::simd_le(self, rhs)
-    }
-    #[inline(always)]
-    fn simd_gt(self, rhs: Self) -> Self {
-        f32x8::simd_gt(self, rhs)
-    }
-    #[inline(always)]
-    fn max(self, rhs: Self) -> Self {
-        f32x8::max(self, rhs)
-    }
-    #[inline(always)]
-    fn abs(self) -> Self {
-        f32x8::abs(self)
-    }
-    #[inline(always)]
-    fn sqrt(self) -> Self {
-        f32x8::sqrt(self)
-    }
-    #[inline(always)]
-    fn is_finite(self) -> Self {
-        f32x8::is_finite(self)
-    }
-    #[inline(always)]
-    fn is_inf(self) -> Self {
-        f32x8::is_inf(self)
-    }
-    #[inline(always)]
-    fn is_sign_negative(self) -> Self {
-        f32x8::is_sign_negative(self)
-    }
-    #[inline(always)]
-    fn to_bitmask(self) -> u32 {
-        f32x8::to_bitmask(self)
+    inherent! {
+        to_array() -> [f32; L];
+        select(t: Self, f: Self) -> Self;
+        simd_eq(rhs: Self) -> Self;
+        simd_ne(rhs: Self) -> Self;
+        simd_lt(rhs: Self) -> Self;
+        simd_le(rhs: Self) -> Self;
+        simd_gt(rhs: Self) -> Self;
+        max(rhs: Self) -> Self;
+        abs() -> Self;
+        sqrt() -> Self;
+        is_finite() -> Self;
+        is_inf() -> Self;
+        is_sign_negative() -> Self;
+        to_bitmask() -> u32;
     }
 }
 

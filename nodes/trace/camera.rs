@@ -93,9 +93,16 @@ impl PinholeCamera {
     /// corner of the image.
     #[inline]
     pub fn ray_dir(&self, x: f32, y: f32) -> V3 {
-        let sx = (2.0 * x / self.width as f32 - 1.0) * self.tan_x;
-        let sy = (1.0 - 2.0 * y / self.height as f32) * self.tan_y;
-        self.basis.ray_dir(sx, sy)
+        self.ray_dirs(&[x], &[y])[0]
+    }
+
+    /// `ray_dir` for `N` film positions at once (SIMD where the compiler can).
+    #[inline(always)]
+    pub fn ray_dirs<const N: usize>(&self, x: &[f32; N], y: &[f32; N]) -> [V3; N] {
+        let (w, h) = (self.width as f32, self.height as f32);
+        let sx: [f32; N] = std::array::from_fn(|i| (2.0 * x[i] / w - 1.0) * self.tan_x);
+        let sy: [f32; N] = std::array::from_fn(|i| (1.0 - 2.0 * y[i] / h) * self.tan_y);
+        self.basis.ray_dirs(&sx, &sy)
     }
 
     /// The camera's frame in f64, for projecting the scene onto the film

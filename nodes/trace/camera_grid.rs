@@ -234,7 +234,7 @@ impl CameraGrid {
     /// The closest hit of the camera ray `eye + t dir`, `0 < t < tmax`, through film
     /// position (x + a, y + b) with 0 <= a, b <= 1, of the triangles `tris` the grid was
     /// built from, for the camera it was built for. `dir` is unit length.
-    #[inline]
+    #[inline(always)]
     pub fn intersect(
         &self,
         tris: &[[V3; 3]],

@@ -1,6 +1,6 @@
 //! Where every path sample starts: its random stream, film position, camera ray and that
-//! ray's first hit (`camera_sample`), shared by the one-path loop (`path_film`) and the
-//! lane loop (`path_lanes`), below both.
+//! ray's first hit (`Starts`), shared by the one-path loop (`path_one`) and the lane loop
+//! (`path_lanes`), below both.
 
 use super::bvh::Hit;
 use super::camera_grid::CameraGrid;
@@ -49,30 +49,101 @@ pub(crate) struct CameraSample {
     pub hit: Option<Hit>,
 }
 
-/// Starts sample `k` of pixel `(x, y)`: both path loops begin here, so they draw the same
-/// numbers and trace the same camera ray (through `grid` when there is one).
+/// The first hit of the camera ray through pixel `(x, y)` along `dir`.
 #[inline(always)]
-pub(crate) fn camera_sample(
+fn camera_hit(
     sc: &RenderScene,
     cam: &PinholeCamera,
     grid: Option<&CameraGrid>,
-    seed: u64,
-    (x, y, k): Job,
-) -> CameraSample {
-    let pix = y as u64 * cam.width as u64 + x as u64;
-    let mut rng = Pcg32::for_sample(pix, k as u64, seed);
-    let [ux, uy] = rng.next_2d();
-    let (fx, fy) = (x as f32 + ux, y as f32 + uy);
-    let dir = cam.ray_dir(fx, fy);
-    let hit = match grid {
+    (x, y): (u32, u32),
+    dir: V3,
+) -> Option<Hit> {
+    match grid {
         Some(g) => g.intersect(&sc.tris, (x, y), cam.eye, dir, cam.far),
         None => sc.intersect(cam.eye, dir, cam.far),
-    };
-    CameraSample {
-        rng,
-        fx,
-        fy,
-        dir,
-        hit,
+    }
+}
+
+/// Pixel samples started together.
+const STARTS: usize = 8;
+
+/// Where every path sample starts, for both path loops, so that they draw the same numbers
+/// and trace the same camera rays: the random streams, film positions and camera ray
+/// directions of eight pixel samples at a time, made in array loops that the compiler
+/// turns into SIMD (the streams' hashing and first steps, the directions' normalisation;
+/// docs/path_tracing.md has the timings), then handed out one by one with their camera
+/// hits (`Starts::next`, through `grid` when there is one).
+pub(crate) struct Starts {
+    rng: [Pcg32; STARTS],
+    fx: [f32; STARTS],
+    fy: [f32; STARTS],
+    dir: [V3; STARTS],
+    pix: [(u32, u32); STARTS],
+    /// The first job made, the starts made, and those handed out.
+    first: usize,
+    made: usize,
+    taken: usize,
+}
+
+impl Starts {
+    /// No starts (the first `next` makes some).
+    pub(crate) fn new() -> Starts {
+        Starts {
+            rng: [const { Pcg32::zeroed() }; STARTS],
+            fx: [0.0; STARTS],
+            fy: [0.0; STARTS],
+            dir: [[0.0; 3]; STARTS],
+            pix: [(0, 0); STARTS],
+            first: 0,
+            made: 0,
+            taken: 0,
+        }
+    }
+
+    /// The start of `jobs[next]`, making those of the next eight jobs when none is left:
+    /// `next` counts up from 0 by one per call.
+    #[inline(always)]
+    pub(crate) fn next(
+        &mut self,
+        sc: &RenderScene,
+        cam: &PinholeCamera,
+        grid: Option<&CameraGrid>,
+        seed: u64,
+        jobs: &[Job],
+        next: usize,
+    ) -> CameraSample {
+        if self.taken == self.made {
+            self.make(cam, seed, &jobs[next..jobs.len().min(next + STARTS)]);
+            self.first = next;
+        }
+        debug_assert_eq!(self.first + self.taken, next, "jobs taken in order");
+        let i = self.taken;
+        self.taken += 1;
+        CameraSample {
+            rng: self.rng[i].clone(),
+            fx: self.fx[i],
+            fy: self.fy[i],
+            dir: self.dir[i],
+            hit: camera_hit(sc, cam, grid, self.pix[i], self.dir[i]),
+        }
+    }
+
+    /// Makes the starts of `jobs` (1 to 8): the pixel sample's stream (`Pcg32::for_sample`),
+    /// its film position from the stream's first two numbers, and the camera ray's
+    /// direction. Unused lanes repeat the first job.
+    #[inline(always)]
+    fn make(&mut self, cam: &PinholeCamera, seed: u64, jobs: &[Job]) {
+        let job = |i: usize| jobs[if i < jobs.len() { i } else { 0 }];
+        let pixel: [u64; STARTS] =
+            std::array::from_fn(|i| job(i).1 as u64 * cam.width as u64 + job(i).0 as u64);
+        let sample: [u64; STARTS] = std::array::from_fn(|i| job(i).2 as u64);
+        let (rng, u) = Pcg32::for_samples_2d(&pixel, &sample, seed);
+        self.rng = rng;
+        self.pix = std::array::from_fn(|i| (job(i).0, job(i).1));
+        self.fx = std::array::from_fn(|i| job(i).0 as f32 + u[0][i]);
+        self.fy = std::array::from_fn(|i| job(i).1 as f32 + u[1][i]);
+        self.dir = cam.ray_dirs(&self.fx, &self.fy);
+        self.made = jobs.len();
+        self.taken = 0;
     }
 }

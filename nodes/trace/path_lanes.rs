@@ -21,7 +21,7 @@ use super::bsdf::Bsdf;
 #[cfg(target_arch = "x86_64")]
 use super::bvh::Avx;
 use super::bvh::{Hit, Segment, Slab, TraceStacks};
-use super::camera_sample::{camera_sample, Batch, Sample};
+use super::camera_sample::{Batch, Sample, Starts};
 use super::direct::{delta_lights, environment_nee, Vertex};
 #[cfg(target_arch = "x86_64")]
 use super::lane_avx::Avx8;
@@ -284,13 +284,14 @@ fn trace_body<const LIGHTS: bool, S: Slab, F: Lane>(
     let mut ln = Lanes::new();
     let mut next = 0usize;
     let mut g = Gather::default();
+    let mut starts = Starts::new();
     loop {
         // Idle lanes take the next pixel samples (the camera ray, as `render` makes it).
         for i in 0..L {
             if ln.job[i] != IDLE || next == jobs.len() {
                 continue;
             }
-            let cs = camera_sample(sc, cam, grid, s.seed, jobs[next]);
+            let cs = starts.next(sc, cam, grid, s.seed, jobs, next);
             out[next].fx = cs.fx;
             out[next].fy = cs.fy;
             ln.job[i] = next;

@@ -5,7 +5,7 @@
 #[cfg(target_arch = "x86_64")]
 use super::bvh::Avx;
 use super::bvh::{Slab, TraceStacks};
-use super::camera_sample::{camera_sample, Batch, Sample};
+use super::camera_sample::{Batch, Sample, Starts};
 use super::render_path::radiance;
 
 /// The batch's pixel samples traced one path at a time (`radiance`), their radiance and
@@ -38,8 +38,9 @@ fn samples_body<S: Slab>(b: Batch, stacks: &mut TraceStacks<S>) -> Vec<Sample> {
     // A loop, not a closure: a closure is not built for the caller's target features
     // unless LLVM inlines it, and this one is too large to be.
     let mut out = Vec::with_capacity(b.jobs.len());
-    for &job in b.jobs {
-        let mut cs = camera_sample(sc, cam, b.grid, b.s.seed, job);
+    let mut starts = Starts::new();
+    for next in 0..b.jobs.len() {
+        let mut cs = starts.next(sc, cam, b.grid, b.s.seed, b.jobs, next);
         let c = radiance(
             sc,
             cam.eye,

@@ -267,20 +267,22 @@ impl CameraGrid {
         mut tmax: f32,
     ) -> Option<Hit> {
         let mut best: Option<Hit> = None;
-        let mut test = |i: u32, tmax: &mut f32| {
-            if let Some((t, u, v)) = tri_test::<KX, KY, KZ>(r, &tris[i as usize], *tmax) {
-                *tmax = t;
+        // Plain loops, not a shared closure: LLVM left the closure out of line, a call per
+        // triangle built without the caller's AVX.
+        for &i in &self.near {
+            if let Some((t, u, v)) = tri_test::<KX, KY, KZ>(r, &tris[i as usize], tmax) {
+                tmax = t;
                 best = Some(Hit { t, prim: i, u, v });
             }
-        };
-        for &i in &self.near {
-            test(i, &mut tmax);
         }
         for &(key, i) in cand {
             if key >= tmax {
                 break;
             }
-            test(i, &mut tmax);
+            if let Some((t, u, v)) = tri_test::<KX, KY, KZ>(r, &tris[i as usize], tmax) {
+                tmax = t;
+                best = Some(Hit { t, prim: i, u, v });
+            }
         }
         best
     }

@@ -4,7 +4,7 @@
 //! camera that turns film positions into rays. Shared by `render_path` and `render_whitted`.
 
 use super::bsdf::Bsdf;
-use super::bvh::{triangle_normal, Bvh, Hit};
+use super::bvh::{Bvh, Hit};
 pub use super::camera::PinholeCamera;
 use super::environment::Environment;
 use super::sampling::{
@@ -13,14 +13,11 @@ use super::sampling::{
 };
 pub use super::trace_error::{SceneError, TraceError};
 use cgnodes_api::types::{Light, Material, MaterialKind, Scene};
-use cgnodes_geometry::scene_geometry::{
-    normal_mapped, scene_geometry_creased, scene_positions, scene_shape_creased,
-};
+use cgnodes_geometry::scene_geometry::{normal_mapped, scene_positions};
 use cgnodes_geometry::texture::{MipTexture, Wrap};
-use rayon::prelude::*;
-use std::sync::Arc;
 
 mod prepare;
+mod shading;
 pub use prepare::{prepare, prepare_cached};
 
 /// A material reduced to what the tracers evaluate.
@@ -245,60 +242,25 @@ impl RenderScene {
     /// edges whose dihedral angle is below `crease_deg` (0 = flat shading).
     pub fn with_crease(scene: &Scene, crease_deg: f64) -> Result<RenderScene, SceneError> {
         check_scene(scene, crease_deg)?;
-        // The BVH is built on the bare positions while the corner attributes are flattened:
-        // its build has serial stretches that the other core fills.
+        // The BVH is built on the bare positions while the corner attributes are flattened
+        // and turned into shading data: its build has serial stretches that the other core
+        // fills.
         let tris = scene_positions(scene);
-        let (bvh, g) = rayon::join(
+        let (bvh, sh) = rayon::join(
             || Bvh::build(&tris),
-            || {
-                // Corner UVs and tangents are read only through textures.
-                if scene_has_textures(scene) {
-                    scene_geometry_creased(scene, crease_deg)
-                } else {
-                    scene_shape_creased(scene, crease_deg)
-                }
-            },
+            || shading::shading(scene, crease_deg, &tris),
         );
-        let g = g?;
-        debug_assert_eq!(tris.len(), g.mat.len(), "one walk over the objects");
-        let tri_mat = g.mat;
-        let materials: Vec<RMaterial> = g
-            .materials
-            .iter()
-            .map(|m| RMaterial::from_material(m))
-            .collect();
-        let textures = textures(&g.materials);
-        let any_nmap = textures.iter().any(|t| t.normal.is_some());
-        let corner_normals: Vec<[V3; 3]> = g.nrm.par_iter().map(|t| t.map(v3)).collect();
-        // UVs are read only through textures.
-        let any_tex = textures
-            .iter()
-            .any(|t| t.base.is_some() || t.normal.is_some());
-        let corner_uvs = if any_tex {
-            corner_uvs(&g.uv, &g.has_uv)
-        } else {
-            Vec::new()
-        };
-        let corner_tangents = if any_nmap { g.tan } else { Vec::new() };
-        let normals: Vec<V3> = tris
-            .par_iter()
-            .map(|t| normalize(triangle_normal(t)))
-            .collect();
-        let plain: Vec<bool> = corner_normals
-            .par_iter()
-            .zip(&normals)
-            .zip(&tri_mat)
-            .map(|((c, &n), &m)| {
-                let tx = &textures[m as usize];
-                tx.base.is_none()
-                    && tx.normal.is_none()
-                    && c.iter().all(|&k| dot(k, n) >= 1.0 - 2e-7)
-            })
-            .collect();
-        let areas: Vec<f32> = tris
-            .par_iter()
-            .map(|t| 0.5 * length(triangle_normal(t)))
-            .collect();
+        let shading::Shading {
+            tri_mat,
+            materials,
+            textures,
+            corner_normals,
+            corner_uvs,
+            corner_tangents,
+            normals,
+            plain,
+            areas,
+        } = sh?;
         let em = EmitterTables::new(&tris, &normals, &areas, &tri_mat, &materials);
         let b = bvh.bounds();
         let diag = if tris.is_empty() {
@@ -469,46 +431,6 @@ fn check_scene(scene: &Scene, crease_deg: f64) -> Result<(), SceneError> {
         return Err(SceneError::Crease(crease_deg));
     }
     Ok(())
-}
-
-/// Whether a material the scene's objects may take (the object's or its mesh's) has a
-/// texture or a normal map.
-fn scene_has_textures(scene: &Scene) -> bool {
-    let textured = |m: &Arc<Material>| m.base_color_texture.is_some() || m.normal_map.is_some();
-    scene.objects.iter().any(|o| {
-        let m = o.material.iter().chain(o.mesh.material.iter());
-        m.into_iter().any(textured)
-    })
-}
-
-/// Each material's textures, sampled without mipmaps.
-fn textures(materials: &[std::sync::Arc<Material>]) -> Vec<Textures> {
-    materials
-        .iter()
-        .map(|m| Textures {
-            base: m
-                .base_color_texture
-                .as_deref()
-                .map(|i| MipTexture::new(i, false)),
-            normal: m.normal_map.as_deref().map(|i| MipTexture::new(i, false)),
-        })
-        .collect()
-}
-
-/// Per-triangle corner UVs in `f32`; NaN marks a triangle without UVs.
-fn corner_uvs(uv: &[[[f64; 2]; 3]], has_uv: &[bool]) -> Vec<[[f32; 2]; 3]> {
-    uv.par_iter()
-        .zip(has_uv)
-        .map(|(t, &h)| {
-            t.map(|w| {
-                if h {
-                    [w[0] as f32, w[1] as f32]
-                } else {
-                    [f32::NAN; 2]
-                }
-            })
-        })
-        .collect()
 }
 
 /// The emissive triangles and how next-event estimation picks them: in proportion to area

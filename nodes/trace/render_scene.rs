@@ -250,18 +250,8 @@ impl RenderScene {
             || Bvh::build(&tris),
             || shading::shading(scene, crease_deg, &tris),
         );
-        let shading::Shading {
-            tri_mat,
-            materials,
-            textures,
-            corner_normals,
-            corner_uvs,
-            corner_tangents,
-            normals,
-            plain,
-            areas,
-        } = sh?;
-        let em = EmitterTables::new(&tris, &normals, &areas, &tri_mat, &materials);
+        let sh = sh?;
+        let em = EmitterTables::new(&tris, &sh.normals, &sh.areas, &sh.tri_mat, &sh.materials);
         let b = bvh.bounds();
         let diag = if tris.is_empty() {
             1.0
@@ -273,14 +263,14 @@ impl RenderScene {
         Ok(RenderScene {
             bvh,
             tris,
-            normals,
-            corner_normals,
-            plain,
-            corner_uvs,
-            corner_tangents,
-            textures,
-            tri_mat,
-            materials,
+            normals: sh.normals,
+            corner_normals: sh.corner_normals,
+            plain: sh.plain,
+            corner_uvs: sh.corner_uvs,
+            corner_tangents: sh.corner_tangents,
+            textures: sh.textures,
+            tri_mat: sh.tri_mat,
+            materials: sh.materials,
             emitters: em.emitters,
             emitter_table: em.table,
             emitter_recs: em.records,

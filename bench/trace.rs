@@ -15,7 +15,7 @@
 //! tree buys; `--wide-bvh`, the default, is accepted and does nothing), `--no-interleave`
 //! (trace a path's shadow ray and its next ray one after the other instead of interleaved,
 //! to measure what `Bvh::intersect_occluded` buys), `--scalar-paths` (one path at a time
-//! instead of four on SSE lanes, `path_lanes`, to measure what the lanes buy),
+//! instead of eight on lanes, `path_lanes`, to measure what the lanes buy),
 //! `--bvh-camera-rays` (camera rays through the BVH instead of `CameraGrid`),
 //! `--baseline-build` (no x86-64-v3 build of either loop, to measure what it buys), `--scene igea`
 //! (the box with the 154k-triangle igea scan standing in it, white diffuse, as

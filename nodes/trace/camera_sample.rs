@@ -39,9 +39,11 @@ pub struct Sample {
     pub fy: f32,
 }
 
-/// The start of one pixel sample's path: its random stream (after the film position's two
-/// numbers), film position, camera ray direction and that ray's first hit.
+/// The start of one pixel sample's path: its index in the batch's jobs, its random stream
+/// (after the film position's two numbers), film position, camera ray direction and that
+/// ray's first hit.
 pub(crate) struct CameraSample {
+    pub job: usize,
     pub rng: Pcg32,
     pub fx: f32,
     pub fy: f32,
@@ -72,8 +74,10 @@ const STARTS: usize = 8;
 /// directions of eight pixel samples at a time, made in array loops that the compiler
 /// turns into SIMD (the streams' hashing and first steps, the directions' normalisation;
 /// docs/path_tracing.md has the timings), then handed out one by one with their camera
-/// hits (`Starts::next`, through `grid` when there is one).
-pub(crate) struct Starts {
+/// hits, in the batch's order (its `Iterator::next`, through the batch's grid when there
+/// is one).
+pub(crate) struct Starts<'a> {
+    b: Batch<'a>,
     rng: [Pcg32; STARTS],
     fx: [f32; STARTS],
     fy: [f32; STARTS],
@@ -85,11 +89,12 @@ pub(crate) struct Starts {
     taken: usize,
 }
 
-impl Starts {
-    /// No starts (the first `next` makes some).
-    pub(crate) fn new() -> Starts {
+impl<'a> Starts<'a> {
+    /// The starts of `b`'s jobs (none made yet: the first `next` makes some).
+    pub(crate) fn new(b: Batch<'a>) -> Starts<'a> {
         Starts {
-            rng: [const { Pcg32::zeroed() }; STARTS],
+            b,
+            rng: std::array::from_fn(|_| Pcg32::new(0, 0)),
             fx: [0.0; STARTS],
             fy: [0.0; STARTS],
             dir: [[0.0; 3]; STARTS],
@@ -100,39 +105,12 @@ impl Starts {
         }
     }
 
-    /// The start of `jobs[next]`, making those of the next eight jobs when none is left:
-    /// `next` counts up from 0 by one per call.
-    #[inline(always)]
-    pub(crate) fn next(
-        &mut self,
-        sc: &RenderScene,
-        cam: &PinholeCamera,
-        grid: Option<&CameraGrid>,
-        seed: u64,
-        jobs: &[Job],
-        next: usize,
-    ) -> CameraSample {
-        if self.taken == self.made {
-            self.make(cam, seed, &jobs[next..jobs.len().min(next + STARTS)]);
-            self.first = next;
-        }
-        debug_assert_eq!(self.first + self.taken, next, "jobs taken in order");
-        let i = self.taken;
-        self.taken += 1;
-        CameraSample {
-            rng: self.rng[i].clone(),
-            fx: self.fx[i],
-            fy: self.fy[i],
-            dir: self.dir[i],
-            hit: camera_hit(sc, cam, grid, self.pix[i], self.dir[i]),
-        }
-    }
-
     /// Makes the starts of `jobs` (1 to 8): the pixel sample's stream (`Pcg32::for_sample`),
     /// its film position from the stream's first two numbers, and the camera ray's
     /// direction. Unused lanes repeat the first job.
     #[inline(always)]
-    fn make(&mut self, cam: &PinholeCamera, seed: u64, jobs: &[Job]) {
+    fn make(&mut self, jobs: &[Job]) {
+        let (cam, seed) = (self.b.cam, self.b.s.seed);
         let job = |i: usize| jobs[if i < jobs.len() { i } else { 0 }];
         let pixel: [u64; STARTS] =
             std::array::from_fn(|i| job(i).1 as u64 * cam.width as u64 + job(i).0 as u64);
@@ -145,5 +123,34 @@ impl Starts {
         self.dir = cam.ray_dirs(&self.fx, &self.fy);
         self.made = jobs.len();
         self.taken = 0;
+    }
+}
+
+impl Iterator for Starts<'_> {
+    type Item = CameraSample;
+
+    /// The start of the batch's next job, making those of the next eight jobs when none is
+    /// left; `None` once every job has started.
+    #[inline(always)]
+    fn next(&mut self) -> Option<CameraSample> {
+        let b = self.b;
+        if self.taken == self.made {
+            let first = self.first + self.made;
+            if first == b.jobs.len() {
+                return None;
+            }
+            self.make(&b.jobs[first..b.jobs.len().min(first + STARTS)]);
+            self.first = first;
+        }
+        let i = self.taken;
+        self.taken += 1;
+        Some(CameraSample {
+            job: self.first + i,
+            rng: self.rng[i].clone(),
+            fx: self.fx[i],
+            fy: self.fy[i],
+            dir: self.dir[i],
+            hit: camera_hit(b.sc, b.cam, b.grid, self.pix[i], self.dir[i]),
+        })
     }
 }

@@ -273,28 +273,21 @@ fn trace_body<const LIGHTS: bool, S: Slab, F: Lane>(
     b: Batch,
     stacks: &mut TraceStacks<S>,
 ) -> Vec<Sample> {
-    let Batch {
-        sc,
-        cam,
-        grid,
-        s,
-        jobs,
-    } = b;
-    let mut out = vec![Sample::default(); jobs.len()];
+    let Batch { sc, cam, s, .. } = b;
+    let mut out = vec![Sample::default(); b.jobs.len()];
     let mut ln = Lanes::new();
-    let mut next = 0usize;
     let mut g = Gather::default();
-    let mut starts = Starts::new();
+    let mut starts = Starts::new(b);
     loop {
         // Idle lanes take the next pixel samples (the camera ray, as `render` makes it).
         for i in 0..L {
-            if ln.job[i] != IDLE || next == jobs.len() {
+            if ln.job[i] != IDLE {
                 continue;
             }
-            let cs = starts.next(sc, cam, grid, s.seed, jobs, next);
-            out[next].fx = cs.fx;
-            out[next].fy = cs.fy;
-            ln.job[i] = next;
+            let Some(cs) = starts.next() else { break };
+            out[cs.job].fx = cs.fx;
+            out[cs.job].fy = cs.fy;
+            ln.job[i] = cs.job;
             ln.rng[i] = cs.rng;
             put(&mut ln.org, i, cam.eye);
             put(&mut ln.dir, i, cs.dir);
@@ -305,7 +298,6 @@ fn trace_body<const LIGHTS: bool, S: Slab, F: Lane>(
             ln.prev_pdf[i] = 0.0;
             ln.depth[i] = 0;
             ln.pending[i] = false;
-            next += 1;
         }
         if ln.job.iter().all(|&j| j == IDLE) {
             ln.flush_orphans(sc, 0, stacks, &mut out);

@@ -38,9 +38,7 @@ fn samples_body<S: Slab>(b: Batch, stacks: &mut TraceStacks<S>) -> Vec<Sample> {
     // A loop, not a closure: a closure is not built for the caller's target features
     // unless LLVM inlines it, and this one is too large to be.
     let mut out = Vec::with_capacity(b.jobs.len());
-    let mut starts = Starts::new();
-    for next in 0..b.jobs.len() {
-        let mut cs = starts.next(sc, cam, b.grid, b.s.seed, b.jobs, next);
+    for mut cs in Starts::new(b) {
         let c = radiance(
             sc,
             cam.eye,

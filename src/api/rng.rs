@@ -28,7 +28,6 @@ impl Pcg32 {
     /// The deterministic generator for one pixel sample: the pixel index and the user seed
     /// are hashed into the initial state, the sample index selects the stream, so any
     /// sample of any pixel can be reproduced on its own, whatever the tiling or thread count.
-    #[inline]
     pub fn for_sample(pixel: u64, sample: u64, seed: u64) -> Pcg32 {
         Pcg32::new(
             splitmix64(pixel ^ splitmix64(seed)),
@@ -36,16 +35,11 @@ impl Pcg32 {
         )
     }
 
-    /// A generator of all-zero state, a placeholder to be overwritten (its numbers are poor).
-    pub const fn zeroed() -> Pcg32 {
-        Pcg32 { state: 0, inc: 0 }
-    }
-
     /// `for_sample` for `N` pixel samples at once, each generator then advanced past its
     /// first two numbers (`next_2d`), which are returned beside it (first numbers, then
-    /// second ones): the same integers as
-    /// one sample at a time, computed in loops over arrays that the compiler turns into
-    /// SIMD (the path tracer starts eight paths together).
+    /// second ones): the same integers as one sample at a time, computed in loops over
+    /// arrays that the compiler turns into SIMD (the path tracer starts eight paths
+    /// together).
     #[inline(always)]
     pub fn for_samples_2d<const N: usize>(
         pixel: &[u64; N],
@@ -71,13 +65,10 @@ impl Pcg32 {
                 uk[i] = (Self::output(old) >> 8) as f32 * (1.0 / 16_777_216.0);
             }
         }
-        let mut r = [const { Pcg32::zeroed() }; N];
-        for i in 0..N {
-            r[i] = Pcg32 {
-                state: state[i],
-                inc: inc[i],
-            };
-        }
+        let r = std::array::from_fn(|i| Pcg32 {
+            state: state[i],
+            inc: inc[i],
+        });
         (r, u)
     }
 

@@ -307,7 +307,7 @@ fn lane_paths_change_no_bit() {
             rr_depth,
             ..settings(spp, max_depth, strategy, filter)
         };
-        assert!(handles(&sc), "the four-lane loop takes this scene");
+        assert!(handles(&sc), "the lane loop takes this scene");
         // The grid is built however few the camera rays, so that it is compared below.
         // The one-path loop in the baseline build against the lanes in the x86-64-v3 one
         // (where the CPU has it).

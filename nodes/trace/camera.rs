@@ -93,12 +93,13 @@ impl PinholeCamera {
     /// corner of the image.
     #[inline]
     pub fn ray_dir(&self, x: f32, y: f32) -> V3 {
-        self.ray_dirs(&[x], &[y])[0]
+        let d = self.ray_dirs(&[x], &[y]);
+        [d[0][0], d[1][0], d[2][0]]
     }
 
     /// `ray_dir` for `N` film positions at once (SIMD where the compiler can).
     #[inline(always)]
-    pub fn ray_dirs<const N: usize>(&self, x: &[f32; N], y: &[f32; N]) -> [V3; N] {
+    pub fn ray_dirs<const N: usize>(&self, x: &[f32; N], y: &[f32; N]) -> [[f32; N]; 3] {
         let (w, h) = (self.width as f32, self.height as f32);
         let sx: [f32; N] = std::array::from_fn(|i| (2.0 * x[i] / w - 1.0) * self.tan_x);
         let sy: [f32; N] = std::array::from_fn(|i| (1.0 - 2.0 * y[i] / h) * self.tan_y);

@@ -81,7 +81,8 @@ pub(crate) struct Starts<'a> {
     rng: [Pcg32; STARTS],
     fx: [f32; STARTS],
     fy: [f32; STARTS],
-    dir: [V3; STARTS],
+    /// Camera ray directions, axis by start (`dir[axis][i]`).
+    dir: [[f32; STARTS]; 3],
     pix: [(u32, u32); STARTS],
     /// The first job made, the starts made, and those handed out.
     first: usize,
@@ -97,7 +98,7 @@ impl<'a> Starts<'a> {
             rng: std::array::from_fn(|_| Pcg32::new(0, 0)),
             fx: [0.0; STARTS],
             fy: [0.0; STARTS],
-            dir: [[0.0; 3]; STARTS],
+            dir: [[0.0; STARTS]; 3],
             pix: [(0, 0); STARTS],
             first: 0,
             made: 0,
@@ -144,13 +145,14 @@ impl Iterator for Starts<'_> {
         }
         let i = self.taken;
         self.taken += 1;
+        let dir = [self.dir[0][i], self.dir[1][i], self.dir[2][i]];
         Some(CameraSample {
             job: self.first + i,
             rng: self.rng[i].clone(),
             fx: self.fx[i],
             fy: self.fy[i],
-            dir: self.dir[i],
-            hit: camera_hit(b.sc, b.cam, b.grid, self.pix[i], self.dir[i]),
+            dir,
+            hit: camera_hit(b.sc, b.cam, b.grid, self.pix[i], dir),
         })
     }
 }

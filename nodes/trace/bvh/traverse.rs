@@ -69,7 +69,10 @@ impl RayPre {
     /// Precomputes the ray `org + t dir`.
     #[inline]
     pub fn new(org: V3, dir: V3) -> RayPre {
-        let a = [dir[0].abs(), dir[1].abs(), dir[2].abs()];
+        // The magnitudes on one register from the direction as it is stored (a pair load
+        // of `dir[1..3]`, which LLVM made otherwise, straddles the two stores that wrote
+        // the direction and stalls until both retire).
+        let a = f32x4::new([dir[0], dir[1], dir[2], 0.0]).abs().to_array();
         let kz = if a[0] > a[1] {
             if a[0] > a[2] {
                 0

@@ -10,8 +10,9 @@
 //! chart of RMSE against time for both goes to `docs/path_tracing_rmse.svg`.
 //!
 //! Options (after `--`): `--ref-spp N` (default 2048), `--spp a,b,c` (default 4,16,64,256),
-//! `--quick` (one 64-spp timing, no reference), `--binary-bvh` (traverse the binary BVH
-//! instead of the default one collapsed to 8 children per node, to measure what the wide
+//! `--quick` (one 64-spp timing, no reference; `--quick-spp N` for another count),
+//! `--grid-rays N` (camera rays per triangle from which `CameraGrid` is built, default 16),
+//! `--binary-bvh` (traverse the binary BVH instead of the default one collapsed to 8 children per node, to measure what the wide
 //! tree buys; `--wide-bvh`, the default, is accepted and does nothing), `--no-interleave`
 //! (trace a path's shadow ray and its next ray one after the other instead of interleaved,
 //! to measure what `Bvh::intersect_occluded` buys), `--scalar-paths` (one path at a time
@@ -359,7 +360,9 @@ fn main() {
         lanes: !args.iter().any(|a| a == "--scalar-paths"),
         camera_grid: !args.iter().any(|a| a == "--bvh-camera-rays"),
         x86_64_v3: !args.iter().any(|a| a == "--baseline-build"),
-        ..Default::default()
+        grid_rays_per_triangle: get("--grid-rays")
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(Shortcuts::default().grid_rays_per_triangle),
     };
     let run = |spp: u32, seed: u64| {
         let c0 = cpu_seconds();
@@ -375,10 +378,13 @@ fn main() {
         return;
     }
     if quick {
-        let (_, _, secs, cpu) = run(64, 1);
-        let paths = 256.0 * 256.0 * 64.0;
+        let spp: u32 = get("--quick-spp")
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(64);
+        let (_, _, secs, cpu) = run(spp, 1);
+        let paths = 256.0 * 256.0 * spp as f64;
         println!(
-            "cgnodes {which} 64 spp: {secs:.3} s wall, {cpu:.2} s CPU on {threads} threads: {:.2} Mpaths/s wall, {:.2} Mpaths per CPU-second",
+            "cgnodes {which} {spp} spp: {secs:.3} s wall, {cpu:.2} s CPU on {threads} threads: {:.2} Mpaths/s wall, {:.2} Mpaths per CPU-second",
             paths / secs / 1e6,
             paths / cpu.max(1e-9) / 1e6
         );

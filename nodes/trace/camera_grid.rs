@@ -21,6 +21,8 @@ use super::camera::{Frame, PinholeCamera};
 use super::sampling::V3;
 use rayon::prelude::*;
 
+mod rays8;
+
 /// Per-pixel candidate triangles of the camera rays.
 #[derive(Clone, Debug)]
 pub struct CameraGrid {
@@ -376,7 +378,13 @@ mod tests {
     use cgnodes_api::rng::Pcg32;
     use cgnodes_api::types::Camera;
 
-    fn camera(eye: [f64; 3], target: [f64; 3], w: u32, h: u32, fov: f64) -> PinholeCamera {
+    pub(super) fn camera(
+        eye: [f64; 3],
+        target: [f64; 3],
+        w: u32,
+        h: u32,
+        fov: f64,
+    ) -> PinholeCamera {
         PinholeCamera::new(&Camera {
             eye,
             target,
@@ -392,7 +400,7 @@ mod tests {
     /// A soup of triangles of every size (some far larger than the view, some behind the
     /// eye, some through the plane of the eye), a closed sphere mesh (shared edges, where
     /// ties happen), and optionally a huge ground plane.
-    fn soup(rng: &mut Pcg32, eye: V3, ground: bool) -> Vec<[V3; 3]> {
+    pub(super) fn soup(rng: &mut Pcg32, eye: V3, ground: bool) -> Vec<[V3; 3]> {
         let mut tris = Vec::new();
         if ground {
             // A ground plane 1e5 units across: the clipping plane moves out to 0.01.

@@ -75,7 +75,7 @@ const STARTS: usize = 8;
 /// turns into SIMD (the streams' hashing and first steps, the directions' normalisation;
 /// docs/path_tracing.md has the timings), then handed out one by one with their camera
 /// hits, in the batch's order (its `Iterator::next`, through the batch's grid when there
-/// is one).
+/// is one: eight rays through one pixel at a time, `CameraGrid::intersect8`).
 pub(crate) struct Starts<'a> {
     b: Batch<'a>,
     rng: [Pcg32; STARTS],
@@ -84,6 +84,10 @@ pub(crate) struct Starts<'a> {
     /// Camera ray directions, axis by start (`dir[axis][i]`).
     dir: [[f32; STARTS]; 3],
     pix: [(u32, u32); STARTS],
+    /// The camera rays' first hits, when the grid found them all together
+    /// (`CameraGrid::intersect8`, for starts through one pixel); else each start's hit is
+    /// found when it is handed out.
+    hits: Option<[Option<Hit>; STARTS]>,
     /// The first job made, the starts made, and those handed out.
     first: usize,
     made: usize,
@@ -100,6 +104,7 @@ impl<'a> Starts<'a> {
             fy: [0.0; STARTS],
             dir: [[0.0; STARTS]; 3],
             pix: [(0, 0); STARTS],
+            hits: None,
             first: 0,
             made: 0,
             taken: 0,
@@ -122,6 +127,13 @@ impl<'a> Starts<'a> {
         self.fx = std::array::from_fn(|i| job(i).0 as f32 + u[0][i]);
         self.fy = std::array::from_fn(|i| job(i).1 as f32 + u[1][i]);
         self.dir = cam.ray_dirs(&self.fx, &self.fy);
+        let one_pixel = self.pix.iter().all(|&p| p == self.pix[0]);
+        self.hits = match self.b.grid {
+            Some(g) if one_pixel => {
+                g.intersect8(&self.b.sc.tris, self.pix[0], cam.eye, &self.dir, cam.far)
+            }
+            _ => None,
+        };
         self.made = jobs.len();
         self.taken = 0;
     }
@@ -152,7 +164,10 @@ impl Iterator for Starts<'_> {
             fx: self.fx[i],
             fy: self.fy[i],
             dir,
-            hit: camera_hit(b.sc, b.cam, b.grid, self.pix[i], dir),
+            hit: match &self.hits {
+                Some(h) => h[i],
+                None => camera_hit(b.sc, b.cam, b.grid, self.pix[i], dir),
+            },
         })
     }
 }

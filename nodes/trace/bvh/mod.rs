@@ -18,8 +18,8 @@ mod wide;
 pub use lanes::Avx;
 pub use lanes::{Slab, Sse, Tri4};
 pub use pair::{Segment, TraceStacks};
-pub(crate) use traverse::tri_test;
 pub use traverse::{intersect_triangle, RayPre};
+pub(crate) use traverse::{sheared_test, tri_test};
 pub use wide::Node8;
 
 use super::sampling::{cross, sub, V3};

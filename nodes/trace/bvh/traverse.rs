@@ -141,6 +141,21 @@ pub(crate) fn tri_test<const KX: usize, const KY: usize, const KZ: usize>(
     let by = b[KY] - r.sy * b[KZ];
     let cx = c[KX] - r.sx * c[KZ];
     let cy = c[KY] - r.sy * c[KZ];
+    sheared_test([ax, ay, bx, by, cx, cy], [a[KZ], b[KZ], c[KZ]], r.sz, tmax)
+}
+
+/// The watertight test's second half (Woop et al. 2013, sections 3.2-3.4) on a triangle
+/// already sheared into the ray's frame: its corners' sheared `[ax, ay, bx, by, cx, cy]`,
+/// their coordinates along the dominant axis `z` (relative to the origin) and the ray's
+/// `sz`. Shared by `tri_test` and the camera grid's eight-ray test, which hands it the
+/// rays whose edge functions need the double-precision fallback.
+#[inline(always)]
+pub(crate) fn sheared_test(
+    [ax, ay, bx, by, cx, cy]: [f32; 6],
+    z: [f32; 3],
+    sz: f32,
+    tmax: f32,
+) -> Option<(f32, f32, f32)> {
     // Scaled barycentrics (2-D edge functions).
     let mut u = cx * by - cy * bx;
     let mut v = ax * cy - ay * cx;
@@ -161,9 +176,9 @@ pub(crate) fn tri_test<const KX: usize, const KY: usize, const KZ: usize>(
     if det == 0.0 {
         return None;
     }
-    let az = r.sz * a[KZ];
-    let bz = r.sz * b[KZ];
-    let cz = r.sz * c[KZ];
+    let az = sz * z[0];
+    let bz = sz * z[1];
+    let cz = sz * z[2];
     let t = u * az + v * bz + w * cz;
     // Sign-aware depth test without dividing (section 3.4).
     if det > 0.0 {

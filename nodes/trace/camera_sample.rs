@@ -4,9 +4,11 @@
 
 use super::bvh::Hit;
 use super::camera_grid::CameraGrid;
+use super::lane_math::Lane;
 use super::render_path::PathSettings;
 use super::render_scene::{PinholeCamera, RenderScene};
 use super::sampling::{Pcg32, V3};
+use std::marker::PhantomData;
 
 /// One pixel sample to trace: pixel column, row and sample index.
 pub type Job = (u32, u32, u32);
@@ -76,7 +78,7 @@ const STARTS: usize = 8;
 /// docs/path_tracing.md has the timings), then handed out one by one with their camera
 /// hits, in the batch's order (its `Iterator::next`, through the batch's grid when there
 /// is one: eight rays through one pixel at a time, `CameraGrid::intersect8`).
-pub(crate) struct Starts<'a> {
+pub(crate) struct Starts<'a, F> {
     b: Batch<'a>,
     rng: [Pcg32; STARTS],
     fx: [f32; STARTS],
@@ -88,15 +90,17 @@ pub(crate) struct Starts<'a> {
     /// (`CameraGrid::intersect8`, for starts through one pixel); else each start's hit is
     /// found when it is handed out.
     hits: Option<[Option<Hit>; STARTS]>,
+    /// The lane type of `CameraGrid::intersect8`.
+    lanes: PhantomData<F>,
     /// The first job made, the starts made, and those handed out.
     first: usize,
     made: usize,
     taken: usize,
 }
 
-impl<'a> Starts<'a> {
+impl<'a, F: Lane> Starts<'a, F> {
     /// The starts of `b`'s jobs (none made yet: the first `next` makes some).
-    pub(crate) fn new(b: Batch<'a>) -> Starts<'a> {
+    pub(crate) fn new(b: Batch<'a>) -> Starts<'a, F> {
         Starts {
             b,
             rng: std::array::from_fn(|_| Pcg32::new(0, 0)),
@@ -105,6 +109,7 @@ impl<'a> Starts<'a> {
             dir: [[0.0; STARTS]; 3],
             pix: [(0, 0); STARTS],
             hits: None,
+            lanes: PhantomData,
             first: 0,
             made: 0,
             taken: 0,
@@ -130,7 +135,7 @@ impl<'a> Starts<'a> {
         let one_pixel = self.pix.iter().all(|&p| p == self.pix[0]);
         self.hits = match self.b.grid {
             Some(g) if one_pixel => {
-                g.intersect8(&self.b.sc.tris, self.pix[0], cam.eye, &self.dir, cam.far)
+                g.intersect8::<F>(&self.b.sc.tris, self.pix[0], cam.eye, &self.dir, cam.far)
             }
             _ => None,
         };
@@ -139,7 +144,7 @@ impl<'a> Starts<'a> {
     }
 }
 
-impl Iterator for Starts<'_> {
+impl<F: Lane> Iterator for Starts<'_, F> {
     type Item = CameraSample;
 
     /// The start of the batch's next job, making those of the next eight jobs when none is

@@ -277,7 +277,7 @@ fn trace_body<const LIGHTS: bool, S: Slab, F: Lane>(
     let mut out = vec![Sample::default(); b.jobs.len()];
     let mut ln = Lanes::new();
     let mut g = Gather::default();
-    let mut starts = Starts::new(b);
+    let mut starts = Starts::<F>::new(b);
     loop {
         // Idle lanes take the next pixel samples (the camera ray, as `render` makes it).
         for i in 0..L {

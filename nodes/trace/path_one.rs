@@ -38,7 +38,7 @@ fn samples_body<S: Slab>(b: Batch, stacks: &mut TraceStacks<S>) -> Vec<Sample> {
     // A loop, not a closure: a closure is not built for the caller's target features
     // unless LLVM inlines it, and this one is too large to be.
     let mut out = Vec::with_capacity(b.jobs.len());
-    for mut cs in Starts::new(b) {
+    for mut cs in Starts::<wide::f32x8>::new(b) {
         let c = radiance(
             sc,
             cam.eye,

@@ -5,19 +5,20 @@
 
 use super::CameraGrid;
 use crate::bvh::{sheared_test, Hit, RayPre};
+use crate::lane_math::Lane;
 use crate::sampling::V3;
-use wide::f32x8;
 
 impl CameraGrid {
     /// `intersect` for the eight camera rays `eye + t dirs[.][i]` (unit directions, axis
-    /// by ray) through pixel `(x, y)`, on eight lanes (`wide::f32x8`): each candidate
+    /// by ray) through pixel `(x, y)`, on eight lanes (`F`: one AVX register in the lane
+    /// loop's x86-64-v3 build, two SSE halves elsewhere): each candidate
     /// triangle is tested once for all eight rays instead of once per ray. `None` when the
     /// rays do not share their axis permutation of the watertight test (the caller then
     /// traces them one by one). Each lane computes the scalar test's operations in its
     /// order and a ray whose edge functions need the double-precision fallback takes the
     /// scalar test's second half, so every hit is bit for bit `intersect`'s.
     #[inline(always)]
-    pub fn intersect8(
+    pub(crate) fn intersect8<F: Lane>(
         &self,
         tris: &[[V3; 3]],
         (x, y): (u32, u32),
@@ -27,7 +28,7 @@ impl CameraGrid {
     ) -> Option<[Option<Hit>; 8]> {
         let axes = RayPre::new(eye, [dirs[0][0], dirs[1][0], dirs[2][0]]).axes();
         let (kx, ky, kz) = axes;
-        let d = dirs.map(f32x8::new);
+        let d = dirs.map(F::from_array);
         // `RayPre::new`'s choice of kz and of the swap, lane by lane.
         let a = d.map(|v| v.abs());
         let m01 = a[0].simd_gt(a[1]).to_bitmask();
@@ -38,12 +39,12 @@ impl CameraGrid {
             1 => !m01 & m12,
             _ => (m01 & !m02) | (!m01 & !m12),
         } & 0xff;
-        let neg = d[kz].simd_lt(f32x8::ZERO).to_bitmask() & 0xff;
+        let neg = d[kz].simd_lt(F::splat(0.0)).to_bitmask() & 0xff;
         if same_kz != 0xff || (neg != 0 && neg != 0xff) {
             return None;
         }
         // The shear (`RayPre`: sz = 1 / dir[kz], sx = dir[kx] sz, sy = dir[ky] sz).
-        let sz = f32x8::splat(1.0) / d[kz];
+        let sz = F::splat(1.0) / d[kz];
         let ray = Rays8 {
             eye,
             axes,
@@ -57,7 +58,7 @@ impl CameraGrid {
         let px = y as usize * self.width as usize + x as usize;
         for &(key, i) in &self.cand[self.start[px] as usize..self.start[px + 1] as usize] {
             // The rays whose loop would not have stopped yet (`key >= tmax` stops it).
-            let live = !f32x8::splat(key).simd_ge(f32x8::new(tm)).to_bitmask() & 0xff;
+            let live = !F::from_array(tm).simd_le(F::splat(key)).to_bitmask() & 0xff;
             if live == 0 {
                 break;
             }
@@ -69,13 +70,13 @@ impl CameraGrid {
 
 /// Eight camera rays sharing the eye and the watertight test's axis permutation, with
 /// each ray's shear (sx, sy, sz) on a lane.
-struct Rays8 {
+struct Rays8<F> {
     eye: V3,
     axes: (usize, usize, usize),
-    sh: [f32x8; 3],
+    sh: [F; 3],
 }
 
-impl Rays8 {
+impl<F: Lane> Rays8<F> {
     /// `tri_test` of triangle `i` for the rays in `live` (bits), each against its own
     /// closest distance so far `tm`; a hit lowers it and becomes the ray's `best`.
     #[inline(always)]
@@ -92,7 +93,7 @@ impl Rays8 {
         let t = &tris[i as usize];
         let rel = |p: V3| [p[0] - self.eye[0], p[1] - self.eye[1], p[2] - self.eye[2]];
         let (a, b, c) = (rel(t[0]), rel(t[1]), rel(t[2]));
-        let sp = f32x8::splat;
+        let sp = F::splat;
         // Shear and scale the corners (Woop et al. 2013, eq. 5), as `tri_test`.
         let ax = sp(a[kx]) - sx * sp(a[kz]);
         let ay = sp(a[ky]) - sy * sp(a[kz]);
@@ -103,18 +104,18 @@ impl Rays8 {
         let u = cx * by - cy * bx;
         let v = ax * cy - ay * cx;
         let w = bx * ay - by * ax;
-        let z = f32x8::ZERO;
-        let m = |x: f32x8| x.to_bitmask() & 0xff;
+        let z = F::splat(0.0);
+        let m = |x: F| x.to_bitmask() & 0xff;
         let edge = m(u.simd_eq(z) | v.simd_eq(z) | w.simd_eq(z)) & live;
         let outside = m((u.simd_lt(z) | v.simd_lt(z) | w.simd_lt(z))
             & (u.simd_gt(z) | v.simd_gt(z) | w.simd_gt(z)));
         let det = u + v + w;
         let tt = u * (sz * sp(a[kz])) + v * (sz * sp(b[kz])) + w * (sz * sp(c[kz]));
         // The sign-aware depth test (section 3.4).
-        let td = f32x8::new(*tm) * det;
+        let td = F::from_array(*tm) * det;
         let pos = m(det.simd_gt(z));
         let reject =
-            (pos & m(tt.simd_le(z) | tt.simd_ge(td))) | (!pos & m(tt.simd_ge(z) | tt.simd_le(td)));
+            (pos & m(tt.simd_le(z) | td.simd_le(tt))) | (!pos & m(z.simd_le(tt) | tt.simd_le(td)));
         let hit = live & !edge & !outside & !m(det.simd_eq(z)) & !reject;
         if hit | edge == 0 {
             return;
@@ -132,7 +133,7 @@ impl Rays8 {
             let found = if hit & (1 << l) != 0 {
                 Some((th[l], hu[l], hv[l]))
             } else {
-                let lane = |x: f32x8| x.to_array()[l];
+                let lane = |x: F| x.to_array()[l];
                 let sheared = [ax, ay, bx, by, cx, cy].map(lane);
                 sheared_test(sheared, [a[kz], b[kz], c[kz]], lane(sz), tm[l])
             };
@@ -149,6 +150,7 @@ mod tests {
     use super::super::tests::{camera, soup};
     use super::*;
     use cgnodes_api::rng::Pcg32;
+    use wide::f32x8;
 
     fn bits(h: Option<Hit>) -> Option<[u32; 4]> {
         h.map(|h| [h.t.to_bits(), h.prim, h.u.to_bits(), h.v.to_bits()])
@@ -183,7 +185,8 @@ mod tests {
                     let fx: [f32; 8] = std::array::from_fn(|i| x as f32 + jitter(i));
                     let fy: [f32; 8] = std::array::from_fn(|i| y as f32 + jitter(i));
                     let dirs = cam.ray_dirs(&fx, &fy);
-                    let Some(got) = grid.intersect8(&tris, (x, y), cam.eye, &dirs, cam.far) else {
+                    let got = grid.intersect8::<f32x8>(&tris, (x, y), cam.eye, &dirs, cam.far);
+                    let Some(got) = got else {
                         apart += 1;
                         continue;
                     };
@@ -214,7 +217,7 @@ mod tests {
         let dirs = cam.ray_dirs(&[1.5; 8], &[1.5; 8]);
         assert_eq!([dirs[0][0], dirs[1][0], dirs[2][0]], [0.0, 0.0, -1.0]);
         let got = grid
-            .intersect8(&tris, (1, 1), cam.eye, &dirs, cam.far)
+            .intersect8::<f32x8>(&tris, (1, 1), cam.eye, &dirs, cam.far)
             .expect("one permutation");
         let want = grid.intersect(&tris, (1, 1), cam.eye, [0.0, 0.0, -1.0], cam.far);
         assert_eq!(want.map(|h| h.t), Some(2.0));

@@ -397,6 +397,15 @@ mod tests {
         .unwrap()
     }
 
+    /// Cameras outside, inside and at the edge of `soup`, wide and narrow, square and not:
+    /// eye, target, width, height, field of view (degrees).
+    pub(super) const CAMERAS: [([f64; 3], [f64; 3], u32, u32, f64); 4] = [
+        ([0.0, 0.0, 6.0], [0.0, 0.0, 0.0], 48, 40, 45.0),
+        ([0.3, 0.2, 0.4], [0.0, -0.3, -1.0], 40, 40, 120.0),
+        ([4.0, 3.0, -2.0], [0.0, 0.0, 0.0], 64, 24, 10.0),
+        ([0.0, 0.0, 0.2], [0.0, 0.0, -2.0], 30, 50, 170.0),
+    ];
+
     /// A soup of triangles of every size (some far larger than the view, some behind the
     /// eye, some through the plane of the eye), a closed sphere mesh (shared edges, where
     /// ties happen), and optionally a huge ground plane.
@@ -447,14 +456,8 @@ mod tests {
     #[test]
     fn grid_hits_are_the_bvh_hits() {
         let mut rng = Pcg32::new(7, 11);
-        let cams = [
-            ([0.0, 0.0, 6.0], [0.0, 0.0, 0.0], 48, 40, 45.0),
-            ([0.3, 0.2, 0.4], [0.0, -0.3, -1.0], 40, 40, 120.0),
-            ([4.0, 3.0, -2.0], [0.0, 0.0, 0.0], 64, 24, 10.0),
-            ([0.0, 0.0, 0.2], [0.0, 0.0, -2.0], 30, 50, 170.0),
-        ];
         let (mut hits, mut ties) = (0, 0);
-        for (eye, target, w, h, fov) in cams {
+        for (eye, target, w, h, fov) in CAMERAS {
             let cam = camera(eye, target, w, h, fov);
             let tris = soup(&mut rng, cam.eye, fov > 100.0);
             let bvh = Bvh::build(&tris);

@@ -147,7 +147,7 @@ impl<F: Lane> Rays8<F> {
 
 #[cfg(test)]
 mod tests {
-    use super::super::tests::{camera, soup};
+    use super::super::tests::{camera, soup, CAMERAS};
     use super::*;
     use cgnodes_api::rng::Pcg32;
     use wide::f32x8;
@@ -162,14 +162,8 @@ mod tests {
     #[test]
     fn eight_rays_are_the_single_ones() {
         let mut rng = Pcg32::new(3, 5);
-        let cams = [
-            ([0.0, 0.0, 6.0], [0.0, 0.0, 0.0], 48, 40, 45.0),
-            ([0.3, 0.2, 0.4], [0.0, -0.3, -1.0], 40, 40, 120.0),
-            ([4.0, 3.0, -2.0], [0.0, 0.0, 0.0], 64, 24, 10.0),
-            ([0.0, 0.0, 0.2], [0.0, 0.0, -2.0], 30, 50, 170.0),
-        ];
         let (mut together, mut apart, mut hits) = (0, 0, 0);
-        for (eye, target, w, h, fov) in cams {
+        for (eye, target, w, h, fov) in CAMERAS {
             let cam = camera(eye, target, w, h, fov);
             // The first soup whose grid fits the budget (wide views of a random soup
             // often put too many triangles in front of the eye).

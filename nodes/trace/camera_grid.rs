@@ -397,9 +397,11 @@ mod tests {
         .unwrap()
     }
 
-    /// Cameras outside, inside and at the edge of `soup`, wide and narrow, square and not:
-    /// eye, target, width, height, field of view (degrees).
-    pub(super) const CAMERAS: [([f64; 3], [f64; 3], u32, u32, f64); 4] = [
+    /// A test camera: eye, target, width, height, field of view (degrees).
+    pub(super) type TestCamera = ([f64; 3], [f64; 3], u32, u32, f64);
+
+    /// Cameras outside, inside and at the edge of `soup`, wide and narrow, square and not.
+    pub(super) const CAMERAS: [TestCamera; 4] = [
         ([0.0, 0.0, 6.0], [0.0, 0.0, 0.0], 48, 40, 45.0),
         ([0.3, 0.2, 0.4], [0.0, -0.3, -1.0], 40, 40, 120.0),
         ([4.0, 3.0, -2.0], [0.0, 0.0, 0.0], 64, 24, 10.0),

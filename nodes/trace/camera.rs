@@ -97,7 +97,8 @@ impl PinholeCamera {
         [d[0][0], d[1][0], d[2][0]]
     }
 
-    /// `ray_dir` for `N` film positions at once (SIMD where the compiler can).
+    /// `ray_dir` for `N` film positions at once (SIMD where the compiler can), axis by
+    /// position: `d[axis][i]`.
     #[inline(always)]
     pub fn ray_dirs<const N: usize>(&self, x: &[f32; N], y: &[f32; N]) -> [[f32; N]; 3] {
         let (w, h) = (self.width as f32, self.height as f32);

@@ -137,7 +137,24 @@ impl<'a, F: Lane> Starts<'a, F> {
             Some(g) if one_pixel => {
                 g.intersect8::<F>(&self.b.sc.tris, self.pix[0], cam.eye, &self.dir, cam.far)
             }
-            _ => None,
+            Some(_) => None,
+            // Without a grid, the BVH's walks two at a time (`Bvh::intersect_pair`), so that
+            // each overlaps the other's waits.
+            None => {
+                let ray = |i: usize| {
+                    let d = [self.dir[0][i], self.dir[1][i], self.dir[2][i]];
+                    (cam.eye, d, cam.far)
+                };
+                let mut h = [None; STARTS];
+                for i in (0..jobs.len()).step_by(2) {
+                    if i + 1 < jobs.len() {
+                        (h[i], h[i + 1]) = self.b.sc.bvh.intersect_pair(ray(i), ray(i + 1));
+                    } else {
+                        h[i] = self.b.sc.bvh.intersect(cam.eye, ray(i).1, cam.far);
+                    }
+                }
+                Some(h)
+            }
         };
         self.made = jobs.len();
         self.taken = 0;

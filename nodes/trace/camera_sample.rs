@@ -53,21 +53,6 @@ pub(crate) struct CameraSample {
     pub hit: Option<Hit>,
 }
 
-/// The first hit of the camera ray through pixel `(x, y)` along `dir`.
-#[inline(always)]
-fn camera_hit(
-    sc: &RenderScene,
-    cam: &PinholeCamera,
-    grid: Option<&CameraGrid>,
-    (x, y): (u32, u32),
-    dir: V3,
-) -> Option<Hit> {
-    match grid {
-        Some(g) => g.intersect(&sc.tris, (x, y), cam.eye, dir, cam.far),
-        None => sc.intersect(cam.eye, dir, cam.far),
-    }
-}
-
 /// Pixel samples started together.
 const STARTS: usize = 8;
 
@@ -76,8 +61,7 @@ const STARTS: usize = 8;
 /// directions of eight pixel samples at a time, made in array loops that the compiler
 /// turns into SIMD (the streams' hashing and first steps, the directions' normalisation;
 /// docs/path_tracing.md has the timings), then handed out one by one with their camera
-/// hits, in the batch's order (its `Iterator::next`, through the batch's grid when there
-/// is one: eight rays through one pixel at a time, `CameraGrid::intersect8`).
+/// hits, in the batch's order (its `Iterator::next`).
 pub(crate) struct Starts<'a, F> {
     b: Batch<'a>,
     rng: [Pcg32; STARTS],
@@ -86,10 +70,8 @@ pub(crate) struct Starts<'a, F> {
     /// Camera ray directions, axis by start (`dir[axis][i]`).
     dir: [[f32; STARTS]; 3],
     pix: [(u32, u32); STARTS],
-    /// The camera rays' first hits, when the grid found them all together
-    /// (`CameraGrid::intersect8`, for starts through one pixel); else each start's hit is
-    /// found when it is handed out.
-    hits: Option<[Option<Hit>; STARTS]>,
+    /// The camera rays' first hits.
+    hits: [Option<Hit>; STARTS],
     /// The lane type of `CameraGrid::intersect8`.
     lanes: PhantomData<F>,
     /// The first job made, the starts made, and those handed out.
@@ -108,7 +90,7 @@ impl<'a, F: Lane> Starts<'a, F> {
             fy: [0.0; STARTS],
             dir: [[0.0; STARTS]; 3],
             pix: [(0, 0); STARTS],
-            hits: None,
+            hits: [None; STARTS],
             lanes: PhantomData,
             first: 0,
             made: 0,
@@ -132,28 +114,33 @@ impl<'a, F: Lane> Starts<'a, F> {
         self.fx = std::array::from_fn(|i| job(i).0 as f32 + u[0][i]);
         self.fy = std::array::from_fn(|i| job(i).1 as f32 + u[1][i]);
         self.dir = cam.ray_dirs(&self.fx, &self.fy);
+        // The camera rays' first hits: through the grid, eight at once when they share a
+        // pixel (`CameraGrid::intersect8`); without one, the BVH's walks two at a time
+        // (`Bvh::intersect_pair`), so that each overlaps the other's waits.
+        let (sc, n) = (self.b.sc, jobs.len());
+        let dir = |i: usize| [self.dir[0][i], self.dir[1][i], self.dir[2][i]];
         let one_pixel = self.pix.iter().all(|&p| p == self.pix[0]);
         self.hits = match self.b.grid {
-            Some(g) if one_pixel => {
-                g.intersect8::<F>(&self.b.sc.tris, self.pix[0], cam.eye, &self.dir, cam.far)
-            }
-            Some(_) => None,
-            // Without a grid, the BVH's walks two at a time (`Bvh::intersect_pair`), so that
-            // each overlaps the other's waits.
+            Some(g) => one_pixel
+                .then(|| g.intersect8::<F>(&sc.tris, self.pix[0], cam.eye, &self.dir, cam.far))
+                .flatten()
+                .unwrap_or_else(|| {
+                    std::array::from_fn(|i| {
+                        let hit = || g.intersect(&sc.tris, self.pix[i], cam.eye, dir(i), cam.far);
+                        (i < n).then(hit).flatten()
+                    })
+                }),
             None => {
-                let ray = |i: usize| {
-                    let d = [self.dir[0][i], self.dir[1][i], self.dir[2][i]];
-                    (cam.eye, d, cam.far)
-                };
+                let ray = |i: usize| (cam.eye, dir(i), cam.far);
                 let mut h = [None; STARTS];
-                for i in (0..jobs.len()).step_by(2) {
-                    if i + 1 < jobs.len() {
-                        (h[i], h[i + 1]) = self.b.sc.bvh.intersect_pair(ray(i), ray(i + 1));
+                for i in (0..n).step_by(2) {
+                    if i + 1 < n {
+                        (h[i], h[i + 1]) = sc.bvh.intersect_pair(ray(i), ray(i + 1));
                     } else {
-                        h[i] = self.b.sc.bvh.intersect(cam.eye, ray(i).1, cam.far);
+                        h[i] = sc.intersect(cam.eye, dir(i), cam.far);
                     }
                 }
-                Some(h)
+                h
             }
         };
         self.made = jobs.len();
@@ -186,10 +173,75 @@ impl<F: Lane> Iterator for Starts<'_, F> {
             fx: self.fx[i],
             fy: self.fy[i],
             dir,
-            hit: match &self.hits {
-                Some(h) => h[i],
-                None => camera_hit(b.sc, b.cam, b.grid, self.pix[i], dir),
-            },
+            hit: self.hits[i],
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene_load::load_obj_scene;
+    use cgnodes_api::types::Camera;
+    use std::path::Path;
+    use wide::f32x8;
+
+    fn bits(h: Option<Hit>) -> Option<[u32; 4]> {
+        h.map(|h| [h.t.to_bits(), h.prim, h.u.to_bits(), h.v.to_bits()])
+    }
+
+    /// Every start's camera hit is the one-ray answer for its direction (the grid's
+    /// `intersect` with a grid, the BVH's `intersect` without), bit for bit, whichever way
+    /// `Starts` found it: eight at once through one pixel (16 spp with a grid), one by one
+    /// (3 spp, so that a batch of eight spans pixels), or in pairs (no grid), with a last
+    /// batch shorter than eight.
+    #[test]
+    fn start_hits_are_the_one_ray_hits() {
+        let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/cornell/cornell_box.obj");
+        let sc = RenderScene::new(&load_obj_scene(&p, false).unwrap()).unwrap();
+        let cam = PinholeCamera::new(&Camera {
+            eye: [0.0, 0.0, 3.9],
+            target: [0.0; 3],
+            width: 24,
+            height: 20,
+            fov_deg: 39.3,
+            far: 100.0,
+            ..Default::default()
+        })
+        .unwrap();
+        let grid = CameraGrid::build(&sc.tris, &cam).expect("the box fits the budget");
+        let mut hits = 0;
+        for (spp, grid) in [(16, Some(&grid)), (3, Some(&grid)), (16, None), (3, None)] {
+            let s = PathSettings {
+                spp,
+                seed: 5,
+                ..Default::default()
+            };
+            // Every pixel's samples, less the last three: the last batch is short.
+            let mut jobs: Vec<Job> = (0..cam.height)
+                .flat_map(|y| (0..cam.width).flat_map(move |x| (0..spp).map(move |k| (x, y, k))))
+                .collect();
+            jobs.truncate(jobs.len() - 3);
+            let b = Batch {
+                sc: &sc,
+                cam: &cam,
+                grid,
+                s: &s,
+                jobs: &jobs,
+            };
+            let starts: Vec<CameraSample> = Starts::<f32x8>::new(b).collect();
+            assert_eq!(starts.len(), jobs.len());
+            for (j, cs) in starts.iter().enumerate() {
+                assert_eq!(cs.job, j);
+                let (x, y, _) = jobs[j];
+                let want = match grid {
+                    Some(g) => g.intersect(&sc.tris, (x, y), cam.eye, cs.dir, cam.far),
+                    None => sc.intersect(cam.eye, cs.dir, cam.far),
+                };
+                assert_eq!(bits(cs.hit), bits(want), "spp {spp}, job {j}");
+                hits += want.is_some() as usize;
+            }
+        }
+        assert!(hits > 10_000, "{hits} hits");
     }
 }

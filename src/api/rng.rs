@@ -62,7 +62,7 @@ impl Pcg32 {
             for i in 0..N {
                 let old = state[i];
                 state[i] = old.wrapping_mul(Self::MULT).wrapping_add(inc[i]);
-                uk[i] = (Self::output(old) >> 8) as f32 * (1.0 / 16_777_216.0);
+                uk[i] = unit_f32(Self::output(old));
             }
         }
         let r = std::array::from_fn(|i| Pcg32 {
@@ -91,7 +91,7 @@ impl Pcg32 {
     /// A uniform float in [0, 1) (24 random mantissa bits).
     #[inline(always)]
     pub fn next_f32(&mut self) -> f32 {
-        (self.next_u32() >> 8) as f32 * (1.0 / 16_777_216.0)
+        unit_f32(self.next_u32())
     }
 
     /// Two uniform floats in [0, 1).
@@ -119,6 +119,12 @@ pub fn lcg_next(state: &mut u64) -> f64 {
         .wrapping_mul(6364136223846793005)
         .wrapping_add(1442695040888963407);
     (*state >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+}
+
+/// A uniform float in [0, 1) from 32 random bits (their top 24 as the mantissa).
+#[inline(always)]
+fn unit_f32(bits: u32) -> f32 {
+    (bits >> 8) as f32 * (1.0 / 16_777_216.0)
 }
 
 #[cfg(test)]

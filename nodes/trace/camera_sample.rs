@@ -186,10 +186,6 @@ mod tests {
     use std::path::Path;
     use wide::f32x8;
 
-    fn bits(h: Option<Hit>) -> Option<[u32; 4]> {
-        h.map(|h| [h.t.to_bits(), h.prim, h.u.to_bits(), h.v.to_bits()])
-    }
-
     /// Every start's camera hit is the one-ray answer for its direction (the grid's
     /// `intersect` with a grid, the BVH's `intersect` without), bit for bit, whichever way
     /// `Starts` found it: eight at once through one pixel (16 spp with a grid), one by one
@@ -238,7 +234,11 @@ mod tests {
                     Some(g) => g.intersect(&sc.tris, (x, y), cam.eye, cs.dir, cam.far),
                     None => sc.intersect(cam.eye, cs.dir, cam.far),
                 };
-                assert_eq!(bits(cs.hit), bits(want), "spp {spp}, job {j}");
+                assert_eq!(
+                    cs.hit.map(Hit::bits),
+                    want.map(Hit::bits),
+                    "spp {spp}, job {j}"
+                );
                 hits += want.is_some() as usize;
             }
         }

@@ -125,6 +125,20 @@ pub struct Hit {
     pub v: f32,
 }
 
+impl Hit {
+    /// Its fields' bits (distance, triangle, barycentrics), for tests that compare hits
+    /// exactly.
+    #[cfg(test)]
+    pub(crate) fn bits(self) -> [u32; 4] {
+        [
+            self.t.to_bits(),
+            self.prim,
+            self.u.to_bits(),
+            self.v.to_bits(),
+        ]
+    }
+}
+
 impl Bvh {
     /// Collapses the tree to 8 children per node for the queries to traverse (left empty
     /// when the leaves cannot be encoded: 2^28 triangles or more). `build` calls it.

@@ -152,10 +152,6 @@ mod tests {
     use cgnodes_api::rng::Pcg32;
     use wide::f32x8;
 
-    fn bits(h: Option<Hit>) -> Option<[u32; 4]> {
-        h.map(|h| [h.t.to_bits(), h.prim, h.u.to_bits(), h.v.to_bits()])
-    }
-
     /// Every lane of `intersect8` is `intersect` of its ray, bit for bit (distance,
     /// triangle, barycentrics): eight rays per pixel (its corner and seven jittered) over
     /// the soups and cameras of `grid_hits_are_the_bvh_hits`.
@@ -188,7 +184,11 @@ mod tests {
                     for (i, got) in got.iter().enumerate() {
                         let dir = [dirs[0][i], dirs[1][i], dirs[2][i]];
                         let want = grid.intersect(&tris, (x, y), cam.eye, dir, cam.far);
-                        assert_eq!(bits(want), bits(*got), "pixel {x},{y}, ray {i}");
+                        assert_eq!(
+                            want.map(Hit::bits),
+                            got.map(Hit::bits),
+                            "pixel {x},{y}, ray {i}"
+                        );
                         hits += want.is_some() as usize;
                     }
                 }
@@ -215,6 +215,6 @@ mod tests {
             .expect("one permutation");
         let want = grid.intersect(&tris, (1, 1), cam.eye, [0.0, 0.0, -1.0], cam.far);
         assert_eq!(want.map(|h| h.t), Some(2.0));
-        assert!(got.iter().all(|g| bits(*g) == bits(want)));
+        assert!(got.iter().all(|g| g.map(Hit::bits) == want.map(Hit::bits)));
     }
 }

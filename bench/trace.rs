@@ -222,7 +222,7 @@ fn traversal_only(sc: &RenderScene, cam: &PinholeCamera, dump: &Path) {
             let Some(h) = sc.bvh.intersect(r.0, r.1, r.2) else {
                 continue;
             };
-            let ng = sc.normals[h.prim as usize];
+            let ng = sc.normal(h.prim);
             let side = if dot(ng, r.1) < 0.0 {
                 ng
             } else {

@@ -355,13 +355,14 @@ fn visit<const LIGHTS: bool, S: Slab>(
         return false;
     };
     let tri = hit.prim;
-    let mat = sc.material(tri);
+    let face = sc.face(tri);
+    let mat = &sc.materials[face.material()];
     let wo = scale(dir, -1.0);
     if mat.is_emitter() {
         let le = sc.emitted(tri, wo);
         if max_comp(le) > 0.0 {
             let w = found_weight(s.strategy, first, ln.prev_pdf[i], || {
-                let cos_l = dot(sc.normals[tri as usize], wo).abs();
+                let cos_l = dot(face.n, wo).abs();
                 sc.light_pdf_area[tri as usize] * hit.t * hit.t / cos_l
             });
             ln.l[i] = add(ln.l[i], scale(mul(get(&ln.thr, i), le), w));
@@ -371,7 +372,7 @@ fn visit<const LIGHTS: bool, S: Slab>(
         ln.finish::<LIGHTS, _>(i, sc, stacks, out);
         return false;
     }
-    let sp = sc.surface(&hit);
+    let sp = sc.surface_on(&hit, face, mat);
     g.t[i] = hit.t;
     put(&mut g.ng, i, sp.ng);
     put(&mut g.ns, i, sp.ns);

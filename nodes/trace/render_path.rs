@@ -224,7 +224,7 @@ pub fn radiance<S: Slab>(
             break;
         };
         let tri = hit.prim;
-        let ng = sc.normals[tri as usize];
+        let ng = sc.normal(tri);
         let mat = sc.material(tri);
         let wo = scale(dir, -1.0);
         let p = add(org, scale(dir, hit.t));
@@ -298,7 +298,7 @@ fn emission_found(
     let le = sc.emitted(hit.prim, wo);
     if max_comp(le) > 0.0 {
         let w = found_weight(strategy, first, prev_pdf, || {
-            let cos_l = dot(sc.normals[tri], wo).abs();
+            let cos_l = dot(sc.normal(tri as u32), wo).abs();
             sc.light_pdf_area[tri] * hit.t * hit.t / cos_l
         });
         return Some((le, w));

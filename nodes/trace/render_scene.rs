@@ -186,6 +186,47 @@ pub const OFFSET_REL: f32 = 4e-7;
 /// point, so the light's own surface does not block it.
 pub const SHADOW_END: f32 = 1.0 - 1e-4;
 
+/// What a hit on a triangle reads first, in one 16-byte record (one cache line, one bounds
+/// check): its unit geometric normal (counter-clockwise winding), its material, and
+/// whether its shading point is that normal and the material's albedo (corner normals
+/// within 2e-7 of the normal's direction, no texture or normal map), so that `surface`
+/// skips the interpolation: every triangle of a flat-shaded scene.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C, align(16))]
+pub struct Face {
+    /// Unit geometric normal.
+    pub n: V3,
+    /// The material index, with `PLAIN` set when the triangle shades flat.
+    word: u32,
+}
+
+/// `Face::word`'s flat-shading bit (material indices stay below it: a scene cannot hold
+/// 2^31 materials).
+const PLAIN: u32 = 1 << 31;
+
+impl Face {
+    /// The record of a triangle with normal `n`, material `mat` (below 2^31).
+    pub fn new(n: V3, mat: u32, plain: bool) -> Face {
+        debug_assert!(mat < PLAIN, "material index {mat} over 2^31");
+        Face {
+            n,
+            word: (mat & !PLAIN) | if plain { PLAIN } else { 0 },
+        }
+    }
+
+    /// The material index.
+    #[inline(always)]
+    pub fn material(self) -> usize {
+        (self.word & !PLAIN) as usize
+    }
+
+    /// Whether the triangle shades flat (`RenderScene::surface` then skips interpolating).
+    #[inline(always)]
+    pub fn plain(self) -> bool {
+        self.word & PLAIN != 0
+    }
+}
+
 /// The flattened scene.
 #[derive(Clone, Debug)]
 pub struct RenderScene {
@@ -193,14 +234,11 @@ pub struct RenderScene {
     pub bvh: Bvh,
     /// Triangle corners, in the caller's order (index = `Hit::prim`).
     pub tris: Vec<[V3; 3]>,
-    /// Unit geometric normal per triangle (counter-clockwise winding).
-    pub normals: Vec<V3>,
+    /// Per triangle, what every hit reads first (`RenderScene::face`): the geometric
+    /// normal, the material and whether it shades flat.
+    pub faces: Vec<Face>,
     /// Unit shading normals at each triangle's corners.
     pub corner_normals: Vec<[V3; 3]>,
-    /// Per triangle: whether its shading point is its plain geometric normal and material
-    /// albedo (corner normals within 2e-7 of the normal's direction, no texture or normal
-    /// map), so `surface` skips the interpolation: every triangle of a flat-shaded scene.
-    pub plain: Vec<bool>,
     /// UVs at each triangle's corners (NaN when its mesh has none); empty when no material
     /// has a texture, since only textures read them.
     pub corner_uvs: Vec<[[f32; 2]; 3]>,
@@ -209,8 +247,6 @@ pub struct RenderScene {
     pub corner_tangents: Vec<[[f64; 4]; 3]>,
     /// Textures per material.
     pub textures: Vec<Textures>,
-    /// Material index per triangle.
-    pub tri_mat: Vec<u32>,
     /// Materials.
     pub materials: Vec<RMaterial>,
     /// Emissive triangles.
@@ -251,7 +287,7 @@ impl RenderScene {
             || shading::shading(scene, crease_deg, &tris),
         );
         let sh = sh?;
-        let em = EmitterTables::new(&tris, &sh.normals, &sh.areas, &sh.tri_mat, &sh.materials);
+        let em = EmitterTables::new(&tris, &sh.faces, &sh.areas, &sh.materials);
         let b = bvh.bounds();
         let diag = if tris.is_empty() {
             1.0
@@ -263,13 +299,11 @@ impl RenderScene {
         Ok(RenderScene {
             bvh,
             tris,
-            normals: sh.normals,
+            faces: sh.faces,
             corner_normals: sh.corner_normals,
-            plain: sh.plain,
             corner_uvs: sh.corner_uvs,
             corner_tangents: sh.corner_tangents,
             textures: sh.textures,
-            tri_mat: sh.tri_mat,
             materials: sh.materials,
             emitters: em.emitters,
             emitter_table: em.table,
@@ -287,10 +321,22 @@ impl RenderScene {
         self.bvh.intersect(org, dir, tmax)
     }
 
+    /// The face record of triangle `tri`.
+    #[inline(always)]
+    pub fn face(&self, tri: u32) -> Face {
+        self.faces[tri as usize]
+    }
+
+    /// The unit geometric normal of triangle `tri` (counter-clockwise winding).
+    #[inline]
+    pub fn normal(&self, tri: u32) -> V3 {
+        self.faces[tri as usize].n
+    }
+
     /// The material of triangle `tri`.
     #[inline]
     pub fn material(&self, tri: u32) -> &RMaterial {
-        &self.materials[self.tri_mat[tri as usize] as usize]
+        &self.materials[self.face(tri).material()]
     }
 
     /// The shading normal and textured albedo of the surface at `hit`: the corner normals
@@ -299,13 +345,21 @@ impl RenderScene {
     /// geometric one would light the back of the surface).
     #[inline(always)]
     pub fn surface(&self, hit: &Hit) -> SurfacePoint {
-        let t = hit.prim as usize;
-        let ng = self.normals[t];
-        if self.plain[t] {
-            let albedo = self.materials[self.tri_mat[t] as usize].albedo;
-            return SurfacePoint { ng, ns: ng, albedo };
+        let f = self.face(hit.prim);
+        self.surface_on(hit, f, &self.materials[f.material()])
+    }
+
+    /// `surface` for a caller that already holds the hit triangle's face and material.
+    #[inline(always)]
+    pub fn surface_on(&self, hit: &Hit, f: Face, mat: &RMaterial) -> SurfacePoint {
+        if f.plain() {
+            return SurfacePoint {
+                ng: f.n,
+                ns: f.n,
+                albedo: mat.albedo,
+            };
         }
-        self.surface_interpolated(hit, ng)
+        self.surface_interpolated(hit, f.n)
     }
 
     /// `surface` for a triangle that is not plain (its own call: inlining it into every
@@ -318,7 +372,7 @@ impl RenderScene {
         let c = &self.corner_normals[t];
         let lerp = |k: usize| b0 * c[0][k] + b1 * c[1][k] + b2 * c[2][k];
         let mut ns = normalize([lerp(0), lerp(1), lerp(2)]);
-        let m = self.tri_mat[t] as usize;
+        let m = self.face(hit.prim).material();
         let mut albedo = self.materials[m].albedo;
         let tx = &self.textures[m];
         // Corner UVs are kept when a material has a texture (NaN where a mesh has none).
@@ -388,7 +442,7 @@ impl RenderScene {
         if !m.is_emitter() {
             return [0.0; 3];
         }
-        if m.two_sided_emission || dot(self.normals[tri as usize], w) > 0.0 {
+        if m.two_sided_emission || dot(self.normal(tri), w) > 0.0 {
             m.emission
         } else {
             [0.0; 3]
@@ -436,15 +490,14 @@ struct EmitterTables {
 impl EmitterTables {
     fn new(
         tris: &[[V3; 3]],
-        normals: &[V3],
+        faces: &[Face],
         areas: &[f32],
-        tri_mat: &[u32],
         materials: &[RMaterial],
     ) -> EmitterTables {
         let mut emitters = Vec::new();
         let mut weights = Vec::new();
-        for (i, &m) in tri_mat.iter().enumerate() {
-            let mat = &materials[m as usize];
+        for (i, f) in faces.iter().enumerate() {
+            let mat = &materials[f.material()];
             if mat.is_emitter() && areas[i] > 0.0 {
                 emitters.push(i as u32);
                 let sides = if mat.two_sided_emission { 2.0 } else { 1.0 };
@@ -458,10 +511,10 @@ impl EmitterTables {
         for (k, &e) in emitters.iter().enumerate() {
             let e = e as usize;
             light_pdf_area[e] = (weights[k] / total) as f32 / areas[e];
-            let m = &materials[tri_mat[e] as usize];
+            let m = &materials[faces[e].material()];
             records.push(EmitterRecord {
                 corners: tris[e],
-                n: normals[e],
+                n: faces[e].n,
                 tri: e as u32,
                 pdf_area: light_pdf_area[e],
                 le: m.emission,

@@ -268,7 +268,7 @@ impl Phong {
                 continue;
             }
             let t = &sc.tris[e as usize];
-            let ln = sc.normals[e as usize];
+            let ln = sc.normal(e);
             let area = 0.5 * super::sampling::length(super::bvh::triangle_normal(t));
             let w = area / pts.len() as f32;
             for &(b1, b2) in pts {

@@ -4,7 +4,7 @@
 //! corner UVs and tangents where textures read them, geometric normals, areas, and which
 //! triangles shade flat.
 
-use super::{RMaterial, SceneError, Textures};
+use super::{Face, RMaterial, SceneError, Textures};
 use crate::bvh::triangle_normal;
 use crate::sampling::{dot, length, normalize, v3, V3};
 use cgnodes_api::types::{Material, Scene};
@@ -15,8 +15,8 @@ use std::sync::Arc;
 
 /// What `shading` makes, per triangle unless noted.
 pub(super) struct Shading {
-    /// Material index.
-    pub tri_mat: Vec<u32>,
+    /// Geometric normal, material and whether the triangle shades flat.
+    pub faces: Vec<Face>,
     /// The materials (per material).
     pub materials: Vec<RMaterial>,
     /// Each material's textures (per material).
@@ -27,10 +27,6 @@ pub(super) struct Shading {
     pub corner_uvs: Vec<[[f32; 2]; 3]>,
     /// Corner tangents, when a material has a normal map (else empty).
     pub corner_tangents: Vec<[[f64; 4]; 3]>,
-    /// Unit geometric normal.
-    pub normals: Vec<V3>,
-    /// Whether the triangle shades flat: untextured, its corner normals its own.
-    pub plain: Vec<bool>,
     /// Area.
     pub areas: Vec<f32>,
 }
@@ -67,17 +63,18 @@ pub(super) fn shading(
         Vec::new()
     };
     let corner_tangents = if any_nmap { g.tan } else { Vec::new() };
-    let normals: Vec<V3> = tris
+    // A triangle shades flat when it is untextured and its corner normals are its own.
+    let faces: Vec<Face> = tris
         .par_iter()
-        .map(|t| normalize(triangle_normal(t)))
-        .collect();
-    let plain: Vec<bool> = corner_normals
-        .par_iter()
-        .zip(&normals)
+        .zip(&corner_normals)
         .zip(&tri_mat)
-        .map(|((c, &n), &m)| {
+        .map(|((t, c), &m)| {
+            let n = normalize(triangle_normal(t));
             let tx = &textures[m as usize];
-            tx.base.is_none() && tx.normal.is_none() && c.iter().all(|&k| dot(k, n) >= 1.0 - 2e-7)
+            let plain = tx.base.is_none()
+                && tx.normal.is_none()
+                && c.iter().all(|&k| dot(k, n) >= 1.0 - 2e-7);
+            Face::new(n, m, plain)
         })
         .collect();
     let areas: Vec<f32> = tris
@@ -85,14 +82,12 @@ pub(super) fn shading(
         .map(|t| 0.5 * length(triangle_normal(t)))
         .collect();
     Ok(Shading {
-        tri_mat,
+        faces,
         materials,
         textures,
         corner_normals,
         corner_uvs,
         corner_tangents,
-        normals,
-        plain,
         areas,
     })
 }

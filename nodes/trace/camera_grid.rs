@@ -188,18 +188,25 @@ impl CameraGrid {
         let project = |t: &[V3; 3]| project_triangle(t, &fr, z0, half);
         let projected: Vec<(bool, Option<Poly>)> = tris.par_iter().map(project).collect();
         let near: Vec<u32> = (0..tris.len() as u32)
+            .into_par_iter()
             .filter(|&i| projected[i as usize].0)
             .collect();
         if near.len() > MAX_NEAR {
             return None;
         }
         // The polygons' bounds on the film bound their pixel count.
-        let mut budget = 8 * pixels + 1_000_000;
-        for p in projected.iter().filter_map(|p| p.1.as_ref()) {
-            let (x0, x1) = (p.lo(0).max(0.0), p.hi(0).min(w as f64));
-            let (y0, y1) = (p.lo(1).max(0.0), p.hi(1).min(h as f64));
-            let n = ((x1 - x0 + 2.0).max(0.0) * (y1 - y0 + 2.0).max(0.0)).min(pixels as f64);
-            budget = budget.checked_sub(n as usize)?;
+        let bound: u64 = projected
+            .par_iter()
+            .filter_map(|p| p.1.as_ref())
+            .map(|p| {
+                let (x0, x1) = (p.lo(0).max(0.0), p.hi(0).min(w as f64));
+                let (y0, y1) = (p.lo(1).max(0.0), p.hi(1).min(h as f64));
+                let n = (x1 - x0 + 2.0).max(0.0) * (y1 - y0 + 2.0).max(0.0);
+                n.min(pixels as f64) as u64
+            })
+            .sum();
+        if bound > 8 * pixels as u64 + 1_000_000 {
+            return None;
         }
         // Nearest first, so that each pixel's list is filled in order.
         let mut order: Vec<(f32, u32)> = (0..tris.len() as u32)
@@ -293,15 +300,16 @@ impl CameraGrid {
 /// The largest coordinate distance of a triangle corner from the eye (infinite or NaN when
 /// a corner is not finite).
 fn eye_extent(tris: &[[V3; 3]], eye: [f64; 3]) -> f64 {
-    let mut ext = 0.0f64;
-    for t in tris {
+    let extent = |t: &[V3; 3]| {
+        let mut ext = 0.0f64;
         for p in t {
             for (x, e) in p.iter().zip(eye) {
                 ext = ext.max((*x as f64 - e).abs());
             }
         }
-    }
-    ext
+        ext
+    };
+    tris.par_iter().map(extent).reduce(|| 0.0, f64::max)
 }
 
 /// Whether triangle `t` reaches into the box `|x| <= half[0]`, `|y| <= half[1]`, `0 <= z <

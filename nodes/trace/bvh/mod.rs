@@ -9,6 +9,7 @@
 mod build;
 mod lanes;
 mod pair;
+mod slots;
 #[cfg(test)]
 mod tests;
 mod traverse;

@@ -3,16 +3,16 @@
 //! al. 2008, "Shallow bounding volume hierarchies for fast SIMD ray tracing of incoherent
 //! rays"; Embree's BVH8), each node's eight boxes stored axis by axis (structure of arrays)
 //! so that one ray is tested against all eight on eight SIMD lanes, and each leaf's (up to
-//! four) triangles stored the same way (`Tri4`) for a four-lane watertight test. A node is
-//! collapsed by opening, while fewer than eight children remain, the interior child with
-//! the largest surface area (the one a random ray is most likely to enter). Eight children
-//! rather than four: a walk takes half as many node steps, each dearer, and the path
-//! tracer got faster on both bench scenes (docs/path_tracing.md, "How it runs", has the
-//! timings).
+//! four) triangles stored the same way (`Tri4`) for a four-lane watertight test. Which
+//! binary subtrees become a node's children is solved for the least surface-area cost
+//! (`slots.rs`). Eight children rather than four: a walk takes half as many node steps,
+//! each dearer, and the path tracer got faster on both bench scenes (docs/path_tracing.md,
+//! "How it runs", has the timings).
 //!
 //! The lane arithmetic is in `lanes.rs`; docs/path_tracing.md has the measurements.
 
 use super::lanes::{tri4, Axes, Fixed, RayBox, Slab, Sse, Tri4, F8};
+use super::slots::Slots;
 use super::{Bvh, BvhNode};
 use crate::bvh::traverse::{with_stack, RayPre};
 use crate::bvh::Hit;
@@ -72,7 +72,9 @@ pub fn collapse(bvh: &Bvh) -> (Vec<Node8>, Vec<Tri4>) {
             (l.0, l.1 + r.1)
         };
     }
-    let is_leaf = |k: usize| under[k].1 <= 4;
+    let counts: Vec<u32> = under.iter().map(|u| u.1).collect();
+    let slots = Slots::solve(nodes, &counts);
+    let is_leaf = |k: usize| slots.is_leaf(k);
     if is_leaf(0) {
         // A single leaf: a root with one child.
         let mut n = empty_node();
@@ -84,29 +86,7 @@ pub fn collapse(bvh: &Bvh) -> (Vec<Node8>, Vec<Tri4>) {
     // (binary node to expand, slot in `out`)
     let mut todo = vec![(0usize, 0usize)];
     while let Some((b, slot)) = todo.pop() {
-        let first = nodes[b].first as usize;
-        let mut kids = Vec::with_capacity(W);
-        kids.extend([first, first + 1]);
-        while kids.len() < W {
-            // Open the interior child of largest area.
-            let pick = kids
-                .iter()
-                .enumerate()
-                .filter(|(_, &k)| !is_leaf(k))
-                .max_by(|a, b| {
-                    let (sa, sb) = (
-                        nodes[*a.1].bounds.half_area(),
-                        nodes[*b.1].bounds.half_area(),
-                    );
-                    sa.total_cmp(&sb)
-                })
-                .map(|(i, _)| i);
-            let Some(i) = pick else { break };
-            let k = kids.swap_remove(i);
-            let f = nodes[k].first as usize;
-            kids.push(f);
-            kids.push(f + 1);
-        }
+        let kids = slots.children(nodes, b);
         let mut n = empty_node();
         for (lane, &k) in kids.iter().enumerate() {
             set_lane(&mut n, lane, bvh, k, under[k], &mut leaves);

@@ -11,7 +11,7 @@
 //!
 //! Options (after `--`): `--ref-spp N` (default 2048), `--spp a,b,c` (default 4,16,64,256),
 //! `--quick` (one 64-spp timing, no reference; `--quick-spp N` for another count),
-//! `--grid-rays N` (camera rays per triangle from which `CameraGrid` is built, default 16),
+//! `--grid-rays N` (camera rays per triangle from which `CameraGrid` is built, default 6),
 //! `--binary-bvh` (traverse the binary BVH instead of the default one collapsed to 8 children per node, to measure what the wide
 //! tree buys; `--wide-bvh`, the default, is accepted and does nothing), `--no-interleave`
 //! (trace a path's shadow ray and its next ray one after the other instead of interleaved,

@@ -20,6 +20,7 @@ use super::bvh::{tri_test, Hit, RayPre};
 use super::camera::{Frame, PinholeCamera};
 use super::sampling::V3;
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 mod rays8;
 
@@ -183,55 +184,52 @@ impl CameraGrid {
             1.01 * z0 * 0.5 * w as f64 / fr.focal,
             1.01 * z0 * 0.5 * h as f64 / fr.focal,
         ];
-        // Per triangle, in parallel: whether it reaches into the pyramid in front of z0,
-        // and the film polygon of its part behind z0 when that lies on the film.
-        let project = |t: &[V3; 3]| project_triangle(t, &fr, z0, half);
-        let projected: Vec<(bool, Option<Poly>)> = tris.par_iter().map(project).collect();
-        let near: Vec<u32> = (0..tris.len() as u32)
-            .into_par_iter()
-            .filter(|&i| projected[i as usize].0)
+        // Per chunk of triangles, in parallel: which reach into the pyramid in front of
+        // z0, the film polygons of their parts behind z0 that lie on the film, and the
+        // pixels those cover, each with the triangle's distance bound and index. A chunk
+        // covers its polygons only while the polygons' film bounds (which bound their
+        // pixel counts) summed over the chunks so far stay within the budget.
+        let budget = 8 * pixels as u64 + 1_000_000;
+        let used = AtomicU64::new(0);
+        // Small scenes in small chunks too: a few large triangles cover most of the film.
+        let size = (tris.len() / 64).clamp(1, CHUNK);
+        let chunks: Vec<Option<Chunk>> = tris
+            .par_chunks(size)
+            .enumerate()
+            .map(|(c, ts)| {
+                let mut ch = Chunk::default();
+                let mut polys = Vec::with_capacity(ts.len());
+                let mut bound = 0u64;
+                for (k, t) in ts.iter().enumerate() {
+                    let i = (c * size + k) as u32;
+                    let (near, poly) = project_triangle(t, &fr, z0, half);
+                    if near {
+                        ch.near.push(i);
+                    }
+                    if let Some(p) = poly {
+                        bound += pixel_bound(&p, fr.size);
+                        polys.push((i, p));
+                    }
+                }
+                if used.fetch_add(bound, Ordering::Relaxed) + bound > budget {
+                    return None;
+                }
+                for (i, p) in &polys {
+                    let key = eye_distance(fr.eye, &tris[*i as usize]);
+                    cover(p, fr.size, |px| ch.hits.push((px as u32, (key, *i))));
+                }
+                Some(ch)
+            })
             .collect();
+        let chunks: Vec<Chunk> = chunks.into_iter().collect::<Option<_>>()?;
+        let near: Vec<u32> = chunks.iter().flat_map(|c| c.near.iter().copied()).collect();
         if near.len() > MAX_NEAR {
             return None;
         }
-        // The polygons' bounds on the film bound their pixel count.
-        let bound: u64 = projected
-            .par_iter()
-            .filter_map(|p| p.1.as_ref())
-            .map(|p| {
-                let (x0, x1) = (p.lo(0).max(0.0), p.hi(0).min(w as f64));
-                let (y0, y1) = (p.lo(1).max(0.0), p.hi(1).min(h as f64));
-                let n = (x1 - x0 + 2.0).max(0.0) * (y1 - y0 + 2.0).max(0.0);
-                n.min(pixels as f64) as u64
-            })
-            .sum();
-        if bound > 8 * pixels as u64 + 1_000_000 {
-            return None;
-        }
-        // Nearest first, so that each pixel's list is filled in order.
-        let mut order: Vec<(f32, u32)> = (0..tris.len() as u32)
-            .into_par_iter()
-            .filter(|&i| projected[i as usize].1.is_some())
-            .map(|i| (eye_distance(fr.eye, &tris[i as usize]), i))
-            .collect();
-        order.par_sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-        // The pixels of each triangle, in parallel in chunks of that order...
-        let hits: Vec<Vec<(u32, u32)>> = order
-            .par_chunks(4096)
-            .enumerate()
-            .map(|(c, chunk)| {
-                let mut out = Vec::new();
-                for (k, &(_, i)) in chunk.iter().enumerate() {
-                    let rank = (c * 4096 + k) as u32;
-                    if let Some(p) = &projected[i as usize].1 {
-                        cover(p, fr.size, |px| out.push((px as u32, rank)));
-                    }
-                }
-                out
-            })
-            .collect();
-        // ...then sorted into compressed rows by pixel, stably (a counting sort).
-        let (start, cand) = rows_by_pixel(&hits, &order, pixels);
+        // Sorted into compressed rows by pixel, stably (a counting sort), then each
+        // pixel's candidates nearest first.
+        let (start, mut cand) = rows_by_pixel(&chunks, pixels);
+        sort_rows(&start, &mut cand);
         Some(CameraGrid {
             width: w,
             start,
@@ -356,15 +354,31 @@ fn project_triangle(t: &[V3; 3], fr: &Frame, z0: f64, half: [f64; 2]) -> (bool, 
     (near, on_film.then_some(poly))
 }
 
-/// The (pixel, rank) pairs sorted into compressed rows by pixel, stably (a counting sort):
-/// row starts and, per entry, the `order` entry of its rank.
-fn rows_by_pixel(
-    hits: &[Vec<(u32, u32)>],
-    order: &[(f32, u32)],
-    pixels: usize,
-) -> (Vec<u32>, Vec<(f32, u32)>) {
+/// What one chunk of triangles adds to the grid: its triangles that every ray tests, and
+/// (pixel, (distance bound, triangle)) per covered pixel, in triangle order.
+#[derive(Default)]
+struct Chunk {
+    near: Vec<u32>,
+    hits: Vec<(u32, (f32, u32))>,
+}
+
+/// Triangles per chunk of the grid's build, at most.
+const CHUNK: usize = 4096;
+
+/// An upper bound of the pixels `cover` visits for `p`: its film bounds grown by a pixel.
+fn pixel_bound(p: &Poly, (w, h): (u32, u32)) -> u64 {
+    let (x0, x1) = (p.lo(0).max(0.0), p.hi(0).min(w as f64));
+    let (y0, y1) = (p.lo(1).max(0.0), p.hi(1).min(h as f64));
+    let n = (x1 - x0 + 2.0).max(0.0) * (y1 - y0 + 2.0).max(0.0);
+    n.min(w as f64 * h as f64) as u64
+}
+
+/// The chunks' hits sorted into compressed rows by pixel, stably (a counting sort): row
+/// starts and the candidates, each pixel's in triangle order.
+fn rows_by_pixel(chunks: &[Chunk], pixels: usize) -> (Vec<u32>, Vec<(f32, u32)>) {
+    let hits = || chunks.iter().flat_map(|c| c.hits.iter());
     let mut start = vec![0u32; pixels + 1];
-    for &(px, _) in hits.iter().flatten() {
+    for &(px, _) in hits() {
         start[px as usize + 1] += 1;
     }
     for k in 0..pixels {
@@ -372,11 +386,40 @@ fn rows_by_pixel(
     }
     let mut fill = start.clone();
     let mut cand = vec![(0.0f32, 0u32); start[pixels] as usize];
-    for &(px, rank) in hits.iter().flatten() {
-        cand[fill[px as usize] as usize] = order[rank as usize];
+    for &(px, c) in hits() {
+        cand[fill[px as usize] as usize] = c;
         fill[px as usize] += 1;
     }
     (start, cand)
+}
+
+/// Consecutive pixels' row starts (one past the last pixel included) and candidates.
+type Run<'a> = (&'a [u32], &'a mut [(f32, u32)]);
+
+/// Sorts each pixel's candidates nearest first (ties by triangle), pixels in parallel.
+fn sort_rows(start: &[u32], cand: &mut [(f32, u32)]) {
+    // Runs of about 4096 candidates, cut at pixel boundaries.
+    let mut runs: Vec<Run> = Vec::new();
+    let (mut rest, mut p0, mut base) = (cand, 0usize, 0u32);
+    let pixels = start.len() - 1;
+    while p0 < pixels {
+        let mut p1 = p0 + 1;
+        while p1 < pixels && start[p1] - start[p0] < 4096 {
+            p1 += 1;
+        }
+        let (run, tail) = rest.split_at_mut((start[p1] - base) as usize);
+        runs.push((&start[p0..=p1], run));
+        base = start[p1];
+        rest = tail;
+        p0 = p1;
+    }
+    runs.into_par_iter().for_each(|(st, run)| {
+        let b = st[0];
+        for w in st.windows(2) {
+            run[(w[0] - b) as usize..(w[1] - b) as usize]
+                .sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        }
+    });
 }
 
 #[cfg(test)]

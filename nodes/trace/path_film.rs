@@ -62,8 +62,8 @@ pub struct Shortcuts {
     /// Camera rays' first hits from per-pixel candidate lists (`CameraGrid`) instead of
     /// the BVH (the same hits but for ties between triangles at equal distance).
     pub camera_grid: bool,
-    /// Camera rays per triangle from which the grid is built (default 16: with fewer,
-    /// building it costs about what it saves).
+    /// Camera rays per triangle from which the grid is built (default 6: with fewer,
+    /// building it costs more than it saves).
     pub grid_rays_per_triangle: u64,
     /// Both loops' second builds for x86-64-v3 CPUs (AVX2 and companions), where the CPU
     /// has it (the same bits as the baseline build).
@@ -75,7 +75,7 @@ impl Default for Shortcuts {
         Shortcuts {
             lanes: true,
             camera_grid: true,
-            grid_rays_per_triangle: 16,
+            grid_rays_per_triangle: 6,
             x86_64_v3: true,
         }
     }
@@ -91,7 +91,7 @@ pub fn render_opts(
 ) -> (Image, Image) {
     let lanes = opts.lanes && path_lanes::handles(sc);
     let (w, h) = (cam.width, cam.height);
-    // Building the grid costs about what it saves on 7 to 27 camera rays per triangle
+    // Building the grid costs more than it saves below about 5 camera rays per triangle
     // (igea, docs/path_tracing.md, "How it runs"): build it only when there are more.
     let rays = w as u64 * h as u64 * s.spp as u64;
     let enough = rays

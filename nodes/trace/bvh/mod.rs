@@ -25,6 +25,9 @@ pub use wide::Node8;
 
 use super::sampling::{cross, sub, V3};
 
+/// Children per node of the 8-wide tree.
+pub const W: usize = 8;
+
 /// An axis-aligned box.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Aabb {

@@ -5,8 +5,7 @@
 //! node by node, the child of largest area until eight remain, which left many nodes near
 //! the leaves with two children.
 
-use super::wide::W;
-use super::BvhNode;
+use super::{BvhNode, W};
 
 /// Cost of a node step relative to a leaf test (the lane loop's instructions for each:
 /// about 60 and 110).

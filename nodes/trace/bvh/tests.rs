@@ -130,7 +130,7 @@ fn wide_tree_matches_binary_tree() {
     let mut nodes_seen = vec![0u32; bvh.wide.len()];
     nodes_seen[0] = 1;
     for n in &bvh.wide {
-        for l in 0..wide::W {
+        for l in 0..W {
             let c = n.child[l];
             if c == u32::MAX {
                 // An unused lane's box is empty, so no ray enters it.

@@ -13,13 +13,10 @@
 
 use super::lanes::{tri4, Axes, Fixed, RayBox, Slab, Sse, Tri4, F8};
 use super::slots::Slots;
-use super::{Bvh, BvhNode};
+use super::{Bvh, BvhNode, W};
 use crate::bvh::traverse::{with_stack, RayPre};
 use crate::bvh::Hit;
 use rayon::prelude::*;
-
-/// Children per node.
-pub const W: usize = 8;
 
 /// Marks an unused child slot.
 const EMPTY: u32 = u32::MAX;

@@ -28,10 +28,11 @@ pub(super) const MAX_TRIS: usize = 1 << 28;
 
 /// A node of the 8-wide BVH: eight child boxes (per axis, per lane), and per child either
 /// an interior node (its index), a leaf (`LEAF | leaf << 3 | count`) or nothing (`EMPTY`,
-/// whose box is empty: min = +inf, max = -inf, so no ray enters it). 224 bytes of data,
-/// padded to 256 so that every node starts on a cache line.
+/// whose box is empty: min = +inf, max = -inf, so no ray enters it). 224 bytes, aligned to
+/// 32: a node spans four cache lines whether or not it starts on one, and without padding
+/// to 256 bytes an eighth more of a large tree stays in the cache.
 #[derive(Clone, Copy, Debug)]
-#[repr(C, align(64))]
+#[repr(C, align(32))]
 pub struct Node8 {
     /// Lower corners, `min[axis][lane]`.
     pub min: [F8; 3],

@@ -295,8 +295,8 @@ impl CameraGrid {
     }
 }
 
-/// The largest coordinate distance of a triangle corner from the eye (infinite or NaN when
-/// a corner is not finite).
+/// The largest coordinate distance of a triangle corner from the eye (infinite when a
+/// corner is; `f64::max` passes over NaN, and the tracer's scenes have finite corners).
 fn eye_extent(tris: &[[V3; 3]], eye: [f64; 3]) -> f64 {
     let extent = |t: &[V3; 3]| {
         let mut ext = 0.0f64;
@@ -393,30 +393,24 @@ fn rows_by_pixel(chunks: &[Chunk], pixels: usize) -> (Vec<u32>, Vec<(f32, u32)>)
     (start, cand)
 }
 
-/// Consecutive pixels' row starts (one past the last pixel included) and candidates.
-type Run<'a> = (&'a [u32], &'a mut [(f32, u32)]);
+/// Pixels whose candidates one job of `sort_rows` sorts.
+const SORT_PIXELS: usize = 256;
 
-/// Sorts each pixel's candidates nearest first (ties by triangle), pixels in parallel.
+/// Sorts each pixel's candidates nearest first (ties by triangle), runs of pixels in
+/// parallel.
 fn sort_rows(start: &[u32], cand: &mut [(f32, u32)]) {
-    // Runs of about 4096 candidates, cut at pixel boundaries.
-    let mut runs: Vec<Run> = Vec::new();
-    let (mut rest, mut p0, mut base) = (cand, 0usize, 0u32);
     let pixels = start.len() - 1;
-    while p0 < pixels {
-        let mut p1 = p0 + 1;
-        while p1 < pixels && start[p1] - start[p0] < 4096 {
-            p1 += 1;
-        }
-        let (run, tail) = rest.split_at_mut((start[p1] - base) as usize);
-        runs.push((&start[p0..=p1], run));
-        base = start[p1];
+    let mut runs = Vec::with_capacity(pixels.div_ceil(SORT_PIXELS));
+    let mut rest = cand;
+    for p0 in (0..pixels).step_by(SORT_PIXELS) {
+        let st = &start[p0..=(p0 + SORT_PIXELS).min(pixels)];
+        let (run, tail) = rest.split_at_mut((st[st.len() - 1] - st[0]) as usize);
+        runs.push((st, run));
         rest = tail;
-        p0 = p1;
     }
     runs.into_par_iter().for_each(|(st, run)| {
-        let b = st[0];
         for w in st.windows(2) {
-            run[(w[0] - b) as usize..(w[1] - b) as usize]
+            run[(w[0] - st[0]) as usize..(w[1] - st[0]) as usize]
                 .sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
         }
     });

@@ -359,20 +359,21 @@ impl RenderScene {
                 albedo: mat.albedo,
             };
         }
-        self.surface_interpolated(hit, f.n)
+        self.surface_interpolated(hit, f)
     }
 
     /// `surface` for a triangle that is not plain (its own call: inlining it into every
     /// caller would crowd the flat-shaded case).
     #[inline(never)]
-    fn surface_interpolated(&self, hit: &Hit, ng: V3) -> SurfacePoint {
+    fn surface_interpolated(&self, hit: &Hit, f: Face) -> SurfacePoint {
+        let ng = f.n;
         let t = hit.prim as usize;
         let (b1, b2) = (hit.u, hit.v);
         let b0 = 1.0 - b1 - b2;
         let c = &self.corner_normals[t];
         let lerp = |k: usize| b0 * c[0][k] + b1 * c[1][k] + b2 * c[2][k];
         let mut ns = normalize([lerp(0), lerp(1), lerp(2)]);
-        let m = self.face(hit.prim).material();
+        let m = f.material();
         let mut albedo = self.materials[m].albedo;
         let tx = &self.textures[m];
         // Corner UVs are kept when a material has a texture (NaN where a mesh has none).

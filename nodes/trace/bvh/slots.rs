@@ -13,6 +13,23 @@ const C_NODE: f32 = 1.0;
 /// Cost of a leaf test (one to four triangles on four lanes cost about the same).
 const C_LEAF: f32 = 1.8;
 
+/// Per binary node (root first, children at `first` and `first + 1` after their parent):
+/// the first triangle below it and how many there are.
+pub(super) fn subtrees(nodes: &[BvhNode]) -> Vec<(u32, u32)> {
+    let mut under = vec![(0u32, 0u32); nodes.len()];
+    // Children come after their parent, so a backward pass sees them first.
+    for k in (0..nodes.len()).rev() {
+        let n = &nodes[k];
+        under[k] = if n.count > 0 {
+            (n.first, n.count)
+        } else {
+            let (l, r) = (under[n.first as usize], under[n.first as usize + 1]);
+            (l.0, l.1 + r.1)
+        };
+    }
+    under
+}
+
 /// The solved program: per binary node, the least cost of its subtree spread over at most
 /// `j` children of a wide node, and how.
 pub(super) struct Slots {
@@ -21,26 +38,23 @@ pub(super) struct Slots {
     /// `split[n][j]`: 0 when j - 1 children do as well, else the children the left
     /// subtree takes (the right one takes the rest).
     split: Vec<[u8; W + 1]>,
-    /// Per binary node made a wide node: the children its left subtree takes of the W.
+    /// Per binary node made a wide node: the children its left subtree takes of the W
+    /// (at least one); 0 for a wide leaf (at most four triangles below it).
     wide_split: Vec<u8>,
-    /// Whether the node is a wide leaf (at most four triangles below it).
-    leaf: Vec<bool>,
 }
 
 impl Slots {
-    /// Solves the program for the binary tree `nodes` (root first, children at `first`
-    /// and `first + 1` after their parent), `count[n]` the triangles below node n.
-    pub(super) fn solve(nodes: &[BvhNode], count: &[u32]) -> Slots {
+    /// Solves the program for the binary tree `nodes`, `under` its `subtrees`.
+    pub(super) fn solve(nodes: &[BvhNode], under: &[(u32, u32)]) -> Slots {
         let n = nodes.len();
         let mut s = Slots {
             cost: vec![[0.0; W + 1]; n],
             split: vec![[0; W + 1]; n],
             wide_split: vec![0; n],
-            leaf: count.iter().map(|&c| c <= 4).collect(),
         };
         for k in (0..n).rev() {
             let area = nodes[k].bounds.half_area().max(0.0);
-            if s.leaf[k] {
+            if under[k].1 <= 4 {
                 s.cost[k] = [area * C_LEAF; W + 1];
                 continue;
             }
@@ -74,7 +88,7 @@ impl Slots {
 
     /// Whether binary node `k` becomes a wide leaf.
     pub(super) fn is_leaf(&self, k: usize) -> bool {
-        self.leaf[k]
+        self.wide_split[k] == 0
     }
 
     /// The binary nodes that become the children of the wide node made for binary node
@@ -90,7 +104,7 @@ impl Slots {
 
     /// Places the subtree of binary node `k` in at most `j` children.
     fn place(&self, nodes: &[BvhNode], k: usize, mut j: usize, out: &mut Vec<usize>) {
-        if self.leaf[k] {
+        if self.is_leaf(k) {
             out.push(k);
             return;
         }
@@ -117,20 +131,6 @@ mod tests {
     use super::*;
     use crate::bvh::Bvh;
     use crate::sampling::{Pcg32, V3};
-
-    /// Triangles below each binary node (children come after their parent).
-    fn counts(nodes: &[BvhNode]) -> Vec<u32> {
-        let mut c = vec![0u32; nodes.len()];
-        for k in (0..nodes.len()).rev() {
-            let n = &nodes[k];
-            c[k] = if n.count > 0 {
-                n.count
-            } else {
-                c[n.first as usize] + c[n.first as usize + 1]
-            };
-        }
-        c
-    }
 
     fn area(nodes: &[BvhNode], k: usize) -> f32 {
         nodes[k].bounds.half_area().max(0.0)
@@ -202,9 +202,10 @@ mod tests {
                 })
                 .collect();
             let bvh = Bvh::build(&tris);
-            let c = counts(&bvh.nodes);
+            let under = subtrees(&bvh.nodes);
+            let c: Vec<u32> = under.iter().map(|u| u.1).collect();
             assert!(c[0] > 4);
-            let s = Slots::solve(&bvh.nodes, &c);
+            let s = Slots::solve(&bvh.nodes, &under);
             let dp = s.cost[0][1];
             let brute = brute_node(&bvh.nodes, &c, 0);
             let tree = built(&s, &bvh.nodes, 0);

@@ -12,7 +12,7 @@
 //! The lane arithmetic is in `lanes.rs`; docs/path_tracing.md has the measurements.
 
 use super::lanes::{tri4, Axes, Fixed, RayBox, Slab, Sse, Tri4, F8};
-use super::slots::Slots;
+use super::slots::{subtrees, Slots};
 use super::{Bvh, BvhNode, W};
 use crate::bvh::traverse::{with_stack, RayPre};
 use crate::bvh::Hit;
@@ -58,25 +58,13 @@ pub fn collapse(bvh: &Bvh) -> (Vec<Node8>, Vec<Tri4>) {
     if nodes.is_empty() || bvh.tris.len() >= MAX_TRIS || nodes.iter().any(|n| n.count > 4) {
         return (out, Vec::new());
     }
-    // Triangles under each binary node (`first` of the leftmost leaf, count); children
-    // come after their parent, so a backward pass sees them first.
-    let mut under = vec![(0u32, 0u32); nodes.len()];
-    for k in (0..nodes.len()).rev() {
-        let n = &nodes[k];
-        under[k] = if n.count > 0 {
-            (n.first, n.count)
-        } else {
-            let (l, r) = (under[n.first as usize], under[n.first as usize + 1]);
-            (l.0, l.1 + r.1)
-        };
-    }
-    let counts: Vec<u32> = under.iter().map(|u| u.1).collect();
-    let slots = Slots::solve(nodes, &counts);
-    let is_leaf = |k: usize| slots.is_leaf(k);
-    if is_leaf(0) {
+    let under = subtrees(nodes);
+    let slots = Slots::solve(nodes, &under);
+    if slots.is_leaf(0) {
         // A single leaf: a root with one child.
         let mut n = empty_node();
-        set_lane(&mut n, 0, bvh, 0, under[0], &mut leaves);
+        set_box(&mut n, 0, &nodes[0]);
+        n.child[0] = add_leaf(&mut leaves, under[0]);
         out.push(n);
         return (out, pack(bvh, &leaves));
     }
@@ -87,12 +75,14 @@ pub fn collapse(bvh: &Bvh) -> (Vec<Node8>, Vec<Tri4>) {
         let kids = slots.children(nodes, b);
         let mut n = empty_node();
         for (lane, &k) in kids.iter().enumerate() {
-            set_lane(&mut n, lane, bvh, k, under[k], &mut leaves);
-            if !is_leaf(k) {
-                n.child[lane] = out.len() as u32;
+            set_box(&mut n, lane, &nodes[k]);
+            n.child[lane] = if slots.is_leaf(k) {
+                add_leaf(&mut leaves, under[k])
+            } else {
                 todo.push((k, out.len()));
                 out.push(empty_node());
-            }
+                (out.len() - 1) as u32
+            };
         }
         out[slot] = n;
     }
@@ -118,27 +108,19 @@ fn empty_node() -> Node8 {
     }
 }
 
-/// Puts binary node `k` of `bvh` in `lane` of `n`: its box, and when it holds at most
-/// four triangles (`under`: first, count) those packed into a new `Tri4` as a leaf (the
-/// caller sets an interior child's index).
-fn set_lane(
-    n: &mut Node8,
-    lane: usize,
-    bvh: &Bvh,
-    k: usize,
-    under: (u32, u32),
-    leaves: &mut Vec<(u32, u32)>,
-) {
-    let b: &BvhNode = &bvh.nodes[k];
+/// Puts the box of binary node `b` in `lane` of `n`.
+fn set_box(n: &mut Node8, lane: usize, b: &BvhNode) {
     for a in 0..3 {
         n.min[a][lane] = b.bounds.min[a];
         n.max[a][lane] = b.bounds.max[a];
     }
-    let (first, count) = under;
-    if count <= 4 {
-        n.child[lane] = LEAF | (leaves.len() as u32) << 3 | count;
-        leaves.push((first, count));
-    }
+}
+
+/// The child code of a new wide leaf over the triangles `(first, count)`, packed into a
+/// `Tri4` at the end.
+fn add_leaf(leaves: &mut Vec<(u32, u32)>, (first, count): (u32, u32)) -> u32 {
+    leaves.push((first, count));
+    LEAF | ((leaves.len() - 1) as u32) << 3 | count
 }
 
 /// One ray's state in the 8-wide traversal, advanced one node or leaf at a time by

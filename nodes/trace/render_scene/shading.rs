@@ -64,23 +64,20 @@ pub(super) fn shading(
     };
     let corner_tangents = if any_nmap { g.tan } else { Vec::new() };
     // A triangle shades flat when it is untextured and its corner normals are its own.
-    let faces: Vec<Face> = tris
+    let (faces, areas): (Vec<Face>, Vec<f32>) = tris
         .par_iter()
         .zip(&corner_normals)
         .zip(&tri_mat)
         .map(|((t, c), &m)| {
-            let n = normalize(triangle_normal(t));
+            let cross = triangle_normal(t);
+            let n = normalize(cross);
             let tx = &textures[m as usize];
             let plain = tx.base.is_none()
                 && tx.normal.is_none()
                 && c.iter().all(|&k| dot(k, n) >= 1.0 - 2e-7);
-            Face::new(n, m, plain)
+            (Face::new(n, m, plain), 0.5 * length(cross))
         })
-        .collect();
-    let areas: Vec<f32> = tris
-        .par_iter()
-        .map(|t| 0.5 * length(triangle_normal(t)))
-        .collect();
+        .unzip();
     Ok(Shading {
         faces,
         materials,
